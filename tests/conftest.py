@@ -1,0 +1,110 @@
+"""Shared fixtures: a real rosmaster on a free port, and a guard against leftover processes.
+
+The pytest process hosts one rospy node for the whole run (rospy allows one per
+process), so the master is session-scoped. Tests that need a fresh process (exit,
+SIGKILL, the IPython terminal, a Jupyter kernel) start one themselves.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+import xmlrpc.client
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))  # tests/helpers.py
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for(predicate, timeout: float = 10.0, interval: float = 0.02, what: str = "condition"):
+    """Poll ``predicate`` until it returns a truthy value; fail the test after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout}s waiting for {what}")
+        time.sleep(interval)
+
+
+def _master_answers(uri: str) -> bool:
+    try:
+        code, _, _ = xmlrpc.client.ServerProxy(uri).getPid("/pytest")
+        return code == 1
+    except OSError:
+        return False
+
+
+@pytest.fixture(scope="session")
+def ros_home(tmp_path_factory) -> Path:
+    home = tmp_path_factory.mktemp("ros_home")
+    os.environ["ROS_HOME"] = str(home)
+    os.environ["ROS_LOG_DIR"] = str(home / "log")
+    return home
+
+
+@pytest.fixture(scope="session")
+def ros_master(ros_home):
+    """A rosmaster of our own on a free port; ROS_MASTER_URI points at it for the run."""
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}/"
+    proc = subprocess.Popen(
+        ["rosmaster", "--core", "-p", str(port), "-w", "3"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env={**os.environ, "ROS_MASTER_URI": uri},
+    )
+    try:
+        wait_for(lambda: _master_answers(uri), timeout=20, what="rosmaster to answer")
+        os.environ["ROS_MASTER_URI"] = uri
+        os.environ["ROS_IP"] = "127.0.0.1"
+        os.environ.pop("ROS_HOSTNAME", None)
+        yield uri
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def _children() -> set[int]:
+    """PIDs of this process's living children (zombies excluded)."""
+    out = set()
+    try:
+        kids = Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").read_text().split()
+    except OSError:
+        return out
+    for pid in map(int, kids):
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if state != "Z":
+            out.add(pid)
+    return out
+
+
+@pytest.fixture(autouse=True)
+def no_leftover_processes(request):
+    """Fail a test that leaves a child process of its own running."""
+    before = _children()
+    yield
+    try:
+        wait_for(lambda: not (_children() - before), timeout=10, what="children to exit")
+    except AssertionError:
+        left = {pid: Path(f"/proc/{pid}/cmdline").read_text().replace("\0", " ") for pid in _children() - before}
+        pytest.fail(f"test left processes running: {left}")
