@@ -21,6 +21,10 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))  # tests/helpers.py
 
 
+# Processes that live for the whole run (the master): not leftovers of any one test.
+SESSION_PIDS: set[int] = set()
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -66,6 +70,7 @@ def ros_master(ros_home):
         stderr=subprocess.DEVNULL,
         env={**os.environ, "ROS_MASTER_URI": uri},
     )
+    SESSION_PIDS.add(proc.pid)
     try:
         wait_for(lambda: _master_answers(uri), timeout=20, what="rosmaster to answer")
         os.environ["ROS_MASTER_URI"] = uri
@@ -82,13 +87,17 @@ def ros_master(ros_home):
 
 
 def _children() -> set[int]:
-    """PIDs of this process's living children (zombies excluded)."""
+    """PIDs of this process's living children (zombies and session processes excluded)."""
     out = set()
-    try:
-        kids = Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").read_text().split()
-    except OSError:
-        return out
+    kids: list[str] = []
+    for task in Path(f"/proc/{os.getpid()}/task").iterdir():  # children of every thread
+        try:
+            kids += (task / "children").read_text().split()
+        except OSError:
+            pass
     for pid in map(int, kids):
+        if pid in SESSION_PIDS:
+            continue
         try:
             state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
         except OSError:
