@@ -7,3 +7,20 @@ adds the magics and live tab completion on top of it.
 from __future__ import annotations
 
 __version__ = "0.1.0"
+
+from .dsl import rosNode  # noqa: E402
+from .errors import IpyrosError  # noqa: E402
+
+__all__ = ["rosNode", "IpyrosError", "load_ipython_extension", "unload_ipython_extension"]
+
+
+def load_ipython_extension(ipython):  # noqa: D103 - documented in ipyros.extension
+    from .extension import load_ipython_extension as load
+
+    load(ipython)
+
+
+def unload_ipython_extension(ipython):  # noqa: D103
+    from .extension import unload_ipython_extension as unload
+
+    unload(ipython)

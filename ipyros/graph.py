@@ -31,7 +31,7 @@ import time
 import xmlrpc.client
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Iterable, Mapping, Optional
+from typing import Iterable, Mapping, Optional, Sequence
 from xml.parsers.expat import ExpatError
 
 #: The caller id the master sees in its logs for our read-only queries.
@@ -72,11 +72,11 @@ class GraphSnapshot:
     # -- queries --------------------------------------------------------------
     def topics_with_prefix(self, prefix: str) -> list[str]:
         """Topic names starting with ``prefix``, sorted; O(log n + matches)."""
-        return _with_prefix(self.topic_names, prefix)
+        return names_with_prefix(self.topic_names, prefix)
 
     def nodes_with_prefix(self, prefix: str) -> list[str]:
         """Node names starting with ``prefix``, sorted."""
-        return _with_prefix(self.nodes, prefix)
+        return names_with_prefix(self.nodes, prefix)
 
     def topics_matching(self, pattern: str = "", type: Optional[str] = None, node: Optional[str] = None) -> list[str]:
         """Topic names that match all the filters given, sorted.
@@ -96,7 +96,8 @@ class GraphSnapshot:
         return list(names)
 
 
-def _with_prefix(sorted_names: tuple[str, ...], prefix: str) -> list[str]:
+def names_with_prefix(sorted_names: Sequence[str], prefix: str) -> list[str]:
+    """The names in ``sorted_names`` (sorted!) that start with ``prefix``; a bisection, not a scan."""
     start = bisect.bisect_left(sorted_names, prefix)
     # Every string with the prefix sorts before prefix + the largest code point.
     end = bisect.bisect_left(sorted_names, prefix + "\U0010ffff", start)

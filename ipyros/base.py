@@ -1,0 +1,563 @@
+"""The basenode: found as ``rosrun`` finds it, run as a managed child process.
+
+A wrapping node launches its basenode itself at ``create()``: no terminal window, no
+``rosrun`` shell script in between. This module does the two halves of that.
+
+**Lookup.** :func:`find_executable` answers ``rosrun PACKAGE EXECUTABLE``'s question in
+Python, without forking ``catkin_find`` and ``rospack``: a package's executables live
+anywhere below
+
+- its catkin *libexec* dir ``<workspace>/lib/<package>`` (Debian: ``/usr/lib/<package>``,
+  e.g. ``/usr/lib/topic_tools/relay``), for the first workspace of ``CMAKE_PREFIX_PATH``
+  that has the package (``/usr`` always counts, as Debian's catkin has it);
+- its package dir: the folder with a ``package.xml`` naming it, found by crawling
+  ``ROS_PACKAGE_PATH`` (as rospack does), else ``<workspace>/share/<package>``;
+- and ipyros's own demo package ``ipyros_demo`` (``ipyros/demo``), last.
+
+The package index is cached per ``(ROS_PACKAGE_PATH, CMAKE_PREFIX_PATH)`` so that tab
+completion answers at once; a lookup that misses drops the cache and looks once more,
+so a package or script created during the session is still found.
+
+**Process.** :class:`BaseProcess` runs the executable with ROS's command-line
+remappings (``__name:=``, ``__ns:=``, ``from:=to``, ``_param:=value``), writes its
+stdout and stderr to a log file the session can :meth:`~BaseProcess.tail`, and stops it
+the way roslaunch does (SIGINT, then SIGTERM, then SIGKILL, to its whole process group).
+A watcher thread per run blocks in ``wait()`` and reports an exit nobody asked for to
+``on_exit`` (exit code and last log lines), so a crashed basenode is news, not a hang.
+
+No orphans, in three layers: the wrapping node calls :meth:`~BaseProcess.stop` at its
+shutdown; an ``atexit`` hook stops every basenode still running when the interpreter
+exits; and if the interpreter is SIGKILLed, the kernel sends the basenode SIGTERM
+(``PR_SET_PDEATHSIG``, set by :func:`ipyros.process.spawn`).
+"""
+
+from __future__ import annotations
+
+import atexit
+import concurrent.futures
+import difflib
+import functools
+import os
+import queue
+import shlex
+import signal
+import tempfile
+import threading
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping, Optional, Sequence
+
+import yaml
+
+from .errors import BaseNodeError, NodeStateError
+from .model import BaseModel
+from .process import spawn, stop_process
+
+#: ipyros's bundled ROS package (``ipyros_demo``): a small demo robot.
+DEMO_DIR = Path(__file__).resolve().parent / "demo"
+
+_IGNORE_MARKERS = ("CATKIN_IGNORE", "COLCON_IGNORE", "AMENT_IGNORE")
+
+
+# ---------------------------------------------------------------------------
+# Lookup: packages and their executables, as rosrun finds them
+# ---------------------------------------------------------------------------
+
+
+def _workspaces() -> list[Path]:
+    """Catkin workspaces in overlay order, as ``catkin.workspace.get_workspaces`` lists them."""
+    paths = [Path(p) for p in os.environ.get("CMAKE_PREFIX_PATH", "").split(os.pathsep) if p]
+    found = [p for p in paths if (p / ".catkin").is_file()]
+    return found + [Path("/usr")] if Path("/usr") not in found else found
+
+
+def _package_name(package_dir: Path) -> Optional[str]:
+    """The ``<name>`` in a package.xml (rosbuild's manifest.xml: the folder's name)."""
+    manifest = package_dir / "package.xml"
+    if not manifest.is_file():
+        return package_dir.name if (package_dir / "manifest.xml").is_file() else None
+    try:
+        name = ET.parse(manifest).getroot().findtext("name")
+    except (ET.ParseError, OSError):
+        return None
+    return name.strip() if name else None
+
+
+def _crawl(root: Path) -> Iterable[tuple[str, Path]]:
+    """``(name, dir)`` of every package below ``root``, the way rospack crawls.
+
+    A package's own subfolders are not searched for more packages; hidden folders and
+    folders marked CATKIN_IGNORE are skipped, and ``rospack_nosubdirs`` stops the descent.
+    """
+    for current, dirs, _files in os.walk(root, followlinks=True):
+        here = Path(current)
+        name = _package_name(here)
+        if name or any((here / m).exists() for m in (*_IGNORE_MARKERS, "rospack_nosubdirs")):
+            dirs.clear()
+            if name and not any((here / m).exists() for m in _IGNORE_MARKERS):
+                yield name, here
+            continue
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+
+
+def _is_ros_share_dir(share: Path) -> bool:
+    """Whether ``<ws>/share/<name>`` belongs to a ROS package (not just any /usr/share folder).
+
+    Debian's runtime-only packages (e.g. ``topic-tools``) ship no package.xml, only a
+    catkin env hook or cmake config next to their executables in ``/usr/lib/<name>``.
+    """
+    return any((share / m).exists() for m in ("package.xml", "catkin_env_hook", f"cmake/{share.name}Config.cmake"))
+
+
+@functools.lru_cache(maxsize=4)
+def _index(env_key: tuple[str, str]) -> dict[str, Path]:
+    """Package name → package dir (first found wins: ROS_PACKAGE_PATH, workspaces, demo).
+
+    ``env_key`` is only there to key the cache on the environment that shaped it.
+    Packages with only a libexec dir map to their ``<ws>/share/<name>`` marker folder.
+    """
+    found: dict[str, Path] = {}
+    for root in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep):
+        if root and Path(root).is_dir():
+            for name, path in _crawl(Path(root)):
+                found.setdefault(name, path)
+    for ws in _workspaces():
+        share = ws / "share"
+        for lib_dir in sorted((ws / "lib").glob("*/")):
+            if _is_ros_share_dir(share / lib_dir.name):
+                found.setdefault(_package_name(share / lib_dir.name) or lib_dir.name, share / lib_dir.name)
+        for manifest in sorted(share.glob("*/package.xml")):
+            name = _package_name(manifest.parent)
+            if name:
+                found.setdefault(name, manifest.parent)
+    found.setdefault(_package_name(DEMO_DIR) or "ipyros_demo", DEMO_DIR)
+    return found
+
+
+def _env_key() -> tuple[str, str]:
+    return os.environ.get("ROS_PACKAGE_PATH", ""), os.environ.get("CMAKE_PREFIX_PATH", "")
+
+
+def _search_dirs(package: str) -> list[Path]:
+    """Where rosrun looks for ``package``'s executables: catkin libexec/share dirs, then its package dir.
+
+    Like ``catkin_find --without-underlays --libexec --share``, only the first workspace
+    that has the package counts; a libexec dir counts even for a package rospack does not
+    know (Debian ships some, like ``roslib``, without any package.xml).
+    """
+    dirs: list[Path] = []
+    for ws in _workspaces():
+        dirs = [d for d in (ws / "lib" / package, ws / "share" / package) if d.is_dir()]
+        if dirs:
+            break
+    package_dir = _index(_env_key()).get(package)
+    if package_dir is not None and package_dir.is_dir():
+        dirs.append(package_dir)
+    unique: dict[str, Path] = {}
+    for d in dirs:
+        unique.setdefault(os.path.realpath(d), d)
+    return list(unique.values())
+
+
+def _is_executable_file(path: Path) -> bool:
+    return path.is_file() and os.access(path, os.X_OK)
+
+
+@functools.lru_cache(maxsize=256)
+def _executables(package: str, env_key: tuple[str, str]) -> dict[str, tuple[Path, ...]]:
+    """Basename → executable files of ``package``, searched like rosrun's ``find -L``.
+
+    Folders named ``build`` right below a package dir (rosrun skips them) and hidden
+    folders are not searched; symlink loops are cut by remembering real paths.
+    """
+    found: dict[str, list[Path]] = {}
+    seen: set[str] = set()
+    for top in _search_dirs(package):
+        for current, dirs, files in os.walk(top, followlinks=True):
+            real = os.path.realpath(current)
+            if real in seen:
+                dirs.clear()
+                continue
+            seen.add(real)
+            dirs[:] = sorted(d for d in dirs if not d.startswith(".") and not (d == "build" and current == str(top)))
+            for f in sorted(files):
+                path = Path(current) / f
+                if _is_executable_file(path):
+                    found.setdefault(f, []).append(path)
+    return {name: tuple(paths) for name, paths in sorted(found.items())}
+
+
+def refresh_packages() -> None:
+    """Forget the cached package index (e.g. after installing or creating a package)."""
+    _index.cache_clear()
+    _executables.cache_clear()
+
+
+def list_packages() -> list[str]:
+    """Names of the ROS packages rosrun could run something from (cached; for completion)."""
+    return sorted(_index(_env_key()))
+
+
+def list_executables(package: str) -> list[str]:
+    """Names of ``package``'s executables (cached; for completion); ``[]`` for an unknown package."""
+    return list(_executables(package, _env_key()))
+
+
+def _did_you_mean(word: str, candidates: Sequence[str]) -> str:
+    close = difflib.get_close_matches(word, candidates, n=3, cutoff=0.6)
+    return f"did you mean {' or '.join(close)}?" if close else ""
+
+
+def find_executable(package: str, executable: str) -> Path:
+    """The file ``rosrun package executable`` would run.
+
+    ``executable`` may also be a path relative to the package dir (``scripts/talker``),
+    as rosrun allows. Raises :class:`BaseNodeError` naming close matches when the
+    package or executable is unknown, or when the name is ambiguous.
+    """
+    if not package or not executable:
+        raise BaseNodeError("a basenode needs a package and an executable, e.g. basePackage('topic_tools') and baseNode('relay')")
+    for fresh in (False, True):  # the second try forgets the caches: something new may have appeared
+        if fresh:
+            refresh_packages()
+        if not _search_dirs(package):
+            continue
+        if "/" in executable:
+            path = _index(_env_key()).get(package, Path("/nonexistent")) / executable
+            if _is_executable_file(path):
+                return path
+            continue
+        candidates = _executables(package, _env_key()).get(executable)
+        if candidates:
+            return _pick(package, executable, candidates)
+    raise _lookup_error(package, executable)
+
+
+def _pick(package: str, executable: str, candidates: tuple[Path, ...]) -> Path:
+    """One of several same-named files: rosrun prefers a catkin libexec one over a share/source one."""
+    if len(candidates) == 1:
+        return candidates[0]
+    libexec = [p for p in candidates if any(p.is_relative_to(ws / "lib" / package) for ws in _workspaces())]
+    if len(libexec) == 1:
+        return libexec[0]
+    raise BaseNodeError(
+        f"package {package!r} has several executables named {executable!r} ({', '.join(map(str, candidates))}): "
+        "name one by its path relative to the package, e.g. 'scripts/" + executable + "'"
+    )
+
+
+def _lookup_error(package: str, executable: str) -> BaseNodeError:
+    if not _search_dirs(package):
+        hint = _did_you_mean(package, list_packages())
+        return BaseNodeError(
+            f"unknown ROS package {package!r}: " + (hint or "check the name with `rospack list`")
+            + " (packages are searched in ROS_PACKAGE_PATH, the catkin workspaces and ipyros_demo)"
+        )
+    names = list_executables(package)
+    hint = _did_you_mean(executable.rsplit("/", 1)[-1], names)
+    listing = f"its executables: {', '.join(names)}" if names else "it has no executable files"
+    return BaseNodeError(f"package {package!r} has no executable {executable!r}: " + (f"{hint} " if hint else "") + listing)
+
+
+# ---------------------------------------------------------------------------
+# The managed process
+# ---------------------------------------------------------------------------
+
+#: ``on_exit(process, returncode, last_log_lines)``, called on the watcher thread.
+OnExit = Callable[["BaseProcess", int, list[str]], None]
+
+
+class _Launcher:
+    """A daemon thread that lives as long as the interpreter and forks every basenode.
+
+    Why not fork from whatever thread calls :meth:`BaseProcess.start`: the kernel's
+    ``PR_SET_PDEATHSIG`` fires when the *thread* that forked the child exits, not the
+    process. A basenode started from a short-lived thread (a rospy callback, a helper
+    thread in the runtime, a restart from a callback) would get SIGTERM as soon as that
+    thread ends. The main thread would do, but start() is not always called from it;
+    a dedicated thread that only ever blocks on its queue dies only with the process,
+    which is exactly when the basenode should die too.
+    """
+
+    def __init__(self) -> None:
+        self._jobs: "queue.SimpleQueue[tuple[Callable[[], Any], concurrent.futures.Future]]" = queue.SimpleQueue()
+        self._thread: Optional[threading.Thread] = None
+        self._lock = threading.Lock()
+
+    def call(self, fn: Callable[[], Any]) -> Any:
+        """Run ``fn`` on the launcher thread; return its result or raise its exception."""
+        with self._lock:
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._serve, name="ipyros-launcher", daemon=True)
+                self._thread.start()
+        if threading.current_thread() is self._thread:
+            return fn()
+        future: concurrent.futures.Future = concurrent.futures.Future()
+        self._jobs.put((fn, future))
+        return future.result()
+
+    def _serve(self) -> None:
+        while True:
+            fn, future = self._jobs.get()
+            try:
+                future.set_result(fn())
+            except BaseException as exc:  # handed to the caller, who raises it
+                future.set_exception(exc)
+
+
+_launcher = _Launcher()
+_running: set["BaseProcess"] = set()  # strong refs: a running basenode is stopped at exit even if forgotten
+_running_lock = threading.Lock()
+
+
+def param_arg(name: str, value: Any) -> str:
+    """A private parameter as a command-line argument: ``_name:=value``.
+
+    rospy reads the value as YAML, roscpp as int, double, bool or else string; plain
+    strings are passed as they are so both read them alike, and only strings that
+    YAML would read as something else (``'5'``, ``'true'``) are quoted.
+    """
+    key = name[1:] if name[:1] in ("~", "_") else name
+    if isinstance(value, bool):
+        text = "true" if value else "false"
+    elif isinstance(value, (int, float)):
+        text = repr(value)
+    elif isinstance(value, str) and _reads_back_as_itself(value):
+        text = value
+    else:
+        text = yaml.safe_dump(value, default_flow_style=True, width=1 << 20).strip()
+        text = text.removesuffix("...").strip()  # the end-of-document mark YAML puts after a bare scalar
+    return f"_{key}:={text}"
+
+
+def _reads_back_as_itself(text: str) -> bool:
+    try:
+        return bool(text) and yaml.safe_load(text) == text
+    except yaml.YAMLError:
+        return False
+
+
+def exit_reason(returncode: int) -> str:
+    """``exited with code 3`` or ``killed by SIGSEGV``: what a return code means, in words."""
+    if returncode < 0:
+        try:
+            return f"killed by {signal.Signals(-returncode).name}"
+        except ValueError:
+            return f"killed by signal {-returncode}"
+    return f"exited with code {returncode}"
+
+
+class _Run:
+    """One start of the process: the Popen, whether its end was asked for, and its watcher."""
+
+    def __init__(self, proc) -> None:
+        self.proc = proc
+        self.expected_exit = threading.Event()
+        self.watcher: Optional[threading.Thread] = None
+
+
+class BaseProcess:
+    """A basenode run as a managed child process.
+
+    ``executable`` is the file to run (see :func:`find_executable`, or
+    :meth:`from_model`); ``remaps`` maps resolved names to resolved names; ``params``
+    are the node's private parameters (``{"rate": 10}`` → ``_rate:=10``).
+    ``on_exit(proc, returncode, last_lines)`` is called, on a watcher thread, when the
+    process ends without :meth:`stop` being asked, including a crash right at start.
+
+        >>> base = BaseProcess(find_executable("topic_tools", "relay"), ["/in", "/out"],
+        ...                    node_name="relay", remaps={"/in": "/w/base/in"}).start()
+        >>> base.tail(5)
+        ['[ipyros] ... starting: /usr/lib/topic_tools/relay /in /out __name:=relay /in:=/w/base/in']
+        >>> base.stop()
+    """
+
+    def __init__(
+        self,
+        executable: "str | os.PathLike[str]",
+        args: Sequence[str] = (),
+        *,
+        node_name: Optional[str] = None,
+        namespace: Optional[str] = None,
+        remaps: Optional[Mapping[str, str]] = None,
+        params: Optional[Mapping[str, Any]] = None,
+        master_uri: Optional[str] = None,
+        log_path: "str | os.PathLike[str] | None" = None,
+        on_exit: Optional[OnExit] = None,
+        env: Optional[Mapping[str, str]] = None,
+    ) -> None:
+        self.executable = Path(executable)
+        self.argv: list[str] = [str(self.executable), *map(str, args)]
+        if node_name:
+            self.argv.append(f"__name:={node_name}")
+        if namespace:
+            self.argv.append(f"__ns:={namespace}")
+        self.argv += [f"{src}:={dst}" for src, dst in (remaps or {}).items()]
+        self.argv += [param_arg(k, v) for k, v in (params or {}).items()]
+        self.node_name = node_name
+        self.env = {**os.environ, **(env or {}), "PYTHONUNBUFFERED": "1"}  # a Python node's prints reach the log now
+        if master_uri:
+            self.env["ROS_MASTER_URI"] = master_uri
+        self.log_path = Path(log_path) if log_path else _temp_log(node_name or self.executable.name)
+        self.on_exit = on_exit
+        self._run: Optional[_Run] = None
+        self._lifecycle = threading.RLock()  # start/stop/restart one at a time
+
+    @classmethod
+    def from_model(
+        cls,
+        base: BaseModel,
+        *,
+        remaps: Optional[Mapping[str, str]] = None,
+        master_uri: Optional[str] = None,
+        log_path: "str | os.PathLike[str] | None" = None,
+        on_exit: Optional[OnExit] = None,
+    ) -> "BaseProcess":
+        """The process for a declared basenode; ``remaps`` (the wrapping's) add to the model's own.
+
+        Without a package, ``base.executable`` must be a path to an executable file.
+        """
+        if not base.executable:
+            raise BaseNodeError("no basenode executable declared: call baseNode('executable') and basePackage('package')")
+        if base.package:
+            path = find_executable(base.package, base.executable)
+        else:
+            path = Path(base.executable).expanduser()
+            if not _is_executable_file(path):
+                raise BaseNodeError(
+                    f"basenode {base.executable!r} is not an executable file: give its package with basePackage('...'), "
+                    "or a path to an executable"
+                )
+        return cls(
+            path, base.args, node_name=base.node_name, namespace=base.namespace,
+            remaps={**base.remaps, **(remaps or {})}, params=base.params,
+            master_uri=master_uri, log_path=log_path, on_exit=on_exit,
+        )
+
+    # -- state ---------------------------------------------------------------
+    @property
+    def pid(self) -> Optional[int]:
+        """The process id while it runs, else None."""
+        return self._run.proc.pid if self.running else None
+
+    @property
+    def running(self) -> bool:
+        run = self._run
+        return run is not None and run.proc.returncode is None
+
+    @property
+    def returncode(self) -> Optional[int]:
+        """How the last run ended (negative: killed by that signal); None while running or never run."""
+        run = self._run
+        return None if run is None else run.proc.returncode
+
+    def __repr__(self) -> str:
+        state = f"running, pid {self.pid}" if self.running else (
+            "not started" if self._run is None else exit_reason(self.returncode))
+        return f"<BaseProcess {self.executable.name} ({state}), log {self.log_path}>"
+
+    # -- lifecycle -----------------------------------------------------------
+    def start(self) -> "BaseProcess":
+        """Launch the process; raise :class:`BaseNodeError` if it cannot be executed at all."""
+        with self._lifecycle:
+            if self.running:
+                raise NodeStateError(f"basenode {self.executable.name} is already running (pid {self.pid}); use restart()")
+            self._note(f"starting: {shlex.join(self.argv)}")
+            with open(self.log_path, "ab", buffering=0) as log:
+                try:
+                    proc = _launcher.call(lambda: spawn(self.argv, env=self.env, log=log.fileno()))
+                except OSError as exc:
+                    self._note(f"could not start: {exc}")
+                    raise BaseNodeError(f"cannot run basenode {self.argv[0]}: {exc.strerror or exc}; check that it is an executable file") from None
+            run = self._run = _Run(proc)
+            with _running_lock:
+                _running.add(self)
+            run.watcher = threading.Thread(target=self._watch, args=(run,), name=f"ipyros-watch-{proc.pid}", daemon=True)
+            run.watcher.start()
+            return self
+
+    def stop(self, timeout: float = 5.0) -> Optional[int]:
+        """Stop the process and its process group: SIGINT, then SIGTERM, then SIGKILL; return its exit code.
+
+        Returns None if it was never started. Stopping a process that already ended is a no-op.
+        """
+        with self._lifecycle:
+            run = self._run
+            if run is None:
+                return None
+            run.expected_exit.set()
+            returncode = stop_process(run.proc, timeout)
+            if run.watcher is not None and run.watcher is not threading.current_thread():
+                run.watcher.join()  # the watcher has the exit written to the log when stop() returns
+            return returncode
+
+    def restart(self, timeout: float = 5.0) -> "BaseProcess":
+        """Stop (if running) and start again with the same argv: same remaps, params and log file."""
+        with self._lifecycle:
+            self.stop(timeout)
+            return self.start()
+
+    # -- log -----------------------------------------------------------------
+    def tail(self, n: int = 20) -> list[str]:
+        """The last ``n`` lines of the log (the process's stdout and stderr, and ipyros's notes)."""
+        return _last_lines(self.log_path, n)
+
+    def _note(self, text: str) -> None:
+        """A line of ipyros's own in the log, so that the log tells the whole story."""
+        with open(self.log_path, "a", encoding="utf-8") as log:
+            log.write(f"[ipyros] {time.strftime('%H:%M:%S')} {text}\n")
+
+    def _watch(self, run: _Run) -> None:
+        """Block until the process ends (no polling), then tell ``on_exit`` if nobody asked for it."""
+        returncode = run.proc.wait()
+        with _running_lock:
+            if self._run is run:
+                _running.discard(self)
+        last_lines = self.tail()
+        if run.expected_exit.is_set():
+            self._note(f"stopped ({exit_reason(returncode)})")
+            return
+        self._note(f"basenode {exit_reason(returncode)}")
+        if self.on_exit is not None:
+            try:
+                self.on_exit(self, returncode, last_lines)
+            except Exception as exc:  # a broken callback must not go unnoticed, nor kill the watcher silently
+                self._note(f"on_exit callback failed: {exc!r}")
+
+
+def _temp_log(label: str) -> Path:
+    """A fresh log file in the temp dir, named after the basenode."""
+    fd, path = tempfile.mkstemp(prefix=f"ipyros-{label.strip('/').replace('/', '_')}-", suffix=".log")
+    os.close(fd)
+    return Path(path)
+
+
+def _last_lines(path: Path, n: int) -> list[str]:
+    """The last ``n`` lines of a text file, reading backwards from its end (logs can be large)."""
+    if n <= 0:
+        return []
+    try:
+        with open(path, "rb") as f:
+            end = f.seek(0, os.SEEK_END)
+            chunk, data = 8192, b""
+            while end > 0 and data.count(b"\n") <= n:
+                start = max(0, end - chunk)
+                f.seek(start)
+                data = f.read(end - start) + data
+                end = start
+    except FileNotFoundError:
+        return []
+    return data.decode("utf-8", errors="replace").splitlines()[-n:]
+
+
+@atexit.register
+def stop_all(timeout: float = 3.0) -> None:
+    """Stop every basenode still running (registered with atexit: the interpreter leaves no orphan)."""
+    with _running_lock:
+        live = list(_running)
+    for proc in live:
+        try:
+            proc.stop(timeout)
+        except Exception:  # at exit, one basenode's trouble must not spare the others
+            pass

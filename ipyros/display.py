@@ -1,0 +1,122 @@
+"""Rich renderables for nodes and their status, and how to print them anywhere.
+
+Renderables are built from plain data (the model, slot figures) and never from rospy,
+so they look the same in a terminal, in a notebook (as HTML) and in plain text.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from rich.console import Console
+from rich.table import Table
+
+
+if TYPE_CHECKING:
+    from .dsl import rosNode
+
+
+def node_table(node: "rosNode") -> Table:
+    """The node's declared structure: one row per topic, timer, service and parameter."""
+    model = node.model()
+    state = "[green]running[/]" if node.created else "[yellow]declared[/]"
+    title = f"rosNode [bold]{node.fullname}[/] ({state})"
+    if model.base is not None:
+        title += f" wrapping [bold]{model.base.package or '?'}/{model.base.executable or '?'}[/]"
+    table = Table(title=title, title_justify="left", show_lines=False)
+    for column in ("kind", "name", "type", "role", "handler"):
+        table.add_column(column)
+    for t in model.topics:
+        table.add_row(t.direction + (" (latched)" if t.latch else ""), t.resolved, t.type, t.role, t.handler or "")
+    for s in model.services:
+        table.add_row("service", s.resolved, s.type, s.role, s.handler or "")
+    for timer in model.timers:
+        table.add_row("timer", timer.name, f"every {timer.period:g} s" + (" once" if timer.oneshot else ""),
+                      "new", timer.handler)
+    for key, value in model.params.items():
+        table.add_row("param", f"~{key}", repr(value), "", "")
+    if not table.row_count:
+        table.add_row("", "[dim]nothing declared yet[/]", "", "", "")
+    return table
+
+
+@dataclass(frozen=True)
+class StatusRow:
+    kind: str
+    name: str
+    handler: str
+    calls: int
+    rate_hz: float
+    mean_ms: float
+    max_ms: float
+    errors: int
+
+
+@dataclass(frozen=True)
+class NodeStatus:
+    """Per handler of a node: calls, rate, handler time and exceptions; rich-renderable."""
+
+    node: str
+    running: bool
+    rows: tuple[StatusRow, ...]
+
+    @classmethod
+    def of(cls, node: "rosNode") -> "NodeStatus":
+        rows = []
+        for key, slot in sorted(node._slots.items()):
+            kind, name = key.split(" ", 1)
+            f = slot.figures()
+            rows.append(StatusRow(kind, name, getattr(slot.handler, "__name__", "?"), f.calls, f.rate_hz,
+                                  f.mean_ms, f.max_ms, f.errors))
+        return cls(node.fullname, node.created, tuple(rows))
+
+    def row(self, name: str) -> StatusRow:
+        return next(r for r in self.rows if r.name == name)
+
+    def __rich__(self) -> Table:
+        table = Table(title=f"status of {self.node}" + ("" if self.running else " (not running)"),
+                      title_justify="left")
+        for column, justify in (("kind", "left"), ("name", "left"), ("handler", "left"), ("calls", "right"),
+                                ("rate Hz", "right"), ("mean ms", "right"), ("max ms", "right"),
+                                ("errors", "right")):
+            table.add_column(column, justify=justify)  # type: ignore[arg-type]
+        for r in self.rows:
+            errors = f"[red]{r.errors}[/]" if r.errors else "0"
+            table.add_row(r.kind, r.name, r.handler, str(r.calls), f"{r.rate_hz:.1f}", f"{r.mean_ms:.3f}",
+                          f"{r.max_ms:.3f}", errors)
+        return table
+
+    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
+        printer.text(render_text(self))
+
+    def _repr_html_(self) -> str:
+        return render_html(self)
+
+
+def render_text(renderable: Any, width: int = 100) -> str:
+    """Render to a string: colours only when stdout is a terminal."""
+    import sys
+
+    buffer = io.StringIO()
+    console = Console(file=buffer, width=_width(width), force_terminal=sys.stdout.isatty(),
+                      color_system="auto" if sys.stdout.isatty() else None)
+    console.print(renderable)
+    return buffer.getvalue().rstrip("\n")
+
+
+def render_html(renderable: Any) -> str:
+    """Render as an HTML fragment for Jupyter."""
+    console = Console(record=True, file=io.StringIO(), width=120)
+    console.print(renderable)
+    return console.export_html(inline_styles=True, code_format="<pre style=\"font-family:monospace\">{code}</pre>")
+
+
+def _width(default: int) -> int:
+    import shutil
+
+    return max(60, shutil.get_terminal_size((default, 24)).columns)
+
+
+__all__ = ["NodeStatus", "StatusRow", "node_table", "render_text", "render_html"]

@@ -1,0 +1,532 @@
+"""The paper's internal DSL: ``rosNode``, ``new``/``reuse``, ``subscribe``, ``publish``, ``create``, ``write``.
+
+Each call validates its input, edits the node's :class:`~ipyros.model.NodeModel`, and,
+once the node runs, makes the live node match at once (:mod:`ipyros.plan` says which
+endpoints must exist; :mod:`ipyros.runtime` opens and closes them). A rejected
+declaration raises a one-line error and changes nothing, neither model nor running node.
+
+    nd = rosNode("turtle_control_node")
+    (nd.new.subscribe(topic="/turtle1/pose", handler=showPose, msgType=Pose)
+           .publish(topic="/turtle1/cmd_vel", msgType=Twist))
+    nd.create()
+    nd.write("/turtle1/cmd_vel", msg)
+"""
+
+from __future__ import annotations
+
+import copy
+import threading
+from collections.abc import MutableMapping
+from typing import Any, Callable, Iterator, Optional
+
+from . import msgtypes, names, plan as planning, runtime
+from .errors import (DeclarationError, HandlerError, IpyrosError, MessageTypeError, NodeStateError,
+                     NotDeclaredError, TopicTypeConflict)
+from .model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from .plan import Spec
+from .session import Session, current
+from .slots import HandlerSlot, call_arity
+
+_UNSET: Any = object()
+
+
+class rosNode:  # noqa: N801 - the paper's name
+    """A ROS node declared, created and reshaped from the prompt.
+
+    ``namespace`` defaults to ``ROS_NAMESPACE`` (or ``/``). Several rosNodes can live in
+    one session: they share the process's single rospy node (see the README).
+    """
+
+    def __init__(self, name: str, namespace: Optional[str] = None, *, session: Optional[Session] = None) -> None:
+        self._session = session or current()
+        ns = names.default_namespace() if namespace is None else names.rosnames.make_global_ns(namespace)
+        self._model = NodeModel(name=names.check_node_name(name), namespace=ns)
+        self._handlers: dict[str, Callable[..., Any]] = {}  # slot key → the user's function
+        self._takes_argument: dict[str, bool] = {}  # slot key → call the handler with the message/event?
+        self._slots: dict[str, HandlerSlot] = {}
+        self._live: dict[Spec, Any] = {}  # spec → runtime endpoint
+        self._writers: dict[str, tuple[Any, str]] = {}  # topic as typed → (publication, type)
+        self._lock = threading.RLock()
+        self._base: Any = None  # the basenode process, for wrapping nodes
+        self.created = False
+        self.new = TopicHandler(self, "new")
+        self.reuse = TopicHandler(self, "reuse")
+        self.params = NodeParams(self)
+
+    # -- identity ---------------------------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self._model.name
+
+    @property
+    def fullname(self) -> str:
+        return planning.node_fullname(self._model)
+
+    @property
+    def ros_name(self) -> Optional[str]:
+        """The ROS node that hosts this node's endpoints (shared by the session's nodes)."""
+        return self._session.process.name if self.created else None
+
+    def model(self) -> NodeModel:
+        """A copy of the declared structure, as plain data."""
+        with self._lock:
+            return copy.deepcopy(self._model)
+
+    def handler(self, topic: str) -> Optional[Callable[..., Any]]:
+        """The function now serving subscription ``topic`` (or service / timer name)."""
+        resolved = self._resolve(topic, "topic")
+        for key in (planning.topic_slot(resolved), planning.service_slot(resolved), planning.timer_slot(topic)):
+            if key in self._handlers:
+                return self._handlers[key]
+        return None
+
+    def resolve(self, name: str) -> str:
+        """The global name ``name`` has for this node."""
+        return self._resolve(name, "topic")
+
+    def _resolve(self, name: str, kind: str) -> str:
+        return names.resolve(name, self._model.namespace, self._model.name, kind)
+
+    # -- the basenode ----------------------------------------------------------------
+    def baseNode(self, executable: str, **options: Any) -> "rosNode":  # noqa: N802 - the paper's name
+        """Wrap the basenode run by ``executable`` (its package is given by :meth:`basePackage`).
+
+        Options: ``name`` (node name, default the executable's), ``namespace``, ``remaps``
+        (dict), ``params`` (private parameters), ``args`` (list of arguments).
+        """
+        from .wrap import set_base
+
+        return set_base(self, executable=executable, **options)
+
+    def basePackage(self, package: str) -> "rosNode":  # noqa: N802 - the paper's name
+        """The package of the basenode, found as rosrun finds it."""
+        from .wrap import set_base
+
+        return set_base(self, package=package)
+
+    @property
+    def base(self) -> Any:
+        """The running basenode process (log tail, stop, restart), or None."""
+        return self._base
+
+    # -- lifecycle ------------------------------------------------------------------
+    def create(self) -> "rosNode":
+        """Start the node: everything declared so far begins to run."""
+        with self._lock:
+            if self.created:
+                return self
+            from .wrap import check_wrapping, start_base
+
+            check_wrapping(self._model)
+            self._session.add(self)
+            try:
+                self._session.start_process_node(self.fullname)
+                self._check_live_types(self._model.topics)
+                self._set_params(self._model.params)
+                self._open(planning.plan(self._model))
+                self.created = True
+                start_base(self)
+            except BaseException:
+                self._close_all()
+                self.created = False
+                self._session.remove(self)
+                raise
+            return self
+
+    def shutdown(self) -> None:
+        """Stop the node's publishers, subscribers, timers, services and its basenode."""
+        with self._lock:
+            if self._base is not None:
+                self._base.stop()
+            self._close_all()
+            self.created = False
+            self._session.remove(self)
+
+    # -- timers -----------------------------------------------------------------------
+    def timer(self, period: float, handler: Callable[..., Any], *, name: Optional[str] = None,
+              oneshot: bool = False) -> "rosNode":
+        """Call ``handler`` every ``period`` seconds (once if ``oneshot``).
+
+        Declaring a timer with the same ``name`` (default: the handler's name) replaces it.
+        """
+        if isinstance(period, bool) or not isinstance(period, (int, float)) or not period > 0:
+            raise DeclarationError(f"timer period must be a positive number of seconds, not {period!r}")
+        name = name or getattr(handler, "__name__", "timer")
+        label = f"{self.name} timer {name}"
+        takes_event = call_arity(handler, "timer", label)
+        timer = TimerModel(name=name, period=float(period), handler=_name_of(handler), oneshot=oneshot)
+
+        def edit(model: NodeModel) -> None:
+            model.timers = [t for t in model.timers if t.name != name] + [timer]
+
+        self._change(edit, {planning.timer_slot(name): (handler, takes_event)})
+        return self
+
+    # -- removal ---------------------------------------------------------------------
+    def remove(self, topic: Optional[str] = None, *, timer: Optional[str] = None,
+               service: Optional[str] = None) -> "rosNode":
+        """Remove every declaration of ``topic``, or the named ``timer`` or ``service``."""
+        if topic is not None:
+            resolved = self._resolve(topic, "topic")
+            if not any(t.resolved == resolved for t in self._model.topics):
+                raise NotDeclaredError(f"{self.name} has no topic {resolved}; nd.model() lists what it has")
+
+            def edit(model: NodeModel) -> None:
+                model.topics = [t for t in model.topics if t.resolved != resolved]
+
+            self._change(edit, drop=[planning.topic_slot(resolved)])
+        if timer is not None:
+            if self._model.timer(timer) is None:
+                known = ", ".join(t.name for t in self._model.timers) or "none"
+                raise NotDeclaredError(f"{self.name} has no timer {timer!r} (timers: {known})")
+            self._change(lambda m: setattr(m, "timers", [t for t in m.timers if t.name != timer]),
+                         drop=[planning.timer_slot(timer)])
+        if service is not None:
+            resolved = self._resolve(service, "service")
+            if not any(s.resolved == resolved for s in self._model.services):
+                raise NotDeclaredError(f"{self.name} has no service {resolved}")
+            self._change(lambda m: setattr(m, "services", [s for s in m.services if s.resolved != resolved]),
+                         drop=[planning.service_slot(resolved)])
+        return self
+
+    # -- writing ----------------------------------------------------------------------
+    def write(self, topic: str, msg: Any) -> None:
+        """Publish ``msg`` on ``topic``, which this node must publish."""
+        writer = self._writers.get(topic)
+        if writer is None:
+            writer = self._writer(topic)
+        publication, type_name = writer
+        if getattr(msg, "_type", None) != type_name:
+            got = getattr(msg, "_type", None) or type(msg).__name__
+            raise MessageTypeError(f"{topic} carries {type_name}, not {got}; "
+                                   f"build a {type_name.split('/')[1]}() and write that")
+        publication.write(msg)
+
+    def _writer(self, topic: str) -> tuple[Any, str]:
+        resolved = self._resolve(topic, "topic")
+        with self._lock:
+            target = planning.write_target(self._model, resolved)
+            if target is None:
+                raise NotDeclaredError(
+                    f"{self.name} does not publish {resolved}; declare it first: "
+                    f"{self.name}.new.publish(topic={topic!r}, msgType=...)")
+            if not self.created:
+                raise NodeStateError(f"{self.name} is not running; call {self.name}.create() before write()")
+            declared = next(t.type for t in self._model.topics if t.resolved == resolved)
+            publication = next(ep for spec, ep in self._live.items()
+                               if isinstance(spec, planning.PublishSpec) and spec.topic == target)
+            self._writers[topic] = (publication, declared)
+            return publication, declared
+
+    # -- status and display ---------------------------------------------------------------
+    def status(self) -> "Any":
+        """Per topic, timer and service: rate, handler time and exception count."""
+        from .display import NodeStatus
+
+        return NodeStatus.of(self)
+
+    def slot(self, key: str) -> Optional[HandlerSlot]:
+        return self._slots.get(key)
+
+    def __repr__(self) -> str:
+        state = "running" if self.created else "declared"
+        return f"<rosNode {self.fullname} ({state}): {len(self._model.topics)} topics, " \
+               f"{len(self._model.timers)} timers, {len(self._model.services)} services>"
+
+    def __rich__(self) -> Any:
+        from .display import node_table
+
+        return node_table(self)
+
+    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
+        from .display import render_text
+
+        printer.text(repr(self) if cycle else render_text(self.__rich__()))
+
+    def _repr_html_(self) -> str:
+        from .display import render_html
+
+        return render_html(self.__rich__())
+
+    # -- the one place where the model and the live node change ------------------------------
+    def _change(self, edit: Callable[[NodeModel], None],
+                handlers: Optional[dict[str, tuple[Callable[..., Any], bool]]] = None,
+                drop: tuple[str, ...] | list[str] = (), check: tuple[TopicModel, ...] = ()) -> None:
+        """Apply ``edit`` to a copy of the model; if the node runs, reconcile; then commit.
+
+        Either everything happens or nothing does: a failure while opening endpoints closes
+        what was opened and reopens what was closed.
+        """
+        with self._lock:
+            new_model = copy.deepcopy(self._model)
+            edit(new_model)
+            if self.created:
+                self._check_live_types(check)
+                self._reconcile(new_model, handlers or {})
+            for key in drop:
+                self._handlers.pop(key, None)
+            for key, (handler, _) in (handlers or {}).items():
+                self._handlers[key] = handler
+            self._takes_argument.update({k: takes for k, (_, takes) in (handlers or {}).items()})
+            self._model = new_model
+            self._writers.clear()
+
+    def _reconcile(self, new_model: NodeModel, handlers: dict[str, tuple[Callable[..., Any], bool]]) -> None:
+        old = planning.plan(self._model)
+        new = planning.plan(new_model)
+        removed = [s for s in old if s not in new]
+        added = [s for s in new if s not in old]
+        # Swap first: a slot that stays keeps its subscription, so no message is lost.
+        for key, (handler, takes) in handlers.items():
+            if key in self._slots:
+                self._slots[key].swap(handler, takes)
+        closed = []
+        for spec in removed:  # before opening: a topic whose type changed must be freed first
+            self._live.pop(spec).close()
+            closed.append(spec)
+        pending = dict(self._handlers)
+        pending.update({k: h for k, (h, _) in handlers.items()})
+        takes_arg = dict(self._takes_argument)
+        takes_arg.update({k: t for k, (_, t) in handlers.items()})
+        try:
+            self._open(added, pending, takes_arg)
+        except BaseException:
+            for spec in added:
+                endpoint = self._live.pop(spec, None)
+                if endpoint is not None:
+                    endpoint.close()
+            self._open(closed)
+            raise
+        still_used = {getattr(s, "slot", None) for s in new}
+        for key in list(self._slots):
+            if key not in still_used:
+                del self._slots[key]
+
+    def _open(self, specs: Any, handlers: Optional[dict[str, Callable[..., Any]]] = None,
+              takes_arg: Optional[dict[str, bool]] = None) -> None:
+        handlers = self._handlers if handlers is None else handlers
+        takes_arg = self._takes_argument if takes_arg is None else takes_arg
+        for spec in specs:
+            try:
+                self._live[spec] = self._open_one(spec, handlers, takes_arg)
+            except IpyrosError:
+                raise
+            except Exception as error:  # rospy's own complaint, made one line
+                raise DeclarationError(f"cannot open {type(spec).__name__[:-4].lower()} "
+                                       f"{getattr(spec, 'topic', None) or getattr(spec, 'name', '')}: {error}") from None
+
+    def _open_one(self, spec: Spec, handlers: dict[str, Callable[..., Any]], takes_arg: dict[str, bool]) -> Any:
+        if isinstance(spec, planning.PublishSpec):
+            return runtime.Publication(spec.topic, msgtypes.resolve_message(spec.type)[1], spec.latch)
+        if isinstance(spec, planning.RelaySpec):
+            return runtime.Relay(spec.source, spec.target, msgtypes.resolve_message(spec.type)[1])
+        if isinstance(spec, planning.ServiceRelaySpec):
+            return runtime.ServiceRelay(spec.source, spec.target, msgtypes.resolve_service(spec.type)[1])
+        slot = self._slots.get(spec.slot)
+        if slot is None:
+            label = f"{self.name} {spec.slot.split(' ', 1)[1]}"
+            slot = HandlerSlot(label, handlers[spec.slot], self._report, pass_argument=takes_arg.get(spec.slot, True))
+            self._slots[spec.slot] = slot
+        if isinstance(spec, planning.SubscribeSpec):
+            return runtime.Subscription(spec.topic, msgtypes.resolve_message(spec.type)[1], slot)
+        if isinstance(spec, planning.TimerSpec):
+            return runtime.Timer(spec.period, slot, spec.oneshot)
+        return runtime.ServiceServer(spec.name, msgtypes.resolve_service(spec.type)[1], slot)
+
+    def _report(self, failure: Any) -> None:
+        self._session.report(failure)
+
+    def _close_all(self) -> None:
+        for spec in reversed(list(self._live)):
+            try:
+                self._live.pop(spec).close()
+            except Exception:  # closing must go on: a half-closed node is worse
+                pass
+        self._writers.clear()
+
+    def _check_live_types(self, topics: Any) -> None:
+        """Refuse a declared type that differs from the type the topic already has on the master."""
+        if not topics or self._session.master is None:
+            return
+        from .master import live_topic_types
+
+        live = live_topic_types(self._session.master.uri)
+        for t in topics:
+            have = live.get(t.resolved)
+            if have and have != t.type and have != "*":
+                raise TopicTypeConflict(f"{t.resolved} already carries {have} on the master, not {t.type}; "
+                                        f"declare msgType={have!r} or use another topic name")
+
+    def _set_params(self, params: dict[str, Any]) -> None:
+        for key, value in params.items():
+            runtime.set_param(self._resolve("~" + key, "parameter"), value)
+
+
+class TopicHandler:
+    """``node.new`` or ``node.reuse``: declares topics and services, chainable."""
+
+    def __init__(self, node: rosNode, role: str) -> None:
+        self._node = node
+        self._role = role
+
+    def __repr__(self) -> str:
+        return f"<{self._node.name}.{self._role}: subscribe(), publish(), service(), unsubscribe(), unpublish()>"
+
+    def subscribe(self, topic: str, handler: Optional[Callable[..., Any]] = None, msgType: Any = _UNSET,
+                  type: Any = _UNSET) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
+        """Subscribe ``handler(msg)`` to ``topic``; declaring it again swaps the handler live."""
+        node, role = self._node, self._role
+        resolved = node._resolve(topic, "topic")
+        type_name, _ = msgtypes.resolve_message(_one_type(msgType, type, topic))
+        label = f"{node.name} {resolved}"
+        handlers = {}
+        if role == "new":
+            if handler is None:
+                raise HandlerError(f"new.subscribe({topic!r}) needs handler=...: the function called with "
+                                   "each message")
+            handlers[planning.topic_slot(resolved)] = (handler, call_arity(handler, "subscribe", label))
+        elif handler is not None:
+            raise HandlerError(f"reuse.subscribe({topic!r}) relays messages unchanged and takes no handler; "
+                               "to handle them use new.subscribe(..., handler=...)")
+        entry = TopicModel(topic, resolved, "subscribe", type_name, role, _name_of(handler))
+        node._change(_replace_topic(entry), handlers, check=(entry,))
+        return self
+
+    def publish(self, topic: str, msgType: Any = _UNSET, type: Any = _UNSET,
+                latch: bool = False) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
+        """Publish ``topic``; ``node.write(topic, msg)`` sends on it."""
+        node = self._node
+        resolved = node._resolve(topic, "topic")
+        type_name, _ = msgtypes.resolve_message(_one_type(msgType, type, topic))
+        entry = TopicModel(topic, resolved, "publish", type_name, self._role, None, bool(latch))
+        node._change(_replace_topic(entry), check=(entry,))
+        return self
+
+    def create(self) -> rosNode:
+        """Create the node, so a declaration chain can end with ``.create()``."""
+        return self._node.create()
+
+    def unsubscribe(self, topic: str) -> "TopicHandler":
+        """Drop this role's subscription to ``topic``."""
+        return self._drop(topic, "subscribe")
+
+    def unpublish(self, topic: str) -> "TopicHandler":
+        """Drop this role's publication of ``topic``."""
+        return self._drop(topic, "publish")
+
+    def _drop(self, topic: str, direction: str) -> "TopicHandler":
+        node, role = self._node, self._role
+        resolved = node._resolve(topic, "topic")
+        if node._model.topic(resolved, direction, role) is None:  # type: ignore[arg-type]
+            raise NotDeclaredError(f"{node.name} has no {role}.{direction} of {resolved}")
+
+        def edit(model: NodeModel) -> None:
+            model.topics = [t for t in model.topics
+                            if not (t.resolved == resolved and t.direction == direction and t.role == role)]
+
+        drop = [planning.topic_slot(resolved)] if direction == "subscribe" and role == "new" else []
+        node._change(edit, drop=drop)
+        return self
+
+    def service(self, name: str, srvType: Any = _UNSET, handler: Optional[Callable[..., Any]] = None,
+                type: Any = _UNSET) -> "TopicHandler":  # noqa: A002,N803
+        """Serve ``name`` with ``handler(request) -> response`` (new), or relay the basenode's (reuse)."""
+        node, role = self._node, self._role
+        resolved = node._resolve(name, "service")
+        type_name, _ = msgtypes.resolve_service(_one_type(srvType, type, name))
+        handlers = {}
+        if role == "new":
+            if handler is None:
+                raise HandlerError(f"new.service({name!r}) needs handler=...: called with each request, "
+                                   "returns the response")
+            handlers[planning.service_slot(resolved)] = (handler, call_arity(handler, "service", f"{node.name} {resolved}"))
+        elif handler is not None:
+            raise HandlerError(f"reuse.service({name!r}) relays the basenode's service and takes no handler; "
+                               "to answer it yourself use new.service(..., handler=...)")
+        entry = ServiceModel(name, resolved, type_name, role, _name_of(handler))
+
+        def edit(model: NodeModel) -> None:
+            model.services = [s for s in model.services if not (s.resolved == resolved and s.role == role)]
+            model.services.append(entry)
+
+        node._change(edit, handlers)
+        return self
+
+
+class NodeParams(MutableMapping):
+    """The node's private (``~name``) parameters: live on the parameter server once created."""
+
+    def __init__(self, node: rosNode) -> None:
+        self._node = node
+
+    def _name(self, key: str) -> str:
+        if not isinstance(key, str) or key.startswith(("/", "~")):
+            raise DeclarationError(f"parameter key {key!r}: give the private name without ~ or /, e.g. 'gain'")
+        return self._node._resolve("~" + key, "parameter")
+
+    def __getitem__(self, key: str) -> Any:
+        name = self._name(key)
+        if self._node.created:
+            if not runtime.has_param(name):
+                raise KeyError(key)
+            return runtime.get_param(name)
+        return self._node._model.params[key]
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        name = self._name(key)
+        node = self._node
+        with node._lock:
+            if node.created:
+                runtime.set_param(name, value)
+            node._model.params[key] = value
+
+    def __delitem__(self, key: str) -> None:
+        name = self._name(key)
+        node = self._node
+        with node._lock:
+            if key not in node._model.params and not (node.created and runtime.has_param(name)):
+                raise KeyError(key)
+            if node.created and runtime.has_param(name):
+                runtime.delete_param(name)
+            node._model.params.pop(key, None)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(list(self._node._model.params))
+
+    def __len__(self) -> int:
+        return len(self._node._model.params)
+
+    def __repr__(self) -> str:
+        return f"<{self._node.name}.params {dict(self.items())!r}>"
+
+
+def _replace_topic(entry: TopicModel) -> Callable[[NodeModel], None]:
+    """An edit that declares ``entry``, replacing the same topic/direction/role if declared."""
+
+    def edit(model: NodeModel) -> None:
+        for other in model.topics:
+            if other.resolved == entry.resolved and other.type != entry.type and \
+                    (other.direction, other.role) != (entry.direction, entry.role):
+                raise TopicTypeConflict(
+                    f"{entry.resolved} is already declared as {other.role}.{other.direction} with {other.type}; "
+                    f"use the same type, or remove it first ({model.name}.remove({entry.name!r}))")
+        model.topics = [t for t in model.topics
+                        if not (t.resolved == entry.resolved and t.direction == entry.direction
+                                and t.role == entry.role)]
+        model.topics.append(entry)
+
+    return edit
+
+
+def _one_type(msg_type: Any, type_: Any, name: str) -> Any:
+    if msg_type is not _UNSET and type_ is not _UNSET and msg_type is not type_ and msg_type != type_:
+        raise MessageTypeError(f"{name}: msgType={msg_type!r} and type={type_!r} disagree; give just one")
+    chosen = msg_type if msg_type is not _UNSET else type_
+    if chosen is _UNSET:
+        raise MessageTypeError(f"{name}: no message type given; add msgType=... e.g. msgType=Twist "
+                               "or msgType='geometry_msgs/Twist'")
+    return chosen
+
+
+def _name_of(handler: Any) -> Optional[str]:
+    return None if handler is None else getattr(handler, "__name__", type(handler).__name__)

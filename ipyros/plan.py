@@ -1,0 +1,152 @@
+"""From a node model to the endpoints that must run, and the basenode's remaps.
+
+This is where the wrapping semantics live (DESIGN.md, "Wrapping, precisely"), as a
+pure function of the model: the runtime only opens what the plan lists and closes
+what it no longer lists. For a wrapping node W around basenode B, every base topic W
+declares gets an *internal* name ``/W/base/<topic>`` and B is launched remapped onto
+it, so B talks only to W there:
+
+==============================  ==========================================================
+declared                        runs
+==============================  ==========================================================
+reuse.publish(T)                relay internal(T) → T (bytes, not deserialised)
+reuse.publish(T) + new.subscribe(T, h)   h gets B's messages; nothing reaches T unless h writes it
+reuse.subscribe(T)              relay T → internal(T)
+reuse.subscribe(T) + new.subscribe(T, h) h gets T's messages; ``write(T)`` feeds B
+new.publish(X) / new.subscribe(X, h)     plain publisher / subscriber on X
+reuse.service(S)                W serves S by calling B's internal(S)
+reuse.service(S) + new.service(S, h)     h serves S; B's S stays reachable at internal(S)
+==============================  ==========================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Union
+
+from rosgraph import names as rosnames
+
+from .model import NodeModel
+
+
+@dataclass(frozen=True)
+class PublishSpec:
+    topic: str
+    type: str
+    latch: bool = False
+
+
+@dataclass(frozen=True)
+class SubscribeSpec:
+    topic: str
+    type: str
+    slot: str  # key of the handler slot that serves it
+
+
+@dataclass(frozen=True)
+class RelaySpec:
+    source: str
+    target: str
+    type: str
+
+
+@dataclass(frozen=True)
+class TimerSpec:
+    name: str
+    period: float
+    oneshot: bool
+    slot: str
+
+
+@dataclass(frozen=True)
+class ServiceSpec:
+    name: str
+    type: str
+    slot: str
+
+
+@dataclass(frozen=True)
+class ServiceRelaySpec:
+    source: str
+    target: str
+    type: str
+
+
+Spec = Union[PublishSpec, SubscribeSpec, RelaySpec, TimerSpec, ServiceSpec, ServiceRelaySpec]
+
+
+def topic_slot(resolved: str) -> str:
+    return f"topic {resolved}"
+
+
+def timer_slot(name: str) -> str:
+    return f"timer {name}"
+
+
+def service_slot(resolved: str) -> str:
+    return f"service {resolved}"
+
+
+def node_fullname(model: NodeModel) -> str:
+    return rosnames.ns_join(rosnames.make_global_ns(model.namespace), model.name)
+
+
+def internal_name(model: NodeModel, resolved: str) -> str:
+    """Where the basenode is remapped to for base topic/service ``resolved``."""
+    return node_fullname(model) + "/base" + resolved
+
+
+def base_remaps(model: NodeModel) -> dict[str, str]:
+    """The ``from:=to`` remaps the basenode is launched with (user remaps first)."""
+    remaps = dict(model.base.remaps) if model.base else {}
+    for t in model.topics:
+        if t.role == "reuse":
+            remaps[t.resolved] = internal_name(model, t.resolved)
+    for s in model.services:
+        if s.role == "reuse":
+            remaps[s.resolved] = internal_name(model, s.resolved)
+    return remaps
+
+
+def plan(model: NodeModel) -> dict[Spec, None]:
+    """The endpoints the node needs now, in a stable order (a dict used as an ordered set)."""
+    specs: dict[Spec, None] = {}
+    reused_out = {t.resolved for t in model.topics if t.role == "reuse" and t.direction == "publish"}
+    reused_in = {t.resolved for t in model.topics if t.role == "reuse" and t.direction == "subscribe"}
+    intercepted = {t.resolved for t in model.topics if t.role == "new" and t.direction == "subscribe"}
+
+    for t in model.topics:
+        if t.role == "new" and t.direction == "publish":
+            specs[PublishSpec(t.resolved, t.type, t.latch)] = None
+        elif t.role == "new":  # subscribe
+            source = internal_name(model, t.resolved) if t.resolved in reused_out else t.resolved
+            specs[SubscribeSpec(source, t.type, topic_slot(t.resolved))] = None
+            if t.resolved in reused_in:  # the handler replaces the relay; write(T) feeds B
+                specs[PublishSpec(internal_name(model, t.resolved), t.type)] = None
+        elif t.direction == "publish":  # reuse: B's output out to the world, unless intercepted
+            if t.resolved not in intercepted:
+                specs[RelaySpec(internal_name(model, t.resolved), t.resolved, t.type)] = None
+        elif t.resolved not in intercepted:  # reuse subscribe: the world into B
+            specs[RelaySpec(t.resolved, internal_name(model, t.resolved), t.type)] = None
+
+    for timer in model.timers:
+        specs[TimerSpec(timer.name, timer.period, timer.oneshot, timer_slot(timer.name))] = None
+
+    served = {s.resolved for s in model.services if s.role == "new"}
+    for s in model.services:
+        if s.role == "new":
+            specs[ServiceSpec(s.resolved, s.type, service_slot(s.resolved))] = None
+        elif s.resolved not in served:
+            specs[ServiceRelaySpec(internal_name(model, s.resolved), s.resolved, s.type)] = None
+    return specs
+
+
+def write_target(model: NodeModel, resolved: str) -> str | None:
+    """Where ``write(resolved)`` sends: its own publication, or B's input for a reused subscription."""
+    for t in model.topics:
+        if t.resolved == resolved and t.role == "new" and t.direction == "publish":
+            return resolved
+    intercepted = model.topic(resolved, "subscribe", "new") is not None
+    if intercepted and model.topic(resolved, "subscribe", "reuse") is not None:
+        return internal_name(model, resolved)
+    return None

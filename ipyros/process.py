@@ -1,0 +1,66 @@
+"""Child processes that never outlive the session.
+
+Each child gets its own process group (Ctrl-C at the prompt must not reach it) and
+asks the kernel to send it SIGTERM when its parent dies (``PR_SET_PDEATHSIG``), so
+even a SIGKILLed interpreter leaves no orphan. The death signal is tied to the
+*thread* that forked, so children are spawned from the main thread or from a thread
+that lives as long as the process.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import subprocess
+from typing import Optional, Sequence
+
+_PR_SET_PDEATHSIG = 1
+_libc = ctypes.CDLL(None, use_errno=True)
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    # Runs in the child between fork and exec.
+    os.setpgid(0, 0)
+    _libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+    if os.getppid() != parent_pid:  # the parent died before prctl took effect
+        os._exit(1)
+
+
+def spawn(argv: Sequence[str], *, env: Optional[dict] = None, log: Optional[int] = None,
+          cwd: Optional[str] = None) -> subprocess.Popen:
+    """Start ``argv`` in its own process group, dying with this process.
+
+    ``log`` is a file descriptor for stdout and stderr together (default: discarded).
+    """
+    parent = os.getpid()
+    out = subprocess.DEVNULL if log is None else log
+    return subprocess.Popen(
+        list(argv), env=env, cwd=cwd, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
+        preexec_fn=lambda: _die_with_parent(parent), close_fds=True,
+    )
+
+
+def stop_process(proc: subprocess.Popen, timeout: float = 5.0) -> Optional[int]:
+    """Stop ``proc`` and its process group: SIGINT (as roslaunch does), then SIGTERM, then SIGKILL."""
+    for sig, wait in ((signal.SIGINT, timeout * 0.6), (signal.SIGTERM, timeout * 0.4), (signal.SIGKILL, 5.0)):
+        if proc.poll() is not None:
+            break
+        try:
+            os.killpg(proc.pid, sig)
+        except ProcessLookupError:
+            break
+        try:
+            proc.wait(wait)
+        except subprocess.TimeoutExpired:
+            continue
+    _reap_group(proc.pid)
+    return proc.wait()
+
+
+def _reap_group(pgid: int) -> None:
+    """Kill what is left of the group (grandchildren of a basenode), best effort."""
+    try:
+        os.killpg(pgid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass

@@ -1,0 +1,225 @@
+"""The only module that talks to rospy: the process node and its live endpoints.
+
+rospy allows one ROS node per process. :class:`ProcessNode` is that node; every DSL
+node of the session hosts its publishers, subscribers, relays, timers and services in
+it. Endpoints are small objects with a ``close()``; the DSL decides which exist
+(see :mod:`ipyros.plan`), this module only opens and closes them.
+
+Performance choices (measured in bench/relay.py):
+- publishers are synchronous (``queue_size=None``): no hand-off to a publisher thread;
+- relays subscribe with :class:`rospy.AnyMsg` and write the received bytes as they are,
+  through a publisher advertised up front with the concrete class, so the type, md5 and
+  message definition are right from the first message and none is lost at start;
+- subscribers have an unbounded queue: rospy's ``queue_size=N`` drops bursts.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import warnings
+import xmlrpc.client
+from typing import Any, Optional
+
+import rospy
+
+from .errors import IpyrosError, MasterError, NodeStateError
+from .slots import HandlerSlot
+
+def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
+    """A synchronous publisher (``queue_size=None`` on purpose; see the module docstring)."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*queue_size", category=SyntaxWarning)
+        return rospy.Publisher(topic, cls, latch=latch, queue_size=None)
+
+
+# Big enough that a 1 MB image is read in few socket calls.
+_BUFF_SIZE = 1 << 22
+
+
+class ProcessNode:
+    """The rospy node of this process, started once and shared by every DSL node."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self.name: Optional[str] = None  # global name, once started
+        self.master_uri: Optional[str] = None
+
+    @property
+    def started(self) -> bool:
+        return self.name is not None
+
+    def start(self, name: str, master_uri: str) -> str:
+        """Start the process node as ``name`` (a global name) unless it already runs."""
+        with self._lock:
+            if self.name is not None:
+                return self.name
+            if rospy.core.is_shutdown_requested() or rospy.core.is_initialized():
+                raise NodeStateError("rospy was already initialised or shut down in this process; "
+                                     "restart the interpreter to use ipyros")
+            _refuse_taken_name(master_uri, name)
+            os.environ["ROS_MASTER_URI"] = master_uri
+            namespace, base = name.rsplit("/", 1)
+            # Signals stay IPython's: Ctrl-C must interrupt the prompt, not kill the node.
+            rospy.init_node(base, argv=[f"__ns:={namespace or '/'}"], disable_signals=True)
+            self.name, self.master_uri = rospy.get_name(), master_uri
+            return self.name
+
+    def shutdown(self, reason: str = "ipyros exit") -> None:
+        if self.name is not None and not rospy.core.is_shutdown():
+            rospy.signal_shutdown(reason)
+
+    def require(self) -> None:
+        if self.name is None:
+            raise NodeStateError("the ROS node is not running; call create() on a node first")
+        if rospy.core.is_shutdown():
+            raise NodeStateError("the ROS node of this session was shut down; restart the interpreter")
+
+
+def _refuse_taken_name(master_uri: str, name: str) -> None:
+    """Refuse to start under a name a live node has: the master would kill that node."""
+    master = xmlrpc.client.ServerProxy(master_uri)
+    try:
+        code, _, api = master.lookupNode("/ipyros", name)
+    except OSError as error:
+        raise MasterError(f"cannot reach the ROS master at {master_uri} ({error.strerror or error}); "
+                          "start roscore or unset ROS_MASTER_URI to let ipyros start one") from None
+    if code != 1:
+        return
+    try:
+        xmlrpc.client.ServerProxy(api).getPid("/ipyros")
+    except OSError:
+        return  # a stale registration: taking the name over is harmless
+    raise NodeStateError(f"a node named {name} is already running; give this node another name "
+                         "(taking the name would make the master shut the other one down)")
+
+
+# -- endpoints ---------------------------------------------------------------------------
+
+
+class Publication:
+    """A synchronous publisher: ``write`` serialises and sends in the caller's thread."""
+
+    def __init__(self, topic: str, cls: type, latch: bool = False) -> None:
+        self.topic, self.cls = topic, cls
+        self._pub = _publisher(topic, cls, latch)
+
+    def write(self, msg: Any) -> None:
+        try:
+            self._pub.publish(msg)
+        except rospy.ROSSerializationException as error:
+            raise IpyrosError(f"cannot send this {self.cls._type} on {self.topic}: {error}; "
+                              "check the field types") from None
+
+    def connections(self) -> int:
+        return self._pub.get_num_connections()
+
+    def close(self) -> None:
+        self._pub.unregister()
+
+
+class Subscription:
+    """A typed subscriber whose callback is a :class:`HandlerSlot`."""
+
+    def __init__(self, topic: str, cls: type, slot: HandlerSlot) -> None:
+        self.topic, self.cls, self.slot = topic, cls, slot
+        self._sub = rospy.Subscriber(topic, cls, slot, queue_size=None, buff_size=_BUFF_SIZE, tcp_nodelay=True)
+
+    def connections(self) -> int:
+        return self._sub.get_num_connections()
+
+    def close(self) -> None:
+        self._sub.unregister()
+
+
+class Relay:
+    """Forward ``source`` to ``target`` unchanged, without deserialising.
+
+    Latching follows the source: once a latched message arrives, the target latches too.
+    """
+
+    def __init__(self, source: str, target: str, cls: type) -> None:
+        self.source, self.target, self.cls = source, target, cls
+        self.count = 0
+        self._pub = _publisher(target, cls)
+        self._impl = self._pub.impl
+        self._sub = rospy.Subscriber(source, rospy.AnyMsg, self._forward,
+                                     queue_size=None, buff_size=_BUFF_SIZE, tcp_nodelay=True)
+
+    def _forward(self, raw: rospy.AnyMsg) -> None:
+        impl = self._impl
+        if not impl.is_latch and raw._connection_header.get("latching") == "1":
+            impl.enable_latch()
+        # Publisher.publish would type-check AnyMsg against the class; the impl just
+        # writes the bytes (AnyMsg.serialize copies its buffer).
+        impl.acquire()
+        try:
+            impl.publish(raw)
+        finally:
+            impl.release()
+        self.count += 1
+
+    def close(self) -> None:
+        self._sub.unregister()
+        self._pub.unregister()
+
+
+class Timer:
+    """A periodic (or one-shot) callback through a :class:`HandlerSlot`."""
+
+    def __init__(self, period: float, slot: HandlerSlot, oneshot: bool = False) -> None:
+        self.period, self.slot = period, slot
+        self._timer = rospy.Timer(rospy.Duration.from_sec(period), slot, oneshot=oneshot)
+
+    def close(self) -> None:
+        self._timer.shutdown()
+
+
+class ServiceServer:
+    """A service whose handler is a :class:`HandlerSlot` (it returns the response)."""
+
+    def __init__(self, name: str, cls: type, slot: HandlerSlot) -> None:
+        self.name, self.cls, self.slot = name, cls, slot
+        self._service = rospy.Service(name, cls, slot)
+
+    def close(self) -> None:
+        self._service.shutdown("removed")
+
+
+class ServiceRelay:
+    """Serve ``target`` by calling ``source`` (a basenode's service) and returning its answer."""
+
+    def __init__(self, source: str, target: str, cls: type) -> None:
+        self.source, self.target, self.cls = source, target, cls
+        self._proxy = rospy.ServiceProxy(source, cls)
+        self._service = rospy.Service(target, cls, self._proxy.call)
+
+    def close(self) -> None:
+        self._service.shutdown("removed")
+        self._proxy.close()
+
+
+def service_proxy(name: str, cls: type) -> rospy.ServiceProxy:
+    """A client for ``name``; call it like a function."""
+    return rospy.ServiceProxy(name, cls)
+
+
+# -- parameters ----------------------------------------------------------------------------
+
+
+def get_param(name: str, default: Any = KeyError) -> Any:
+    if default is KeyError:
+        return rospy.get_param(name)
+    return rospy.get_param(name, default)
+
+
+def set_param(name: str, value: Any) -> None:
+    rospy.set_param(name, value)
+
+
+def has_param(name: str) -> bool:
+    return rospy.has_param(name)
+
+
+def delete_param(name: str) -> None:
+    rospy.delete_param(name)

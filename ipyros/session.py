@@ -1,0 +1,127 @@
+"""The session: the master in use, the process node, and the DSL nodes living in it.
+
+There is one session per interpreter because rospy allows one node per process; it
+is created on first use (``current()``) and closed at interpreter exit, stopping
+everything ipyros started: nodes, basenodes, and the master if ipyros started it.
+"""
+
+from __future__ import annotations
+
+import atexit
+import sys
+import threading
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Callable, Optional
+
+from . import master as master_mod
+from .errors import NodeStateError
+from .runtime import ProcessNode
+from .slots import HandlerFailure
+
+if TYPE_CHECKING:
+    from .dsl import rosNode
+
+
+def print_failure(failure: HandlerFailure) -> None:
+    """Default report of a handler exception: the handler's traceback on stderr."""
+    more = f" ({failure.suppressed} more since the last report)" if failure.suppressed else ""
+    sys.stderr.write(f"ipyros: handler {failure.handler} failed on {failure.label}{more}; "
+                     f"the node keeps running\n{failure.traceback}")
+    sys.stderr.flush()
+
+
+@dataclass
+class SessionConfig:
+    """How the session finds its master and names its ROS node."""
+
+    master_uri: Optional[str] = None  # None: ROS_MASTER_URI, else http://localhost:11311
+    start_master: bool = True  # start one on localhost when none answers
+    process_node_name: Optional[str] = None  # None: the first node created names it
+    announce: Callable[[str], None] = field(default=lambda text: print(text, file=sys.stderr))
+
+
+class Session:
+    """Everything ipyros runs in this interpreter."""
+
+    def __init__(self, config: Optional[SessionConfig] = None) -> None:
+        self.config = config or SessionConfig()
+        self.master: Optional[master_mod.MasterHandle] = None
+        self.process = ProcessNode()
+        self.nodes: dict[str, "rosNode"] = {}  # full name → node, in creation order
+        self.report: Callable[[HandlerFailure], None] = print_failure
+        self._lock = threading.RLock()
+        self.closed = False
+
+    def attach_master(self) -> master_mod.MasterHandle:
+        """The master in use, found or started on first call."""
+        with self._lock:
+            if self.master is None:
+                self.master = master_mod.attach(self.config.master_uri, self.config.start_master)
+                if self.master.started:
+                    self.config.announce(f"ipyros: {self.master.describe()}")
+            return self.master
+
+    def start_process_node(self, fullname: str) -> str:
+        """Start the process's ROS node (named after the first node created) and return its name."""
+        with self._lock:
+            if self.closed:
+                raise NodeStateError("this ipyros session was closed; restart the interpreter")
+            uri = self.attach_master().uri
+            return self.process.start(self.config.process_node_name or fullname, uri)
+
+    def add(self, node: "rosNode") -> None:
+        with self._lock:
+            other = self.nodes.get(node.fullname)
+            if other is not None and other is not node and other.created:
+                raise NodeStateError(f"a node named {node.fullname} is already running in this session; "
+                                     f"shut it down first ({node.fullname}.shutdown()) or pick another name")
+            self.nodes[node.fullname] = node
+
+    def remove(self, node: "rosNode") -> None:
+        with self._lock:
+            if self.nodes.get(node.fullname) is node:
+                del self.nodes[node.fullname]
+
+    def close(self) -> None:
+        """Stop every node and basenode, the process node, and the master if we started it."""
+        with self._lock:
+            if self.closed:
+                return
+            self.closed = True
+            for node in reversed(list(self.nodes.values())):
+                try:
+                    node.shutdown()
+                except Exception as error:  # keep closing the rest
+                    print(f"ipyros: error while shutting down {node.fullname}: {error}", file=sys.stderr)
+            self.process.shutdown()
+            if self.master is not None:
+                self.master.stop()
+
+
+_current: Optional[Session] = None
+_current_lock = threading.Lock()
+
+
+def current() -> Session:
+    """The session of this interpreter, created on first use."""
+    global _current
+    with _current_lock:
+        if _current is None or _current.closed:
+            _current = Session()
+        return _current
+
+
+def configure(config: SessionConfig) -> Session:
+    """Set how the session attaches, before anything has started."""
+    session = current()
+    if session.master is not None and config.master_uri not in (None, session.master.uri):
+        raise NodeStateError(f"this session already uses the master at {session.master.uri}; "
+                             "restart the interpreter to use another one")
+    session.config = config
+    return session
+
+
+@atexit.register
+def _close_at_exit() -> None:
+    if _current is not None:
+        _current.close()

@@ -1,0 +1,163 @@
+"""Handler slots: the one place a ROS callback enters user code.
+
+A subscription, timer or service calls its slot, and the slot calls whatever handler
+it holds *now*. Swapping a handler is one attribute assignment, atomic under the GIL,
+so every message is handled by exactly one handler, old or new, and none is lost:
+the ROS subscription itself is never touched. The slot also keeps the figures the
+status table shows, the last messages for trying a candidate handler, and turns a
+handler's exception into a report instead of a dead callback thread.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import traceback
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, Callable, Optional
+
+Report = Callable[["HandlerFailure"], None]
+
+
+@dataclass(frozen=True)
+class HandlerFailure:
+    """One handler exception, with the handler's own traceback (not rospy's)."""
+
+    label: str  # e.g. "turtle_control_node /turtle1/pose"
+    handler: str
+    error: BaseException
+    traceback: str
+    suppressed: int  # failures of this slot not reported since the last report
+
+
+@dataclass(frozen=True)
+class SlotFigures:
+    """What a slot has seen so far; rates are over the recent calls."""
+
+    calls: int
+    errors: int
+    rate_hz: float
+    mean_ms: float
+    max_ms: float
+
+
+class HandlerSlot:
+    """Calls the current handler; counts calls, time and exceptions.
+
+    ``report`` gets at most one failure per ``report_interval`` seconds per slot;
+    the others are counted and mentioned in the next report.
+    """
+
+    def __init__(
+        self,
+        label: str,
+        handler: Callable[..., Any],
+        report: Report,
+        *,
+        pass_argument: bool = True,
+        keep: int = 20,
+        report_interval: float = 5.0,
+    ) -> None:
+        self.label = label
+        self._current = (handler, pass_argument)
+        self.recent: deque[Any] = deque(maxlen=keep)
+        self._report = report
+        self._report_interval = report_interval
+        self._lock = threading.Lock()  # figures only; never held while the handler runs
+        self._calls = 0
+        self._errors = 0
+        self._total_s = 0.0
+        self._max_s = 0.0
+        self._stamps: deque[float] = deque(maxlen=200)
+        self._last_report = -float("inf")
+        self._suppressed = 0
+
+    def swap(self, handler: Callable[..., Any], pass_argument: bool = True) -> None:
+        """Make ``handler`` serve every call from now on."""
+        # One tuple assignment: a callback reads both fields from the same handler.
+        self._current = (handler, pass_argument)
+
+    @property
+    def handler(self) -> Callable[..., Any]:
+        return self._current[0]
+
+    @property
+    def pass_argument(self) -> bool:
+        return self._current[1]
+
+    def __call__(self, arg: Any = None) -> Any:
+        handler, pass_argument = self._current
+        if arg is not None:
+            self.recent.append(arg)
+        start = time.perf_counter()
+        try:
+            return handler(arg) if pass_argument else handler()
+        except Exception as error:  # a handler's bug must never kill the node
+            self._failed(handler, error)
+            return None
+        finally:
+            elapsed = time.perf_counter() - start
+            with self._lock:
+                self._calls += 1
+                self._total_s += elapsed
+                self._max_s = max(self._max_s, elapsed)
+                self._stamps.append(start)
+
+    def _failed(self, handler: Callable[..., Any], error: Exception) -> None:
+        with self._lock:
+            self._errors += 1
+            now = time.monotonic()
+            if now - self._last_report < self._report_interval:
+                self._suppressed += 1
+                return
+            self._last_report, suppressed, self._suppressed = now, self._suppressed, 0
+        # Drop this frame: the user wants their handler's traceback, not ours.
+        tb = error.__traceback__.tb_next if error.__traceback__ else None
+        text = "".join(traceback.format_exception(type(error), error, tb))
+        name = getattr(handler, "__name__", repr(handler))
+        self._report(HandlerFailure(self.label, name, error, text, suppressed))
+
+    def figures(self) -> SlotFigures:
+        with self._lock:
+            stamps = list(self._stamps)
+            calls, errors, total, peak = self._calls, self._errors, self._total_s, self._max_s
+        rate = 0.0
+        if len(stamps) > 1 and time.perf_counter() - stamps[-1] < 2.0:
+            rate = (len(stamps) - 1) / max(stamps[-1] - stamps[0], 1e-9)
+        mean = (total / calls * 1e3) if calls else 0.0
+        return SlotFigures(calls, errors, rate, mean, peak * 1e3)
+
+
+def call_arity(handler: Any, what: str, label: str) -> bool:
+    """Check ``handler`` can be called by ROS; return whether it takes the one argument.
+
+    Subscriptions and services pass one argument (message, request); timers pass the
+    timer event, which a handler may also do without.
+    """
+    import inspect
+
+    from .errors import HandlerError
+
+    if not callable(handler):
+        raise HandlerError(f"handler for {label} is {type(handler).__name__} {handler!r}, not a function; "
+                           "pass the function itself, e.g. handler=showPose (no parentheses)")
+    try:
+        signature = inspect.signature(handler)
+    except (TypeError, ValueError):
+        return True  # builtins without a signature: trust the user
+    name = getattr(handler, "__name__", "handler")
+    try:
+        signature.bind(None)
+        return True
+    except TypeError:
+        pass
+    if what == "timer":
+        try:
+            signature.bind()
+            return False
+        except TypeError:
+            pass
+    expected = {"subscribe": "the message", "service": "the request", "timer": "the timer event (or nothing)"}[what]
+    raise HandlerError(f"handler {name}{signature} for {label} must take one argument, {expected}; "
+                       f"e.g. def {name}(msg): ...")
