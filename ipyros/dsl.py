@@ -345,17 +345,29 @@ class rosNode:  # noqa: N801 - the paper's name
         self._writers.clear()
 
     def _check_live_types(self, topics: Any) -> None:
-        """Refuse a declared type that differs from the type the topic already has on the master."""
+        """Refuse a declared type that differs from the type a live topic already has.
+
+        The master remembers a topic's type after everyone left it, so only topics with a
+        publisher or subscriber count; the ones only this session uses are checked against
+        the session's other nodes (this node may change its own topic's type).
+        """
         if not topics or self._session.master is None:
             return
-        from .master import live_topic_types
+        from .master import live_topics
 
-        live = live_topic_types(self._session.master.uri)
+        live = live_topics(self._session.master.uri)
+        me = self._session.process.name
         for t in topics:
-            have = live.get(t.resolved)
-            if have and have != t.type and have != "*":
-                raise TopicTypeConflict(f"{t.resolved} already carries {have} on the master, not {t.type}; "
-                                        f"declare msgType={have!r} or use another topic name")
+            have, users = live.get(t.resolved, (None, set()))
+            if not have or have == t.type or have == "*" or not users:
+                continue
+            if users == {me}:
+                have = next((o.type for n in self._session.nodes.values() if n is not self
+                             for o in n._model.topics if o.resolved == t.resolved and o.type != t.type), None)
+                if have is None:
+                    continue
+            raise TopicTypeConflict(f"{t.resolved} already carries {have}, not {t.type}; "
+                                    f"declare msgType={have!r} or use another topic name")
 
     def _set_params(self, params: dict[str, Any]) -> None:
         for key, value in params.items():

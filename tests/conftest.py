@@ -117,3 +117,50 @@ def no_leftover_processes(request):
     except AssertionError:
         left = {pid: Path(f"/proc/{pid}/cmdline").read_text().replace("\0", " ") for pid in _children() - before}
         pytest.fail(f"test left processes running: {left}")
+
+
+@pytest.fixture(scope="session")
+def ros_session(ros_master):
+    """The ipyros session of this pytest process, on the fixture's master.
+
+    Its one rospy node is named /ipyros_test; every DSL node of the run lives in it.
+    """
+    from ipyros import session as sessions
+
+    session = sessions.configure(sessions.SessionConfig(
+        master_uri=ros_master, start_master=False, process_node_name="/ipyros_test"))
+    yield session
+    session.close()
+
+
+@pytest.fixture
+def failures(ros_session):
+    """Handler failures reported during the test (instead of printed)."""
+    seen: list = []
+    previous = ros_session.report
+    ros_session.report = seen.append
+    yield seen
+    ros_session.report = previous
+
+
+@pytest.fixture
+def make_node(ros_session):
+    """Build rosNodes that are shut down when the test ends."""
+    from ipyros import rosNode
+
+    nodes = []
+
+    def make(name: str, **kwargs):
+        node = rosNode(name, session=ros_session, **kwargs)
+        nodes.append(node)
+        return node
+
+    yield make
+    for node in nodes:
+        node.shutdown()
+
+
+def master_state(uri: str) -> dict:
+    """{'pub': {topic: [nodes]}, 'sub': {...}, 'srv': {...}} straight from the master."""
+    code, _, (pubs, subs, srvs) = xmlrpc.client.ServerProxy(uri).getSystemState("/pytest")
+    return {"pub": dict(pubs), "sub": dict(subs), "srv": dict(srvs)}
