@@ -18,7 +18,7 @@ class Peer:
 
     def __init__(self, script: str, *args: str) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, str(PEERS / script), *map(str, args)],
+            [sys.executable, str(PEERS / script), *map(str, args)],  # an absolute path stays as it is
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
             env={**os.environ, "PYTHONUNBUFFERED": "1"},
         )
