@@ -13,10 +13,13 @@ SCRIPT = Path(__file__).resolve().parent / "nodes" / "many_topics.py"
 
 
 @contextlib.contextmanager
-def many_topics(node: str, count: int, prefix: str, type: str = "std_msgs/String",
-                subscribe: tuple[str, ...] = ()) -> Iterator[subprocess.Popen]:
-    """A subprocess node advertising ``count`` topics ``prefix0000``...; stopped (SIGTERM) on exit."""
+def many_topics(node: str, count: int, prefix: str = "/many/t", type: str = "std_msgs/String",
+                subscribe: tuple[str, ...] = (), topics: dict[str, str] | None = None) -> Iterator[subprocess.Popen]:
+    """A subprocess node advertising ``count`` topics ``prefix0000``... and ``topics`` {name: type};
+    stopped (SIGTERM) on exit."""
     cmd = [sys.executable, str(SCRIPT), node, str(count), "--prefix", prefix, "--type", type]
+    if topics:
+        cmd += ["--topics", *(f"{name}={t}" for name, t in topics.items())]
     if subscribe:
         cmd += ["--subscribe", *subscribe]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=dict(os.environ))

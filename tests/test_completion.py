@@ -1,0 +1,315 @@
+"""Tab completion, answered from a GraphCache of a real master with a real publisher process.
+
+Two tiers: the matcher called with a CompletionContext, and the whole IPython completer
+(``Completer.completions``) of a real InteractiveShell. The DSL node in user_ns is a
+small object whose ``model()`` returns a hand-built NodeModel: plain data, not a ROS mock.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import pytest
+from conftest import free_port, wait_for
+from IPython.core.completer import CompletionContext, provisionalcompleter
+from IPython.core.interactiveshell import InteractiveShell
+from topic_nodes import many_topics
+from traitlets.config import Config
+
+from ipyros.completion import IDENTIFIER, Catalog, RosMatcher, default_catalog, install, string_argument, uninstall
+from ipyros.graph import GraphCache
+from ipyros.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+
+LIVE = {
+    "/ct/turtle1/cmd_vel": "geometry_msgs/Twist",
+    "/ct/turtle1/pose": "geometry_msgs/Pose2D",
+    "/ct/turtle1/color_sensor": "std_msgs/ColorRGBA",
+    "/ct/turtle2/cmd_vel": "geometry_msgs/Twist",
+    "/ct/cmd_vel": "geometry_msgs/Twist",
+    "/ct/odom": "std_msgs/String",
+}
+
+CATALOG = Catalog(
+    message_types=lambda: ["std_msgs/String", "geometry_msgs/TwistStamped", "geometry_msgs/Twist", "geometry_msgs/Pose"],
+    service_types=lambda: ["std_srvs/SetBool", "std_srvs/Empty"],
+    packages=lambda: ["turtlesim", "topic_tools", "turtle_tf"],
+    executables=lambda pkg: {"turtlesim": ["turtlesim_node", "turtle_teleop_key", "draw_square"]}.get(pkg, []),
+)
+
+
+class FakeNode:
+    """Stands in for a DSL node: completion only ever calls ``model()``."""
+
+    def __init__(self, model: NodeModel):
+        self._model = model
+
+    def model(self) -> NodeModel:
+        return self._model
+
+
+def wrapping_model() -> NodeModel:
+    """Like the paper's ``wnode``, in namespace /ct."""
+    return NodeModel(
+        name="wnode",
+        namespace="/ct/",
+        base=BaseModel(executable="turtlesim_node", package="turtlesim"),
+        topics=[
+            TopicModel("cmd_vel", "/ct/cmd_vel", "subscribe", "geometry_msgs/Twist", "new", "relay"),
+            TopicModel("odom", "/ct/odom", "subscribe", "std_msgs/String", "reuse"),
+            TopicModel("mobile_base/commands/velocity", "/ct/mobile_base/commands/velocity", "publish",
+                       "geometry_msgs/Twist"),
+            TopicModel("/ct/turtle1/zz_mine", "/ct/turtle1/zz_mine", "publish", "std_msgs/String"),
+        ],
+        timers=[TimerModel("tick", 1.0, "on_tick"), TimerModel("blink", 0.5, "on_blink")],
+        services=[ServiceModel("reset", "/ct/reset", "std_srvs/Empty", "new", "do_reset")],
+    )
+
+
+@pytest.fixture(scope="module")
+def graph(ros_master):
+    with many_topics("compl_sim", 0, topics=LIVE, subscribe=("/ct/tf",)):
+        cache = GraphCache(ros_master, period=0.2).start()
+        wait_for(lambda: set(LIVE) | {"/ct/tf"} <= set(cache.snapshot.topics), timeout=20,
+                 what="the test node's topics in the graph")
+        yield cache
+        cache.stop()
+
+
+@pytest.fixture
+def ip():
+    config = Config()
+    config.HistoryManager.hist_file = ":memory:"
+    shell = InteractiveShell.instance(config=config)
+    shell.user_ns["wnode"] = FakeNode(wrapping_model())
+    shell.user_ns["nd"] = FakeNode(NodeModel(name="nd", topics=[
+        TopicModel("/ct/turtle1/cmd_vel", "/ct/turtle1/cmd_vel", "publish", "geometry_msgs/Twist"),
+        TopicModel("/ct/turtle1/pose", "/ct/turtle1/pose", "subscribe", "geometry_msgs/Pose2D", "new", "show"),
+    ]))
+    shell.user_ns["not_a_node"] = 42
+    yield shell
+    InteractiveShell.clear_instance()
+
+
+@pytest.fixture
+def matcher(ip, graph):
+    return RosMatcher(ip, graph, CATALOG)
+
+
+def ask(matcher: RosMatcher, text: str):
+    """Call the matcher as IPython would, with the cursor at the end of ``text``."""
+    lines = text.split("\n")
+    token = text.split()[-1] if text.strip() and not text[-1].isspace() else ""
+    for delim in "\"'(=:":
+        token = token.rsplit(delim, 1)[-1]
+    context = CompletionContext(token=token, full_text=text, cursor_position=len(lines[-1]),
+                                cursor_line=len(lines) - 1, limit=None)
+    return matcher(context)
+
+
+def texts(matcher: RosMatcher, text: str) -> list[str]:
+    result = ask(matcher, text)
+    completions = [c.text for c in result["completions"]]
+    assert result["suppress"] is bool(completions) or completions == [] and result["suppress"]
+    return completions
+
+
+# -- tier 1: the matcher with a CompletionContext ---------------------------------------
+def test_topics_magic_completes_live_topics_by_prefix(matcher):
+    result = ask(matcher, "%topics /ct/tur")
+    assert [c.text for c in result["completions"]] == [
+        "/ct/turtle1/cmd_vel", "/ct/turtle1/color_sensor", "/ct/turtle1/pose", "/ct/turtle2/cmd_vel"]
+    assert result["suppress"] is True and result["matched_fragment"] == "/ct/tur" and result["ordered"]
+    # Each completion says what the topic carries.
+    assert [c.type for c in result["completions"]][:2] == ["geometry_msgs/Twist", "std_msgs/ColorRGBA"]
+    assert texts(matcher, "%echo /ct/turtle1/p") == ["/ct/turtle1/pose"]
+    assert "/ct/tf" in texts(matcher, "%topics /ct/t")  # subscribed-only topics are live too
+
+
+def test_relative_tail_completes_in_the_default_namespace(matcher):
+    assert texts(matcher, "%echo ct/turtle1/c") == ["ct/turtle1/cmd_vel", "ct/turtle1/color_sensor"]
+
+
+def test_topics_magic_options(matcher):
+    assert texts(matcher, "%topics /ct --type geometry_msgs/Tw") == ["geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
+    assert texts(matcher, "%topics --type=geometry_msgs/P") == ["geometry_msgs/Pose"]
+    assert texts(matcher, "%topics -t Tw") == ["geometry_msgs/Twist", "geometry_msgs/TwistStamped"]  # by short name
+    assert texts(matcher, "%topics --node /compl") == ["/compl_sim"]
+    # After an option's value, the next word is positional again.
+    assert texts(matcher, "%topics --node /compl_sim /ct/turtle2") == ["/ct/turtle2/cmd_vel"]
+
+
+def test_pub_magic_topic_then_type(matcher):
+    assert texts(matcher, "%pub /ct/turtle2/") == ["/ct/turtle2/cmd_vel"]
+    assert texts(matcher, "%publish /ct/turtle2/cmd_vel geometry_msgs/T") == [
+        "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
+
+
+def test_handler_magic_node_then_its_subscriptions(matcher):
+    assert texts(matcher, "%handler ") == ["nd", "wnode"]  # variables holding DSL nodes, nothing else
+    assert texts(matcher, "%handler w") == ["wnode"]
+    assert texts(matcher, "%handler wnode ") == ["cmd_vel", "odom"]
+    assert texts(matcher, "%handler wnode c") == ["cmd_vel"]
+    assert texts(matcher, "%handler nd /") == ["/ct/turtle1/pose"]
+    # An unknown node name: fall back to the live topics.
+    assert texts(matcher, "%handler ghost /ct/turtle2") == ["/ct/turtle2/cmd_vel"]
+
+
+def test_wrap_magic_package_executable_and_topic_options(matcher):
+    assert texts(matcher, "%wrap turt") == ["turtle_tf", "turtlesim"]
+    assert texts(matcher, "%wrap turtlesim turtle") == ["turtle_teleop_key", "turtlesim_node"]
+    assert texts(matcher, "%wrap turtlesim turtlesim_node --reuse /ct/turtle1/p") == ["/ct/turtle1/pose"]
+    assert texts(matcher, "%wrap turtlesim turtlesim_node --remap /ct/odom:=/ct/turtle2/") == ["/ct/turtle2/cmd_vel"]
+    assert texts(matcher, "%wrap nosuchpkg ") == []
+
+
+def test_dsl_string_arguments_complete_topics(matcher):
+    # An unknown receiver: the method name alone says it is a topic.
+    assert texts(matcher, 'x.subscribe(topic="/ct/turtle2') == ["/ct/turtle2/cmd_vel"]
+    assert texts(matcher, "y.publish(topic='/ct/turtle1/p") == ["/ct/turtle1/pose"]
+    assert texts(matcher, 'x.new.subscribe("/ct/turtle1/col') == ["/ct/turtle1/color_sensor"]
+
+
+def test_dsl_node_topics_come_first(matcher):
+    # nd.write: the node's publications first, then the live topics.
+    assert texts(matcher, 'nd.write("/ct/turtle1/') == [
+        "/ct/turtle1/cmd_vel", "/ct/turtle1/color_sensor", "/ct/turtle1/pose"]
+    assert texts(matcher, 'wnode.write("/ct/turtle1/')[0] == "/ct/turtle1/zz_mine"
+    # Relative names as the node declared them, in the node's namespace (/ct/).
+    assert texts(matcher, 'wnode.write("')[:2] == ["/ct/turtle1/zz_mine", "mobile_base/commands/velocity"]
+    assert texts(matcher, 'wnode.write("turtle1/')[:2] == ["turtle1/zz_mine", "turtle1/cmd_vel"]
+    # subscribe: own subscriptions first (odom before the live /ct/cmd_vel... duplicates dropped).
+    assert texts(matcher, 'wnode.new.subscribe(topic="') [:2] == ["cmd_vel", "odom"]
+    assert texts(matcher, 'wnode.new.subscribe(topic="turtle2/') == ["turtle2/cmd_vel"]
+    assert texts(matcher, 'wnode.reuse.subscribe(topic="c') == ["cmd_vel"]
+
+
+def test_dsl_chain_over_continuation_lines(matcher):
+    cell = ('{\nwnode.new\n    .subscribe(topic="cmd_vel", handler=relay, msgType=Twist)\n'
+            '    .publish(topic = "/ct/')
+    found = texts(matcher, cell)
+    assert found[:2] == ["/ct/mobile_base/commands/velocity", "/ct/turtle1/zz_mine"]  # publications, as global
+    assert "/ct/turtle1/pose" in found
+    assert texts(matcher, cell[: -len('"/ct/')] + '"/ct/turtle1/zz_mine", msgType="geometry_msgs/Tw') == [
+        "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
+
+
+def test_dsl_types_services_timers_base(matcher):
+    assert texts(matcher, 'x.subscribe("/a", f, "geometry_msgs/Po') == ["geometry_msgs/Pose"]
+    assert texts(matcher, 'x.publish("/a", type="std') == ["std_msgs/String"]
+    assert texts(matcher, 'anything(msgType="geometry_msgs/Tw') == ["geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
+    assert texts(matcher, 'wnode.new.service("reset", srvType="std_srvs/') == ["std_srvs/Empty", "std_srvs/SetBool"]
+    assert texts(matcher, 'wnode.new.service("reset", type="std_srvs/S') == ["std_srvs/SetBool"]
+    assert texts(matcher, 'wnode.new.service("/ct/re') == ["/ct/reset"]
+    assert texts(matcher, 'wnode.remove(timer="') == ["blink", "tick"]
+    assert texts(matcher, 'wnode.remove("') == ["/ct/turtle1/zz_mine", "cmd_vel", "mobile_base/commands/velocity", "odom"]
+    assert texts(matcher, 'wnode.unsubscribe("') == ["cmd_vel", "odom"]
+    assert texts(matcher, 'wnode.baseNode("turtles') == ["turtlesim_node"]  # package from the model
+    assert texts(matcher, 'wnode.basePackage("turtle') == ["turtle_tf", "turtlesim"]
+
+
+def test_not_ours_is_left_to_ipython(matcher, ip):
+    for text in ['print("/ct', 'open("/ct/tur', "x = 1", 'f.write("/ct', "%time /ct", "%topics --type",
+                 'x.subscribe(callback="/ct', 'x.subscribe(["/ct', 'a = """/ct', "topics /ct/tur"]:
+        result = ask(matcher, text)
+        assert result["completions"] == [] and result["suppress"] is False, text
+
+
+def test_completion_evaluates_nothing(matcher, ip):
+    calls = []
+
+    class Sneaky:
+        def model(self):
+            calls.append("model")
+            raise RuntimeError("boom")
+
+    ip.user_ns["make"] = lambda: calls.append("make")
+    ip.user_ns["sneaky"] = Sneaky()
+    ip.user_ns["items"] = [FakeNode(wrapping_model())]
+    # Calls and subscripts in the receiver are never evaluated; no model, so write() is not ours.
+    assert texts(matcher, 'make().write("') == []
+    assert texts(matcher, 'items[0].write("') == []
+    assert calls == []
+    # A model() that raises only loses the node's own topics.
+    assert texts(matcher, 'sneaky.new.subscribe(topic="/ct/turtle2') == ["/ct/turtle2/cmd_vel"]
+    assert calls == ["model"]
+
+
+def test_master_down_answers_instantly_from_local_data(ip):
+    dead = GraphCache(f"http://127.0.0.1:{free_port()}/", period=0.05).start()
+    try:
+        assert dead.wait_first(2) and not dead.snapshot.master_up
+        down = RosMatcher(ip, dead, CATALOG)
+        started = time.monotonic()
+        assert texts(down, "%topics /ct/tur") == []
+        assert texts(down, 'wnode.write("') == ["/ct/turtle1/zz_mine", "mobile_base/commands/velocity"]
+        assert texts(down, "%topics --type geometry_msgs/Tw") == ["geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
+        assert time.monotonic() - started < 0.5
+    finally:
+        dead.stop()
+
+
+def test_string_argument_scanner():
+    arg = string_argument('nd.new.subscribe(topic="/a", handler=f)\n  .publish(topic = "/tu')
+    assert arg is not None and arg.fragment == "/tu" and arg.keyword == "topic" and arg.index == 0
+    assert arg.chain == ("nd", "new", "subscribe", "publish") and not arg.root_called
+    arg = string_argument('rosNode("x").new.publish("/a", "geo')
+    assert arg.chain == ("rosNode", "new", "publish") and arg.root_called and arg.index == 1
+    assert string_argument('s = "a(b" # "(\nf(x, "q').fragment == "q"  # strings and comments skipped
+    assert string_argument('f("done")') is None
+    assert string_argument('f(g("a") + "b') is None
+
+
+def test_default_catalog_scans_this_machine():
+    catalog = default_catalog()
+    assert "geometry_msgs/Twist" in catalog.message_types()
+    assert "std_srvs/Empty" in catalog.service_types()
+    assert "topic_tools" in catalog.packages()
+    assert "relay" in catalog.executables("topic_tools")
+    assert catalog.message_types() is catalog.message_types()  # scanned once
+
+
+# -- tier 2: through IPython's completer ------------------------------------------------
+def complete(ip, text: str):
+    with provisionalcompleter(), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return list(ip.Completer.completions(text, len(text)))
+
+
+def test_through_the_shell(ip, graph):
+    handle = install(ip, graph, CATALOG)
+    try:
+        found = complete(ip, "%topics /ct/tur")
+        assert [c.text for c in found] == [
+            "/ct/turtle1/cmd_vel", "/ct/turtle1/color_sensor", "/ct/turtle1/pose", "/ct/turtle2/cmd_vel"]
+        assert {c.start for c in found} == {len("%topics ")}
+        # Jedi and the file matcher are suppressed; our order (own topics first) is kept.
+        text = 'wnode.write("/ct/turtle1/'
+        found = complete(ip, text)
+        assert [c.text for c in found] == ["/ct/turtle1/zz_mine", "/ct/turtle1/cmd_vel", "/ct/turtle1/color_sensor",
+                                           "/ct/turtle1/pose"]
+        assert {c.start for c in found} == {text.index('"') + 1}
+        assert [c.text for c in complete(ip, 'x.subscribe(topic="/ct/turtle2')] == ["/ct/turtle2/cmd_vel"]
+        assert [c.text for c in complete(ip, "%topics --type=geometry_msgs/Tw")] == [
+            "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
+        assert [c.text for c in complete(ip, "%wrap turtlesim turtle")] == ["turtle_teleop_key", "turtlesim_node"]
+        assert [c.text for c in complete(ip, "%handler w")] == ["wnode"]
+        # Ordinary Python completion still works.
+        assert "not_a_node" in [c.text for c in complete(ip, "not_a")]
+    finally:
+        uninstall(ip, handle)
+    assert not any(getattr(m, "matcher_identifier", None) == IDENTIFIER for m in ip.Completer.custom_matchers)
+    assert "wnode" not in [c.text for c in complete(ip, "%handler w")]  # no longer ours
+    uninstall(ip, handle)  # harmless twice
+
+
+def test_completion_is_fast_through_the_shell(ip, graph):
+    handle = install(ip, graph, CATALOG)
+    try:
+        complete(ip, "%topics /ct/")  # warm-up
+        started = time.perf_counter()
+        for _ in range(20):
+            complete(ip, 'wnode.new.subscribe(topic="/ct/tur')
+        assert (time.perf_counter() - started) / 20 < 0.05
+    finally:
+        uninstall(ip, handle)
