@@ -510,6 +510,10 @@ def _types(known: Sequence[str], fragment: str) -> list[str]:
 
 
 # -- the IPython side -----------------------------------------------------------------
+#: The answer when the text is ours but nothing matches (see RosMatcher.__call__).
+NOTHING = SimpleCompletion("", type="no match")
+
+
 class RosMatcher:
     """The matcher object: decides whether a completion is ours and answers it.
 
@@ -544,6 +548,12 @@ class RosMatcher:
         except Exception:  # TAB must never show a traceback; say why at debug level
             log.debug("ipyros completion failed", exc_info=True)
             return SimpleMatcherResult(completions=[], suppress=False)
+        if not completions:
+            # IPython lets a matcher suppress the others only if it has a completion, so
+            # "no such topic" would bring in file names (``%topics /`` listing the disk
+            # when the master is down). One empty completion replacing nothing says
+            # "nothing" and keeps them out: the terminal skips empty texts.
+            return SimpleMatcherResult(completions=[NOTHING], matched_fragment="", suppress=True)
         if context.limit is not None:
             completions = completions[: context.limit]
         return SimpleMatcherResult(

@@ -108,10 +108,10 @@ def ask(matcher: RosMatcher, text: str):
 
 
 def texts(matcher: RosMatcher, text: str) -> list[str]:
+    """The completions of text that ipyros answers (an empty list when nothing matches)."""
     result = ask(matcher, text)
-    completions = [c.text for c in result["completions"]]
-    assert result["suppress"] is bool(completions) or completions == [] and result["suppress"]
-    return completions
+    assert result["suppress"] is True, f"not answered: {text!r}"
+    return [c.text for c in result["completions"] if c.text]  # "" stands for "no match", as in the terminal
 
 
 # -- tier 1: the matcher with a CompletionContext ---------------------------------------
@@ -227,8 +227,8 @@ def test_completion_evaluates_nothing(matcher, ip):
     ip.user_ns["sneaky"] = Sneaky()
     ip.user_ns["items"] = [FakeNode(wrapping_model())]
     # Calls and subscripts in the receiver are never evaluated; no model, so write() is not ours.
-    assert texts(matcher, 'make().write("') == []
-    assert texts(matcher, 'items[0].write("') == []
+    assert ask(matcher, 'make().write("')["suppress"] is False
+    assert ask(matcher, 'items[0].write("')["suppress"] is False
     assert calls == []
     # A model() that raises only loses the node's own topics.
     assert texts(matcher, 'sneaky.new.subscribe(topic="/ct/turtle2') == ["/ct/turtle2/cmd_vel"]
@@ -242,6 +242,7 @@ def test_master_down_answers_instantly_from_local_data(ip):
         down = RosMatcher(ip, dead, CATALOG)
         started = time.monotonic()
         assert texts(down, "%topics /ct/tur") == []
+        assert texts(down, "%topics /") == []  # not the file system's root
         assert texts(down, 'wnode.write("') == ["/ct/turtle1/zz_mine", "mobile_base/commands/velocity"]
         assert texts(down, "%topics --type geometry_msgs/Tw") == ["geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
         assert time.monotonic() - started < 0.5
@@ -271,9 +272,10 @@ def test_default_catalog_scans_this_machine():
 
 # -- tier 2: through IPython's completer ------------------------------------------------
 def complete(ip, text: str):
+    """What the terminal would offer: IPython's completions less empty texts (it skips those)."""
     with provisionalcompleter(), warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return list(ip.Completer.completions(text, len(text)))
+        return [c for c in ip.Completer.completions(text, len(text)) if c.text]
 
 
 def test_through_the_shell(ip, graph):
@@ -294,6 +296,10 @@ def test_through_the_shell(ip, graph):
             "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
         assert [c.text for c in complete(ip, "%wrap turtlesim turtle")] == ["turtle_teleop_key", "turtlesim_node"]
         assert [c.text for c in complete(ip, "%handler w")] == ["wnode"]
+        # Ours but nothing matches: no file names crowd in (the file matcher would list /ct...).
+        assert complete(ip, "%topics /ct/nothing") == []
+        assert complete(ip, 'x.subscribe(topic="/') != [] and all(c.text.startswith("/") and c.text != "/usr/"
+                                                                   for c in complete(ip, 'x.subscribe(topic="/'))
         # Ordinary Python completion still works.
         assert "not_a_node" in [c.text for c in complete(ip, "not_a")]
     finally:

@@ -1,0 +1,221 @@
+"""Completion benchmark: how long a TAB takes with 1,000 live topics, and with the master gone.
+
+    python -m bench.completion            # full run (about 30 s)
+    python -m bench.completion --quick    # fewer repeats
+
+Starts a rosmaster of its own on a free port and one node process that advertises
+1,000 topics (``/bench/t0000`` ... ``/bench/t0999``, tests/nodes/many_topics.py), points a
+GraphCache at the master, and times completions for topic prefixes (1,000, 100, 1 and 0
+matches), DSL string arguments and message types, two ways:
+
+- **matcher**: the ipyros matcher called directly with a CompletionContext (ipyros's own cost);
+- **shell**: ``Completer.completions`` of a real IPython shell (what a TAB press costs
+  in all, IPython's own work included).
+
+Then it stops the master and times the same calls again: they must stay just as fast
+(the graph cache answers from its last, empty, snapshot; nothing waits on the network).
+Warm calls are timed (the first call of each case, which may scan the disk for types
+or packages, is shown apart as "cold"). Target (issue 4): every warm call <= 50 ms.
+The table is printed and saved to bench/results/completion.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import tempfile
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from IPython.core.completer import CompletionContext, provisionalcompleter
+from IPython.core.interactiveshell import InteractiveShell
+from traitlets.config import Config
+
+from bench.relay import BenchError, Child, Master, wait_until
+from ipyros.completion import RosMatcher, default_catalog, install, uninstall
+from ipyros.graph import GraphCache
+from ipyros.model import NodeModel, TopicModel
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRIPT = ROOT / "tests" / "nodes" / "many_topics.py"
+RESULTS = Path(__file__).resolve().parent / "results"
+TARGET_MS = 50.0
+TOPICS = 1000
+
+#: (label, text before the cursor): what a user would press TAB after.
+CASES = [
+    ("%topics /            (1000 topics)", "%topics /"),
+    ("%topics /bench/t05   (100)", "%topics /bench/t05"),
+    ("%topics /bench/t0999 (1)", "%topics /bench/t0999"),
+    ("%topics /nothing     (0)", "%topics /nothing"),
+    ('nd.new.subscribe(topic="/bench/t01', 'nd.new.subscribe(topic="/bench/t01'),
+    ('nd.write("  (own first, 1000 live)', 'nd.write("'),
+    ("%topics --type geometry_msgs/Tw", "%topics --type geometry_msgs/Tw"),
+    ('x.publish("/a", msgType="Tw', 'x.publish("/a", msgType="Tw'),
+    ("%wrap topic_tools r", "%wrap topic_tools r"),
+]
+
+
+class DslNode:
+    """A stand-in for a DSL node in user_ns: completion only calls ``model()``."""
+
+    def model(self) -> NodeModel:
+        return NodeModel(name="nd", topics=[
+            TopicModel("/bench/mine", "/bench/mine", "publish", "std_msgs/String"),
+            TopicModel("/bench/t0100", "/bench/t0100", "subscribe", "std_msgs/String", "new", "show"),
+        ])
+
+
+@dataclass
+class Row:
+    phase: str
+    way: str
+    case: str
+    found: int
+    cold_ms: float
+    p50_ms: float
+    p99_ms: float
+    max_ms: float
+
+    @property
+    def ok(self) -> bool:
+        return self.max_ms <= TARGET_MS
+
+
+def timed(call: Callable[[], int], repeats: int) -> tuple[int, float, list[float]]:
+    """(result count, first call ms, warm call ms...) of ``repeats`` warm calls after a cold one."""
+    started = time.perf_counter()
+    found = call()
+    cold = (time.perf_counter() - started) * 1000
+    times = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        call()
+        times.append((time.perf_counter() - started) * 1000)
+    return found, cold, times
+
+
+def percentile(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
+
+
+def context(text: str) -> CompletionContext:
+    token = text.split()[-1] if text and not text[-1].isspace() else ""
+    for delim in "\"'(=":
+        token = token.rsplit(delim, 1)[-1]
+    return CompletionContext(token=token, full_text=text, cursor_position=len(text), cursor_line=0, limit=None)
+
+
+def measure(phase: str, shell: InteractiveShell, matcher: RosMatcher, repeats: int) -> list[Row]:
+    rows = []
+    for label, text in CASES:
+        ctx = context(text)
+        ways = {
+            "matcher": lambda: sum(1 for c in matcher(ctx)["completions"] if c.text),
+            "shell": lambda: sum(1 for c in shell.Completer.completions(text, len(text)) if c.text),
+        }
+        for way, call in ways.items():
+            found, cold, times = timed(call, repeats if way == "matcher" else max(10, repeats // 4))
+            rows.append(Row(phase, way, label, found, cold, statistics.median(times), percentile(times, 0.99), max(times)))
+    return rows
+
+
+def table(rows: list[Row]) -> str:
+    lines = ["| master | way | TAB after | found | cold ms | p50 ms | p99 ms | max ms | <= 50 ms |",
+             "|---|---|---|---:|---:|---:|---:|---:|---|"]
+    for r in rows:
+        lines.append(f"| {r.phase} | {r.way} | `{r.case.strip()}` | {r.found} | {r.cold_ms:.2f} | {r.p50_ms:.2f} "
+                     f"| {r.p99_ms:.2f} | {r.max_ms:.2f} | {'yes' if r.ok else 'NO'} |")
+    return "\n".join(lines)
+
+
+def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]:
+    rows: list[Row] = []
+    notes: list[str] = []
+    config = Config()
+    config.HistoryManager.hist_file = ":memory:"
+    with tempfile.TemporaryDirectory(prefix="ipyros-bench-completion-") as tmp:
+        workdir = Path(tmp)
+        master = Master(workdir)
+        publisher = graph = shell = handle = None
+        try:
+            say(f"master at {master.uri}; advertising {TOPICS} topics ...")
+            started = time.monotonic()
+            publisher = Child("many_topics", [sys.executable, str(SCRIPT), "bench_topics", str(TOPICS),
+                                              "--prefix", "/bench/t"], master.env, workdir)
+            publisher.expect("ready", 180)
+            notes.append(f"{TOPICS} publishers registered in {time.monotonic() - started:.1f} s")
+            graph = GraphCache(master.uri, period=1.0).start()
+            wait_until(lambda: len(graph.snapshot.topics_with_prefix("/bench/t")) == TOPICS, 30,
+                       "the graph cache to see every topic", 0.05)
+            started = time.perf_counter()
+            graph.refresh_now()
+            notes.append(f"one graph refresh (getSystemState + getTopicTypes) with master up: "
+                         f"{(time.perf_counter() - started) * 1000:.1f} ms")
+
+            shell = InteractiveShell.instance(config=config)
+            shell.user_ns["nd"] = DslNode()
+            catalog = default_catalog()
+            catalog.warm()  # done before install(), whose background warm-up then finds it cached
+            handle = install(shell, graph, catalog)
+            matcher = RosMatcher(shell, graph, catalog)
+            with provisionalcompleter(), warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                say("timing with the master up ...")
+                rows += measure("up", shell, matcher, repeats)
+                say("stopping the master ...")
+                publisher.stop()
+                master.stop()
+                wait_until(lambda: not graph.snapshot.master_up, 10, "the graph cache to see the master gone", 0.05)
+                started = time.perf_counter()
+                graph.refresh_now()
+                notes.append(f"one graph refresh with the master down: {(time.perf_counter() - started) * 1000:.1f} ms")
+                say("timing with the master down ...")
+                rows += measure("down", shell, matcher, repeats)
+        finally:
+            if handle is not None:
+                uninstall(shell, handle)
+            if shell is not None:
+                InteractiveShell.clear_instance()
+            if graph is not None:
+                graph.stop()
+            if publisher is not None:
+                publisher.stop()
+            master.stop()
+    return rows, notes
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.completion", description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
+    parser.add_argument("--repeats", type=int, help="warm calls per case through the matcher (default 200, quick 40)")
+    parser.add_argument("--out", type=Path, help="where to save the table (default bench/results/completion.md)")
+    opts = parser.parse_args(argv)
+    repeats = opts.repeats or (40 if opts.quick else 200)
+    try:
+        rows, notes = run(repeats, lambda line: print(line, flush=True))
+    except BenchError as e:
+        print(f"completion bench failed: {e}", file=sys.stderr)
+        return 1
+    worst = max(rows, key=lambda r: r.max_ms)
+    ok = all(r.ok for r in rows)
+    text = (f"Completion latency, {TOPICS} live topics, {repeats} warm calls per case through the matcher "
+            f"({max(10, repeats // 4)} through the shell)\n\n" + table(rows) + "\n\n"
+            + "\n".join(f"- {n}" for n in notes)
+            + f"\n\nTarget (issue 4): every warm completion <= {TARGET_MS:.0f} ms: {'PASS' if ok else 'FAIL'} "
+              f"(slowest: {worst.max_ms:.2f} ms, {worst.way}, `{worst.case.strip()}`, master {worst.phase}).\n")
+    out = opts.out or RESULTS / "completion.md"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+    print("\n" + text)
+    print(f"(saved to {out})")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
