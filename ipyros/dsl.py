@@ -26,6 +26,7 @@ from .model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
 from .plan import Spec
 from .session import Session, current
 from .slots import HandlerSlot, call_arity
+from .wrap import check_reuse
 
 _UNSET: Any = object()
 
@@ -39,6 +40,8 @@ class rosNode:  # noqa: N801 - the paper's name
 
     def __init__(self, name: str, namespace: Optional[str] = None, *, session: Optional[Session] = None) -> None:
         self._session = session or current()
+        # A wrapping node without a namespace of its own lives in its basenode's (see wrap.set_base).
+        self._explicit_namespace = namespace is not None
         ns = names.default_namespace() if namespace is None else names.rosnames.make_global_ns(namespace)
         self._model = NodeModel(name=names.check_node_name(name), namespace=ns)
         self._handlers: dict[str, Callable[..., Any]] = {}  # slot key → the user's function
@@ -87,6 +90,12 @@ class rosNode:  # noqa: N801 - the paper's name
     def _resolve(self, name: str, kind: str) -> str:
         return names.resolve(name, self._model.namespace, self._model.name, kind)
 
+    def _resolve_as(self, role: str, name: str, kind: str) -> str:
+        """Resolve a declared name: ``reuse`` names are the basenode's, resolved as it resolves them."""
+        from .wrap import resolve_for
+
+        return resolve_for(self._model, role, name, kind)
+
     # -- the basenode ----------------------------------------------------------------
     def baseNode(self, executable: str, **options: Any) -> "rosNode":  # noqa: N802 - the paper's name
         """Wrap the basenode run by ``executable`` (its package is given by :meth:`basePackage`).
@@ -104,6 +113,15 @@ class rosNode:  # noqa: N801 - the paper's name
 
         return set_base(self, package=package)
 
+    def discover(self, timeout: float = 10.0) -> Any:
+        """Run the basenode once, read its topics and services from the master, reuse them all.
+
+        Returns the discovered interface (it displays as a table).
+        """
+        from .wrap import discover
+
+        return discover(self, timeout)
+
     @property
     def base(self) -> Any:
         """The running basenode process (log tail, stop, restart), or None."""
@@ -117,7 +135,7 @@ class rosNode:  # noqa: N801 - the paper's name
                 return self
             from .wrap import check_wrapping, start_base
 
-            check_wrapping(self._model)
+            check_wrapping(self._model, [n._model for n in self._session.nodes.values() if n is not self and n.created])
             self._session.add(self)
             try:
                 self._session.start_process_node(self.fullname)
@@ -127,6 +145,9 @@ class rosNode:  # noqa: N801 - the paper's name
                 self.created = True
                 start_base(self)
             except BaseException:
+                if self._base is not None:
+                    self._base.stop()
+                    self._base = None
                 self._close_all()
                 self.created = False
                 self._session.remove(self)
@@ -138,6 +159,7 @@ class rosNode:  # noqa: N801 - the paper's name
         with self._lock:
             if self._base is not None:
                 self._base.stop()
+                self._base = None
             self._close_all()
             self.created = False
             self._session.remove(self)
@@ -319,7 +341,11 @@ class rosNode:  # noqa: N801 - the paper's name
         if isinstance(spec, planning.PublishSpec):
             return runtime.Publication(spec.topic, msgtypes.resolve_message(spec.type)[1], spec.latch)
         if isinstance(spec, planning.RelaySpec):
-            return runtime.Relay(spec.source, spec.target, msgtypes.resolve_message(spec.type)[1])
+            def wrong_type(got: str, spec: planning.RelaySpec = spec) -> None:
+                self._session.notify(f"ipyros: {spec.source} carries {got}, but {self.name} relays it as {spec.type}; "
+                                     f"messages are dropped: declare type={got!r}")
+
+            return runtime.Relay(spec.source, spec.target, msgtypes.resolve_message(spec.type)[1], wrong_type)
         if isinstance(spec, planning.ServiceRelaySpec):
             return runtime.ServiceRelay(spec.source, spec.target, msgtypes.resolve_service(spec.type)[1])
         slot = self._slots.get(spec.slot)
@@ -388,8 +414,10 @@ class TopicHandler:
                   type: Any = _UNSET) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
         """Subscribe ``handler(msg)`` to ``topic``; declaring it again swaps the handler live."""
         node, role = self._node, self._role
-        resolved = node._resolve(topic, "topic")
+        resolved = node._resolve_as(role, topic, "topic")
         type_name, _ = msgtypes.resolve_message(_one_type(msgType, type, topic))
+        if role == "reuse":
+            check_reuse(node._model, resolved, "subscribe")
         label = f"{node.name} {resolved}"
         handlers = {}
         if role == "new":
@@ -408,8 +436,10 @@ class TopicHandler:
                 latch: bool = False) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
         """Publish ``topic``; ``node.write(topic, msg)`` sends on it."""
         node = self._node
-        resolved = node._resolve(topic, "topic")
+        resolved = node._resolve_as(self._role, topic, "topic")
         type_name, _ = msgtypes.resolve_message(_one_type(msgType, type, topic))
+        if self._role == "reuse":
+            check_reuse(node._model, resolved, "publish")
         entry = TopicModel(topic, resolved, "publish", type_name, self._role, None, bool(latch))
         node._change(_replace_topic(entry), check=(entry,))
         return self
@@ -428,7 +458,7 @@ class TopicHandler:
 
     def _drop(self, topic: str, direction: str) -> "TopicHandler":
         node, role = self._node, self._role
-        resolved = node._resolve(topic, "topic")
+        resolved = node._resolve_as(role, topic, "topic")
         if node._model.topic(resolved, direction, role) is None:  # type: ignore[arg-type]
             raise NotDeclaredError(f"{node.name} has no {role}.{direction} of {resolved}")
 
@@ -444,7 +474,7 @@ class TopicHandler:
                 type: Any = _UNSET) -> "TopicHandler":  # noqa: A002,N803
         """Serve ``name`` with ``handler(request) -> response`` (new), or relay the basenode's (reuse)."""
         node, role = self._node, self._role
-        resolved = node._resolve(name, "service")
+        resolved = node._resolve_as(role, name, "service")
         type_name, _ = msgtypes.resolve_service(_one_type(srvType, type, name))
         handlers = {}
         if role == "new":

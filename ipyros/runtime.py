@@ -19,7 +19,7 @@ import os
 import threading
 import warnings
 import xmlrpc.client
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import rospy
 
@@ -136,19 +136,29 @@ class Relay:
     """Forward ``source`` to ``target`` unchanged, without deserialising.
 
     Latching follows the source: once a latched message arrives, the target latches too.
+    Messages of another type than declared are dropped, and ``on_wrong_type(type)`` is
+    told once: forwarding them would put bytes of one type under another's name.
     """
 
-    def __init__(self, source: str, target: str, cls: type) -> None:
+    def __init__(self, source: str, target: str, cls: type,
+                 on_wrong_type: Optional[Callable[[str], None]] = None) -> None:
         self.source, self.target, self.cls = source, target, cls
         self.count = 0
+        self.dropped = 0
+        self._type = cls._type
+        self._on_wrong_type = on_wrong_type
         self._pub = _publisher(target, cls)
         self._impl = self._pub.impl
         self._sub = rospy.Subscriber(source, rospy.AnyMsg, self._forward,
                                      queue_size=None, buff_size=_BUFF_SIZE, tcp_nodelay=True)
 
     def _forward(self, raw: rospy.AnyMsg) -> None:
+        header = raw._connection_header
+        if header.get("type") != self._type:
+            self._wrong_type(header.get("type", "?"))
+            return
         impl = self._impl
-        if not impl.is_latch and raw._connection_header.get("latching") == "1":
+        if not impl.is_latch and header.get("latching") == "1":
             impl.enable_latch()
         # Publisher.publish would type-check AnyMsg against the class; the impl just
         # writes the bytes (AnyMsg.serialize copies its buffer).
@@ -158,6 +168,11 @@ class Relay:
         finally:
             impl.release()
         self.count += 1
+
+    def _wrong_type(self, got: str) -> None:
+        self.dropped += 1
+        if self.dropped == 1 and self._on_wrong_type is not None:
+            self._on_wrong_type(got)
 
     def close(self) -> None:
         self._sub.unregister()

@@ -52,6 +52,10 @@ class Session:
         self._lock = threading.RLock()
         self.closed = False
 
+    def notify(self, text: str) -> None:
+        """Tell the user something that happened on its own (a basenode died, ...)."""
+        self.config.announce(text)
+
     def attach_master(self) -> master_mod.MasterHandle:
         """The master in use, found or started on first call."""
         with self._lock:

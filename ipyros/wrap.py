@@ -1,21 +1,75 @@
-"""Wrapping: the DSL side of a node that wraps a basenode (paper section III).
+"""Wrapping: the DSL side of a node that wraps a basenode (paper section III, figure 1).
 
-The topology is decided in :mod:`ipyros.plan`; this module checks the declarations
-that only make sense together, and starts the basenode process with its remaps.
+Which endpoints run is decided in :mod:`ipyros.plan`. This module resolves base topic
+names the way the basenode will (in its namespace, ``~`` under its name), checks the
+declarations that only make sense together, starts the basenode with its remaps, and
+offers black-box discovery: read a running basenode's interface from the master and
+declare it all as ``reuse`` in one call.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+import re
+from typing import TYPE_CHECKING, Any, Optional
 
-from .errors import DeclarationError
+from rosgraph import names as rosnames
+
+from . import names
+from .errors import BaseNodeError, DeclarationError, TopicTypeConflict
 from .model import BaseModel, NodeModel
+from .plan import base_remaps, internal_name, node_fullname
 
 if TYPE_CHECKING:
+    from .discovery import Interface
     from .dsl import rosNode
 
 _BASE_OPTIONS = {"name": "node_name", "namespace": "namespace", "remaps": "remaps", "params": "params", "args": "args"}
 
+
+# -- names ---------------------------------------------------------------------------------
+
+def base_node_name(base: BaseModel) -> str:
+    """The basenode's ROS name: the one given, else the executable's (``move_base``)."""
+    if base.node_name:
+        return base.node_name.strip("/")
+    stem = re.sub(r"\W", "_", (base.executable or "base").rsplit("/", 1)[-1].split(".")[0])
+    return stem if stem[:1].isalpha() else "n" + stem
+
+
+def base_namespace(model: NodeModel) -> str:
+    base = model.base
+    return rosnames.make_global_ns(base.namespace) if base and base.namespace else model.namespace
+
+
+def base_fullname(model: NodeModel) -> str:
+    assert model.base is not None
+    return rosnames.ns_join(base_namespace(model), base_node_name(model.base))
+
+
+def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
+    """``reuse`` names are the basenode's: resolve them as it does; ``new`` ones are the node's own.
+
+    A ``new`` declaration spelled like a ``reuse`` one (``~reset`` both times) means the
+    basenode's name: that is how a reused topic or service is intercepted.
+    """
+    if role == "new" and model.base is not None:
+        declared = model.topics if kind == "topic" else model.services
+        if any(d.role == "reuse" and d.name == name for d in declared):
+            role = "reuse"
+    if role == "reuse" and model.base is not None:
+        return names.resolve(name, base_namespace(model), base_node_name(model.base), kind)
+    return names.resolve(name, model.namespace, model.name, kind)
+
+
+def _reresolve(model: NodeModel) -> None:
+    """After the basenode changed: base names may resolve elsewhere now."""
+    for t in model.topics:
+        t.resolved = resolve_for(model, t.role, t.name, "topic")
+    for s in model.services:
+        s.resolved = resolve_for(model, s.role, s.name, "service")
+
+
+# -- declarations --------------------------------------------------------------------------
 
 def set_base(node: "rosNode", **fields: Any) -> "rosNode":
     """Record basenode fields (``executable``, ``package`` and the options) in the model."""
@@ -27,20 +81,36 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
         raise DeclarationError(f"{node.name} is already running; declare its basenode before create()")
     for key in ("executable", "package"):
         if key in fields and (not isinstance(fields[key], str) or not fields[key].strip()):
-            raise DeclarationError(f"base{key.capitalize() if key == 'package' else 'Node'}() needs a non-empty name")
+            what = "basePackage('package')" if key == "package" else "baseNode('executable')"
+            raise DeclarationError(f"{what} needs a non-empty name")
+    if fields.get("name"):
+        names.check_node_name(fields["name"])
 
     def edit(model: NodeModel) -> None:
         base = model.base or BaseModel()
         for key, value in fields.items():
             setattr(base, _BASE_OPTIONS.get(key, key), value)
         model.base = base
+        if fields.get("namespace") and not node._explicit_namespace:
+            model.namespace = rosnames.make_global_ns(fields["namespace"])
+        _reresolve(model)
 
     node._change(edit)
     return node
 
 
-def check_wrapping(model: NodeModel) -> None:
-    """Refuse to create a node whose wrapping declarations are incomplete."""
+def check_reuse(model: NodeModel, resolved: str, direction: str, kind: str = "topic") -> None:
+    """A base topic is wrapped once: refuse reuse of it in both directions."""
+    if kind != "topic":
+        return
+    other = "subscribe" if direction == "publish" else "publish"
+    if model.topic(resolved, other, "reuse") is not None:  # type: ignore[arg-type]
+        raise DeclarationError(f"{resolved} is already wrapped as reuse.{other}; a base topic is wrapped once: "
+                               f"remove it first ({model.name}.remove({resolved!r}))")
+
+
+def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # type: ignore[assignment]
+    """Refuse to create a node whose wrapping declarations are incomplete or clash."""
     reuses = [t.name for t in model.topics if t.role == "reuse"] + [s.name for s in model.services if s.role == "reuse"]
     if model.base is None:
         if reuses:
@@ -50,10 +120,127 @@ def check_wrapping(model: NodeModel) -> None:
     if not model.base.executable or not model.base.package:
         missing = "baseNode('executable')" if not model.base.executable else "basePackage('package')"
         raise DeclarationError(f"{model.name}'s basenode is incomplete; add .{missing}")
+    mine = base_fullname(model)
+    for other in others:
+        if other.base is None or base_fullname(other) != mine:
+            continue
+        raise DeclarationError(f"basenode {mine} is already wrapped by {node_fullname(other)}; "
+                               "wrap it once, or give this one another name: baseNode(..., name='other')")
 
 
-def start_base(node: "rosNode") -> None:
-    """Launch the basenode of a wrapping node, remapped onto the wrapping node's internal names."""
-    if node._model.base is None:
+# -- the basenode process ------------------------------------------------------------------
+
+def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
+    """Launch the basenode remapped onto the wrapping node's internal names, and check its types."""
+    from .base import BaseProcess, exit_reason
+    from .discovery import wait_for_node
+
+    model = node._model
+    if model.base is None:
         return
-    raise DeclarationError("wrapping a basenode is not available yet")
+    session = node._session
+    wrapping = {k: v for k, v in base_remaps(model).items() if k not in model.base.remaps}
+    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
+                        "namespace": base_namespace(model)})
+
+    def died(proc: Any, returncode: int, last_lines: list[str]) -> None:
+        tail = "\n    ".join(last_lines[-8:])
+        session.notify(f"ipyros: basenode {base_fullname(model)} of {node.name} {exit_reason(returncode)}; "
+                       f"restart it with {node.name}.base.restart()\n    {tail}")
+
+    process = BaseProcess.from_model(base, remaps=wrapping, master_uri=session.master.uri, on_exit=died)
+    node._base = process.start()
+    try:
+        interface = wait_for_node(session.master.uri, base_fullname(model), timeout=settle_timeout)
+    except BaseNodeError:
+        if not process.running:
+            raise BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(process.returncode or 0)} at start; "
+                                f"last log lines: {' | '.join(process.tail(5))}") from None
+        raise
+    check_base_types(model, interface)
+
+
+def check_base_types(model: NodeModel, interface: "Interface") -> None:
+    """Refuse a base topic declared with another type than the basenode uses."""
+    actual = {name: type_ for name, type_ in interface.publications + interface.subscriptions if type_}
+    for t in model.topics:
+        if t.role != "reuse":
+            continue
+        have = actual.get(internal_name(model, t.resolved))
+        if have and have != t.type:
+            raise TopicTypeConflict(f"basenode {base_fullname(model)} uses {t.resolved} as {have}, but {model.name} "
+                                    f"declares {t.type}; declare type={have!r}")
+
+
+def declare_interface(node: "rosNode", interface: "Interface") -> "Interface":
+    """Declare every topic and service of a basenode's interface as ``reuse`` on ``node``."""
+    model = node._model
+    prefix = rosnames.make_global_ns(base_namespace(model))
+    untyped = [name for name, type_ in interface.publications + interface.subscriptions + interface.services
+               if not type_]
+    for name, type_ in interface.publications:
+        if type_:
+            node.reuse.publish(_relative(name, prefix), type=type_)
+    for name, type_ in interface.subscriptions:
+        if type_:
+            node.reuse.subscribe(_relative(name, prefix), type=type_)
+    for name, type_ in interface.services:
+        if type_:
+            node.reuse.service(_relative(name, prefix), type=type_)
+    if untyped:
+        node._session.notify(f"ipyros: {', '.join(untyped)} of {interface.node} have no known type yet "
+                             "(nobody publishes them); declare them yourself with type=...")
+    return interface
+
+
+def _relative(name: str, prefix: str) -> str:
+    """Keep names in the basenode's namespace relative, so they follow its namespace."""
+    return name[len(prefix):] if prefix != "/" and name.startswith(prefix) else name
+
+
+def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
+    """Black-box discovery: run the basenode as it is, read its interface, declare it as reuse.
+
+    The basenode runs briefly without remaps (it is stopped before the wrapping node
+    starts it again, remapped). Returns the interface, which displays as a table.
+    """
+    from .base import BaseProcess
+    from .discovery import wait_for_node
+
+    model = node._model
+    check_wrapping(model)
+    if node.created:
+        raise DeclarationError(f"{node.name} is already running; discover() its basenode before create()")
+    uri = node._session.attach_master().uri
+    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),  # type: ignore[union-attr]
+                        "namespace": base_namespace(model)})
+    probe = BaseProcess.from_model(base, master_uri=uri).start()
+    try:
+        interface = wait_for_node(uri, base_fullname(model), timeout=timeout)
+    except BaseNodeError:
+        if not probe.running:
+            raise BaseNodeError(f"basenode {base_fullname(model)} exited at start; last log lines: "
+                                f"{' | '.join(probe.tail(5))}") from None
+        raise
+    finally:
+        probe.stop()
+    return declare_interface(node, interface)
+
+
+def wrap(package: str, executable: str, name: Optional[str] = None, *, node_name: Optional[str] = None,
+         namespace: Optional[str] = None, remaps: Optional[dict] = None, params: Optional[dict] = None,
+         args: Optional[list] = None, session: Any = None) -> "rosNode":
+    """Wrap ``package``/``executable`` in one call: discover its interface, reuse it all, create.
+
+    The wrapping node is named ``name`` (default ``<executable>_wrapper``).
+    """
+    from .dsl import rosNode
+
+    options = {k: v for k, v in dict(name=node_name, namespace=namespace, remaps=remaps, params=params,
+                                     args=args).items() if v}
+    node = rosNode(name or f"{base_node_name(BaseModel(executable=executable))}_wrapper", namespace=namespace,
+                   session=session)
+    node.baseNode(executable, **options).basePackage(package)
+    node.discover()
+    node.create()
+    return node

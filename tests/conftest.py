@@ -19,6 +19,9 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))  # tests/helpers.py
+# The test basenodes are a ROS package: found by package + executable, as rosrun finds them.
+os.environ["ROS_PACKAGE_PATH"] = os.pathsep.join(
+    p for p in (str(HERE / "nodes"), os.environ.get("ROS_PACKAGE_PATH", "")) if p)
 
 
 # Processes that live for the whole run (the master): not leftovers of any one test.
