@@ -1,0 +1,100 @@
+"""The basenode's life as the wrapping node manages it: log, restart, crash, and no orphans."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+from std_msgs.msg import Int32, String
+
+from conftest import master_state, wait_for
+
+
+def alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def wrapped_echo(make_node, name):
+    w = make_node(name)
+    w.baseNode("echo_node").basePackage("ipyros_test_nodes")
+    w.reuse.subscribe("in", type=String).publish("out", type=String)
+    return w.create()
+
+
+def test_log_tail_restart_and_shutdown(make_node, ros_master):
+    w = wrapped_echo(make_node, "life_wrapper")
+    wait_for(lambda: any("echo_node ready" in line for line in w.base.tail()), what="the basenode's output in its log")
+    first = w.base.pid
+    w.base.restart()
+    assert w.base.pid != first and not alive(first)
+    wait_for(lambda: master_state(ros_master)["sub"].get("/life_wrapper/base/in") == ["/echo_node"],
+             what="the restarted basenode, remapped again")
+    out = []
+    make_node("life_listener").new.subscribe("/out", handler=out.append, msgType=String).create()
+    feeder = make_node("life_feeder").new.publish("/in", msgType=String).create()
+    wait_for(lambda: feeder.write("/in", String("r")) or out, timeout=20, what="traffic after restart")
+    pid = w.base.pid
+    w.shutdown()
+    assert not alive(pid), "shutdown stops the basenode"
+
+
+def test_a_crash_is_reported_with_exit_code_and_log(make_node, ros_session):
+    told = []
+    previous = ros_session.config.announce
+    ros_session.config.announce = told.append
+    try:
+        w = wrapped_echo(make_node, "crash_wrapper")
+        crasher = make_node("crash_sender").new.publish("/crash", msgType=Int32).create()
+        wait_for(lambda: crasher._writer("/crash")[0].connections(), what="the basenode to subscribe /crash")
+        crasher.write("/crash", Int32(3))
+        wait_for(lambda: told, timeout=20, what="the crash to be reported")
+    finally:
+        ros_session.config.announce = previous
+    assert "basenode /echo_node of crash_wrapper exited with code 3; restart it with crash_wrapper.base.restart()" \
+        in told[0]
+    assert "echo_node ready" in told[0], "the last log lines come with the report"
+    assert not w.base.running and w.base.returncode == 3
+
+
+SCRIPT = """
+import sys
+from ipyros import rosNode
+from std_msgs.msg import String
+w = rosNode("orphan_wrapper")
+w.baseNode("echo_node").basePackage("ipyros_test_nodes")
+w.reuse.publish("out", type=String)
+w.create()
+print("BASE", w.base.pid, flush=True)
+if sys.argv[1] == "wait":
+    sys.stdin.read()
+"""
+
+
+def start_interpreter(mode: str) -> tuple[subprocess.Popen, int]:
+    proc = subprocess.Popen([sys.executable, "-c", textwrap.dedent(SCRIPT), mode], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=dict(os.environ))
+    line = proc.stdout.readline()  # type: ignore[union-attr]
+    assert line.startswith("BASE"), line
+    return proc, int(line.split()[1])
+
+
+def test_no_orphan_when_the_interpreter_exits(ros_master):
+    proc, base_pid = start_interpreter("exit")
+    assert proc.wait(30) == 0
+    wait_for(lambda: not alive(base_pid), what="the basenode to stop at exit")
+
+
+def test_no_orphan_when_the_interpreter_is_killed(ros_master):
+    proc, base_pid = start_interpreter("wait")
+    assert alive(base_pid)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(10)
+    wait_for(lambda: not alive(base_pid), what="the basenode to die with its SIGKILLed interpreter")
