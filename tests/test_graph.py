@@ -58,7 +58,7 @@ def test_topics_matching_glob_substring_type_node(ros_master):
         snap = wait_for(lambda: len(graph.refresh_now(2).topics_with_prefix("/m/")) == 4 and graph.snapshot,
                         timeout=20, what="4 topics under /m/")
         assert graph.topics_matching("/m/*/cmd*") == ["/m/a/cmd0000", "/m/a/cmd0001"]
-        assert snap.topics_matching("pose") == ["/m/b/pose0000", "/m/b/pose0001"]
+        assert snap.topics_matching("b/pose") == ["/m/b/pose0000", "/m/b/pose0001"]  # a substring
         assert snap.topics_matching("/m/", type="geometry_msgs/Twist") == ["/m/a/cmd0000", "/m/a/cmd0001"]
         assert snap.topics_matching("/m/", type="geometry_msgs/*") == snap.topics_with_prefix("/m/")
         # A node matches the topics it publishes and those it subscribes to.
