@@ -84,21 +84,34 @@ def _package_name(package_dir: Path) -> Optional[str]:
     return name.strip() if name else None
 
 
+def _walk(top: Path, seen: set[str]) -> Iterable[tuple[Path, list[str], list[str]]]:
+    """``os.walk`` following symlinks (as ``find -L`` does), in sorted order, without hidden
+    folders, and visiting each real folder once (``seen``) so that symlink loops end.
+
+    Like ``os.walk``, the caller may prune the ``dirs`` list it is handed.
+    """
+    for current, dirs, files in os.walk(top, followlinks=True):
+        real = os.path.realpath(current)
+        if real in seen:
+            dirs.clear()
+            continue
+        seen.add(real)
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        yield Path(current), dirs, sorted(files)
+
+
 def _crawl(root: Path) -> Iterable[tuple[str, Path]]:
     """``(name, dir)`` of every package below ``root``, the way rospack crawls.
 
-    A package's own subfolders are not searched for more packages; hidden folders and
-    folders marked CATKIN_IGNORE are skipped, and ``rospack_nosubdirs`` stops the descent.
+    A package's own subfolders are not searched for more packages; folders marked
+    CATKIN_IGNORE are skipped, and ``rospack_nosubdirs`` stops the descent.
     """
-    for current, dirs, _files in os.walk(root, followlinks=True):
-        here = Path(current)
+    for here, dirs, _files in _walk(root, set()):
         name = _package_name(here)
         if name or any((here / m).exists() for m in (*_IGNORE_MARKERS, "rospack_nosubdirs")):
             dirs.clear()
             if name and not any((here / m).exists() for m in _IGNORE_MARKERS):
                 yield name, here
-            continue
-        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
 
 
 def _is_ros_share_dir(share: Path) -> bool:
@@ -174,17 +187,12 @@ def _executables(package: str, env_key: tuple[str, str]) -> dict[str, tuple[Path
     found: dict[str, list[Path]] = {}
     seen: set[str] = set()
     for top in _search_dirs(package):
-        for current, dirs, files in os.walk(top, followlinks=True):
-            real = os.path.realpath(current)
-            if real in seen:
-                dirs.clear()
-                continue
-            seen.add(real)
-            dirs[:] = sorted(d for d in dirs if not d.startswith(".") and not (d == "build" and current == str(top)))
-            for f in sorted(files):
-                path = Path(current) / f
-                if _is_executable_file(path):
-                    found.setdefault(f, []).append(path)
+        for here, dirs, files in _walk(top, seen):
+            if here == top and "build" in dirs:
+                dirs.remove("build")
+            for f in files:
+                if _is_executable_file(here / f):
+                    found.setdefault(f, []).append(here / f)
     return {name: tuple(paths) for name, paths in sorted(found.items())}
 
 
@@ -217,16 +225,16 @@ def find_executable(package: str, executable: str) -> Path:
     package or executable is unknown, or when the name is ambiguous.
     """
     if not package or not executable:
-        raise BaseNodeError("a basenode needs a package and an executable, e.g. basePackage('topic_tools') and baseNode('relay')")
+        raise BaseNodeError(
+            "a basenode needs a package and an executable, e.g. basePackage('topic_tools') and baseNode('relay')"
+        )
     for fresh in (False, True):  # the second try forgets the caches: something new may have appeared
         if fresh:
             refresh_packages()
-        if not _search_dirs(package):
-            continue
-        if "/" in executable:
-            path = _index(_env_key()).get(package, Path("/nonexistent")) / executable
-            if _is_executable_file(path):
-                return path
+        if "/" in executable:  # rosrun takes a path as relative to the package dir
+            package_dir = _index(_env_key()).get(package)
+            if package_dir is not None and _is_executable_file(package_dir / executable):
+                return package_dir / executable
             continue
         candidates = _executables(package, _env_key()).get(executable)
         if candidates:
@@ -257,7 +265,7 @@ def _lookup_error(package: str, executable: str) -> BaseNodeError:
     names = list_executables(package)
     hint = _did_you_mean(executable.rsplit("/", 1)[-1], names)
     listing = f"its executables: {', '.join(names)}" if names else "it has no executable files"
-    return BaseNodeError(f"package {package!r} has no executable {executable!r}: " + (f"{hint} " if hint else "") + listing)
+    return BaseNodeError(f"package {package!r} has no executable {executable!r}: {hint + ' ' if hint else ''}{listing}")
 
 
 # ---------------------------------------------------------------------------
@@ -349,12 +357,11 @@ def exit_reason(returncode: int) -> str:
 
 
 class _Run:
-    """One start of the process: the Popen, whether its end was asked for, and its watcher."""
+    """One start of the process: the Popen, and whether its end was asked for."""
 
     def __init__(self, proc) -> None:
         self.proc = proc
         self.expected_exit = threading.Event()
-        self.watcher: Optional[threading.Thread] = None
 
 
 class BaseProcess:
@@ -419,15 +426,17 @@ class BaseProcess:
         Without a package, ``base.executable`` must be a path to an executable file.
         """
         if not base.executable:
-            raise BaseNodeError("no basenode executable declared: call baseNode('executable') and basePackage('package')")
+            raise BaseNodeError(
+                "no basenode executable declared: call baseNode('executable') and basePackage('package')"
+            )
         if base.package:
             path = find_executable(base.package, base.executable)
         else:
             path = Path(base.executable).expanduser()
             if not _is_executable_file(path):
                 raise BaseNodeError(
-                    f"basenode {base.executable!r} is not an executable file: give its package with basePackage('...'), "
-                    "or a path to an executable"
+                    f"basenode {base.executable!r} is not an executable file: "
+                    "give its package with basePackage('...'), or a path to an executable"
                 )
         return cls(
             path, base.args, node_name=base.node_name, namespace=base.namespace,
@@ -462,19 +471,23 @@ class BaseProcess:
         """Launch the process; raise :class:`BaseNodeError` if it cannot be executed at all."""
         with self._lifecycle:
             if self.running:
-                raise NodeStateError(f"basenode {self.executable.name} is already running (pid {self.pid}); use restart()")
+                raise NodeStateError(
+                    f"basenode {self.executable.name} is already running (pid {self.pid}); use restart()"
+                )
             self._note(f"starting: {shlex.join(self.argv)}")
             with open(self.log_path, "ab", buffering=0) as log:
                 try:
                     proc = _launcher.call(lambda: spawn(self.argv, env=self.env, log=log.fileno()))
                 except OSError as exc:
                     self._note(f"could not start: {exc}")
-                    raise BaseNodeError(f"cannot run basenode {self.argv[0]}: {exc.strerror or exc}; check that it is an executable file") from None
+                    raise BaseNodeError(
+                        f"cannot run basenode {self.argv[0]}: {exc.strerror or exc}; "
+                        "check that it is an executable file"
+                    ) from None
             run = self._run = _Run(proc)
             with _running_lock:
                 _running.add(self)
-            run.watcher = threading.Thread(target=self._watch, args=(run,), name=f"ipyros-watch-{proc.pid}", daemon=True)
-            run.watcher.start()
+            threading.Thread(target=self._watch, args=(run,), name=f"ipyros-watch-{proc.pid}", daemon=True).start()
             return self
 
     def stop(self, timeout: float = 5.0) -> Optional[int]:
@@ -486,10 +499,13 @@ class BaseProcess:
             run = self._run
             if run is None:
                 return None
-            run.expected_exit.set()
+            was_running = run.proc.returncode is None and not run.expected_exit.is_set()
+            run.expected_exit.set()  # before any signal: the watcher must not report this exit
             returncode = stop_process(run.proc, timeout)
-            if run.watcher is not None and run.watcher is not threading.current_thread():
-                run.watcher.join()  # the watcher has the exit written to the log when stop() returns
+            # Noted here, not by the watcher: stop() must not wait for the watcher, which may be
+            # inside on_exit calling restart() and so waiting for this very lock.
+            if was_running:
+                self._note(f"stopped ({exit_reason(returncode)})")
             return returncode
 
     def restart(self, timeout: float = 5.0) -> "BaseProcess":
@@ -514,10 +530,9 @@ class BaseProcess:
         with _running_lock:
             if self._run is run:
                 _running.discard(self)
-        last_lines = self.tail()
         if run.expected_exit.is_set():
-            self._note(f"stopped ({exit_reason(returncode)})")
             return
+        last_lines = self.tail()
         self._note(f"basenode {exit_reason(returncode)}")
         if self.on_exit is not None:
             try:

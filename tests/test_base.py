@@ -42,9 +42,11 @@ def echo_node() -> Path:
 
 
 def log_has(proc: BaseProcess, text: str, timeout: float = 20.0) -> str:
-    """Wait until a line of the process's log contains ``text``; return that line."""
-    return wait_for(lambda: next((line for line in proc.tail(200) if text in line), None),
-                    timeout, what=f"{text!r} in the log of {proc.executable.name}: {proc.tail(5)}")
+    """Wait until a line the process wrote to its log (not ipyros's notes) contains ``text``; return it."""
+    def found():
+        return next((line for line in proc.tail(200) if text in line and not line.startswith("[ipyros]")), None)
+
+    return wait_for(found, timeout, what=f"{text!r} in the log of {proc.executable.name}: {proc.tail(5)}")
 
 
 class Exits:
@@ -362,8 +364,9 @@ def test_demo_move_base_drives_turtle_sim_to_a_goal_and_the_speed_guard_trips(ro
     log_has(nav, "move_base ready")
     with Peer("echo_topic.py", "/turtle1/pose", "geometry_msgs/Pose") as poses:
         poses.wait_line("position")
-        goal = BaseProcess("/usr/bin/rostopic", ["pub", "-r", "2", "/move_base_simple/goal", "geometry_msgs/PoseStamped",
-                                                 "{pose: {position: {x: 1.0, y: 1.0}}}"], master_uri=ros_master)
+        goal = BaseProcess("/usr/bin/rostopic", ["pub", "-r", "2", "/move_base_simple/goal",
+                                                 "geometry_msgs/PoseStamped", "{pose: {position: {x: 1.0, y: 1.0}}}"],
+                           master_uri=ros_master)
         stopper(goal.start())
         log_has(nav, "goal reached", timeout=30)
         goal.stop()

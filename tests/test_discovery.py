@@ -46,7 +46,8 @@ def test_python_node_in_a_namespace_with_a_remap(ros_master, launch):
         publications=[("/robot/out", "std_msgs/String")],
         subscriptions=[("/robot/crash", "std_msgs/Int32"), ("/w/in", "std_msgs/String")],
         services=[("/robot/probe/reset", "std_srvs/Empty")],
-        left_out=["/rosout (publishes)", "/robot/probe/get_loggers (service)", "/robot/probe/set_logger_level (service)"],
+        left_out=["/rosout (publishes)", "/robot/probe/get_loggers (service)",
+                  "/robot/probe/set_logger_level (service)"],
     )
     assert discover(ros_master, "/robot/probe") == interface  # once registered, one read gives the same
 
