@@ -499,13 +499,15 @@ class BaseProcess:
             run = self._run
             if run is None:
                 return None
-            was_running = run.proc.returncode is None and not run.expected_exit.is_set()
+            if run.proc.returncode is not None:
+                # Ended and reaped already: its pid, and so its group id, may belong to
+                # another process by now, so there is nothing we may signal.
+                return run.proc.returncode
             run.expected_exit.set()  # before any signal: the watcher must not report this exit
             returncode = stop_process(run.proc, timeout)
             # Noted here, not by the watcher: stop() must not wait for the watcher, which may be
             # inside on_exit calling restart() and so waiting for this very lock.
-            if was_running:
-                self._note(f"stopped ({exit_reason(returncode)})")
+            self._note(f"stopped ({exit_reason(returncode)})")
             return returncode
 
     def restart(self, timeout: float = 5.0) -> "BaseProcess":
@@ -532,6 +534,10 @@ class BaseProcess:
                 _running.discard(self)
         if run.expected_exit.is_set():
             return
+        try:  # what the crashed basenode started goes with it (the group outlives its leader)
+            os.killpg(run.proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
         last_lines = self.tail()
         self._note(f"basenode {exit_reason(returncode)}")
         if self.on_exit is not None:

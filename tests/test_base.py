@@ -223,13 +223,16 @@ def test_python_basenode_remapped_relays_through_its_internal_names(ros_master, 
 
 def test_crash_after_start_is_reported_with_exit_code_and_last_lines(ros_master, stopper):
     exits = Exits()
-    proc = BaseProcess(echo_node(), node_name="crasher", params={"exit_after": 0.5}, master_uri=ros_master,
-                       on_exit=exits)
+    proc = BaseProcess(echo_node(), ["--spawn-child"], node_name="crasher", params={"exit_after": 0.5},
+                       master_uri=ros_master, on_exit=exits)
     stopper(proc.start())
+    child = int(log_has(proc, "child pid").split()[-1])
     reported, returncode, last_lines = exits.wait()
     assert reported is proc and returncode == 3
     assert "crashing with code 3: exit_after 0.5" in last_lines and "last words on stderr" in last_lines
     assert not proc.running and proc.returncode == 3 and proc.pid is None
+    wait_for(lambda: not pid_alive(child), 10, what="the crashed basenode's own child to be killed")
+    assert proc.stop() == 3  # stopping a crashed basenode signals nothing and says how it ended
     wait_for(lambda: "basenode exited with code 3" in proc.tail(1)[0], 10, what="the exit noted in the log")
     assert "exited with code 3" in repr(proc)
 
