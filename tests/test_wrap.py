@@ -24,6 +24,11 @@ def listen(make_node, name, topic, type_):
 
 def test_the_papers_kobuki_session_as_typed(ros_session, make_node, ros_master):
     global speed
+    # move_base's private params may be left on the parameter server by other tests: its default speed is 1.0.
+    import xmlrpc.client
+    master = xmlrpc.client.ServerProxy(ros_master)
+    if master.hasParam("/pytest", "/move_base")[2]:
+        master.deleteParam("/pytest", "/move_base")
     # The world around the basenode: a robot pose, a goal, and someone listening to the robot's base.
     world = make_node("kobuki_world")
     world.new.publish("/turtle1/pose", msgType=Pose, latch=True).publish("/move_base_simple/goal", msgType=PoseStamped,
@@ -183,9 +188,9 @@ def test_wrapping_errors(make_node):
 
 def test_a_base_topic_declared_with_the_wrong_type(make_node):
     w = make_node("wrong_type")
-    w.baseNode("echo_node").basePackage("ipyros_test_nodes")
+    w.baseNode("echo_node", namespace="wt").basePackage("ipyros_test_nodes")
     w.reuse.publish("out", type=Twist)
-    with pytest.raises(errors.TopicTypeConflict, match="basenode /echo_node uses /out as std_msgs/String, but "
+    with pytest.raises(errors.TopicTypeConflict, match="basenode /wt/echo_node uses /wt/out as std_msgs/String, but "
                                                        "wrong_type declares geometry_msgs/Twist"):
         w.create()
     assert not w.created and w.base is None, "nothing is left running"

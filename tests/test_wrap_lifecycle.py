@@ -69,8 +69,8 @@ import sys
 from ipyros import rosNode
 from std_msgs.msg import String
 w = rosNode("orphan_wrapper")
-w.baseNode("echo_node").basePackage("ipyros_test_nodes")
-w.reuse.publish("out", type=String)
+w.baseNode("echo_node", namespace="orphans").basePackage("ipyros_test_nodes")
+w.reuse.publish("out", type=String)  # a SIGKILLed node stays registered: keep its topics apart
 w.create()
 print("BASE", w.base.pid, flush=True)
 if sys.argv[1] == "wait":
