@@ -1,0 +1,257 @@
+"""``%load_ext ipyros`` and ``%unload_ext ipyros``: what the extension adds to a shell, and takes back.
+
+Loading:
+
+* registers the magics (:mod:`ipyros.magics`) and the tab completer (:mod:`ipyros.completion`,
+  answered from a :class:`~ipyros.graph.GraphCache` refreshed in the background);
+* puts ``rosNode`` in the user namespace;
+* shows an :class:`~ipyros.errors.IpyrosError` raised at the prompt as one line, not a traceback;
+* prints handler failures from ROS threads without wrecking the prompt
+  (:func:`ipyros.magics.output.failure_report`);
+* attaches to the ROS master, and prints one line saying which and how.
+
+The prompt never waits on the network: when a master answers a short local check
+(0.3 s at most) it is used at once; otherwise, if allowed, one is started on a
+background thread while the prompt comes back. A node's ``create()`` waits for that
+start, because both go through the session's lock (:meth:`Session.attach_master`).
+
+Unloading undoes each of these; nodes the user created keep running (they belong to
+the session, which stops them at exit), the ``%pub`` publisher is closed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import threading
+from collections import deque
+from typing import Any, Optional
+
+from . import completion, master as master_mod, plan as planning
+from .dsl import rosNode
+from .errors import IpyrosError, MasterError
+from .graph import GraphCache
+from .magics import NodeMagics, RosMagics, TopicMagics, WrapMagics
+from .magics.output import Printer, StderrLogHandler, failure_report, note
+from .probe import PromptPublisher
+from .session import Session, configure, current
+
+log = logging.getLogger(__name__)
+
+#: Settings whose change must reach something already running.
+_LIVE_SETTINGS = ["master_uri", "start_master", "graph_period", "log_level"]
+
+
+class Extension:
+    """Everything ipyros adds to one shell; :meth:`load` adds it, :meth:`unload` takes it back."""
+
+    def __init__(self, shell: Any) -> None:
+        self.shell = shell
+        self.settings = RosMagics(shell=shell)  # reads c.RosMagics.* from the shell's config
+        self.printer = Printer(lambda: self.settings.rich_output)
+        self.publisher = PromptPublisher()
+        self.graph = GraphCache(_slashed(self.settings.master_uri or master_mod.configured_uri()),
+                                period=self.settings.graph_period)
+        self.node_magics = NodeMagics(shell, self)
+        self.magics = [self.settings, TopicMagics(shell, self), self.node_magics, WrapMagics(shell, self)]
+        self._completion: Optional[completion.Installed] = None
+        self._log_handler = StderrLogHandler()
+        self._report = failure_report(lambda: self.settings.handler_tracebacks)
+        self._saved: dict[str, Any] = {}
+
+    @property
+    def session(self) -> Session:
+        return current()
+
+    # -- load ------------------------------------------------------------------------------
+    def load(self) -> None:
+        shell = self.shell
+        self._saved["announce"] = self.session.config.announce
+        line = self._configure_session()
+        for magics in self.magics:
+            shell.register_magics(magics)
+        shell.push({"rosNode": rosNode}, interactive=False)
+        self._saved["custom_exc"] = (shell.custom_exceptions, shell.CustomTB)
+        previous_tb = shell.CustomTB
+        shell.set_custom_exc((*shell.custom_exceptions, IpyrosError),
+                             lambda sh, etype, value, tb, tb_offset=None: _show_error(sh, previous_tb, etype, value,
+                                                                                      tb, tb_offset))
+        self._saved["report"] = self.session.report
+        self.session.report = self._report
+        self._start_logging()
+        shell.events.register("post_run_cell", self._after_cell)
+        self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
+        self.graph.start()
+        self._completion = completion.install(shell, self.graph)
+        print(f"ipyros: {line or self._attach()}")
+
+    def _configure_session(self) -> Optional[str]:
+        """Give the session the master settings (keeping the rest); a problem as one line."""
+        session = self.session
+        uri = self.settings.master_uri or session.config.master_uri
+        config = dataclasses.replace(session.config, master_uri=_slashed(uri) if uri else None,
+                                     start_master=self.settings.start_master, announce=_quiet)
+        try:
+            configure(config)
+        except IpyrosError as error:  # already attached elsewhere: keep that master
+            session.config = dataclasses.replace(session.config, announce=_quiet)
+            self.graph.master_uri = session.master.uri if session.master else self.graph.master_uri
+            return f"{error}"
+        self.graph.master_uri = session.master.uri if session.master else _slashed(
+            config.master_uri or master_mod.configured_uri())
+        return None
+
+    def _attach(self) -> str:
+        """Attach at once if a master answers; else start one in the background if allowed.
+
+        Returns the line to print. The announcement the session would make when it starts
+        a master is silenced (``_quiet``): this line already says it.
+        """
+        session = self.session
+        if session.master is not None:
+            return session.master.describe()
+        uri = self.graph.master_uri
+        if master_mod.answers(uri, timeout=0.3):
+            try:
+                return session.attach_master().describe()
+            except MasterError as error:  # it went away between the two checks
+                return str(error)
+        if not session.config.start_master:
+            return (f"no ROS master answers at {uri}; start roscore there, "
+                    "or let ipyros start one: %config RosMagics.start_master = True")
+        threading.Thread(target=_start_master, args=(session,), name="ipyros-master", daemon=True).start()
+        return f"no ROS master answered at {uri}; starting one there (it stops when this session exits)"
+
+    def _start_logging(self) -> None:
+        logger = logging.getLogger("ipyros")
+        self._saved["logging"] = (logger.level, logger.propagate)
+        logger.addHandler(self._log_handler)
+        logger.propagate = False  # the root logger would print it a second time
+        logger.setLevel(self.settings.log_level.upper())
+
+    # -- while loaded ------------------------------------------------------------------------
+    def _after_cell(self, result: Any = None) -> None:
+        """``post_run_cell``: swap edited handlers in; give new subscriptions their history size."""
+        self.node_magics.after_cell(result)
+        self._keep_history(self.settings.try_history)
+
+    def _keep_history(self, size: int) -> None:
+        """Make every subscription of the session's nodes keep its last ``size`` messages (for %try)."""
+        for node in list(self.session.nodes.values()):
+            for topic in node.model().subscriptions():
+                slot = node.slot(planning.topic_slot(topic.resolved))
+                if slot is not None and slot.recent.maxlen != size:
+                    # A message arriving during the copy may be missed by the history; never by the handler.
+                    slot.recent = deque(slot.recent, maxlen=size)
+
+    def _setting_changed(self, change: Any) -> None:
+        name, value = change["name"], change["new"]
+        if name == "graph_period":
+            self.graph.period = value
+        elif name == "log_level":
+            logging.getLogger("ipyros").setLevel(value.upper())
+        else:  # master_uri, start_master
+            problem = self._configure_session()
+            print(f"ipyros: {problem or self._attach()}")
+
+    # -- unload ------------------------------------------------------------------------------
+    def unload(self) -> None:
+        shell = self.shell
+        if self._completion is not None:
+            completion.uninstall(shell, self._completion)
+            self._completion = None
+        self.graph.stop()
+        self.settings.unobserve(self._setting_changed, names=_LIVE_SETTINGS)
+        shell.events.unregister("post_run_cell", self._after_cell)
+        logger = logging.getLogger("ipyros")
+        logger.removeHandler(self._log_handler)
+        logger.setLevel(self._saved["logging"][0])
+        logger.propagate = self._saved["logging"][1]
+        session = self.session
+        if session.report is self._report:
+            session.report = self._saved["report"]
+        if session.config.announce is _quiet:
+            session.config = dataclasses.replace(session.config, announce=self._saved["announce"])
+        shell.custom_exceptions, shell.CustomTB = self._saved["custom_exc"]
+        shell.drop_by_id({"rosNode": rosNode})
+        for magics in self.magics:
+            _unregister(shell, magics)
+        self.publisher.close()
+
+
+def _quiet(text: str) -> None:
+    """The session's announcement, silenced while the extension is loaded (its load line says it)."""
+
+
+def _start_master(session: Session) -> None:
+    """Attach the session to its master, starting one; runs on a thread of its own."""
+    starting = session.master is None
+    try:
+        handle = session.attach_master()
+    except IpyrosError as error:
+        note(f"{error}")
+        return
+    except Exception as error:  # a thread must not die silently
+        note(f"could not start the ROS master: {error}")
+        return
+    if starting and handle.started:
+        # The master dies with the thread that forked it (PR_SET_PDEATHSIG, see ipyros.process):
+        # this thread must live as long as the interpreter.
+        threading.Event().wait()
+
+
+def _show_error(shell: Any, previous: Any, etype: type, value: BaseException, tb: Any,
+                tb_offset: Optional[int] = None) -> Optional[list[str]]:
+    """The custom exception handler: an IpyrosError as one line; others to the previous handler."""
+    if not isinstance(value, IpyrosError):
+        return previous(etype, value, tb, tb_offset=tb_offset)
+    name = etype.__name__
+    if str(getattr(shell, "colors", "nocolor")).lower() != "nocolor":
+        name = f"\x1b[31;1m{name}\x1b[0m"
+    stb = [f"{name}: {value}"]
+    shell._showtraceback(etype, value, stb)  # a kernel sends it as the cell's error
+    return stb
+
+
+def _unregister(shell: Any, magics: Any) -> None:
+    """Take one Magics instance out of the shell (IPython has no API to unregister)."""
+    manager = shell.magics_manager
+    for kind, table in magics.magics.items():
+        for name, method in table.items():
+            if manager.magics[kind].get(name) == method:
+                del manager.magics[kind][name]
+    if manager.registry.get(type(magics).__name__) is magics:
+        del manager.registry[type(magics).__name__]
+    if magics in shell.configurables:
+        shell.configurables.remove(magics)
+
+
+def _slashed(uri: str) -> str:
+    return uri if uri.endswith("/") else uri + "/"
+
+
+# -- the entry points -----------------------------------------------------------------------
+_loaded: dict[int, Extension] = {}
+
+
+def load_ipython_extension(ipython: Any) -> None:
+    """Load ipyros into ``ipython`` (``%load_ext ipyros``); a second load does nothing."""
+    if id(ipython) in _loaded:
+        return
+    extension = Extension(ipython)
+    _loaded[id(ipython)] = extension
+    try:
+        extension.load()
+    except BaseException:
+        del _loaded[id(ipython)]
+        raise
+
+
+def unload_ipython_extension(ipython: Any) -> None:
+    """Unload ipyros from ``ipython`` (``%unload_ext ipyros``)."""
+    extension = _loaded.pop(id(ipython), None)
+    if extension is not None:
+        extension.unload()
+
+
+__all__ = ["Extension", "load_ipython_extension", "unload_ipython_extension"]

@@ -1,0 +1,16 @@
+"""The IPython face of ipyros: one ``Magics`` class per concern.
+
+* :class:`RosMagics` (``config.py``): the settings, ``%config RosMagics``;
+* :class:`TopicMagics` (``graph.py``): ``%topics``, ``%echo``, ``%pub``;
+* :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
+* :class:`WrapMagics` (``wrap.py``): ``%wrap``.
+
+:mod:`ipyros.extension` creates and registers them; ``%magic?`` shows each one's help.
+"""
+
+from .config import RosMagics
+from .graph import TopicMagics
+from .nodes import NodeMagics
+from .wrap import WrapMagics
+
+__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics"]

@@ -1,0 +1,98 @@
+"""What the ipyros magics share: their link to the extension, and finding what a line names."""
+
+from __future__ import annotations
+
+import re
+from typing import TYPE_CHECKING, Any, Callable
+
+from IPython.core.error import UsageError
+from IPython.core.magic import Magics
+
+from .. import names
+from ..dsl import rosNode
+from ..session import current
+
+if TYPE_CHECKING:
+    from ..extension import Extension
+
+
+class ExtensionMagics(Magics):
+    """A ``Magics`` class of ipyros: reaches the settings, the graph and the printer via ``ext``."""
+
+    def __init__(self, shell: Any, ext: "Extension") -> None:
+        super().__init__(shell=shell)
+        self.ext = ext
+
+
+def find_node(shell: Any, name: str) -> rosNode:
+    """The rosNode a magic argument names: a variable of the user's, else a session node's name."""
+    value = shell.user_ns.get(name)
+    if isinstance(value, rosNode):
+        return value
+    if value is not None:
+        raise UsageError(f"{name} is a {type(value).__name__}, not a rosNode; "
+                         f"give the variable that holds the node ({_node_variables(shell)})")
+    session_nodes = current().nodes
+    wanted = name if name.startswith("/") else None
+    for node in session_nodes.values():
+        if node.fullname == wanted or node.name == name:
+            return node
+    raise UsageError(f"no rosNode called {name!r}; give the variable that holds the node "
+                     f"({_node_variables(shell)})")
+
+
+def _node_variables(shell: Any) -> str:
+    names = [k for k, v in shell.user_ns.items() if isinstance(v, rosNode) and not k.startswith("_")]
+    return "rosNode variables here: " + ", ".join(sorted(names)) if names else "there is no rosNode variable yet"
+
+
+def evaluate(shell: Any, expression: str, what: str) -> Any:
+    """``expression`` evaluated in the user's namespace; a NameError becomes a UsageError."""
+    try:
+        return shell.ev(expression)
+    except NameError as error:
+        raise UsageError(f"{what}: {error}") from None
+    except SyntaxError as error:
+        raise UsageError(f"{what}: {expression!r} is not a Python expression ({error.msg})") from None
+
+
+def global_topic(name: str) -> str:
+    """A topic name typed at a magic, made global as rostopic does (``chatter`` → ``/chatter``).
+
+    Relative names resolve in ``ROS_NAMESPACE``; an invalid name is a one-line error.
+    """
+    return names.resolve(name, names.default_namespace(), "ipyros", "topic")
+
+
+def split_head(line: str, value_options: set[str], positional: Callable[[int, str], bool]) -> tuple[str, str]:
+    """Split a magic line into its options-and-names head and the raw text after it.
+
+    For magics whose last argument is free text (a YAML message, a Python expression),
+    which argparse's shell-like splitting would mangle (quotes removed, spaces lost).
+    The head is every option (``value_options`` take the next word as their value) and
+    the words for which ``positional(index, word)`` is true; the first other word starts
+    the raw text, kept exactly as typed.
+    """
+    head: list[str] = []
+    rest = line
+    count = 0
+    takes_value = False
+    while True:
+        match = _WORD.match(rest)
+        if match is None:
+            return " ".join(head), ""
+        word = match.group(1)
+        if takes_value:
+            takes_value = False
+        elif word.startswith("-") and not _NUMBER.match(word):
+            takes_value = word in value_options
+        elif positional(count, word):
+            count += 1
+        else:
+            return " ".join(head), rest.strip()
+        head.append(word)
+        rest = rest[match.end():]
+
+
+_WORD = re.compile(r"\s*(\S+)")
+_NUMBER = re.compile(r"-\.?\d")

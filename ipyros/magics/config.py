@@ -1,0 +1,91 @@
+"""``RosMagics``: the extension's settings, as traitlets configuration.
+
+Every setting can live in ``ipython_config.py``::
+
+    c.RosMagics.master_uri = "http://robot:11311/"
+    c.RosMagics.start_master = False
+
+or be read and changed at the prompt with ``%config``::
+
+    %config RosMagics                      # lists them with their help
+    %config RosMagics.hz_window = 2.0
+
+IPython only offers ``%config`` for configurables with ``config=True`` traits, and every
+``Magics`` instance registers itself as one, so the settings live on a ``Magics`` class
+of their own; the magics that use them (``%topics``, ``%handler``, ...) are in the
+modules next to this one and read them from here at each call. Settings that act on
+something already running (the graph refresh period, the log level, the master before
+it is attached) are applied when they change by :mod:`ipyros.extension`.
+"""
+
+from __future__ import annotations
+
+from IPython.core.magic import Magics, magics_class
+from traitlets import Bool, CaselessStrEnum, Float, Int, Unicode, validate
+
+
+@magics_class
+class RosMagics(Magics):
+    """Settings of the ipyros extension (``%load_ext ipyros``)."""
+
+    master_uri = Unicode(
+        "",
+        help="URI of the ROS master to use, e.g. http://localhost:11311/. Empty: ROS_MASTER_URI, "
+             "else http://localhost:11311/. Fixed once the first node is created.",
+    ).tag(config=True)
+
+    start_master = Bool(
+        True,
+        help="Start a ROS master (rosmaster --core and rosout) on this machine when none answers at "
+             "master_uri; it stops when the IPython session exits.",
+    ).tag(config=True)
+
+    graph_period = Float(
+        1.0,
+        help="Seconds between background refreshes of the cached ROS graph that tab completion reads. "
+             "%topics always reads the master afresh.",
+    ).tag(config=True)
+
+    log_level = CaselessStrEnum(
+        ["DEBUG", "INFO", "WARNING", "ERROR"],
+        default_value="WARNING",
+        help="Level of ipyros's own log messages (logger 'ipyros'), printed on stderr.",
+    ).tag(config=True)
+
+    handler_tracebacks = Bool(
+        True,
+        help="When a handler raises, print its full traceback; False prints one line per failure.",
+    ).tag(config=True)
+
+    echo_count = Int(
+        0,
+        help="How many messages %echo shows when -n is not given; 0 means until Ctrl-C.",
+    ).tag(config=True)
+
+    hz_window = Float(
+        1.0,
+        help="Seconds %topics --hz listens to measure message rates.",
+    ).tag(config=True)
+
+    try_history = Int(
+        20,
+        help="How many of the last messages each subscription of a node keeps, for %try.",
+    ).tag(config=True)
+
+    rich_output = Bool(
+        True,
+        help="Render tables and messages with rich: colour in a terminal, HTML in Jupyter. "
+             "False prints plain text. Either way there is no colour when output is not a terminal.",
+    ).tag(config=True)
+
+    @validate("graph_period", "hz_window")
+    def _positive_seconds(self, proposal):
+        if not proposal.value > 0:
+            raise ValueError(f"{proposal.trait.name} must be a positive number of seconds, not {proposal.value}")
+        return proposal.value
+
+    @validate("echo_count", "try_history")
+    def _not_negative(self, proposal):
+        if proposal.value < 0:
+            raise ValueError(f"{proposal.trait.name} must be 0 or more, not {proposal.value}")
+        return proposal.value

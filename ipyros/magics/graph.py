@@ -1,0 +1,208 @@
+"""``%topics``, ``%echo``, ``%pub``: what ``rostopic list/hz/echo/pub`` do, at the prompt.
+
+They read the graph from the master afresh (:meth:`GraphCache.refresh_now`, bounded by a
+short timeout), listen and publish through the small DSL nodes of :mod:`ipyros.probe`,
+and print with rich (tables in a terminal or a notebook, plain text in a pipe).
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+import time
+from typing import Any, Optional
+
+from IPython.core.error import UsageError
+from IPython.core.magic import line_cell_magic, line_magic, magics_class, no_var_expand
+from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from rich.syntax import Syntax
+from rich.table import Table
+
+from .. import msgtypes
+from ..errors import MasterError
+from ..graph import GraphSnapshot
+from ..msgbuild import build_message, parse_data
+from ..probe import Echo, Rate, measure_rates
+from .common import ExtensionMagics, global_topic, split_head
+
+# "pkg/Type" or "pkg/msg/Type": how %pub tells a type from the message data after the topic.
+_TYPE_WORD = re.compile(r"[A-Za-z]\w*/(msg/)?[A-Za-z]\w*")
+
+
+@magics_class
+class TopicMagics(ExtensionMagics):
+    """Magics about the live topics of the ROS graph."""
+
+    # -- %topics -------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("pattern", nargs="?", default="",
+              help="only topics matching this glob (/turtle*/pose) or containing this text (cmd)")
+    @argument("-t", "--type", help="only topics of this message type (a glob works: geometry_msgs/*)")
+    @argument("-n", "--node", help="only topics this node publishes or subscribes to")
+    @argument("--hz", action="store_true",
+              help="also measure each topic's message rate, listening for c.RosMagics.hz_window seconds")
+    @line_magic
+    def topics(self, line: str) -> None:
+        """List the live topics: name, type, publishers and subscribers."""
+        args = parse_argstring(self.topics, line)
+        snap = self._snapshot()
+        node = _node_name(args.node) if args.node else None
+        if node and node not in snap.nodes:
+            raise UsageError(f"no node {node} in the ROS graph{_close(node, snap.nodes)}")
+        found = snap.topics_matching(args.pattern, type=args.type, node=node)
+        if not found:
+            if args.type and not any(c in args.type for c in "*?[") and args.type not in snap.topics.values():
+                msgtypes.resolve_message(args.type)  # a misspelt type: its error says so
+            what = " and ".join(filter(None, [
+                f"matching {args.pattern!r}" if args.pattern else "", f"of type {args.type}" if args.type else "",
+                f"of node {node}" if node else ""]))
+            print(f"no live topics {what}".rstrip() + (" (the master knows none)" if not snap.topics else ""))
+            return
+        rates = measure_rates({t: snap.topics[t] for t in found}, self.ext.settings.hz_window) if args.hz else None
+        self.ext.printer.show(_topics_table(snap, found, rates, self.ext.graph.master_uri))
+
+    # -- %echo ---------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("topic", help="the live topic to listen to")
+    @argument("-n", "--count", type=int, default=None,
+              help="stop after this many messages (default c.RosMagics.echo_count; 0: until Ctrl-C)")
+    @line_magic
+    def echo(self, line: str) -> None:
+        """Print the messages arriving on TOPIC until Ctrl-C (or -n of them).
+
+        Ctrl-C stops only the listening: nodes keep running. The subscription made for
+        listening is removed when it stops.
+        """
+        args = parse_argstring(self.echo, line)
+        count = self.ext.settings.echo_count if args.count is None else args.count
+        if count < 0:
+            raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {count}")
+        topic = global_topic(args.topic)
+        type_name = self._live_type(topic)
+        shown = 0
+        printer = self.ext.printer
+        with Echo(topic, type_name) as echo:
+            try:
+                while not count or shown < count:
+                    msg = echo.get(timeout=0.1)  # short waits: Ctrl-C gets through between them
+                    if msg is not None:
+                        shown += 1
+                        printer.show(Syntax(str(msg), "yaml", background_color="default"), "---")
+            except KeyboardInterrupt:
+                print(f"stopped listening to {topic} after {shown} message{'s' * (shown != 1)}")
+
+    # -- %pub / %%pub ----------------------------------------------------------------------
+    @magic_arguments()
+    @argument("topic", help="the topic to publish on")
+    @argument("type", nargs="?", help="its message type, pkg/Type; may be left out for a live topic")
+    @argument("data", nargs="*", help="the message, the rest of the line (or the cell of %%%%pub): a Python "
+              "dict, a YAML mapping, a list of all fields in order, or one value for a one-field message; "
+              "fields left out keep their defaults, unknown or mistyped fields are errors")
+    @argument("-t", "--type", dest="type_option", metavar="TYPE", help="the message type, as an option")
+    @argument("-r", "--rate", type=float, help="publish again at this rate (Hz) until Ctrl-C")
+    @no_var_expand
+    @line_cell_magic
+    def pub(self, line: str, cell: Optional[str] = None) -> None:
+        """Publish one message on TOPIC, built and checked field by field.
+
+            %pub /chatter std_msgs/String hello
+            %pub /turtle1/cmd_vel geometry_msgs/Twist {linear: {x: 1.0}, angular: {z: 0.5}}
+            %pub /turtle1/cmd_vel {'linear': {'x': 1.0}}      # type taken from the live topic
+
+            %%pub /turtle1/cmd_vel geometry_msgs/Twist
+            linear: {x: 1.0}
+            angular: {z: 0.5}
+
+        The publisher is latched and stays advertised until the extension is unloaded, so
+        subscribers still connecting get the message too. A topic that one of your nodes
+        already publishes is published through that node.
+        """
+        head, data = split_head(line, {"-t", "--type", "-r", "--rate"},
+                                lambda index, word: index == 0 or (index == 1 and bool(_TYPE_WORD.fullmatch(word))))
+        args = parse_argstring(self.pub, head)
+        if cell is not None:
+            if data:
+                raise UsageError("give the message either on the line or in the cell of %%pub, not both")
+            data = cell
+        if args.type and args.type_option and args.type != args.type_option:
+            raise UsageError(f"two message types given ({args.type} and {args.type_option}); give one")
+        if args.rate is not None and not args.rate > 0:
+            raise UsageError(f"--rate must be a positive number of messages per second, not {args.rate}")
+        topic = global_topic(args.topic)
+        given = args.type or args.type_option
+        type_name = msgtypes.resolve_message(given)[0] if given else self._live_type(topic, for_pub=True)
+        msg = build_message(type_name, parse_data(data))
+        if args.rate is None:
+            sender = self.ext.publisher.publish(topic, type_name, msg)
+            print(f"published a {type_name} on {topic} (from {sender})")
+            return
+        self._publish_at(args.rate, topic, type_name, msg)
+
+    def _publish_at(self, rate: float, topic: str, type_name: str, msg: Any) -> None:
+        period, sent = 1.0 / rate, 0
+        start = time.monotonic()
+        try:
+            while True:
+                self.ext.publisher.publish(topic, type_name, msg)
+                sent += 1
+                time.sleep(max(0.0, start + sent * period - time.monotonic()))
+        except KeyboardInterrupt:
+            print(f"published {sent} {type_name} message{'s' * (sent != 1)} on {topic} at {rate:g} Hz")
+
+    # -- shared ----------------------------------------------------------------------------
+    def _snapshot(self) -> GraphSnapshot:
+        snap = self.ext.graph.refresh_now()
+        if not snap.master_up:
+            raise MasterError(f"no ROS master answers at {self.ext.graph.master_uri}; start roscore, "
+                              "or check ROS_MASTER_URI (c.RosMagics.master_uri)")
+        return snap
+
+    def _live_type(self, topic: str, for_pub: bool = False) -> str:
+        snap = self._snapshot()
+        if topic not in snap.topics:
+            fix = f"; give its type: %pub {topic} pkg/Type ..." if for_pub else "; %topics lists them"
+            raise UsageError(f"no live topic {topic}{_close(topic, snap.topic_names)}{fix}")
+        type_name = snap.topics[topic]
+        if not type_name or type_name == "*":
+            raise UsageError(f"the master does not know the type of {topic} yet; try again in a moment")
+        return type_name
+
+
+def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
+                  uri: str) -> Table:
+    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {uri}", title_justify="left")
+    table.add_column("topic", overflow="fold", style="bold")
+    table.add_column("type", overflow="fold")
+    table.add_column("publishers", overflow="fold")
+    table.add_column("subscribers", overflow="fold")
+    if rates is not None:
+        table.add_column("rate Hz", justify="right")
+    for topic in found:
+        row = [topic, snap.topics[topic] or "?", _nodes(snap.publishers.get(topic, ())),
+               _nodes(snap.subscribers.get(topic, ()))]
+        if rates is not None:
+            row.append(_rate(rates.get(topic)))
+        table.add_row(*row)
+    return table
+
+
+def _nodes(nodes: tuple[str, ...], most: int = 3) -> str:
+    shown = ", ".join(nodes[:most])
+    return shown + (f" +{len(nodes) - most} more" if len(nodes) > most else "")
+
+
+def _rate(rate: Optional[Rate]) -> str:
+    if rate is None:
+        return "? (type not installed)"
+    if rate.hz is None:
+        return f"{rate.count} msg" if rate.count else "none"
+    return f"{rate.hz:.1f}"
+
+
+def _node_name(name: str) -> str:
+    return name if name.startswith("/") else "/" + name
+
+
+def _close(name: str, known: Any) -> str:
+    close = difflib.get_close_matches(name, list(known), n=3)
+    return f" (did you mean {', '.join(close)}?)" if close else ""

@@ -1,0 +1,136 @@
+"""``%handler``, ``%%handler``, ``%try``, ``%status``: working on the handlers of running nodes.
+
+NODE is the variable holding a rosNode (``nd``), or a node's name in this session.
+TOPIC is a subscribed topic as the node names it; a timer's name or a service also
+work for ``%handler``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+from IPython.core.error import UsageError
+from IPython.core.magic import line_cell_magic, line_magic, magics_class
+from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from rich.table import Table
+
+from ..dsl import rosNode
+from ..editing import EditWatch, PendingEdit, current_handler, find_target, handler_source, new_functions, redeclare
+from ..session import current
+from ..tryout import try_candidate
+from .common import ExtensionMagics, evaluate, find_node, split_head
+
+
+@magics_class
+class NodeMagics(ExtensionMagics):
+    """Magics that edit, try and watch the handlers of the session's nodes."""
+
+    def __init__(self, shell: Any, ext: Any) -> None:
+        super().__init__(shell, ext)
+        self.edits = EditWatch()
+
+    def after_cell(self, result: Any = None) -> None:
+        """``post_run_cell``: swap in the handlers whose edited source was just run."""
+        for news in self.edits.check(self.shell.user_ns):
+            print(f"ipyros: {news}")
+
+    # -- %handler / %%handler ----------------------------------------------------------------
+    @magic_arguments()
+    @argument("node", help="the variable holding the rosNode")
+    @argument("topic", help="the subscribed topic whose handler to edit (or a timer's name, or a service)")
+    @line_cell_magic
+    def handler(self, line: str, cell: Optional[str] = None) -> None:
+        """Edit the live handler of TOPIC on NODE.
+
+        %handler NODE TOPIC puts the source of the function now handling TOPIC in the next
+        input; edit it and run it, and the new function replaces the live one (no message
+        is lost). This needs the source: it works for handlers typed at the prompt or
+        imported from a file, not for lambdas or functions made by exec.
+
+        %%handler NODE TOPIC runs the cell, which defines the new handler (a def), and swaps
+        it in at once.
+        """
+        args = parse_argstring(self.handler, line)
+        node = find_node(self.shell, args.node)
+        target = find_target(node, args.topic)
+        old = current_handler(node, target)
+        if cell is None:
+            source = handler_source(old, args.node, target)
+            self.edits.expect(PendingEdit(node, target, old.__name__, old))
+            self.shell.set_next_input(source.rstrip("\n"))
+            print(f"ipyros: edit {old.__name__} and run it: it replaces the handler of {node.name} {target.label}")
+            return
+        self.edits.forget(node, target)
+        before = dict(self.shell.user_ns)
+        result = self.shell.run_cell(cell)
+        if not result.success:
+            return  # the cell's own error was shown; the live handler is unchanged
+        defined = new_functions(before, self.shell.user_ns)
+        if not defined:
+            raise UsageError(f"the cell defines no function; define the new handler of {target.label} "
+                             f"with def, e.g. def {old.__name__}(msg): ...")
+        name = old.__name__ if old.__name__ in defined else None
+        if name is None and len(defined) > 1:
+            raise UsageError(f"the cell defines {', '.join(sorted(defined))}; which is the handler? "
+                             f"name it {old.__name__}, like the one it replaces")
+        name = name or next(iter(defined))
+        redeclare(node, target, defined[name])
+        print(f"ipyros: {node.name} {target.label} is now handled by the new {name}")
+
+    # -- %try ------------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("node", help="the variable holding the rosNode")
+    @argument("topic", help="the subscribed topic")
+    @argument("candidate", nargs="*", help="the candidate handler: a function's name, or any expression "
+              "giving a function (a lambda), the rest of the line")
+    @argument("-n", "--last", type=int, help="only the last N messages (default: all the node keeps, "
+              "c.RosMagics.try_history)")
+    @line_magic("try")
+    def try_handler(self, line: str) -> None:
+        """Run CANDIDATE on the last messages TOPIC brought to NODE, beside the live handler.
+
+        Nothing is swapped. Each handler gets its own copy of each message; what it prints
+        and what it writes through node.write() is captured and shown, not published.
+        Anything else it does (globals, parameters, its own publishers) happens for real.
+        """
+        head, expression = split_head(line, {"-n", "--last"}, lambda index, word: index < 2)
+        args = parse_argstring(self.try_handler, head)
+        if not expression:
+            raise UsageError("give the candidate handler after NODE and TOPIC, e.g. %try nd /chatter new_handler")
+        if args.last is not None and args.last < 1:
+            raise UsageError(f"-n must be 1 or more, not {args.last}")
+        node = find_node(self.shell, args.node)
+        candidate = evaluate(self.shell, expression, "candidate handler")
+        self.ext.printer.show(try_candidate(node, args.topic, candidate, args.last))
+
+    # -- %status ------------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("node", nargs="?", help="the variable holding the rosNode; none: list the session's nodes")
+    @line_magic
+    def status(self, line: str) -> None:
+        """Per topic and timer of NODE: calls, message rate, handler time (mean, max), exceptions.
+
+        Without NODE: the rosNodes running in this session (created and not shut down).
+        """
+        args = parse_argstring(self.status, line)
+        if args.node:
+            self.ext.printer.show(find_node(self.shell, args.node).status())
+            return
+        nodes = list(current().nodes.values())
+        if not nodes:
+            print("no rosNode is running in this session")
+            return
+        self.ext.printer.show(_nodes_table(nodes, self.shell.user_ns))
+
+
+def _nodes_table(nodes: list[rosNode], user_ns: dict[str, Any]) -> Table:
+    table = Table(title=f"rosNodes running in this session (hosted by ROS node {current().process.name})",
+                  title_justify="left")
+    for column in ("node", "topics", "timers", "services", "basenode", "variables"):
+        table.add_column(column, justify="right" if column in ("topics", "timers", "services") else "left")
+    for node in nodes:
+        model = node.model()
+        base = f"{model.base.package}/{model.base.executable}" if model.base else ""
+        names = ", ".join(sorted(k for k, v in user_ns.items() if v is node and not k.startswith("_")))
+        table.add_row(node.fullname, str(len(model.topics)), str(len(model.timers)), str(len(model.services)), base, names)
+    return table
