@@ -34,11 +34,9 @@ exits; and if the interpreter is SIGKILLed, the kernel sends the basenode SIGTER
 from __future__ import annotations
 
 import atexit
-import concurrent.futures
 import difflib
 import functools
 import os
-import queue
 import shlex
 import signal
 import tempfile
@@ -276,45 +274,6 @@ def _lookup_error(package: str, executable: str) -> BaseNodeError:
 OnExit = Callable[["BaseProcess", int, list[str]], None]
 
 
-class _Launcher:
-    """A daemon thread that lives as long as the interpreter and forks every basenode.
-
-    Why not fork from whatever thread calls :meth:`BaseProcess.start`: the kernel's
-    ``PR_SET_PDEATHSIG`` fires when the *thread* that forked the child exits, not the
-    process. A basenode started from a short-lived thread (a rospy callback, a helper
-    thread in the runtime, a restart from a callback) would get SIGTERM as soon as that
-    thread ends. The main thread would do, but start() is not always called from it;
-    a dedicated thread that only ever blocks on its queue dies only with the process,
-    which is exactly when the basenode should die too.
-    """
-
-    def __init__(self) -> None:
-        self._jobs: "queue.SimpleQueue[tuple[Callable[[], Any], concurrent.futures.Future]]" = queue.SimpleQueue()
-        self._thread: Optional[threading.Thread] = None
-        self._lock = threading.Lock()
-
-    def call(self, fn: Callable[[], Any]) -> Any:
-        """Run ``fn`` on the launcher thread; return its result or raise its exception."""
-        with self._lock:
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._serve, name="ipyros-launcher", daemon=True)
-                self._thread.start()
-        if threading.current_thread() is self._thread:
-            return fn()
-        future: concurrent.futures.Future = concurrent.futures.Future()
-        self._jobs.put((fn, future))
-        return future.result()
-
-    def _serve(self) -> None:
-        while True:
-            fn, future = self._jobs.get()
-            try:
-                future.set_result(fn())
-            except BaseException as exc:  # handed to the caller, who raises it
-                future.set_exception(exc)
-
-
-_launcher = _Launcher()
 _running: set["BaseProcess"] = set()  # strong refs: a running basenode is stopped at exit even if forgotten
 _running_lock = threading.Lock()
 
@@ -477,7 +436,7 @@ class BaseProcess:
             self._note(f"starting: {shlex.join(self.argv)}")
             with open(self.log_path, "ab", buffering=0) as log:
                 try:
-                    proc = _launcher.call(lambda: spawn(self.argv, env=self.env, log=log.fileno()))
+                    proc = spawn(self.argv, env=self.env, log=log.fileno())
                 except OSError as exc:
                     self._note(f"could not start: {exc}")
                     raise BaseNodeError(

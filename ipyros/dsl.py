@@ -22,7 +22,7 @@ from typing import Any, Callable, Iterator, Optional
 from . import msgtypes, names, plan as planning, runtime
 from .errors import (DeclarationError, HandlerError, IpyrosError, MessageTypeError, NodeStateError,
                      NotDeclaredError, TopicTypeConflict)
-from .model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from .model import NodeModel, ServiceModel, TimerModel, TopicModel
 from .plan import Spec
 from .session import Session, current
 from .slots import HandlerSlot, call_arity

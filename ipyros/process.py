@@ -9,11 +9,14 @@ that lives as long as the process.
 
 from __future__ import annotations
 
+import concurrent.futures
 import ctypes
 import os
+import queue
 import signal
 import subprocess
-from typing import Optional, Sequence
+import threading
+from typing import Any, Callable, Optional, Sequence
 
 _PR_SET_PDEATHSIG = 1
 _libc = ctypes.CDLL(None, use_errno=True)
@@ -27,18 +30,59 @@ def _die_with_parent(parent_pid: int) -> None:
         os._exit(1)
 
 
+class _Launcher:
+    """A daemon thread that lives as long as the interpreter and forks every basenode.
+
+    Why not fork from whatever thread calls spawn(): the kernel's
+    ``PR_SET_PDEATHSIG`` fires when the *thread* that forked the child exits, not the
+    process. A basenode started from a short-lived thread (a rospy callback, a helper
+    thread in the runtime, a restart from a callback) would get SIGTERM as soon as that
+    thread ends. The main thread would do, but start() is not always called from it;
+    a dedicated thread that only ever blocks on its queue dies only with the process,
+    which is exactly when the basenode should die too.
+    """
+
+    def __init__(self) -> None:
+        self._jobs: "queue.SimpleQueue[tuple[Callable[[], Any], concurrent.futures.Future]]" = queue.SimpleQueue()
+        self._thread: Optional[threading.Thread] = None
+        self._lock = threading.Lock()
+
+    def call(self, fn: Callable[[], Any]) -> Any:
+        """Run ``fn`` on the launcher thread; return its result or raise its exception."""
+        with self._lock:
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._serve, name="ipyros-launcher", daemon=True)
+                self._thread.start()
+        if threading.current_thread() is self._thread:
+            return fn()
+        future: concurrent.futures.Future = concurrent.futures.Future()
+        self._jobs.put((fn, future))
+        return future.result()
+
+    def _serve(self) -> None:
+        while True:
+            fn, future = self._jobs.get()
+            try:
+                future.set_result(fn())
+            except BaseException as exc:  # handed to the caller, who raises it
+                future.set_exception(exc)
+
+
+_launcher = _Launcher()
+
+
 def spawn(argv: Sequence[str], *, env: Optional[dict] = None, log: Optional[int] = None,
           cwd: Optional[str] = None) -> subprocess.Popen:
     """Start ``argv`` in its own process group, dying with this process.
 
-    ``log`` is a file descriptor for stdout and stderr together (default: discarded).
+    The fork happens on the launcher thread, whichever thread calls. ``log`` is a file descriptor for stdout and stderr together (default: discarded).
     """
     parent = os.getpid()
     out = subprocess.DEVNULL if log is None else log
-    return subprocess.Popen(
+    return _launcher.call(lambda: subprocess.Popen(
         list(argv), env=env, cwd=cwd, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
         preexec_fn=lambda: _die_with_parent(parent), close_fds=True,
-    )
+    ))
 
 
 def stop_process(proc: subprocess.Popen, timeout: float = 5.0) -> Optional[int]:
