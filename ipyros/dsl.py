@@ -406,9 +406,18 @@ class TopicHandler:
     def __init__(self, node: rosNode, role: str) -> None:
         self._node = node
         self._role = role
+        self._done: list[str] = []  # what the current chain declared, for the prompt's Out[]
 
     def __repr__(self) -> str:
-        return f"<{self._node.name}.{self._role}: subscribe(), publish(), service(), unsubscribe(), unpublish()>"
+        # A chain typed at the prompt shows what it did, in one line, not an object address.
+        node = self._node
+        state = "live" if node.created else "declared, not created yet"
+        done = "; ".join(self._done[-3:]) or "subscribe(), publish(), service(), unsubscribe(), unpublish()"
+        self._done.clear()
+        return f"{node.name}.{self._role}: {done} ({state})"
+
+    def _did(self, text: str) -> None:
+        self._done.append(text)
 
     def subscribe(self, topic: str, handler: Optional[Callable[..., Any]] = None, msgType: Any = _UNSET,
                   type: Any = _UNSET) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
@@ -430,6 +439,7 @@ class TopicHandler:
                                "to handle them use new.subscribe(..., handler=...)")
         entry = TopicModel(topic, resolved, "subscribe", type_name, role, _name_of(handler))
         node._change(_replace_topic(entry), handlers, check=(entry,))
+        self._did(f"subscribe {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
         return self
 
     def publish(self, topic: str, msgType: Any = _UNSET, type: Any = _UNSET,
@@ -442,6 +452,7 @@ class TopicHandler:
             check_reuse(node._model, resolved, "publish")
         entry = TopicModel(topic, resolved, "publish", type_name, self._role, None, bool(latch))
         node._change(_replace_topic(entry), check=(entry,))
+        self._did(f"publish {resolved} [{type_name}]")
         return self
 
     def create(self) -> rosNode:
@@ -468,6 +479,7 @@ class TopicHandler:
 
         drop = [planning.topic_slot(resolved)] if direction == "subscribe" and role == "new" else []
         node._change(edit, drop=drop)
+        self._did(f"removed {direction} {resolved}")
         return self
 
     def service(self, name: str, srvType: Any = _UNSET, handler: Optional[Callable[..., Any]] = None,
@@ -492,6 +504,7 @@ class TopicHandler:
             model.services.append(entry)
 
         node._change(edit, handlers)
+        self._did(f"service {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
         return self
 
 
