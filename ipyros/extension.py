@@ -66,7 +66,7 @@ class Extension:
     # -- load ------------------------------------------------------------------------------
     def load(self) -> None:
         shell = self.shell
-        self._saved["announce"] = self.session.config.announce
+        self._saved["config"] = self.session.config
         line = self._configure_session()
         for magics in self.magics:
             shell.register_magics(magics)
@@ -170,8 +170,11 @@ class Extension:
         session = self.session
         if session.report is self._report:
             session.report = self._saved["report"]
-        if session.config.announce is _quiet:
-            session.config = dataclasses.replace(session.config, announce=self._saved["announce"])
+        saved = self._saved["config"]
+        if session.master is None or saved.master_uri in (None, session.master.uri):
+            session.config = saved  # the master settings as they were before loading
+        else:
+            session.config = dataclasses.replace(session.config, announce=saved.announce)
         shell.custom_exceptions, shell.CustomTB = self._saved["custom_exc"]
         shell.drop_by_id({"rosNode": rosNode})
         for magics in self.magics:
@@ -184,20 +187,17 @@ def _quiet(text: str) -> None:
 
 
 def _start_master(session: Session) -> None:
-    """Attach the session to its master, starting one; runs on a thread of its own."""
-    starting = session.master is None
+    """Attach the session to its master, starting one; runs on a short-lived thread of its own.
+
+    The master process itself is forked by :func:`ipyros.process.spawn` on its launcher
+    thread, so it does not die with this thread (``PR_SET_PDEATHSIG``).
+    """
     try:
-        handle = session.attach_master()
+        session.attach_master()
     except IpyrosError as error:
         note(f"{error}")
-        return
     except Exception as error:  # a thread must not die silently
         note(f"could not start the ROS master: {error}")
-        return
-    if starting and handle.started:
-        # The master dies with the thread that forked it (PR_SET_PDEATHSIG, see ipyros.process):
-        # this thread must live as long as the interpreter.
-        threading.Event().wait()
 
 
 def _show_error(shell: Any, previous: Any, etype: type, value: BaseException, tb: Any,

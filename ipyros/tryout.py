@@ -29,6 +29,7 @@ import traceback
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
+from rich.console import Group
 from rich.table import Table
 from rich.text import Text
 
@@ -100,11 +101,12 @@ class TrialReport:
     def differing(self) -> int:
         return sum(not r.same for r in self.rows)
 
-    def __rich__(self) -> Table:
+    def __rich__(self) -> Group:
         summary = (f"{self.differing} of {len(self.rows)} messages give different results"
                    if self.differing else f"same results on all {len(self.rows)} messages")
-        table = Table(title=f"{self.node} {self.topic}: live {self.live_name} vs candidate "
-                            f"{self.candidate_name} ({summary})", title_justify="left", show_lines=True)
+        heading = Text.assemble((f"{self.node} {self.topic}", "bold"), f": live {self.live_name} vs candidate "
+                                f"{self.candidate_name}: ", (summary, "yellow" if self.differing else "green"))
+        table = Table(show_lines=True)
         table.add_column("#", justify="right")
         table.add_column("message", overflow="fold", max_width=40)
         table.add_column(f"live: {self.live_name}", overflow="fold")
@@ -114,7 +116,7 @@ class TrialReport:
             cells = [Text("\n".join(o.lines()) or "(nothing)", style="" if o.lines() else "dim")
                      for o in (row.live, row.candidate)]
             table.add_row(mark, one_line(row.message), *cells)
-        return table
+        return Group(heading, table)
 
     def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
         from .display import render_text

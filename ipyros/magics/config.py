@@ -21,7 +21,7 @@ it is attached) are applied when they change by :mod:`ipyros.extension`.
 from __future__ import annotations
 
 from IPython.core.magic import Magics, magics_class
-from traitlets import Bool, CaselessStrEnum, Float, Int, Unicode, validate
+from traitlets import Bool, CaselessStrEnum, Float, Int, TraitError, Unicode, validate
 
 
 @magics_class
@@ -81,11 +81,11 @@ class RosMagics(Magics):
     @validate("graph_period", "hz_window")
     def _positive_seconds(self, proposal):
         if not proposal.value > 0:
-            raise ValueError(f"{proposal.trait.name} must be a positive number of seconds, not {proposal.value}")
+            raise TraitError(f"{proposal.trait.name} must be a positive number of seconds, not {proposal.value}")
         return proposal.value
 
     @validate("echo_count", "try_history")
     def _not_negative(self, proposal):
         if proposal.value < 0:
-            raise ValueError(f"{proposal.trait.name} must be 0 or more, not {proposal.value}")
+            raise TraitError(f"{proposal.trait.name} must be 0 or more, not {proposal.value}")
         return proposal.value

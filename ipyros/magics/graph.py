@@ -113,6 +113,7 @@ class TopicMagics(ExtensionMagics):
             linear: {x: 1.0}
             angular: {z: 0.5}
 
+        Options go before the message: everything after TOPIC and TYPE is the message.
         The publisher is latched and stays advertised until the extension is unloaded, so
         subscribers still connecting get the message too. A topic that one of your nodes
         already publishes is published through that node.

@@ -15,6 +15,7 @@ from IPython.core.magic_arguments import argument, magic_arguments, parse_argstr
 from rich.table import Table
 
 from ..dsl import rosNode
+from ..errors import IpyrosError
 from ..editing import EditWatch, PendingEdit, current_handler, find_target, handler_source, new_functions, redeclare
 from ..session import current
 from ..tryout import try_candidate
@@ -63,8 +64,8 @@ class NodeMagics(ExtensionMagics):
         self.edits.forget(node, target)
         before = dict(self.shell.user_ns)
         result = self.shell.run_cell(cell)
-        if not result.success:
-            return  # the cell's own error was shown; the live handler is unchanged
+        if not result.success:  # its error was shown; the cell magic fails too, in one line
+            raise IpyrosError(f"the cell failed, so {node.name} {target.label} keeps its handler {old.__name__}")
         defined = new_functions(before, self.shell.user_ns)
         if not defined:
             raise UsageError(f"the cell defines no function; define the new handler of {target.label} "

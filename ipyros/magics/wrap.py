@@ -16,7 +16,8 @@ from typing import Any
 import yaml
 from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
-from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from IPython.core.magic_arguments import argument, magic_arguments
+from IPython.utils.process import arg_split  # how IPython splits magic lines
 
 from .common import ExtensionMagics
 
@@ -37,7 +38,12 @@ class WrapMagics(ExtensionMagics):
     @line_magic
     def wrap(self, line: str) -> None:
         """Wrap PACKAGE's EXECUTABLE: launch it, reuse its whole interface, bind the node to NAME."""
-        args = parse_argstring(self.wrap, line)
+        # Remaps may follow the options, and words after -- are the basenode's own arguments:
+        # argparse's default parse would refuse both.
+        words = arg_split(line)
+        own = words.index("--") if "--" in words else len(words)
+        args = self.wrap.parser.parse_intermixed_args(words[:own])
+        args.extra += words[own + 1:]
         if args.var is not None and not _is_variable(args.var):
             raise UsageError(f"--as {args.var}: give a Python variable name, e.g. --as turtle")
         remaps, params, extra_args = rosrun_words(args.extra)

@@ -1,0 +1,152 @@
+"""%topics, %echo and %pub in a real shell, against the test master and peer processes."""
+
+from __future__ import annotations
+
+import pytest
+from conftest import master_state, wait_for
+from IPython.core.error import UsageError
+from peer import Peer
+
+from ipyros.errors import MessageTypeError, TopicTypeConflict
+from ipyros.extension import _loaded
+from shell import ctrl_c_after, error_of, ip, ok  # noqa: F401
+
+
+@pytest.fixture
+def rate_peer():
+    """A steady 50 Hz std_msgs/UInt32 source on /mg/rate."""
+    with Peer("publish_rate.py", "/mg/rate", 50) as peer:
+        peer.wait_line("ready")
+        yield peer
+
+
+def wait_listed(ip, topic):
+    wait_for(lambda: topic in _loaded[id(ip)].graph.refresh_now().topics, what=f"{topic} on the master")
+
+
+def test_topics_lists_live_topics_with_type_publishers_and_subscribers(ip, capsys, rate_peer):
+    with Peer("echo_topic.py", "/mg/words", "std_msgs/String") as listener:
+        listener.wait_line("ready")
+        wait_listed(ip, "/mg/words")
+        capsys.readouterr()
+        ok(ip, "%topics /mg/")
+        out = capsys.readouterr().out
+        rows = {line.split()[1]: line for line in out.splitlines() if "/mg/" in line and line.startswith("│")}
+        assert set(rows) == {"/mg/rate", "/mg/words"}
+        assert "std_msgs/UInt32" in rows["/mg/rate"] and "/publish_rate_" in rows["/mg/rate"]
+        assert "std_msgs/String" in rows["/mg/words"] and "/echo_topic_" in rows["/mg/words"]
+        ok(ip, "%topics --type std_msgs/String /mg/*")
+        out = capsys.readouterr().out
+        assert "/mg/words" in out and "/mg/rate" not in out
+        publisher = next(n for n in _loaded[id(ip)].graph.snapshot.nodes if n.startswith("/publish_rate_"))
+        ok(ip, f"%topics -n {publisher.lstrip('/')}")
+        out = capsys.readouterr().out
+        assert "/mg/rate" in out and "/mg/words" not in out
+
+
+def test_topics_hz_measures_the_rate(ip, capsys, rate_peer):
+    wait_listed(ip, "/mg/rate")
+    ok(ip, "%config RosMagics.hz_window = 1.0")
+    ok(ip, "%topics /mg/rate --hz")
+    row = next(line for line in capsys.readouterr().out.splitlines() if "/mg/rate" in line and "│" in line)
+    rate = float(row.rstrip(" │").split()[-1])
+    assert 40 < rate < 60, row
+    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "the listener is gone"
+
+
+def test_topics_errors_and_empty_results(ip, capsys):
+    assert "no node /mg_nobody" in str(error_of(ip, "%topics --node mg_nobody"))
+    error = error_of(ip, "%topics --type geometry_msgs/Twst")
+    assert isinstance(error, MessageTypeError) and "did you mean geometry_msgs/Twist" in str(error)
+    capsys.readouterr()
+    ok(ip, "%topics /mg/nothing_like_this")
+    assert capsys.readouterr().out.strip() == "no live topics matching '/mg/nothing_like_this'"
+    assert "unrecognized arguments" in str(error_of(ip, "%topics a b"))
+
+
+def test_echo_prints_n_messages_and_leaves_no_subscription(ip, capsys, rate_peer):
+    wait_listed(ip, "/mg/rate")
+    capsys.readouterr()
+    ok(ip, "%echo /mg/rate -n 3")
+    out = capsys.readouterr().out
+    assert out.count("---") == 3 and out.count("data: ") == 3
+    values = [int(line.split()[1]) for line in out.splitlines() if line.startswith("data: ")]
+    assert values == sorted(values) and len(set(values)) == 3
+    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+
+
+def test_echo_stops_on_ctrl_c_without_killing_anything(ip, capsys, make_node):
+    with Peer("publish_type.py", "/mg/latched", "std_msgs/String") as peer:
+        peer.wait_line("ready")
+        wait_listed(ip, "/mg/latched")
+        capsys.readouterr()
+        with ctrl_c_after(1.0):
+            ok(ip, "%echo mg/latched")  # relative: resolved in ROS_NAMESPACE, i.e. /
+        out = capsys.readouterr().out
+        assert out.count("---") == 1, "the latched message, then nothing until Ctrl-C"
+        assert "stopped listening to /mg/latched after 1 message" in out
+        assert peer.proc.poll() is None
+        assert "/mg/latched" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+
+
+def test_echo_errors(ip):
+    error = error_of(ip, "%echo /mg/not_there")
+    assert isinstance(error, UsageError) and "no live topic /mg/not_there; %topics lists them" in str(error)
+    assert "-n must be 0" in str(error_of(ip, "%echo /x -n -2"))
+    assert "invalid topic name 'bad-name'" in str(error_of(ip, "%echo bad-name"))
+
+
+def test_pub_sends_one_checked_message(ip, capsys):
+    with Peer("echo_topic.py", "/mg/heard", "std_msgs/String") as listener:
+        listener.wait_line("ready")
+        ok(ip, "%pub /mg/heard std_msgs/String hello")
+        listener.wait_line('data: "hello"')
+        assert "published a std_msgs/String on /mg/heard (from ipyros_pub_" in capsys.readouterr().out
+        wait_listed(ip, "/mg/heard")
+        ok(ip, "%pub /mg/heard {'data': 'typed from the live topic'}")
+        listener.wait_line('data: "typed from the live topic"')
+        ok(ip, 'x = "expanded"')
+        ok(ip, '%pub /mg/heard std_msgs/String "{x}"')  # no $/{} expansion: the text as typed
+        listener.wait_line('data: "{x}"')
+        ok(ip, "%%pub /mg/heard std_msgs/String\ndata: from a cell\n")
+        listener.wait_line('data: "from a cell"')
+
+
+def test_pub_mistakes_are_one_line_errors_naming_the_field(ip):
+    error = error_of(ip, "%pub /mg/twist geometry_msgs/Twist {linear: {x: 1, q: 2}}")
+    assert isinstance(error, MessageTypeError)
+    assert str(error) == "geometry_msgs/Twist: linear.q: no such field (geometry_msgs/Vector3 has x, y, z)"
+    error = error_of(ip, "%pub /mg/twist geometry_msgs/Twist {angular: {z: fast}}")
+    assert "angular.z: expected a number (float64), got 'fast' (str)" in str(error)
+    assert "unknown message type 'geometry_msgs/Twst'" in str(error_of(ip, "%pub /mg/twist geometry_msgs/Twst {}"))
+    error = error_of(ip, "%pub /mg/nobody_knows {data: 1}")
+    assert isinstance(error, UsageError) and "give its type: %pub /mg/nobody_knows pkg/Type" in str(error)
+    assert "either on the line or in the cell" in str(error_of(ip, "%%pub /mg/x std_msgs/String hi\ndata: x"))
+    assert "--rate must be a positive" in str(error_of(ip, "%pub -r 0 /mg/x std_msgs/String hi"))
+
+
+def test_pub_through_a_node_that_publishes_the_topic_and_type_conflicts(ip, capsys):
+    ok(ip, "from std_msgs.msg import String\n"
+           "talker = rosNode('mg_talker').new.publish('/mg/talk', msgType=String).create()")
+    try:
+        with Peer("echo_topic.py", "/mg/talk", "std_msgs/String") as listener:
+            listener.wait_line("ready")
+            wait_for(lambda: "/mg/talk" in master_state(_loaded[id(ip)].graph.master_uri)["sub"], what="listener")
+            capsys.readouterr()
+            ok(ip, "%pub /mg/talk std_msgs/String 'via the talker'")
+            assert "(from mg_talker)" in capsys.readouterr().out
+            listener.wait_line('data: "via the talker"')
+        assert isinstance(error_of(ip, "%pub /mg/talk std_msgs/Int32 5"), TopicTypeConflict)
+    finally:
+        ok(ip, "talker.shutdown()")
+
+
+def test_pub_at_a_rate_until_ctrl_c(ip, capsys):
+    with Peer("echo_topic.py", "/mg/beat", "std_msgs/UInt32") as listener:
+        listener.wait_line("ready")
+        with ctrl_c_after(1.0):
+            ok(ip, "%pub -r 20 /mg/beat std_msgs/UInt32 7")  # options before the message
+        out = capsys.readouterr().out
+        sent = int(out.split("published ")[1].split()[0])
+        assert 10 <= sent <= 30 and "at 20 Hz" in out
+        wait_for(lambda: sum("data: 7" in line for line in listener.lines) >= 5, what="the beats")
