@@ -132,6 +132,26 @@ class Subscription:
         self._sub.unregister()
 
 
+_raw_classes: dict[type, type] = {}
+
+
+def raw_class(cls: type) -> type:
+    """An :class:`rospy.AnyMsg` that says it is ``cls``: bytes in, no deserialising.
+
+    With plain AnyMsg the master records the subscription as "*" (``rosnode info``
+    shows "unknown type") and any publisher may connect; this one registers the real
+    type and md5, so tools show it and a publisher of another type is refused.
+    """
+    raw = _raw_classes.get(cls)
+    if raw is None:
+        raw = type(f"Raw{cls.__name__}", (rospy.AnyMsg,), {
+            "__slots__": (), "_type": cls._type, "_md5sum": cls._md5sum, "_full_text": cls._full_text,
+            # False: rospy would set header.seq on a message it has not parsed; bytes pass unchanged.
+            "_has_header": False})
+        _raw_classes[cls] = raw
+    return raw
+
+
 class Relay:
     """Forward ``source`` to ``target`` unchanged, without deserialising.
 
@@ -149,7 +169,7 @@ class Relay:
         self._on_wrong_type = on_wrong_type
         self._pub = _publisher(target, cls)
         self._impl = self._pub.impl
-        self._sub = rospy.Subscriber(source, rospy.AnyMsg, self._forward,
+        self._sub = rospy.Subscriber(source, raw_class(cls), self._forward,
                                      queue_size=None, buff_size=_BUFF_SIZE, tcp_nodelay=True)
 
     def _forward(self, raw: rospy.AnyMsg) -> None:

@@ -203,3 +203,34 @@ def test_wrapping_the_same_basenode_twice(make_node):
     b.baseNode("echo_node").basePackage("ipyros_test_nodes")
     with pytest.raises(errors.DeclarationError, match="basenode /echo_node is already wrapped by /first_wrapper"):
         b.create()
+
+
+def test_what_rostopic_and_rosnode_show(make_node):
+    """The README's "What ROS tools show" section, checked with the real command-line tools."""
+    w = make_node("shown_wrapper")
+    w.baseNode("echo_node", namespace="shown").basePackage("ipyros_test_nodes")
+    w.reuse.subscribe("in", type=String).publish("out", type=String)
+    w.create()
+    # rosnode info types only published topics: give /shown/in a publisher, as a running system has.
+    make_node("shown_feeder").new.publish("/shown/in", msgType=String).create()
+
+    def run(*argv: str) -> str:
+        result = subprocess.run(argv, capture_output=True, text=True, timeout=30)
+        assert result.returncode == 0, result.stderr
+        return result.stdout
+
+    topics = run("rostopic", "list").split()
+    for name in ("/shown/in", "/shown/out", "/shown/shown_wrapper/base/shown/in", "/shown/shown_wrapper/base/shown/out"):
+        assert name in topics
+    assert "/shown/echo_node" in run("rosnode", "list").split()
+
+    base = run("rosnode", "info", "/shown/echo_node")
+    assert "/shown/shown_wrapper/base/shown/out [std_msgs/String]" in base.split("Subscriptions:")[0]
+    assert "/shown/shown_wrapper/base/shown/in [std_msgs/String]" in base.split("Subscriptions:")[1]
+
+    host = run("rosnode", "info", w.ros_name)
+    publications, subscriptions = host.split("Subscriptions:")[0], host.split("Subscriptions:")[1].split("Services:")[0]
+    assert "/shown/out [std_msgs/String]" in publications
+    assert "/shown/shown_wrapper/base/shown/in [std_msgs/String]" in publications
+    assert "/shown/in [std_msgs/String]" in subscriptions
+    assert "/shown/shown_wrapper/base/shown/out [std_msgs/String]" in subscriptions
