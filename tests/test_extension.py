@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import logging
 import os
 import subprocess
@@ -228,3 +229,42 @@ def test_embedded_master_starts_in_the_background_and_outlives_the_load(tmp_path
         proc.stdin.close()  # type: ignore[union-attr]
         proc.wait(20)
     wait_for(lambda: not master_mod.answers(uri, timeout=0.2), timeout=10, what="the master to stop with the session")
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_rich_output_colours_a_terminal_and_plain_output_does_not(ip, monkeypatch):
+    from rich.table import Table
+
+    printer = _loaded[id(ip)].printer
+    table = Table("topic")
+    table.add_row("[bold]/x[/]")
+    for rich, coloured in ((True, True), (False, False)):
+        ok(ip, f"%config RosMagics.rich_output = {rich}")
+        terminal = _Terminal()
+        monkeypatch.setattr(sys, "stdout", terminal)
+        printer.show(table)
+        monkeypatch.undo()
+        assert ("\x1b[" in terminal.getvalue()) is coloured
+        assert "/x" in terminal.getvalue()
+
+
+def test_completion_answers_from_the_extensions_graph(ip, rate_topic):
+    from IPython.core.completer import provisionalcompleter
+
+    graph = _loaded[id(ip)].graph
+    wait_for(lambda: rate_topic in graph.snapshot.topics, what="the background refresh to see the topic")
+    text = "%echo /ext_ra"
+    with provisionalcompleter():
+        completions = [c.text for c in ip.Completer.completions(text, len(text))]
+    assert rate_topic in completions
+
+
+@pytest.fixture
+def rate_topic():
+    with Peer("publish_rate.py", "/ext_rate", 10) as peer:
+        peer.wait_line("ready")
+        yield "/ext_rate"

@@ -69,6 +69,20 @@ def test_handler_edits_a_timer_too(node_ip):
     assert ip.user_ns["nd"].model().timer("on_tick").period == 0.05
 
 
+def test_handler_edits_a_service_too(node_ip, capsys):
+    ip = node_ip
+    ok(ip, "from std_srvs.srv import Trigger, TriggerResponse\n"
+           "def answer(req):\n    return TriggerResponse(True, 'old')\n"
+           "nd.new.service('/mn/ask', 'std_srvs/Trigger', answer)")
+    ok(ip, "%handler nd /mn/ask")
+    assert ip.rl_next_input.startswith("def answer(req):")
+    ok(ip, ip.rl_next_input.replace("'old'", "'new'"))
+    assert "mn_node service /mn/ask is now handled by the new answer" in capsys.readouterr().out
+    handler = ip.user_ns["nd"].handler("/mn/ask")
+    assert handler is ip.user_ns["answer"] and handler(None).message == "new"
+    assert ip.user_ns["nd"].model().service("/mn/ask").type == "std_srvs/Trigger"
+
+
 def test_cell_handler_defines_and_swaps_at_once(node_ip, capsys):
     ip = node_ip
     ok(ip, "%%handler nd /mn/numbers\ndef doubled(msg):\n    heard.append(('doubled', 2 * msg.data))")
