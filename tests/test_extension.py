@@ -20,7 +20,7 @@ from ipyros import IpyrosError, master as master_mod, rosNode
 from ipyros.completion import IDENTIFIER
 from ipyros.extension import _loaded
 from ipyros.magics import RosMagics
-from shell import error_of, interactive_shell, ip, ok, run  # noqa: F401
+from shell import error_of, interactive_shell, ip, ok  # noqa: F401
 
 MAGICS = {"line": {"topics", "echo", "pub", "handler", "try", "status", "wrap"}, "cell": {"pub", "handler"}}
 

@@ -15,8 +15,8 @@ from IPython.core.magic_arguments import argument, magic_arguments, parse_argstr
 from rich.table import Table
 
 from ..dsl import rosNode
-from ..errors import IpyrosError
 from ..editing import EditWatch, PendingEdit, current_handler, find_target, handler_source, new_functions, redeclare
+from ..errors import IpyrosError
 from ..session import current
 from ..tryout import try_candidate
 from .common import ExtensionMagics, evaluate, find_node, split_head
@@ -133,5 +133,6 @@ def _nodes_table(nodes: list[rosNode], user_ns: dict[str, Any]) -> Table:
         model = node.model()
         base = f"{model.base.package}/{model.base.executable}" if model.base else ""
         names = ", ".join(sorted(k for k, v in user_ns.items() if v is node and not k.startswith("_")))
-        table.add_row(node.fullname, str(len(model.topics)), str(len(model.timers)), str(len(model.services)), base, names)
+        counts = (str(len(model.topics)), str(len(model.timers)), str(len(model.services)))
+        table.add_row(node.fullname, *counts, base, names)
     return table
