@@ -146,14 +146,15 @@ class MagicSpec:
 
 _TYPE_OPTIONS = {"--type": MSG_TYPE, "-t": MSG_TYPE}
 
-#: The line magics whose arguments are completed. Keep in step with ipyros/magics.py.
+#: The line magics whose arguments are completed. Keep in step with ipyros/magics/.
 MAGICS: dict[str, MagicSpec] = {
     "topics": MagicSpec((TOPIC,), {**_TYPE_OPTIONS, "--node": NODE, "-n": NODE}),
     "echo": MagicSpec((TOPIC,), {"-n": None, "--count": None}),
     "handler": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
     "pub": MagicSpec((TOPIC, MSG_TYPE), {**_TYPE_OPTIONS, "-r": None, "--rate": None}),
-    "publish": MagicSpec((TOPIC, MSG_TYPE), {**_TYPE_OPTIONS, "-r": None, "--rate": None}),
-    "wrap": MagicSpec((PACKAGE, EXECUTABLE), {**_TYPE_OPTIONS, "--name": None, "--namespace": None, "--ns": None},
+    "try": MagicSpec((DSL_NODE, OWN_TOPIC), {"-n": None, "--last": None}, direction="subscribe"),
+    "status": MagicSpec((DSL_NODE,)),
+    "wrap": MagicSpec((PACKAGE, EXECUTABLE), {"--as": None, "--name": None, "--namespace": None, "--ns": None},
                       other_options=TOPIC),
 }
 

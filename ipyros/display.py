@@ -100,7 +100,7 @@ def render_text(renderable: Any, width: int = 100) -> str:
     import sys
 
     buffer = io.StringIO()
-    console = Console(file=buffer, width=_width(width), force_terminal=sys.stdout.isatty(),
+    console = Console(file=buffer, width=_width(width), force_terminal=sys.stdout.isatty(), force_jupyter=False,
                       color_system="auto" if sys.stdout.isatty() else None)
     console.print(renderable)
     return buffer.getvalue().rstrip("\n")
@@ -108,7 +108,7 @@ def render_text(renderable: Any, width: int = 100) -> str:
 
 def render_html(renderable: Any) -> str:
     """Render as an HTML fragment for Jupyter."""
-    console = Console(record=True, file=io.StringIO(), width=120)
+    console = Console(record=True, file=io.StringIO(), width=120, force_jupyter=False)
     console.print(renderable)
     return console.export_html(inline_styles=True, code_format="<pre style=\"font-family:monospace\">{code}</pre>")
 

@@ -351,7 +351,8 @@ class rosNode:  # noqa: N801 - the paper's name
         slot = self._slots.get(spec.slot)
         if slot is None:
             label = f"{self.name} {spec.slot.split(' ', 1)[1]}"
-            slot = HandlerSlot(label, handlers[spec.slot], self._report, pass_argument=takes_arg.get(spec.slot, True))
+            slot = HandlerSlot(label, handlers[spec.slot], self._report, pass_argument=takes_arg.get(spec.slot, True),
+                               keep=self._session.config.keep_recent)
             self._slots[spec.slot] = slot
         if isinstance(spec, planning.SubscribeSpec):
             return runtime.Subscription(spec.topic, msgtypes.resolve_message(spec.type)[1], slot)

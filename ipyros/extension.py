@@ -32,7 +32,7 @@ from .dsl import rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache
 from .magics import NodeMagics, RosMagics, TopicMagics, WrapMagics
-from .magics.output import Printer, StderrLogHandler, failure_report, note
+from .magics.output import Printer, StderrLogHandler, failure_report, note, note_line
 from .probe import PromptPublisher
 from .session import Session, configure, current
 
@@ -78,6 +78,8 @@ class Extension:
                                                                                       tb, tb_offset))
         self._saved["report"] = self.session.report
         self.session.report = self._report
+        self._saved["notice"] = self.session.notice
+        self.session.notice = note_line
         self._start_logging()
         shell.events.register("post_run_cell", self._after_cell)
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
@@ -90,7 +92,9 @@ class Extension:
         session = self.session
         uri = self.settings.master_uri or session.config.master_uri
         config = dataclasses.replace(session.config, master_uri=_slashed(uri) if uri else None,
-                                     start_master=self.settings.start_master, announce=_quiet)
+                                     start_master=self.settings.start_master, announce=_quiet,
+                                     process_node_name=_global(self.settings.process_node_name),
+                                     keep_recent=self.settings.try_history)
         try:
             configure(config)
         except IpyrosError as error:  # already attached elsewhere: keep that master
@@ -170,6 +174,8 @@ class Extension:
         session = self.session
         if session.report is self._report:
             session.report = self._saved["report"]
+        if session.notice is note_line:
+            session.notice = self._saved["notice"]
         saved = self._saved["config"]
         if session.master is None or saved.master_uri in (None, session.master.uri):
             session.config = saved  # the master settings as they were before loading
@@ -180,6 +186,12 @@ class Extension:
         for magics in self.magics:
             _unregister(shell, magics)
         self.publisher.close()
+
+
+def _global(name: str) -> Optional[str]:
+    """A node name from the settings as a global name; empty means "not set"."""
+    name = name.strip()
+    return ("/" + name.lstrip("/")) if name else None
 
 
 def _quiet(text: str) -> None:

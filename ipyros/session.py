@@ -22,6 +22,12 @@ if TYPE_CHECKING:
     from .dsl import rosNode
 
 
+def print_notice(text: str) -> None:
+    """Default report of something that happened on its own: a line on stderr."""
+    sys.stderr.write(text.rstrip("\n") + "\n")
+    sys.stderr.flush()
+
+
 def print_failure(failure: HandlerFailure) -> None:
     """Default report of a handler exception: the handler's traceback on stderr."""
     more = f" ({failure.suppressed} more since the last report)" if failure.suppressed else ""
@@ -37,6 +43,7 @@ class SessionConfig:
     master_uri: Optional[str] = None  # None: ROS_MASTER_URI, else http://localhost:11311
     start_master: bool = True  # start one on localhost when none answers
     process_node_name: Optional[str] = None  # None: the first node created names it
+    keep_recent: int = 20  # messages each subscription keeps for trying a handler on them
     announce: Callable[[str], None] = field(default=lambda text: print(text, file=sys.stderr))
 
 
@@ -49,12 +56,13 @@ class Session:
         self.process = ProcessNode()
         self.nodes: dict[str, "rosNode"] = {}  # full name → node, in creation order
         self.report: Callable[[HandlerFailure], None] = print_failure
+        self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
         self._lock = threading.RLock()
         self.closed = False
 
     def notify(self, text: str) -> None:
         """Tell the user something that happened on its own (a basenode died, ...)."""
-        self.config.announce(text)
+        self.notice(text)
 
     def attach_master(self) -> master_mod.MasterHandle:
         """The master in use, found or started on first call."""

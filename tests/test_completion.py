@@ -141,8 +141,14 @@ def test_topics_magic_options(matcher):
 
 def test_pub_magic_topic_then_type(matcher):
     assert texts(matcher, "%pub /ct/turtle2/") == ["/ct/turtle2/cmd_vel"]
-    assert texts(matcher, "%publish /ct/turtle2/cmd_vel geometry_msgs/T") == [
+    assert texts(matcher, "%pub /ct/turtle2/cmd_vel geometry_msgs/T") == [
         "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
+
+
+def test_try_and_status_magics_complete_nodes_and_subscriptions(matcher):
+    assert texts(matcher, "%status w") == ["wnode"]
+    assert texts(matcher, "%try ") == ["nd", "wnode"]
+    assert "/ct/turtle1/pose" in texts(matcher, "%try nd /ct/turtle1/p")
 
 
 def test_handler_magic_node_then_its_subscriptions(matcher):

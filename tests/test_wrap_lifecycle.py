@@ -48,8 +48,8 @@ def test_log_tail_restart_and_shutdown(make_node, ros_master):
 
 def test_a_crash_is_reported_with_exit_code_and_log(make_node, ros_session):
     told = []
-    previous = ros_session.config.announce
-    ros_session.config.announce = told.append
+    previous = ros_session.notice
+    ros_session.notice = told.append
     try:
         w = wrapped_echo(make_node, "crash_wrapper")
         crasher = make_node("crash_sender").new.publish("/crash", msgType=Int32).create()
@@ -57,7 +57,7 @@ def test_a_crash_is_reported_with_exit_code_and_log(make_node, ros_session):
         crasher.write("/crash", Int32(3))
         wait_for(lambda: told, timeout=20, what="the crash to be reported")
     finally:
-        ros_session.config.announce = previous
+        ros_session.notice = previous
     assert "basenode /echo_node of crash_wrapper exited with code 3; restart it with crash_wrapper.base.restart()" \
         in told[0]
     assert "echo_node ready" in told[0], "the last log lines come with the report"

@@ -40,6 +40,12 @@ class RosMagics(Magics):
              "master_uri; it stops when the IPython session exits.",
     ).tag(config=True)
 
+    process_node_name = Unicode(
+        "",
+        help="Name of this session's ROS node, which hosts every rosNode of the session (rospy allows one "
+             "node per process). Empty: the first rosNode created names it.",
+    ).tag(config=True)
+
     graph_period = Float(
         1.0,
         help="Seconds between background refreshes of the cached ROS graph that tab completion reads. "

@@ -53,6 +53,11 @@ def note(text: str) -> None:
     _write_err(f"ipyros: {text}\n")
 
 
+def note_line(text: str) -> None:
+    """A message that already says ``ipyros:`` (a basenode died, ...), on stderr from any thread."""
+    _write_err(text.rstrip("\n") + "\n")
+
+
 def failure_report(tracebacks: Callable[[], bool]) -> Callable[[HandlerFailure], None]:
     """A ``Session.report`` that prints a failing handler's traceback (or one line) safely.
 
