@@ -20,13 +20,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import pytest
-from conftest import wait_for
+from conftest import master_state, wait_for
 from helpers import pid_alive
 from jupyter_client import KernelManager
 from jupyter_client.kernelspec import KernelSpecManager
 from peer import Peer
 
-TOPIC = "/e2e_kernel/ticks"  # std_msgs/UInt32 0, 1, 2, ... from publish_rate.py
+TOPIC = "/e2e_kernel/ticks"  # std_msgs/UInt32 0, 1, 2, ... from peers/ticker.py
 TIMEOUT = 30  # per request: generous, finite
 
 HANDLER = '''\
@@ -55,6 +55,10 @@ class Cell:
     def stdout(self) -> str:
         return "".join(c["text"] for c in self.outputs("stream") if c["name"] == "stdout")
 
+    def said(self) -> list[str]:
+        """The ``ipyros:`` lines of stdout (a handler's prints may be mixed in while a node runs)."""
+        return [line for line in self.stdout().splitlines() if line.startswith("ipyros:")]
+
     def shown(self, mime: str = "text/plain") -> str:
         """Everything displayed (display_data and the cell's result) in ``mime``, ANSI colours removed."""
         texts = [c["data"].get(mime, "") for c in self.outputs("display_data", "execute_result")]
@@ -70,6 +74,14 @@ class Kernel:
     def __init__(self, manager: KernelManager) -> None:
         self.manager = manager
         self.client = manager.client()
+        self.pid = manager.provisioner.pid
+
+    def shutdown(self) -> None:
+        """Ask the kernel to shut down (killed if it does not in time); wait until its process is gone."""
+        if self.manager.has_kernel:
+            self.client.stop_channels()
+            self.manager.shutdown_kernel(now=False)
+        wait_for(lambda: not pid_alive(self.pid), timeout=20, what="the kernel process to exit")
 
     def run(self, code: str, timeout: float = TIMEOUT) -> Cell:
         messages: list[dict[str, Any]] = []
@@ -91,7 +103,7 @@ class Kernel:
 
 @pytest.fixture
 def ticks(ros_master):
-    with Peer("publish_rate.py", TOPIC, 20) as peer:
+    with Peer("ticker.py", TOPIC, 20) as peer:
         peer.wait_line("ready")
         yield peer
 
@@ -113,16 +125,13 @@ def kernel(ros_master, tmp_path):
     manager = KernelManager(kernel_name="ipyros_e2e", kernel_spec_manager=KernelSpecManager(kernel_dirs=[str(specs)]),
                             connection_file=str(tmp_path / "connection.json"))
     manager.start_kernel(env=env)
-    pid = manager.provisioner.pid
     kernel = Kernel(manager)
     try:
         kernel.client.start_channels()
         kernel.client.wait_for_ready(timeout=60)
         yield kernel
     finally:
-        kernel.client.stop_channels()
-        manager.shutdown_kernel(now=False)  # a shutdown request; killed if it does not exit in time
-        wait_for(lambda: not pid_alive(pid), timeout=20, what="the kernel process to exit")
+        kernel.shutdown()
 
 
 def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
@@ -136,7 +145,7 @@ def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
     # %topics shows a table (rich: text and HTML).
     cell = kernel.ok(f"%topics {TOPIC}")
     row = next(line for line in cell.shown().splitlines() if TOPIC in line)
-    assert "std_msgs/UInt32" in row and "/publish_rate_" in row
+    assert "std_msgs/UInt32" in row and "/ticker_" in row
     assert TOPIC in cell.shown("text/html")
 
     # A node declared and created in cells; completion inside its DSL calls.
@@ -148,21 +157,26 @@ def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
     assert "/e2e_kernel_node" in cell.shown("text/html") and "on_tick" in cell.shown("text/html")
 
     # Handler prints from ROS threads reach the cell that runs.
-    cell = kernel.ok(wait_ticks("OLD", 3))
+    cell = kernel.ok(wait_ticks("OLD", 5))
     assert re.search(r"^OLD \d+$", cell.stdout(), re.MULTILINE), cell.stdout()
 
     # %handler puts the source into the next cell; running the edited source swaps it in.
     cell = kernel.ok(f"%handler nd {TOPIC}")
-    assert cell.stdout() == f"ipyros: edit on_tick and run it: it replaces the handler of e2e_kernel_node {TOPIC}\n"
+    assert cell.said() == [f"ipyros: edit on_tick and run it: it replaces the handler of e2e_kernel_node {TOPIC}"]
     source = cell.payload("set_next_input")["text"]
     assert source == HANDLER.split("\n", 1)[1].rstrip("\n")
     cell = kernel.ok(source.replace("OLD", "NEW"))
-    assert cell.stdout() == f"ipyros: e2e_kernel_node {TOPIC} is now handled by the new on_tick\n"
-    cell = kernel.ok(wait_ticks("NEW", 3))
-    lines = cell.stdout().splitlines()
-    assert sum(bool(re.fullmatch(r"NEW \d+", line)) for line in lines) >= 3, lines
-    first_new = next(i for i, line in enumerate(lines) if line.startswith("NEW"))
-    assert not [line for line in lines[first_new:] if line.startswith("OLD")], lines
+    assert cell.said() == [f"ipyros: e2e_kernel_node {TOPIC} is now handled by the new on_tick"]
+    cell = kernel.ok(wait_ticks("NEW", 5))
+    # Which cell a print from a ROS thread lands in depends on when ipykernel flushes it;
+    # what the handlers saw is exact: OLD up to the swap, NEW after, no message lost.
+    assert re.search(r"^NEW \d+$", cell.stdout(), re.MULTILINE), cell.stdout()
+    seen = [tuple(pair) for pair in json.loads(kernel.ok("import json\nprint(f'ticks={json.dumps(ticks)}')")
+                                               .stdout().split("ticks=", 1)[1].splitlines()[0])]
+    words = [word for word, _ in seen]
+    assert words == sorted(words, key=["OLD", "NEW"].index), f"OLD after NEW: {seen}"
+    numbers = [number for _, number in seen]
+    assert numbers == list(range(numbers[0], numbers[0] + len(numbers))), f"a message lost or repeated: {seen}"
 
     # %status: per-handler figures of the node, and the session's nodes.
     cell = kernel.ok("%status nd")
@@ -178,9 +192,14 @@ def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
     assert not cell.ok and "has no handler for /e2e_kernel/nothing" in cell.reply["evalue"]
     assert len(cell.reply["traceback"]) == 1, cell.reply["traceback"]
 
+    # Shutting the kernel down takes its ROS node off the master.
+    ros_node = re.search(r"^node=(.*)$", kernel.ok("import rospy\nprint(f'node={rospy.get_name()}')").stdout(),
+                         re.MULTILINE)[1]
+    assert ros_node in master_state(ros_master)["sub"][TOPIC]
+    kernel.shutdown()
+    wait_for(lambda: not registered(ros_master, ros_node), timeout=10, what=f"{ros_node} to leave the master")
 
-@pytest.mark.xfail(strict=True, reason="ipyros/display.py: render_text/render_html make a rich Console that "
-                   "detects Jupyter and displays instead of rendering, so a node shows three times")
+
 def test_a_node_shows_once_in_a_notebook(kernel):
     kernel.ok("%load_ext ipyros")
     cell = kernel.ok("nd = rosNode('e2e_kernel_shown')\nnd")
@@ -188,6 +207,11 @@ def test_a_node_shows_once_in_a_notebook(kernel):
     (result,) = cell.outputs("execute_result")
     assert "/e2e_kernel_shown" in result["data"]["text/plain"]
     assert "/e2e_kernel_shown" in result["data"]["text/html"]
+
+
+def registered(master_uri: str, node: str) -> list[str]:
+    """The topics and services ``node`` is registered for on the master."""
+    return [name for kind in master_state(master_uri).values() for name, nodes in kind.items() if node in nodes]
 
 
 def wait_ticks(word: str, count: int) -> str:

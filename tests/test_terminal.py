@@ -18,11 +18,12 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import master_state, wait_for
 from helpers import pid_alive
 from peer import Peer
 from terminal import Terminal, descendants
 
-TOPIC = "/e2e_turtle/ticks"  # std_msgs/UInt32 0, 1, 2, ... from publish_rate.py
+TOPIC = "/e2e_turtle/ticks"  # std_msgs/UInt32 0, 1, 2, ... from peers/ticker.py
 RATE_HZ = 10
 PROMPT = re.compile(r"^In \[(\d+)\]: ?(.*)$")
 OLD_DEF = 'def on_tick(msg): print("OLD", msg.data)'
@@ -31,7 +32,7 @@ OLD_DEF = 'def on_tick(msg): print("OLD", msg.data)'
 @pytest.fixture
 def ticks(ros_master):
     """A steady source on TOPIC, like a sensor."""
-    with Peer("publish_rate.py", TOPIC, RATE_HZ) as peer:
+    with Peer("ticker.py", TOPIC, RATE_HZ) as peer:
         peer.wait_line("ready")
         yield peer
 
@@ -82,12 +83,12 @@ def numbers(rows: list[str], word: str) -> list[int]:
     return [int(row.split()[1]) for row in rows if re.fullmatch(rf"{word} \d+", row)]
 
 
-def test_a_session_at_the_terminal(ipython, ticks):
+def test_a_session_at_the_terminal(ipython, ticks, ros_master):
     term = ipython
 
     # Loading prints one line naming the master.
     run(term, "%load_ext ipyros")
-    term.wait_for(f"ipyros: ROS master {os.environ['ROS_MASTER_URI']} (found running)")
+    term.wait_for(f"ipyros: ROS master {ros_master} (found running)")
 
     # TAB completes the live topic in place (a unique match). The graph cache fills in the
     # background within a second of loading: until it has the topic, TAB finds nothing,
@@ -103,7 +104,7 @@ def test_a_session_at_the_terminal(ipython, ticks):
     term.wait_for(completed, timeout=20, what=f"TAB to complete {TOPIC}", interval=0.5)
     term.press("Enter")
     table = term.wait_for(lambda rows: [row for row in rows if TOPIC in row and "│" in row], what="the topics table")
-    assert "std_msgs/UInt32" in table[0] and "/publish_rate_" in table[0]
+    assert "std_msgs/UInt32" in table[0] and "/ticker_" in table[0]
 
     # %topics alone lists it too, among the others (the table may be longer than the screen).
     run(term, "%topics")
@@ -148,15 +149,22 @@ def test_a_session_at_the_terminal(ipython, ticks):
     seen = numbers(term.screen(), "NEW")[-1]
     rows = term.wait_for(lambda rows: numbers(rows, "NEW")[-1] >= seen + 5 and rows, what="more NEW lines")
     assert prompt(rows) and prompt(rows)[1] == "x = 12", "\n".join(rows)
-    stray = [row for row in rows if ("NEW" in row or "OLD" in row) and not re.fullmatch(r"(NEW|OLD) \d+", row)
-             and not PROMPT.match(row) and "ipyros:" not in row]
+    stray = [row for row in rows if re.search(r"(NEW|OLD) \d+", row) and not re.fullmatch(r"(NEW|OLD) \d+", row)]
     assert not stray, f"a print from a ROS thread got mixed into other text: {stray}"
 
-    # Exit: the session ends, and nothing it started is left.
+    # Exit: the session ends, nothing it started is left, and its ROS node leaves the master.
     term.press("C-u")
-    prompt_reads(term, "")
+    run(term, 'import rospy; print("node=" + rospy.get_name())')
+    ros_node = next(row[5:] for row in term.screen() if row.startswith("node=/"))
+    assert ros_node in master_state(ros_master)["sub"][TOPIC]
     family = descendants(term.pid)
     term.line("exit")
     term.wait_for(lambda rows: not term.alive() or None, timeout=20, what="IPython to exit")
     left = [pid for pid in {term.pid, *family} if pid_alive(pid)]
     assert not left, f"processes left after exit: {left}"
+    wait_for(lambda: not registered(ros_master, ros_node), timeout=10, what=f"{ros_node} to leave the master")
+
+
+def registered(master_uri: str, node: str) -> list[str]:
+    """The topics and services ``node`` is registered for on the master."""
+    return [name for kind in master_state(master_uri).values() for name, nodes in kind.items() if node in nodes]
