@@ -145,12 +145,7 @@ class rosNode:  # noqa: N801 - the paper's name
                 self.created = True
                 start_base(self)
             except BaseException:
-                if self._base is not None:
-                    self._base.stop()
-                    self._base = None
-                self._close_all()
-                self.created = False
-                self._session.remove(self)
+                self.shutdown()  # nothing half-started stays behind
                 raise
             return self
 
