@@ -3,10 +3,11 @@
 End-to-end tests use it to drive the terminal IPython as a person would: keys go in
 through ``tmux send-keys``, the screen comes back through ``tmux capture-pane``.
 
-Each :class:`Terminal` runs on a tmux server of its own (``tmux -L <unique socket>``)
-with a session name of its own, so a test touches nothing of anyone else's: not a
-user's tmux, not another test's. When its one session ends (the program exits, or
-:meth:`Terminal.close` kills it) that server exits by itself.
+Each :class:`Terminal` runs on a tmux server of its own (``tmux -S <socket>`` in a
+temporary directory of its own) with a session name of its own, so a test touches
+nothing of anyone else's: not a user's tmux, not another test's. When its one session
+ends (the program exits, or :meth:`Terminal.close` kills it) that server exits by
+itself, and :meth:`Terminal.close` removes the directory.
 
     with Terminal("e2e_demo", ["python3", "-q"], env=env) as term:
         term.wait_for(">>> ")
@@ -21,8 +22,10 @@ program itself: a test can check that it, and whatever it started, have ended.
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
+import tempfile
 import time
 import uuid
 from pathlib import Path
@@ -47,6 +50,7 @@ class Terminal:
         self.pid: Optional[int] = None
         self.server_pid: Optional[int] = None
         self._started: dict[int, Optional[str]] = {}
+        self._socket_dir = tempfile.mkdtemp(prefix="ipyros-tmux-")  # short: a socket path has a length limit
 
     # -- lifecycle ----------------------------------------------------------------------------
     def start(self) -> "Terminal":
@@ -75,9 +79,14 @@ class Terminal:
             if not _gone(pid, started, timeout):
                 os.kill(pid, signal.SIGKILL)
                 _gone(pid, started, timeout)
+        shutil.rmtree(self._socket_dir, ignore_errors=True)
 
     def __enter__(self) -> "Terminal":
-        return self.start()
+        try:
+            return self.start()
+        except BaseException:
+            self.close()
+            raise
 
     def __exit__(self, *exc) -> None:
         self.close()
@@ -140,8 +149,8 @@ class Terminal:
     # -- tmux -----------------------------------------------------------------------------------
     def _tmux(self, *args: str, check: bool = True) -> Optional[str]:
         """Run one tmux command on this terminal's own server; its output, or None if it failed."""
-        done = subprocess.run(["tmux", "-L", self.name, *args], env=self.env, capture_output=True, text=True,
-                              check=False, timeout=30)
+        done = subprocess.run(["tmux", "-S", os.path.join(self._socket_dir, "tmux"), *args], env=self.env,
+                              capture_output=True, text=True, check=False, timeout=30)
         if done.returncode != 0:
             if check:
                 raise RuntimeError(f"tmux {' '.join(args[:1])} failed: {done.stderr.strip()}")

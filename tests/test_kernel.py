@@ -12,6 +12,7 @@ home, IPYTHONDIR and ROS_HOME of its own, on the test master.
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import re
@@ -56,8 +57,13 @@ class Cell:
         return "".join(c["text"] for c in self.outputs("stream") if c["name"] == "stdout")
 
     def said(self) -> list[str]:
-        """The ``ipyros:`` lines of stdout (a handler's prints may be mixed in while a node runs)."""
-        return [line for line in self.stdout().splitlines() if line.startswith("ipyros:")]
+        """The ``ipyros:`` lines of stdout, without the handler's prints.
+
+        While a node runs its handler prints from a ROS thread, maybe into this cell, maybe
+        between the text of a line and its newline (``print`` writes them one by one).
+        """
+        text = re.sub(r"(OLD|NEW) \d+", "", self.stdout())
+        return [line for line in text.splitlines() if line.startswith("ipyros:")]
 
     def shown(self, mime: str = "text/plain") -> str:
         """Everything displayed (display_data and the cell's result) in ``mime``, ANSI colours removed."""
@@ -93,6 +99,12 @@ class Kernel:
         cell = self.run(code, timeout)
         assert cell.ok, f"{code!r} failed: {cell.reply.get('ename')}: {cell.reply.get('evalue')}"
         return cell
+
+    def value(self, code: str) -> Any:
+        """The value of the cell's last expression, a Python literal (read from its repr, not from
+        stdout, where a handler's print may fall in the middle of a line)."""
+        (result,) = self.ok(code).outputs("execute_result")
+        return ast.literal_eval(result["data"]["text/plain"])
 
     def complete(self, code: str) -> list[str]:
         """The matches a front end gets for TAB at the end of ``code``."""
@@ -171,8 +183,7 @@ def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
     # Which cell a print from a ROS thread lands in depends on when ipykernel flushes it;
     # what the handlers saw is exact: OLD up to the swap, NEW after, no message lost.
     assert re.search(r"^NEW \d+$", cell.stdout(), re.MULTILINE), cell.stdout()
-    seen = [tuple(pair) for pair in json.loads(kernel.ok("import json\nprint(f'ticks={json.dumps(ticks)}')")
-                                               .stdout().split("ticks=", 1)[1].splitlines()[0])]
+    seen = kernel.value("[tuple(tick) for tick in ticks]")
     words = [word for word, _ in seen]
     assert words == sorted(words, key=["OLD", "NEW"].index), f"OLD after NEW: {seen}"
     numbers = [number for _, number in seen]
@@ -193,8 +204,7 @@ def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
     assert len(cell.reply["traceback"]) == 1, cell.reply["traceback"]
 
     # Shutting the kernel down takes its ROS node off the master.
-    ros_node = re.search(r"^node=(.*)$", kernel.ok("import rospy\nprint(f'node={rospy.get_name()}')").stdout(),
-                         re.MULTILINE)[1]
+    ros_node = kernel.value("import rospy\nrospy.get_name()")
     assert ros_node in (state := master_state(ros_master))["sub"].get(TOPIC, ()), (ros_node, state)
     kernel.shutdown()
     wait_for(lambda: not registered(ros_master, ros_node), timeout=10, what=f"{ros_node} to leave the master")
