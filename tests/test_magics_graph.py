@@ -38,7 +38,7 @@ def test_topics_lists_live_topics_with_type_publishers_and_subscribers(ip, capsy
         ok(ip, "%topics --type std_msgs/String /mg/*")
         out = capsys.readouterr().out
         assert "/mg/words" in out and "/mg/rate" not in out
-        publisher = next(n for n in _loaded[id(ip)].graph.snapshot.nodes if n.startswith("/publish_rate_"))
+        publisher = _loaded[id(ip)].graph.snapshot.publishers["/mg/rate"][0]  # this test's peer, not an older one
         ok(ip, f"%topics -n {publisher.lstrip('/')}")
         out = capsys.readouterr().out
         assert "/mg/rate" in out and "/mg/words" not in out
@@ -131,7 +131,8 @@ def test_pub_through_a_node_that_publishes_the_topic_and_type_conflicts(ip, caps
     try:
         with Peer("echo_topic.py", "/mg/talk", "std_msgs/String") as listener:
             listener.wait_line("ready")
-            wait_for(lambda: "/mg/talk" in master_state(_loaded[id(ip)].graph.master_uri)["sub"], what="listener")
+            talker = ip.user_ns["talker"]  # a message written before the connection is up is lost: wait for it
+            wait_for(lambda: talker._writer("/mg/talk")[0].connections(), what="the listener to connect")
             capsys.readouterr()
             ok(ip, "%pub /mg/talk std_msgs/String 'via the talker'")
             assert "(from mg_talker)" in capsys.readouterr().out

@@ -172,8 +172,10 @@ class TopicMagics(ExtensionMagics):
 def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
                   uri: str) -> Table:
     table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {uri}", title_justify="left")
-    table.add_column("topic", overflow="fold", style="bold")
-    table.add_column("type", overflow="fold")
+    # Names stay whole (they are what you copy); the node lists give way when space runs out.
+    table.add_column("topic", overflow="fold", style="bold", min_width=min(60, max(map(len, found), default=5)))
+    table.add_column("type", overflow="fold", min_width=min(40, max((len(snap.topics[t] or "?") for t in found),
+                                                                   default=4)))
     table.add_column("publishers", overflow="fold")
     table.add_column("subscribers", overflow="fold")
     if rates is not None:
