@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -35,17 +36,22 @@ class Peer:
                         timeout, what=f"{text!r} from {self.proc.args[1]} (got {self.lines[-5:]})")
 
     def stop(self) -> None:
-        if self.proc.poll() is None:
+        """End the peer so that it unregisters from the master (a killed node stays listed there
+        and misleads the tests that come after): stdin closed, then Ctrl-C, then SIGTERM/SIGKILL."""
+        try:
+            self.proc.stdin.close()  # type: ignore[union-attr]
+        except OSError:
+            pass
+        steps = ((lambda: None, 2.0), (lambda: self.proc.send_signal(signal.SIGINT), 5.0),
+                 (self.proc.terminate, 5.0), (self.proc.kill, 10.0))
+        for ask, wait in steps:
+            if self.proc.poll() is not None:
+                break
+            ask()
             try:
-                self.proc.stdin.close()  # type: ignore[union-attr]
-            except OSError:
-                pass
-            self.proc.terminate()
-            try:
-                self.proc.wait(10)
+                self.proc.wait(wait)
             except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+                continue
         self._reader.join(5)
 
     def __enter__(self) -> "Peer":
