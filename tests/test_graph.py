@@ -23,7 +23,9 @@ def graph(ros_master):
 
 def test_topics_appear_with_types_and_nodes_then_disappear(graph):
     with many_topics("graph_pub", 3, "/gt/pose", type="geometry_msgs/Pose", subscribe=("/gt/in",)) as proc:
-        snap = wait_for(lambda: "/gt/pose0002" in graph.snapshot.topics and graph.snapshot, timeout=20,
+        # A node registers its topics and services one by one: wait for the last of each kind.
+        snap = wait_for(lambda: (s := graph.snapshot) and "/gt/pose0002" in s.topics and "/gt/in" in s.subscribers
+                        and "/graph_pub/get_loggers" in s.services and s, timeout=20,
                         what="the publisher's topics in the snapshot")
         assert snap.master_up
         assert snap.topics["/gt/pose0000"] == "geometry_msgs/Pose"
@@ -55,8 +57,8 @@ def test_topics_matching_glob_substring_type_node(ros_master):
     with many_topics("match_a", 2, "/m/a/cmd", type="geometry_msgs/Twist"), \
             many_topics("match_b", 2, "/m/b/pose", type="geometry_msgs/Pose", subscribe=("/m/a/cmd0000",)):
         graph = GraphCache(ros_master)
-        snap = wait_for(lambda: len(graph.refresh_now(2).topics_with_prefix("/m/")) == 4 and graph.snapshot,
-                        timeout=20, what="4 topics under /m/")
+        snap = wait_for(lambda: (s := graph.refresh_now(2)) and len(s.topics_with_prefix("/m/")) == 4
+                        and "/m/a/cmd0000" in s.subscribers and s, timeout=20, what="4 topics under /m/")
         assert graph.topics_matching("/m/*/cmd*") == ["/m/a/cmd0000", "/m/a/cmd0001"]
         assert snap.topics_matching("b/pose") == ["/m/b/pose0000", "/m/b/pose0001"]  # a substring
         assert snap.topics_matching("/m/", type="geometry_msgs/Twist") == ["/m/a/cmd0000", "/m/a/cmd0001"]
