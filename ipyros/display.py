@@ -95,6 +95,40 @@ class NodeStatus:
         return render_html(self)
 
 
+@dataclass(frozen=True)
+class History:
+    """A node's changes, oldest first; rich-renderable."""
+
+    node: str
+    changes: tuple[Any, ...]
+
+    def __len__(self) -> int:
+        return len(self.changes)
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        return iter(self.changes)
+
+    def __getitem__(self, index: int) -> Any:
+        return self.changes[index]
+
+    def __rich__(self) -> Table:
+        import time
+
+        table = Table(title=f"history of {self.node}", title_justify="left")
+        table.add_column("#", justify="right")
+        table.add_column("time")
+        table.add_column("change", overflow="fold")
+        for i, change in enumerate(self.changes, 1):
+            table.add_row(str(i), time.strftime("%H:%M:%S", time.localtime(change.time)), change.change)
+        return table
+
+    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
+        printer.text(render_text(self))
+
+    def _repr_html_(self) -> str:
+        return render_html(self)
+
+
 def render_text(renderable: Any, width: int = 100) -> str:
     """Render to a string: colours only when stdout is a terminal."""
     import sys
@@ -119,4 +153,4 @@ def _width(default: int) -> int:
     return max(60, shutil.get_terminal_size((default, 24)).columns)
 
 
-__all__ = ["NodeStatus", "StatusRow", "node_table", "render_text", "render_html"]
+__all__ = ["History", "NodeStatus", "StatusRow", "node_table", "render_text", "render_html"]

@@ -144,6 +144,7 @@ class rosNode:  # noqa: N801 - the paper's name
                 self._open(planning.plan(self._model))
                 self.created = True
                 start_base(self)
+                self._record("create()")
             except BaseException:
                 self.shutdown()  # nothing half-started stays behind
                 raise
@@ -152,6 +153,8 @@ class rosNode:  # noqa: N801 - the paper's name
     def shutdown(self) -> None:
         """Stop the node's publishers, subscribers, timers, services and its basenode."""
         with self._lock:
+            if self.created:
+                self._record("shutdown()")
             if self._base is not None:
                 self._base.stop()
                 self._base = None
@@ -177,6 +180,7 @@ class rosNode:  # noqa: N801 - the paper's name
             model.timers = [t for t in model.timers if t.name != name] + [timer]
 
         self._change(edit, {planning.timer_slot(name): (handler, takes_event)})
+        self._record(f"timer {name} every {float(period):g} s -> {timer.handler}" + (" once" if oneshot else ""))
         return self
 
     # -- removal ---------------------------------------------------------------------
@@ -192,18 +196,21 @@ class rosNode:  # noqa: N801 - the paper's name
                 model.topics = [t for t in model.topics if t.resolved != resolved]
 
             self._change(edit, drop=[planning.topic_slot(resolved)])
+            self._record(f"remove {resolved}")
         if timer is not None:
             if self._model.timer(timer) is None:
                 known = ", ".join(t.name for t in self._model.timers) or "none"
                 raise NotDeclaredError(f"{self.name} has no timer {timer!r} (timers: {known})")
             self._change(lambda m: setattr(m, "timers", [t for t in m.timers if t.name != timer]),
                          drop=[planning.timer_slot(timer)])
+            self._record(f"remove timer {timer}")
         if service is not None:
             resolved = self._resolve(service, "service")
             if not any(s.resolved == resolved for s in self._model.services):
                 raise NotDeclaredError(f"{self.name} has no service {resolved}")
             self._change(lambda m: setattr(m, "services", [s for s in m.services if s.resolved != resolved]),
                          drop=[planning.service_slot(resolved)])
+            self._record(f"remove service {resolved}")
         return self
 
     # -- writing ----------------------------------------------------------------------
@@ -355,6 +362,15 @@ class rosNode:  # noqa: N801 - the paper's name
             return runtime.Timer(spec.period, slot, spec.oneshot)
         return runtime.ServiceServer(spec.name, msgtypes.resolve_service(spec.type)[1], slot)
 
+    def _record(self, change: str) -> None:
+        self._session.record(self.fullname, change)
+
+    def history(self) -> Any:
+        """Every change of this node so far, oldest first (a table in IPython)."""
+        from .display import History
+
+        return History(self.fullname, tuple(c for c in self._session.history if c.node == self.fullname))
+
     def _report(self, failure: Any) -> None:
         self._session.report(failure)
 
@@ -414,6 +430,7 @@ class TopicHandler:
 
     def _did(self, text: str) -> None:
         self._done.append(text)
+        self._node._record(f"{self._role}.{text}")
 
     def subscribe(self, topic: str, handler: Optional[Callable[..., Any]] = None, msgType: Any = _UNSET,
                   type: Any = _UNSET) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
@@ -530,6 +547,7 @@ class NodeParams(MutableMapping):
             if node.created:
                 runtime.set_param(name, value)
             node._model.params[key] = value
+            node._record(f"params[{key!r}] = {value!r}")
 
     def __delitem__(self, key: str) -> None:
         name = self._name(key)

@@ -36,6 +36,15 @@ def print_failure(failure: HandlerFailure) -> None:
     sys.stderr.flush()
 
 
+@dataclass(frozen=True)
+class Change:
+    """One change a DSL node went through, as it would be typed (``new.subscribe /x [T] -> h``)."""
+
+    time: float
+    node: str
+    change: str
+
+
 @dataclass
 class SessionConfig:
     """How the session finds its master and names its ROS node."""
@@ -55,10 +64,17 @@ class Session:
         self.master: Optional[master_mod.MasterHandle] = None
         self.process = ProcessNode()
         self.nodes: dict[str, "rosNode"] = {}  # full name → node, in creation order
+        self.history: list[Change] = []  # every change of every node, in order
         self.report: Callable[[HandlerFailure], None] = print_failure
         self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
         self._lock = threading.RLock()
         self.closed = False
+
+    def record(self, node: str, change: str) -> None:
+        """Add a change to the session's history."""
+        import time
+
+        self.history.append(Change(time.time(), node, change))
 
     def notify(self, text: str) -> None:
         """Tell the user something that happened on its own (a basenode died, ...)."""

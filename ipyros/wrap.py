@@ -96,6 +96,7 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
         _reresolve(model)
 
     node._change(edit)
+    node._record("base " + ", ".join(f"{k}={v!r}" for k, v in fields.items()))
     return node
 
 

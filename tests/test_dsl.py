@@ -227,3 +227,20 @@ def test_the_node_displays_as_a_table(make_node):
     nd.new.publish("/dsl_show", msgType=Twist)
     text = render_text(nd.__rich__())
     assert "rosNode /dsl_show (declared)" in text and "geometry_msgs/Twist" in text and "publish" in text
+
+
+def test_every_change_is_in_the_history(make_node):
+    from ipyros.display import render_text
+
+    nd = make_node("dsl_history")
+    nd.new.publish("/dsl_history/out", msgType=Twist)
+    nd.create()
+    nd.new.subscribe("/dsl_history/in", handler=print, msgType="std_msgs/String")
+    nd.timer(0.5, print, name="tick")
+    nd.params["gain"] = 2
+    nd.remove("/dsl_history/in")
+    assert [c.change for c in nd.history()] == [
+        "new.publish /dsl_history/out [geometry_msgs/Twist]", "create()",
+        "new.subscribe /dsl_history/in [std_msgs/String] -> print", "timer tick every 0.5 s -> print",
+        "params['gain'] = 2", "remove /dsl_history/in"]
+    assert "history of /dsl_history" in render_text(nd.history())
