@@ -18,6 +18,10 @@ user's globals and stay editable with ``%handler``) and replays the declarations
 the public DSL, so every check applies as if typed. :func:`export` writes a standalone
 rospy script doing what the node does, by walking the same plan the runtime opens
 (:func:`ipyros.plan.plan`): so the script and the live node cannot disagree on wrapping.
+
+A saved file keeps code, not state: the values of the handlers' other globals (``speed``)
+and helper functions they call come from the namespace they are loaded into. An export
+has no such namespace later, so it copies them in: plain literals, helper sources, imports.
 """
 
 from __future__ import annotations
@@ -43,6 +47,7 @@ import yaml
 from . import plan as planning
 from .errors import IpyrosError
 from .model import BaseModel, NodeModel
+from .slots import call_arity
 
 if TYPE_CHECKING:
     from .dsl import rosNode
@@ -111,8 +116,8 @@ def _lambda_expression(fn: types.FunctionType, text: str, label: str, give_def: 
                 found.add(piece)
             break
     if len(found) != 1:
-        why = "cannot cut it out of its line" if not found else "several lambdas on its line look like it"
-        raise IpyrosError(f"the handler of {label} is a lambda and ipyros {why}; {give_def}")
+        why = "cannot be cut out of its source line" if not found else "looks like other lambdas on its line"
+        raise IpyrosError(f"the handler of {label} is a lambda that {why}; {give_def}")
     return found.pop() + "\n"
 
 
@@ -474,7 +479,7 @@ class _Script:
                 lines.append(f"relay({spec.source!r}, {spec.target!r}, {self.cls(spec.type)})")
             elif isinstance(spec, planning.TimerSpec):
                 fn, name = self.node._handlers[spec.slot], self.names[spec.slot]
-                call = name if _takes_event(fn) else f"lambda event: {name}()"
+                call = name if call_arity(fn, "timer", name) else f"lambda event: {name}()"
                 oneshot = ", oneshot=True" if spec.oneshot else ""
                 lines.append(f"rospy.Timer(rospy.Duration({spec.period!r}), {call}{oneshot})")
             elif isinstance(spec, planning.ServiceSpec):
@@ -495,13 +500,13 @@ class _Script:
                 f"{planning.node_fullname(model)}.\n\nIt needs no ipyros: ./{Path(self.path).name} "
                 "[from:=to ...] [_param:=value ...]"]
         if base is not None:
-            head.append(f"It runs its basenode {model.base.package}/{model.base.executable} "  # type: ignore[union-attr]
-                        "itself, remapped as ipyros ran it, and stops it on exit.")
+            wrapped = f"{model.base.package}/{model.base.executable}"  # type: ignore[union-attr]
+            head.append(f"It runs its basenode {wrapped} itself, remapped as ipyros ran it, and stops it on exit.")
         head.append('"""')
         stdlib = ["os", "signal", "subprocess"] if base else ["os"] if model.namespace != "/" else []
         head += [f"import {m}" for m in stdlib]
         if model.namespace != "/":
-            head += ["", "# Before rospy is imported (it reads its namespace then); the names below are resolved in it.",
+            head += ["", "# Before rospy is imported: it reads its namespace then. The names below are resolved in it.",
                      f"os.environ[\"ROS_NAMESPACE\"] = {model.namespace!r}"]
         head += ["", *_import_lines({n: o for n, o in self.imports.items() if n not in stdlib})]
         if self.values:
@@ -520,20 +525,15 @@ class _Script:
 
 
 def _import_lines(imports: dict[str, tuple[str, Optional[str]]]) -> list[str]:
-    """Sorted import lines; ``from m import a, b`` for names imported under their own name."""
-    plain = sorted(import_statement(n, o) for n, o in imports.items() if o[1] is None or o[1] != n)
-    grouped: dict[str, list[str]] = {}
+    """``import m`` lines, then ``from m import a, b`` lines (one per module), sorted."""
+    lines, froms = [], {}
     for name, (module, attr) in imports.items():
         if attr == name:
-            grouped.setdefault(module, []).append(name)
-    return [s for s in plain if s.startswith("import")] + sorted(
-        [s for s in plain if s.startswith("from")] + [f"from {m} import {', '.join(sorted(ns))}" for m, ns in grouped.items()])
-
-
-def _takes_event(fn: Callable[..., Any]) -> bool:
-    from .slots import call_arity
-
-    return call_arity(fn, "timer", getattr(fn, "__name__", "timer"))
+            froms.setdefault(module, []).append(name)
+        else:
+            lines.append(import_statement(name, (module, attr)))
+    lines += [f"from {module} import {', '.join(sorted(names))}" for module, names in froms.items()]
+    return sorted(lines, key=lambda line: (line.startswith("from"), line))
 
 
 def _base_argv(model: NodeModel) -> list[str]:

@@ -48,6 +48,13 @@ def shout(msg):
     wnode.write("loud", String(msg.data.upper()))  # noqa: F821
 
 
+LIMIT = 3
+
+
+def clamp(value):  # a helper of a handler: exported with it
+    return min(value, LIMIT)
+
+
 def turtle_node(make_node):
     """The paper's turtle node, with a timer, a service and a parameter."""
     nd = make_node("turtle_control_node")
@@ -66,6 +73,8 @@ def wrapper_node(make_node):
     wnode.baseNode("echo_node", args=["--prefix", "echo> "], params={"exit_after": 0}).basePackage("ipyros_test_nodes")
     wnode.reuse.subscribe("in", type=String).publish("out", type=String).service("~reset", type=Empty)
     wnode.new.subscribe("out", handler=shout, type=String).publish("loud", type=String)
+    wnode.timer(1.0, lambda event: None, name="idle")
+    wnode.params["volume"] = 11
     return wnode
 
 
@@ -106,7 +115,7 @@ def test_wrapping_node_round_trip(make_node, tmp_path):
     wnode = wrapper_node(make_node)
     loaded = keep.load(keep.save(wnode, tmp_path / "wrapper.yaml"))
     assert loaded.model() == wnode.model()
-    assert loaded.model().base.args == ["--prefix", "echo> "]
+    assert loaded.model().base.args == ["--prefix", "echo> "] and loaded.params["volume"] == 11
 
 
 def test_loaded_node_runs_its_handlers_in_the_namespace_given(make_node, tmp_path):
@@ -135,8 +144,14 @@ def test_lambda_handlers(make_node, tmp_path):
     loaded.handler("/keep/a")(String("x"))
     assert namespace["got"] == ["x"] and loaded.model() == nd.model()
 
+    nd.new.subscribe("/keep/a",  # getsource gives only the lambda's line of this statement
+                     handler=lambda msg: got.append(msg.data.upper()),  # noqa: F821
+                     msgType=String)
+    handler = yaml.safe_load(keep.save(nd, path).read_text())["handlers"][0]
+    assert handler["source"] == "lambda msg: got.append(msg.data.upper())\n"
+
     nd.new.subscribe("/keep/b", handler=[lambda m: 1, lambda m: 2][1], msgType=String)
-    with pytest.raises(IpyrosError, match=r"/keep/b is a lambda .* give the handler .* a def"):
+    with pytest.raises(IpyrosError, match=r"/keep/b is a lambda that looks like other lambdas on its line; give .* a def"):
         keep.save(nd, tmp_path / "two.yaml")
     nd.new.subscribe("/keep/b", handler=[].append, msgType=String)
     with pytest.raises(IpyrosError, match=r"builtin_function_or_method 'append'.* give the handler of .*/keep/b a def"):
@@ -238,6 +253,7 @@ def test_exported_wrapper_runs_and_stops_its_basenode(make_node, tmp_path, ros_m
     text = script.read_text()
     assert "os.environ[\"ROS_NAMESPACE\"] = '/keep_ns/'" in text
     assert "relay('/keep_ns/in', '/keep_ns/keep_wrapper/base/keep_ns/in', String)" in text
+    assert "rospy.Timer(rospy.Duration(1.0), timer_idle)" in text
     assert "'_exit_after:=0'" in text and "'/keep_ns/out:=/keep_ns/keep_wrapper/base/keep_ns/out'" in text
     driver, heard = world(make_node, "keep_wrapper_world", ("/keep_ns/in", String), ("/keep_ns/loud", String),
                           ("/keep_ns/out", String))
@@ -256,6 +272,7 @@ def test_exported_wrapper_runs_and_stops_its_basenode(make_node, tmp_path, ros_m
         assert stop(proc) == 0
         wait_for(lambda: not Path(f"/proc/{base_pid}").exists(), timeout=10, what="the basenode to be gone")
         assert "echo_node shut down" in lines  # stopped by Ctrl-C, so it unregistered
+    assert runtime.get_param("/keep_ns/keep_wrapper/volume") == 11
     assert "/keep_ns/echo_node" not in str(master_state(ros_master))
 
 
@@ -265,9 +282,12 @@ def test_export_marks_globals_it_cannot_write(make_node, tmp_path):
 
     def watch(msg):
         if threshold.is_set():
-            print(msg)
+            print(clamp(len(msg.data)))
 
     nd.new.subscribe("/keep/watch", handler=watch, msgType=String)
     with pytest.warns(keep.ExportWarning, match="needs values for threshold"):
         script = keep.export(nd, tmp_path / "watch.py")
-    assert "threshold = None  # set me: used by handler watch" in script.read_text()
+    text = script.read_text()
+    assert "threshold = None  # set me: used by handler watch" in text
+    assert "def clamp(value):" in text and "LIMIT = 3" in text
+    compile(text, str(script), "exec")
