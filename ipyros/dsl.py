@@ -242,6 +242,28 @@ class rosNode:  # noqa: N801 - the paper's name
             self._writers[topic] = (publication, declared)
             return publication, declared
 
+    # -- keeping the work ----------------------------------------------------------------
+    def save(self, path: Any) -> Any:
+        """Save the node (model and handler sources) to a YAML file; see :mod:`ipyros.keep`."""
+        from .keep import save
+
+        return save(self, path)
+
+    @classmethod
+    def load(cls, path: Any, namespace: Optional[dict] = None, create: bool = False, *,
+             session: Optional[Session] = None) -> "rosNode":
+        """Rebuild a saved node; its handlers are defined in ``namespace`` (in IPython: ``get_ipython().user_ns``)."""
+        from .keep import load
+
+        node = load(path, namespace, session=session)
+        return node.create() if create else node
+
+    def export(self, path: Any, namespace: Optional[dict] = None) -> Any:
+        """Write a standalone rospy script that runs this node without ipyros; see :mod:`ipyros.export`."""
+        from .export import export
+
+        return export(self, path, namespace)
+
     # -- status and display ---------------------------------------------------------------
     def status(self) -> "Any":
         """Per topic, timer and service: rate, handler time and exception count."""

@@ -23,7 +23,7 @@ from std_srvs.srv import Empty, EmptyResponse
 
 from conftest import master_state, wait_for
 
-from ipyros import keep, runtime
+from ipyros import export, keep, runtime
 from ipyros.errors import IpyrosError
 
 speed = 2.5  # read by showPose when called: exported as a literal
@@ -224,7 +224,7 @@ def stop(proc: subprocess.Popen) -> int:
 
 
 def test_exported_turtle_node_runs_without_ipyros(make_node, tmp_path, ros_master):
-    script = keep.export(turtle_node(make_node), tmp_path / "turtle_control_node.py")
+    script = export.export(turtle_node(make_node), tmp_path / "turtle_control_node.py")
     text = script.read_text()
     assert text.startswith("#!/usr/bin/python3\n") and os.access(script, os.X_OK)
     for line in ("import math", "from geometry_msgs.msg import Pose, Twist", "speed = 2.5", "nd = NodeHandle()",
@@ -249,7 +249,7 @@ def test_exported_turtle_node_runs_without_ipyros(make_node, tmp_path, ros_maste
 
 
 def test_exported_wrapper_runs_and_stops_its_basenode(make_node, tmp_path, ros_master):
-    script = keep.export(wrapper_node(make_node), tmp_path / "keep_wrapper.py")
+    script = export.export(wrapper_node(make_node), tmp_path / "keep_wrapper.py")
     text = script.read_text()
     assert "os.environ[\"ROS_NAMESPACE\"] = '/keep_ns/'" in text
     assert "relay('/keep_ns/in', '/keep_ns/keep_wrapper/base/keep_ns/in', String)" in text
@@ -285,9 +285,19 @@ def test_export_marks_globals_it_cannot_write(make_node, tmp_path):
             print(clamp(len(msg.data)))
 
     nd.new.subscribe("/keep/watch", handler=watch, msgType=String)
-    with pytest.warns(keep.ExportWarning, match="needs values for threshold"):
-        script = keep.export(nd, tmp_path / "watch.py")
+    with pytest.warns(export.ExportWarning, match="needs values for threshold"):
+        script = export.export(nd, tmp_path / "watch.py")
     text = script.read_text()
     assert "threshold = None  # set me: used by handler watch" in text
     assert "def clamp(value):" in text and "LIMIT = 3" in text
     compile(text, str(script), "exec")
+
+
+def test_the_dsl_methods_save_load_and_export(make_node, tmp_path, ros_session):
+    from ipyros import rosNode
+
+    nd = turtle_node(make_node)
+    saved = nd.save(tmp_path / "nd.yaml")
+    again = rosNode.load(saved, {}, session=ros_session)
+    assert again.model() == nd.model()
+    assert nd.export(tmp_path / "nd.py").read_text().startswith("#!/usr/bin/python3")
