@@ -91,6 +91,7 @@ class Route:
     relay: Optional[list[str]] = None  # relay argv, with {kind} to fill; None: no relay
     note: str = ""
     handler: bool = False  # the relay changes a field of every message (path d)
+    says_ready: bool = True  # the relay says "ready TOPIC", TOPIC being where to publish
 
     def argv(self, kind: str) -> Optional[list[str]]:
         return None if self.relay is None else [a.replace("{kind}", kind) for a in self.relay]
@@ -100,38 +101,34 @@ def rospy_relay(*options: str) -> list[str]:
     return [sys.executable, str(NODES / "rospy_relay.py"), TOPIC_IN, TOPIC_OUT, "{kind}", *options]
 
 
-def ipyros_relay(mode: str) -> list[str]:
-    return [sys.executable, str(NODES / "ipyros_relay.py"), mode, TOPIC_IN, TOPIC_OUT, "{kind}"]
+def ipyros_node(mode: str) -> list[str]:
+    return [sys.executable, str(NODES / "ipyros_node.py"), mode, TOPIC_IN, TOPIC_OUT, "{kind}"]
 
 
-def runtime_has_relays() -> bool:
-    """Whether ipyros.runtime offers what bench/nodes/ipyros_relay.py drives."""
-    try:
-        from ipyros import runtime
-    except Exception:  # not written yet, or broken mid-edit: fall back to the rospy recipe
-        return False
-    return all(hasattr(runtime, name) for name in ("ProcessNode", "Relay", "Subscription", "Publication"))
+def topic_tools_relay() -> Route:
+    return Route("b", "topic_tools relay (C++)", [str(TOPIC_TOOLS_RELAY), TOPIC_IN, TOPIC_OUT], says_ready=False)
 
 
-def main_routes() -> list[Route]:
-    if runtime_has_relays():
-        reuse = Route("c", "ipyros reuse relay", ipyros_relay("reuse"), "ipyros.runtime.Relay")
-        handler = Route("d", "ipyros handler", ipyros_relay("handler"),
-                        "ipyros.runtime Subscription + HandlerSlot + Publication", handler=True)
-    else:
-        reuse = Route("c", "rospy reuse relay", rospy_relay(), "bench/nodes/rospy_relay.py (recipe)")
-        handler = Route("d", "rospy handler", rospy_relay("--mode", "handler"),
+def main_routes(rospy_only: bool = False) -> list[Route]:
+    """Issue 3's four paths; ``rospy_only`` runs (c) and (d) as bench/nodes/rospy_relay.py's recipe."""
+    if rospy_only:
+        reuse = Route("c", "rospy reuse relay (recipe)", rospy_relay(), "bench/nodes/rospy_relay.py")
+        handler = Route("d", "rospy handler (recipe)", rospy_relay("--mode", "handler"),
                         "bench/nodes/rospy_relay.py --mode handler", handler=True)
-    return [Route("a", "no relay"), Route("b", "topic_tools relay (C++)", [str(TOPIC_TOOLS_RELAY), TOPIC_IN, TOPIC_OUT]),
-            reuse, handler]
+    else:
+        reuse = Route("c", "ipyros wrapping node, reuse", ipyros_node("reuse"),
+                      "a wrapping node's reuse.publish relay (bench/nodes/ipyros_node.py)")
+        handler = Route("d", "ipyros node, handler", ipyros_node("handler"),
+                        "new.subscribe(handler) + write() (bench/nodes/ipyros_node.py)", handler=True)
+    return [Route("a", "no relay", says_ready=False), topic_tools_relay(), reuse, handler]
 
 
 def recipe_routes() -> list[Route]:
-    """The rospy relay variants compared to find the recipe: R4 (reuse) and R13 (handler) won."""
+    """The rospy relay variants compared to find the recipe: R4 (reuse) and R12 (handler) won."""
     naive = ("--sub-queue", "10", "--pub-queue", "10", "--buff-size", "65536", "--sub-nodelay", "0")
     return [
-        Route("a", "no relay"),
-        Route("b", "topic_tools relay (C++)", [str(TOPIC_TOOLS_RELAY), TOPIC_IN, TOPIC_OUT]),
+        Route("a", "no relay", says_ready=False),
+        topic_tools_relay(),
         Route("R1", "typed, queues 10/10, publish()", rospy_relay("--mode", "handler", "--typed-write", "publish",
                                                                    *naive), handler=True),
         Route("R2", "AnyMsg, queues 10/10, impl.publish", rospy_relay("--write", "impl", *naive)),
@@ -145,10 +142,11 @@ def recipe_routes() -> list[Route]:
         Route("R9", "R4, length+bytes joined, write_data", rospy_relay("--write", "joined")),
         Route("R10", "R4, advertised on 1st message", rospy_relay("--advertise", "lazy")),
         Route("R11", "R4, glibc mallopt", rospy_relay("--mallopt")),
-        Route("R12", "typed, unbounded, sync, publish()", rospy_relay("--mode", "handler", "--typed-write", "publish"),
+        Route("R12", "typed, unbounded, sync, publish()", rospy_relay("--mode", "handler"), handler=True),
+        Route("R13", "R12, kept buffer + sendmsg", rospy_relay("--mode", "handler", "--typed-write", "buffer"),
               handler=True),
-        Route("R13", "typed, unbounded, sync, kept buffer + sendmsg", rospy_relay("--mode", "handler"), handler=True),
-        Route("R14", "R13, glibc mallopt", rospy_relay("--mode", "handler", "--mallopt"), handler=True),
+        Route("R14", "R12, glibc mallopt", rospy_relay("--mode", "handler", "--mallopt"), handler=True),
+        *main_routes()[2:],  # ipyros as it is now, for comparison
     ]
 
 
@@ -378,13 +376,13 @@ def relay_connected(master: Master, relay_name: str) -> bool:
     return any(row[2] == "o" and row[4] == TOPIC_OUT for row in info)
 
 
-def wait_ready(master: Master, sub: Child, relay: Optional[Child]) -> None:
+def wait_ready(master: Master, sub: Child, relay: Optional[Child], source: str) -> None:
     """Subscriber (and relay) registered; a relay publishing already is connected downstream."""
     sub.expect("ready", 30)
     wait_until(lambda: master.state()[1].get(TOPIC_OUT), 30, "the subscriber to register")
     if relay is None:
         return
-    names = wait_until(lambda: master.state()[1].get(TOPIC_IN), 30, "the relay to subscribe")
+    names = wait_until(lambda: master.state()[1].get(source), 30, f"the relay to subscribe to {source}")
     if TOPIC_OUT in master.state()[0]:  # advertised up front: let the subscriber connect first
         wait_until(lambda: relay_connected(master, names[0]), 30, "the subscriber to connect to the relay")
 
@@ -416,8 +414,9 @@ def run_once(master: Master, route: Route, load: Load, workdir: Path) -> Run:
         sub = start("sub", [sys.executable, str(NODES / "bench_sub.py"), TOPIC_OUT, load.kind, str(report)])
         relay_argv = route.argv(load.kind)
         relay = start("relay", relay_argv) if relay_argv else None
-        wait_ready(master, sub, relay)
-        pub = start("pub", [sys.executable, str(NODES / "bench_pub.py"), TOPIC_IN if relay else TOPIC_OUT,
+        source = TOPIC_OUT if relay is None else relay.expect("ready", 60) if route.says_ready else TOPIC_IN
+        wait_ready(master, sub, relay, source)
+        pub = start("pub", [sys.executable, str(NODES / "bench_pub.py"), source,
                             load.kind, str(load.rate_hz), str(load.rate_count), str(load.flat_count)])
         others = ForeignLoad([os.getpid(), master.child.proc.pid] + [p.proc.pid for p in procs])
         cpu = relay_cpu()
@@ -460,6 +459,8 @@ def summarize(record: dict, load: Load, seen: Phases) -> Run:
     def per_message_us(ns: Optional[int], count: int) -> Optional[float]:
         return ns / 1e3 / count if ns is not None and count else None
 
+    # Relay CPU per message *sent*: a relay that drops messages is not credited per survivor.
+
     return Run(
         latency_ms=[lat / 1e6 for i, lat in zip(index, latency) if load.warmup <= i < load.rate_count],
         start_lost=sum(1 for i in range(load.start_window) if i not in got),
@@ -468,8 +469,8 @@ def summarize(record: dict, load: Load, seen: Phases) -> Run:
         flat_sent=load.flat_count,
         flat_received=len(flat),
         flat_per_s=len(flat) / span if span > 0 else 0.0,
-        relay_cpu_us=per_message_us(seen.relay_rate_ns, seen.rate_received),
-        relay_flat_cpu_us=per_message_us(seen.relay_flat_ns, len(flat)),
+        relay_cpu_us=per_message_us(seen.relay_rate_ns, load.rate_count),
+        relay_flat_cpu_us=per_message_us(seen.relay_flat_ns, load.flat_count),
         header_ok=(header.get("type") == kind.type_name and header.get("md5sum") == cls._md5sum
                    and header.get("message_definition") == cls._full_text),
         handled=record["handled"],
@@ -543,7 +544,7 @@ def measure(master: Master, cell: Cell, workdir: Path, quiet_below: float, attem
 
 
 def run_all(routes: list[Route], load_list: list[Load], repeats: int, log: Callable[[str], None],
-            quiet_below: float = 0.25, attempts: int = 3) -> list[Cell]:
+            quiet_below: float = 0.25, attempts: int = 2) -> list[Cell]:
     cells = [Cell(load, route) for load in load_list for route in routes]
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-") as tmp:
         master = Master(Path(tmp))
@@ -630,7 +631,8 @@ def table(cells: list[Cell], routes: list[Route], load_list: list[Load], repeats
         ld = cell.load
         name = f"({cell.route.key}) {cell.route.label}"
         if cell.error or not cell.runs:
-            lines.append(f"| {ld.label} | {name} | failed: {cell.error or 'no run'} ||||||| ")
+            why = (cell.error or "no run").split(";")[0]  # the whole message is in the log above
+            lines.append(f"| {ld.label} | {name} | failed: {why} ||||||| ")
             continue
         cpu = "-" if math.isnan(cell.cpu_us) else f"{cell.cpu_us:.0f} / {cell.flat_cpu_us:.1f}"
         lines.append(f"| {ld.label} | {name} | {_ms(cell.p50)} | {_ms(cell.p99)} | "
@@ -656,6 +658,10 @@ def parse(argv=None) -> argparse.Namespace:
     parser.add_argument("--seconds", type=float, help="length of the paced stream (default 3, quick 1.5)")
     parser.add_argument("--flat-twist", type=int, help="small messages sent flat out (default 200000, quick 60000)")
     parser.add_argument("--flat-image", type=int, help="images sent flat out (default 200, quick 60)")
+    parser.add_argument("--rospy-only", action="store_true",
+                        help="run (c) and (d) with bench/nodes/rospy_relay.py's recipe instead of ipyros")
+    parser.add_argument("--attempts", type=int, default=2,
+                        help="runs of a scenario at most, while other processes use 0.25 cores or more (default 2)")
     parser.add_argument("--only", help="comma-separated route keys to run, e.g. a,b,R4")
     parser.add_argument("--kinds", default="twist,image", help="message kinds to run (twist,image)")
     parser.add_argument("--out", type=Path, help="where to save the table (default bench/results/relay.md)")
@@ -670,7 +676,7 @@ def main(argv=None) -> int:
                                     opts.flat_twist or (60000 if quick else 200000),
                                     opts.flat_image or (60 if quick else 200))
                  if ld.kind in opts.kinds.split(",")]
-    routes = recipe_routes() if opts.recipes else main_routes()
+    routes = recipe_routes() if opts.recipes else main_routes(opts.rospy_only)
     if opts.only:
         routes = [r for r in routes if r.key in opts.only.split(",")]
     if not TOPIC_TOOLS_RELAY.exists():
@@ -682,7 +688,7 @@ def main(argv=None) -> int:
 
     began = time.monotonic()
     print(f"relay bench: {len(routes)} paths x {len(load_list)} messages x {repeats} repeats", flush=True)
-    cells = run_all(routes, load_list, repeats, lambda line: print(line, flush=True))
+    cells = run_all(routes, load_list, repeats, lambda line: print(line, flush=True), attempts=opts.attempts)
     text = table(cells, routes, load_list, repeats)
     checks = [] if opts.recipes else check_targets(cells)
     if checks:

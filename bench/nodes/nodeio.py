@@ -29,8 +29,10 @@ def say(*words: object) -> None:
     sys.stdout.flush()
 
 
-def serve(commands: Optional[dict[str, Callable[[], object]]] = None) -> None:
-    """Answer the bench's commands until ``quit`` or end of input, then shut rospy down."""
+def serve(commands: Optional[dict[str, Callable[[], object]]] = None,
+          cleanup: Optional[Callable[[], None]] = None) -> None:
+    """Answer the bench's commands until ``quit`` or end of input; then ``cleanup()``, and
+    shut rospy down."""
     commands = commands or {}
     for line in sys.stdin:
         word = line.strip()
@@ -43,4 +45,8 @@ def serve(commands: Optional[dict[str, Callable[[], object]]] = None) -> None:
             answer = action()
             if answer is not None:
                 say(answer)
-    rospy.signal_shutdown("bench done")
+    try:
+        if cleanup is not None:
+            cleanup()
+    finally:
+        rospy.signal_shutdown("bench done")

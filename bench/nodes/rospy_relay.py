@@ -48,8 +48,8 @@ def parse(argv=None) -> argparse.Namespace:
     parser.add_argument("--write", choices=["sendmsg", "impl", "joined"], default="sendmsg",
                         help="reuse: length and bytes in one sendmsg per connection (no copy); "
                              "impl.publish(raw); or length + bytes joined, then write_data")
-    parser.add_argument("--typed-write", choices=["buffer", "publish"], default="buffer",
-                        help="handler: serialize into a kept buffer and sendmsg a view of it; or Publisher.publish")
+    parser.add_argument("--typed-write", choices=["publish", "buffer"], default="publish",
+                        help="handler: Publisher.publish; or serialize into a kept buffer and sendmsg a view of it")
     parser.add_argument("--advertise", choices=["eager", "lazy"], default="eager",
                         help="advertise OUT at start-up, or when the first message arrives")
     parser.add_argument("--mallopt", action="store_true",
@@ -200,7 +200,7 @@ def main(argv=None) -> None:
         keep_big_allocations_on_heap()
     nodeio.start("bench_relay")
     Relay(opts)
-    nodeio.say("ready")
+    nodeio.say("ready", opts.source)
     nodeio.serve()
 
 
