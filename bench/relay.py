@@ -49,14 +49,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
+from bench.nodes import wire  # message kinds; the node scripts import it as plain `wire`
+
 HERE = Path(__file__).resolve().parent
 NODES = HERE / "nodes"
 RESULTS = HERE / "results"
 TOPIC_IN, TOPIC_OUT = "/bench/in", "/bench/out"
 TOPIC_TOOLS_RELAY = Path("/usr/lib/topic_tools/relay")
-
-sys.path.insert(0, str(NODES))
-import wire  # noqa: E402  (bench/nodes/wire.py: message kinds, shared with the node scripts)
 
 
 # -- what is measured ----------------------------------------------------------------------
@@ -642,8 +641,8 @@ def table(cells: list[Cell], routes: list[Route], load_list: list[Load], repeats
     lines += ["", "bytes: downstream saw the publisher's type, md5 and message definition, and the handler's "
               "change on every message through a handler and on none through a relay.",
               f"Other processes on the machine used {statistics.median(foreign or [0]):.2f} cores (median, "
-              f"max {max(foreign or [0]):.2f}) during the runs kept; {sum(c.reruns for c in cells)} runs were "
-              "done again because others used 0.25 cores or more."]
+              f"max {max(foreign or [0]):.2f}) during the runs kept; runs done again because others used "
+              f"0.25 cores or more: {sum(c.reruns for c in cells)}."]
     notes = [f"({r.key}) {r.note}" for r in routes if r.note]
     if notes:
         lines += ["Relays: " + "; ".join(notes) + "."]
@@ -688,7 +687,11 @@ def main(argv=None) -> int:
 
     began = time.monotonic()
     print(f"relay bench: {len(routes)} paths x {len(load_list)} messages x {repeats} repeats", flush=True)
-    cells = run_all(routes, load_list, repeats, lambda line: print(line, flush=True), attempts=opts.attempts)
+    try:
+        cells = run_all(routes, load_list, repeats, lambda line: print(line, flush=True), attempts=opts.attempts)
+    except KeyboardInterrupt:  # run_all has stopped every process it started
+        print("relay bench interrupted", file=sys.stderr)
+        return 130
     text = table(cells, routes, load_list, repeats)
     checks = [] if opts.recipes else check_targets(cells)
     if checks:
