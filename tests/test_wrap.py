@@ -234,3 +234,18 @@ def test_what_rostopic_and_rosnode_show(make_node):
     assert "/shown/shown_wrapper/base/shown/in [std_msgs/String]" in publications
     assert "/shown/in [std_msgs/String]" in subscriptions
     assert "/shown/shown_wrapper/base/shown/out [std_msgs/String]" in subscriptions
+
+
+def test_a_reuse_relay_keeps_latching(make_node):
+    """turtle_sim latches speed_exceeded: a subscriber that comes late still gets it, marked latched."""
+    from std_msgs.msg import Bool
+
+    w = make_node("latch_wrapper")
+    w.baseNode("turtle_sim", namespace="latch").basePackage("ipyros_demo")
+    w.reuse.publish("turtle1/speed_exceeded", type=Bool)
+    w.create()
+    relay = next(ep for ep in w._live.values() if getattr(ep, "target", None) == "/latch/turtle1/speed_exceeded")
+    wait_for(lambda: relay.count >= 1, timeout=20, what="the latched message to pass the relay")
+    late = listen(make_node, "latch_late", "/latch/turtle1/speed_exceeded", Bool)
+    wait_for(lambda: late, timeout=20, what="the latched message for a late subscriber")
+    assert late[0].data is False and late[0]._connection_header["latching"] == "1"
