@@ -10,12 +10,15 @@ handler's exception into a report instead of a dead callback thread.
 
 from __future__ import annotations
 
+import inspect
 import threading
 import time
 import traceback
 from collections import deque
 from dataclasses import dataclass
 from typing import Any, Callable
+
+from .errors import HandlerError
 
 Report = Callable[["HandlerFailure"], None]
 
@@ -135,10 +138,6 @@ def call_arity(handler: Any, what: str, label: str) -> bool:
     Subscriptions and services pass one argument (message, request); timers pass the
     timer event, which a handler may also do without.
     """
-    import inspect
-
-    from .errors import HandlerError
-
     if not callable(handler):
         raise HandlerError(f"handler for {label} is {type(handler).__name__} {handler!r}, not a function; "
                            "pass the function itself, e.g. handler=showPose (no parentheses)")
