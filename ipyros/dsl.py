@@ -413,13 +413,14 @@ class rosNode:  # noqa: N801 - the paper's name
         """
         if not topics or self._session.master is None:
             return
-        from .master import live_topics
+        from .graph import fetch_snapshot
 
-        live = live_topics(self._session.master.uri)
+        live = fetch_snapshot(self._session.master.uri, timeout=2.0)  # live topics only, one round trip
         me = self._session.process.name
         for t in topics:
-            have, users = live.get(t.resolved, (None, set()))
-            if not have or have == t.type or have == "*" or not users:
+            have = live.topics.get(t.resolved)
+            users = {*live.publishers.get(t.resolved, ()), *live.subscribers.get(t.resolved, ())}
+            if not have or have == t.type or have == "*":
                 continue
             if users == {me}:
                 have = next((o.type for n in self._session.nodes.values() if n is not self

@@ -34,6 +34,8 @@ from types import MappingProxyType
 from typing import Iterable, Mapping, Optional, Sequence
 from xml.parsers.expat import ExpatError
 
+from .master import master_proxy
+
 #: The caller id the master sees in its logs for our read-only queries.
 CALLER_ID = "/ipyros_graph"
 
@@ -119,19 +121,6 @@ def _matches_exactly(name: str, pattern: str) -> bool:
 EMPTY = GraphSnapshot()
 
 
-class _TimeoutTransport(xmlrpc.client.Transport):
-    """An XML-RPC transport whose sockets give up after ``timeout`` seconds."""
-
-    def __init__(self, timeout: float):
-        super().__init__()
-        self._timeout = timeout
-
-    def make_connection(self, host):
-        conn = super().make_connection(host)
-        conn.timeout = self._timeout  # read by HTTPConnection.connect() when it opens the socket
-        return conn
-
-
 def fetch_snapshot(master_uri: str, timeout: float = 1.0) -> GraphSnapshot:
     """Ask the master for the whole graph now; an empty snapshot if it cannot answer.
 
@@ -139,7 +128,7 @@ def fetch_snapshot(master_uri: str, timeout: float = 1.0) -> GraphSnapshot:
     Never raises for network trouble: a master that is down, refuses, times out or
     answers garbage all give ``master_up=False``.
     """
-    proxy = xmlrpc.client.ServerProxy(master_uri, transport=_TimeoutTransport(timeout))
+    proxy = master_proxy(master_uri, timeout)
     calls = xmlrpc.client.MultiCall(proxy)
     calls.getSystemState(CALLER_ID)
     calls.getTopicTypes(CALLER_ID)

@@ -108,22 +108,3 @@ def attach(uri: Optional[str] = None, start: bool = True, timeout: float = 15.0)
         handle.processes.append(spawn([rosout, "__name:=rosout"], env=env))
     os.environ["ROS_MASTER_URI"] = uri
     return handle
-
-
-def live_topics(uri: str, timeout: float = 2.0) -> dict[str, tuple[str, set[str]]]:
-    """{topic: (type, nodes publishing or subscribing)} as the master knows them now.
-
-    Empty if the master does not answer: a check that cannot be made is skipped.
-    """
-    try:
-        proxy = master_proxy(uri, timeout)
-        code, _, pairs = proxy.getTopicTypes("/ipyros")
-        code2, _, (pubs, subs, _) = proxy.getSystemState("/ipyros")
-    except (OSError, xmlrpc.client.Error):
-        return {}
-    if code != 1 or code2 != 1:
-        return {}
-    users: dict[str, set[str]] = {}
-    for topic, nodes in [*pubs, *subs]:
-        users.setdefault(topic, set()).update(nodes)
-    return {topic: (type_, users.get(topic, set())) for topic, type_ in pairs}

@@ -25,6 +25,7 @@ from typing import Any, Callable, Optional
 import rospy
 
 from .errors import IpyrosError, MasterError, NodeStateError
+from .master import master_proxy
 from .slots import HandlerSlot
 
 def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
@@ -82,17 +83,16 @@ class ProcessNode:
 
 def _refuse_taken_name(master_uri: str, name: str) -> None:
     """Refuse to start under a name a live node has: the master would kill that node."""
-    master = xmlrpc.client.ServerProxy(master_uri)
     try:
-        code, _, api = master.lookupNode("/ipyros", name)
+        code, _, api = master_proxy(master_uri).lookupNode("/ipyros", name)
     except OSError as error:
         raise MasterError(f"cannot reach the ROS master at {master_uri} ({error.strerror or error}); "
                           "start roscore or unset ROS_MASTER_URI to let ipyros start one") from None
     if code != 1:
         return
     try:
-        xmlrpc.client.ServerProxy(api).getPid("/ipyros")
-    except OSError:
+        master_proxy(api, timeout=1.0).getPid("/ipyros")
+    except (OSError, xmlrpc.client.Error):
         return  # a stale registration: taking the name over is harmless
     raise NodeStateError(f"a node named {name} is already running; give this node another name "
                          "(taking the name would make the master shut the other one down)")

@@ -81,12 +81,9 @@ def ros_master(ros_home):
         os.environ.pop("ROS_HOSTNAME", None)
         yield uri
     finally:
-        proc.terminate()
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+        from topic_nodes import stop
+
+        stop(proc)
 
 
 def _children() -> set[int]:
