@@ -113,6 +113,17 @@ class rosNode:  # noqa: N801 - the paper's name
 
         return set_base(self, package=package)
 
+    def baseLaunch(self, launch: str, node: str) -> "rosNode":  # noqa: N802 - named like baseNode
+        """Wrap the node ``node`` that the launch file ``launch`` starts (``/robot1/planner``).
+
+        Its package, executable, name, namespace, remaps, params and args come from the
+        launch file; ``create()`` runs the rest of the launch file untouched, and this
+        node wrapped where it was. The launch file itself is not edited.
+        """
+        from .wrap import set_launch_base
+
+        return set_launch_base(self, launch, node)
+
     def discover(self, timeout: float = 10.0) -> Any:
         """Run the basenode once, read its topics and services from the master, reuse them all.
 
