@@ -10,8 +10,10 @@ __version__ = "0.1.0"
 
 from .dsl import rosNode  # noqa: E402
 from .errors import IpyrosError  # noqa: E402
+from .savefile import restore, restoring, save_session, spin  # noqa: E402
 
-__all__ = ["rosNode", "IpyrosError", "load_ipython_extension", "unload_ipython_extension"]
+__all__ = ["rosNode", "IpyrosError", "save_session", "restore", "restoring", "spin",
+           "load_ipython_extension", "unload_ipython_extension"]
 
 
 def load_ipython_extension(ipython):  # noqa: D103 - documented in ipyros.extension

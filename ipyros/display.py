@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 
@@ -42,6 +43,31 @@ def node_table(node: "rosNode") -> Table:
     return table
 
 
+class Shown:
+    """Shows itself as its rich rendering: in a terminal as text, in Jupyter as HTML."""
+
+    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
+        printer.text(render_text(self))
+
+    def _repr_html_(self) -> str:
+        return render_html(self)
+
+
+class Rows(Shown):
+    """A sequence of records (``rows``) shown as a table."""
+
+    rows: tuple[Any, ...]
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        return iter(self.rows)
+
+    def __getitem__(self, index: int) -> Any:
+        return self.rows[index]
+
+
 @dataclass(frozen=True)
 class StatusRow:
     kind: str
@@ -55,7 +81,7 @@ class StatusRow:
 
 
 @dataclass(frozen=True)
-class NodeStatus:
+class NodeStatus(Shown):
     """Per handler of a node: calls, rate, handler time and exceptions; rich-renderable."""
 
     node: str
@@ -88,45 +114,26 @@ class NodeStatus:
                           f"{r.max_ms:.3f}", errors)
         return table
 
-    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
-        printer.text(render_text(self))
-
-    def _repr_html_(self) -> str:
-        return render_html(self)
-
 
 @dataclass(frozen=True)
-class History:
-    """A node's changes, oldest first; rich-renderable."""
+class History(Rows):
+    """A node's changes, oldest first (``ipyros.session.Change``); rich-renderable."""
 
     node: str
-    changes: tuple[Any, ...]
-
-    def __len__(self) -> int:
-        return len(self.changes)
-
-    def __iter__(self):  # type: ignore[no-untyped-def]
-        return iter(self.changes)
-
-    def __getitem__(self, index: int) -> Any:
-        return self.changes[index]
+    rows: tuple[Any, ...]
+    path: Any = None  # the file the session writes its history to, if any
 
     def __rich__(self) -> Table:
         import time
 
-        table = Table(title=f"history of {self.node}", title_justify="left")
+        kept = f" (kept in {self.path})" if self.path else ""
+        table = Table(title=f"history of {self.node}{kept}", title_justify="left")
         table.add_column("#", justify="right")
         table.add_column("time")
         table.add_column("change", overflow="fold")
-        for i, change in enumerate(self.changes, 1):
+        for i, change in enumerate(self.rows, 1):
             table.add_row(str(i), time.strftime("%H:%M:%S", time.localtime(change.time)), change.change)
         return table
-
-    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
-        printer.text(render_text(self))
-
-    def _repr_html_(self) -> str:
-        return render_html(self)
 
 
 def render_text(renderable: Any, width: int = 100) -> str:
@@ -153,4 +160,27 @@ def _width(default: int) -> int:
     return max(60, shutil.get_terminal_size((default, 24)).columns)
 
 
-__all__ = ["History", "NodeStatus", "StatusRow", "node_table", "render_text", "render_html"]
+@dataclass(frozen=True)
+class Versions(Rows):
+    """The versions of one handler (``ipyros.versions.HandlerVersion``), oldest first; rich-renderable."""
+
+    label: str  # e.g. "kobuki /cmd_vel"
+    rows: tuple[Any, ...]
+    current: Any  # the number of the version serving now, or None
+
+    def __rich__(self) -> Table:
+        table = Table(title=f"versions of the handler of {self.label}", title_justify="left")
+        for column in ("#", "time", "handler", "lines", "first line of its body"):
+            table.add_column(column, justify="right" if column in ("#", "lines") else "left", overflow="fold")
+        for v in self.rows:
+            mark = " (now)" if v.number == self.current else ""
+            lines = [line.strip() for line in (v.source or "").splitlines() if line.strip()]
+            body = next((line for line in lines[1:] if not line.startswith(("#", '"""', "'''"))),
+                        lines[0] if lines else "no source")
+            table.add_row(f"{v.number}{mark}", v.when, v.name, str(len(lines)), escape(body))
+        if not self.rows:
+            table.add_row("", "", "no versions yet", "", "")
+        return table
+
+
+__all__ = ["History", "Versions", "NodeStatus", "StatusRow", "node_table", "render_text", "render_html"]

@@ -15,17 +15,19 @@ declaration raises a one-line error and changes nothing, neither model nor runni
 from __future__ import annotations
 
 import copy
+import re
 import threading
 from collections.abc import MutableMapping
 from typing import Any, Callable, Iterator, Optional
 
-from . import msgtypes, names, plan as planning, runtime
+from . import msgtypes, names, plan as planning, runtime, versions as versions_mod
 from .errors import (DeclarationError, HandlerError, IpyrosError, MessageTypeError, NodeStateError,
                      NotDeclaredError, TopicTypeConflict)
 from .model import NodeModel, ServiceModel, TimerModel, TopicModel
 from .plan import Spec
 from .session import Session, current
 from .slots import HandlerSlot, call_arity
+from .versions import HandlerVersion
 from .wrap import check_reuse
 
 _UNSET: Any = object()
@@ -49,6 +51,10 @@ class rosNode:  # noqa: N801 - the paper's name
         self._slots: dict[str, HandlerSlot] = {}
         self._live: dict[Spec, Any] = {}  # spec → runtime endpoint
         self._writers: dict[str, tuple[Any, str]] = {}  # topic as typed → (publication, type)
+        self._versions: dict[str, list[HandlerVersion]] = {}  # slot key → every function it was given
+        self._current_version: dict[str, int] = {}  # slot key → number of the version serving it
+        self._reverting: Optional[int] = None  # set while revert() re-declares an old version
+        self._new_version: Optional[tuple[str, HandlerVersion]] = None  # for the next _record
         self._lock = threading.RLock()
         self._base: Any = None  # the basenode process, for wrapping nodes
         self.created = False
@@ -254,19 +260,44 @@ class rosNode:  # noqa: N801 - the paper's name
             return publication, declared
 
     # -- keeping the work ----------------------------------------------------------------
-    def save(self, path: Any) -> Any:
-        """Save the node (model and handler sources) to a YAML file; see :mod:`ipyros.keep`."""
-        from .keep import save
+    def save(self, path: Any, namespace: Optional[dict] = None) -> Any:
+        """Save the node to ``path``: ``.py`` as runnable DSL code, ``.yaml``/``.json`` as its model.
 
-        return save(self, path)
+        The Python file (:mod:`ipyros.savefile`) brings the node back running when run;
+        the model file (:mod:`ipyros.keep`, docs/model.md) is the node model plus handler
+        sources, for tools. Handlers' globals are looked up in ``namespace`` first.
+        """
+        from .keep import MODEL_SUFFIXES, save
+        from .savefile import save_nodes
+
+        suffix = str(path).rsplit(".", 1)[-1].lower() if "." in str(path) else ""
+        if suffix == "py":
+            return save_nodes([self], path, namespace)
+        if suffix in MODEL_SUFFIXES:
+            return save(self, path)
+        raise DeclarationError(f"{path}: say what to save by the suffix: .py (runnable code) "
+                               "or .yaml / .json (the node model)")
 
     @classmethod
     def load(cls, path: Any, namespace: Optional[dict] = None, create: bool = False, *,
              session: Optional[Session] = None) -> "rosNode":
-        """Rebuild a saved node; its handlers are defined in ``namespace`` (in IPython: ``get_ipython().user_ns``)."""
-        from .keep import load
+        """Bring back a node saved by :meth:`save` (``.py`` runs the file; a model file is declared).
 
-        node = load(path, namespace, session=session)
+        Handlers are defined in ``namespace`` (in IPython: ``get_ipython().user_ns``); a
+        ``.py`` file creates the node if it was running when saved; ``create=True`` also
+        creates a node loaded from a model file.
+        """
+        from .keep import load
+        from .savefile import restore
+
+        if str(path).endswith(".py"):
+            nodes = restore(path, namespace)
+            if len(nodes) != 1:
+                raise DeclarationError(f"{path} holds {len(nodes)} nodes ({', '.join(n.name for n in nodes)}); "
+                                       "ipyros.restore(path) brings them all back")
+            node = nodes[0]
+        else:
+            node = load(path, namespace, session=session)
         return node.create() if create else node
 
     def export(self, path: Any, namespace: Optional[dict] = None) -> Any:
@@ -323,6 +354,8 @@ class rosNode:  # noqa: N801 - the paper's name
             for key in drop:
                 self._handlers.pop(key, None)
             for key, (handler, _) in (handlers or {}).items():
+                if self._handlers.get(key) is not handler:
+                    self._add_version(key, handler)
                 self._handlers[key] = handler
             self._takes_argument.update({k: takes for k, (_, takes) in (handlers or {}).items()})
             self._model = new_model
@@ -396,13 +429,98 @@ class rosNode:  # noqa: N801 - the paper's name
         return runtime.ServiceServer(spec.name, msgtypes.resolve_service(spec.type)[1], slot)
 
     def _record(self, change: str) -> None:
-        self._session.record(self.fullname, change)
+        pending, self._new_version = self._new_version, None
+        if pending is None:
+            self._session.record(self.fullname, change)
+            return
+        slot, version = pending
+        if self._reverting is not None:
+            change = f"revert {slot} to version {version.number} ({version.name})"
+        self._session.record(self.fullname, change, slot=slot, version=version.number, handler=version.name,
+                             source=version.source)
+
+    # -- handler versions --------------------------------------------------------------
+    def _add_version(self, slot: str, handler: Callable[..., Any]) -> None:
+        """Note that ``slot`` is now served by ``handler``: a new version, or an old one brought back."""
+        versions = self._versions.setdefault(slot, [])
+        if self._reverting is not None:
+            version = versions[self._reverting - 1]
+        else:
+            version = HandlerVersion(len(versions) + 1, versions_mod.now(), _name_of(handler) or "handler",
+                                     versions_mod.source_of(handler), handler)
+            versions.append(version)
+        self._current_version[slot] = version.number
+        self._new_version = (slot, version)
+
+    def versions(self, what: str) -> Any:
+        """Every function the handler of ``what`` (a topic, timer name or service) was given, oldest first.
+
+        Displays as a table; ``nd.versions("cmd_vel")[0].source`` is the first one's source.
+        """
+        from .display import Versions
+        from .editing import find_target
+
+        target = find_target(self, what)
+        with self._lock:
+            return Versions(f"{self.name} {target.label}", tuple(self._versions.get(target.slot, ())),
+                            self._current_version.get(target.slot))
+
+    def revert(self, what: str, version: int) -> "rosNode":
+        """Serve ``what`` with handler ``version`` again (see :meth:`versions`), live, no message lost."""
+        from .editing import current_handler, find_target, redeclare
+
+        target = find_target(self, what)
+        with self._lock:
+            known = self._versions.get(target.slot, [])
+            if isinstance(version, bool) or not isinstance(version, int) or not 1 <= version <= len(known):
+                raise NotDeclaredError(f"{self.name} {target.label} has versions 1 to {len(known)}, not {version!r}; "
+                                       f"{self.name}.versions({what!r}) lists them")
+            chosen = known[version - 1]
+            if chosen.function is None:
+                namespace = getattr(current_handler(self, target), "__globals__", {})
+                chosen.function = versions_mod.compile_version(chosen, namespace, f"{self.name} {target.label}")
+            self._reverting = version
+            try:
+                redeclare(self, target, chosen.function)
+            finally:
+                self._reverting = None
+        return self
+
+    def restore_versions(self, what: str, versions: list[tuple[str, str]], current: Optional[int] = None) -> "rosNode":
+        """Give the handler of ``what`` its past: every version as ``(time, source)``, oldest first.
+
+        Version ``current`` (default: the last) is the function serving now; the others
+        are kept as source and compiled by :meth:`revert` when chosen, in the namespace
+        of the handler then serving. This is how a saved file brings versions back.
+        """
+        from .editing import current_handler, find_target
+
+        target = find_target(self, what)
+        current = len(versions) if current is None else current
+        if not versions or isinstance(current, bool) or not isinstance(current, int) \
+                or not 1 <= current <= len(versions):
+            raise DeclarationError(f"restore_versions({what!r}): current={current!r} is not one of the "
+                                   f"{len(versions)} versions given")
+        restored = []
+        for number, entry in enumerate(versions, 1):
+            if not (isinstance(entry, (tuple, list)) and len(entry) == 2 and isinstance(entry[1], str)
+                    and entry[1].strip()):
+                raise DeclarationError(f"restore_versions({what!r}): version {number} is not (time, source text)")
+            when, source = entry
+            restored.append(HandlerVersion(number, versions_mod.parse_time(when), _defined_name(source), source))
+        with self._lock:
+            restored[current - 1].function = current_handler(self, target)
+            self._versions[target.slot] = restored
+            self._current_version[target.slot] = current
+        return self
 
     def history(self) -> Any:
         """Every change of this node so far, oldest first (a table in IPython)."""
         from .display import History
 
-        return History(self.fullname, tuple(c for c in self._session.history if c.node == self.fullname))
+        journal = self._session.journal
+        return History(self.fullname, tuple(c for c in self._session.history if c.node == self.fullname),
+                       journal.path if journal else None)
 
     def _report(self, failure: Any) -> None:
         self._session.report(failure)
@@ -629,6 +747,12 @@ def _one_type(msg_type: Any, type_: Any, name: str) -> Any:
         raise MessageTypeError(f"{name}: no message type given; add msgType=... e.g. msgType=Twist "
                                "or msgType='geometry_msgs/Twist'")
     return chosen
+
+
+def _defined_name(source: str) -> str:
+    """The name a handler's source defines: ``def name(...)``, else ``<lambda>``."""
+    match = re.match(r"\s*(?:async\s+)?def\s+(\w+)", source)
+    return match.group(1) if match else "<lambda>"
 
 
 def _name_of(handler: Any) -> Optional[str]:

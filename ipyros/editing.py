@@ -24,6 +24,7 @@ import types
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Mapping, Optional
 
+from . import plan as planning
 from .errors import IpyrosError, NotDeclaredError, TopicNameError
 
 if TYPE_CHECKING:
@@ -36,6 +37,7 @@ class HandlerTarget:
 
     kind: str  # "topic", "timer" or "service"
     name: str  # as declared: the topic/service name as typed, or the timer's name
+    slot: str  # the node's handler slot key (see ipyros.plan): where its versions are kept
 
     @property
     def label(self) -> str:
@@ -52,13 +54,13 @@ def find_target(node: "rosNode", name: str) -> HandlerTarget:
     if resolved is not None:
         topic = model.topic(resolved, "subscribe", "new")
         if topic is not None:
-            return HandlerTarget("topic", topic.name)
+            return HandlerTarget("topic", topic.name, planning.topic_slot(resolved))
         service = next((s for s in model.services if s.resolved == resolved and s.role == "new"), None)
         if service is not None:
-            return HandlerTarget("service", service.name)
+            return HandlerTarget("service", service.name, planning.service_slot(resolved))
     timer = model.timer(name)
     if timer is not None:
-        return HandlerTarget("timer", timer.name)
+        return HandlerTarget("timer", timer.name, planning.timer_slot(timer.name))
     handlers = [f"{t.resolved} ({t.handler})" for t in model.subscriptions() if t.role == "new"]
     handlers += [f"timer {t.name} ({t.handler})" for t in model.timers]
     handlers += [f"service {s.resolved} ({s.handler})" for s in model.services if s.role == "new"]

@@ -31,6 +31,7 @@ import builtins
 import contextlib
 import dis
 import inspect
+import json
 import linecache
 import os
 import re
@@ -38,8 +39,9 @@ import sys
 import tempfile
 import textwrap
 import types
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Optional
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Optional
 
 import yaml
 
@@ -178,6 +180,61 @@ def _is_literal(value: Any) -> bool:
     return type(value) is dict and all(_is_literal(k) and _is_literal(v) for k, v in value.items())
 
 
+@dataclass
+class Bindings:
+    """What handlers need from outside their own source, sorted into what a file can hold.
+
+    For every global a handler reads (:func:`global_names`): an import if its value is
+    importable, an assignment if it is a plain literal, the source if it is a helper
+    function of the user's (whose own globals are bound in turn), else *unbound*, with
+    why, for the caller to report.
+    """
+
+    imports: dict[str, tuple[str, Optional[str]]] = field(default_factory=dict)
+    values: dict[str, str] = field(default_factory=dict)  # name → its assignment line
+    functions: dict[str, str] = field(default_factory=dict)  # name → source defining it
+    unbound: dict[str, str] = field(default_factory=dict)  # name → why it could not be bound
+
+    def has(self, name: str) -> bool:
+        return any(name in d for d in (self.imports, self.values, self.functions, self.unbound))
+
+    def bind(self, fn: types.FunctionType, source: str, namespace: Optional[dict],
+             skip: Callable[[str, Any], bool] = lambda name, value: False) -> None:
+        """Bind the globals of ``fn`` (whose source is ``source``); ``skip(name, value)`` leaves one out."""
+        for name in global_names(source):
+            if self.has(name):
+                continue
+            value = _lookup(name, fn, namespace)
+            if skip(name, value):
+                continue
+            origin = None if value is _MISSING else import_of(value, fn.__module__)
+            if origin is not None:
+                self.imports[name] = origin
+            elif isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
+                helper = handler_source(value, f"helper {name} of {fn.__name__}")
+                self.functions[name] = f"{name} = {helper}" if value.__name__ == "<lambda>" else \
+                    helper if value.__name__ == name else f"{helper}{name} = {value.__name__}\n"
+                self.bind(value, helper, namespace, skip)
+            elif value is not _MISSING and _is_literal(value):
+                self.values[name] = f"{name} = {value!r}"
+            else:
+                self.unbound[name] = (f"used by {fn.__name__}, not defined when saved" if value is _MISSING else
+                                      f"used by {fn.__name__}, a {type(value).__name__}: not a literal, not importable")
+
+    def import_lines(self, skip: Iterable[str] = ()) -> list[str]:
+        """``import m`` lines, then ``from m import a, b`` lines (one per module), sorted."""
+        lines, froms = [], {}
+        for name, (module, attr) in self.imports.items():
+            if name in skip:
+                continue
+            if attr == name:
+                froms.setdefault(module, []).append(name)
+            else:
+                lines.append(import_statement(name, (module, attr)))
+        lines += [f"from {module} import {', '.join(sorted(names))}" for module, names in froms.items()]
+        return sorted(lines, key=lambda line: (line.startswith("from"), line))
+
+
 # -- files ------------------------------------------------------------------------------------
 
 def _write_atomic(path: "str | os.PathLike[str]", text: str, mode: int = 0o644) -> Path:
@@ -211,13 +268,37 @@ _Dumper.add_representer(str, lambda dumper, text: dumper.represent_scalar(
 
 # -- save -------------------------------------------------------------------------------------
 
+MODEL_SUFFIXES = ("yaml", "yml", "json")
+
+
+def handler_sources(nodes: Iterable["rosNode"]) -> dict[tuple[int, str], str]:
+    """``(id(node), slot) → source`` of every handler of ``nodes``.
+
+    A handler without source fails it, and the error names every such handler, so
+    nothing is saved with a handler silently missing.
+    """
+    sources, missing = {}, []
+    for node in nodes:
+        for slot, label in handler_slots(node.model()):
+            fn = node._handlers[slot]
+            try:
+                sources[(id(node), slot)] = handler_source(fn, f"{node.name} {label}")
+            except IpyrosError as error:
+                missing.append(str(error).split("; ")[0])  # names the handler and why
+    if missing:
+        raise IpyrosError(f"nothing saved: {'; '.join(missing)}; define "
+                          f"{'them' if len(missing) > 1 else 'it'} with def (at the prompt or in a file), "
+                          "declare again, then save")
+    return sources
+
+
 def save(node: "rosNode", path: "str | os.PathLike[str]") -> Path:
-    """Save ``node``'s model and its handlers' sources to the YAML file ``path``; return its path."""
+    """Save ``node``'s model and its handlers' sources to ``path`` (YAML, or JSON for ``.json``)."""
     model = node.model()
+    sources = handler_sources([node])
     entries = []
-    for slot, label in handler_slots(model):
-        fn = node._handlers[slot]
-        source = handler_source(fn, f"{node.name} {label}")
+    for slot, _ in handler_slots(model):
+        fn, source = node._handlers[slot], sources[(id(node), slot)]
         origins = {n: import_of(_lookup(n, fn, None), fn.__module__) for n in global_names(source)}
         entry: dict[str, Any] = {"slot": slot, "name": fn.__name__}
         imports = [import_statement(n, o) for n, o in origins.items() if o is not None]
@@ -225,6 +306,8 @@ def save(node: "rosNode", path: "str | os.PathLike[str]") -> Path:
             entry["imports"] = imports
         entries.append({**entry, "source": source})
     data = {FORMAT_KEY: FORMAT, "node": model.to_dict(), "handlers": entries}
+    if str(path).lower().endswith(".json"):
+        return _write_atomic(path, json.dumps(data, indent=2, ensure_ascii=False) + "\n")
     return _write_atomic(path, yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100))
 
 
@@ -248,6 +331,7 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
     except (TypeError, ValueError, AttributeError) as error:
         raise IpyrosError(f"{path}: the node is malformed: {error}") from None
     functions = {entry["slot"]: _define(path, entry, namespace) for entry in data["handlers"]}
+    functions.update(_by_name(path, model, functions, namespace))
     node = rosNode(model.name, namespace=model.namespace, session=session)
     try:
         _declare(node, model, functions)
@@ -259,12 +343,35 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
     return node
 
 
+def _by_name(path: Path, model: NodeModel, functions: dict[str, Any], namespace: dict) -> dict[str, Any]:
+    """Handlers a model file declares without their source: found by name in ``namespace``."""
+    wanted = {slot: name for slot, name in _slot_handlers(model) if slot not in functions}
+    found = {slot: namespace[name] for slot, name in wanted.items() if callable(namespace.get(name))}
+    lacking = sorted({name for slot, name in wanted.items() if slot not in found})
+    if lacking:
+        raise IpyrosError(f"{path} has no source for handler(s) {', '.join(lacking)} and they are not defined here; "
+                          "define them first (def name(msg): ...), then load")
+    return found
+
+
+def _slot_handlers(model: NodeModel) -> Iterator[tuple[str, str]]:
+    """``(slot key, handler name)`` of every handler the model declares."""
+    names = {planning.topic_slot(t.resolved): t.handler for t in model.topics}
+    names.update({planning.service_slot(s.resolved): s.handler for s in model.services})
+    names.update({planning.timer_slot(t.name): t.handler for t in model.timers})
+    for slot, _ in handler_slots(model):
+        yield slot, names[slot] or "?"
+
+
 def _read(path: Path) -> dict:
     """The file's data, checked for shape; every problem is one line naming the file."""
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
     except OSError as error:
         raise IpyrosError(f"cannot read {path}: {error.strerror}") from None
+    except json.JSONDecodeError as error:
+        raise IpyrosError(f"{path} is not valid JSON at line {error.lineno}: {error.msg}") from None
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark else ""
@@ -273,6 +380,7 @@ def _read(path: Path) -> dict:
         raise IpyrosError(f"{path} is not a saved ipyros node (no {FORMAT_KEY}: key); save one with nd.save(path)")
     if data[FORMAT_KEY] != FORMAT:
         raise IpyrosError(f"{path} has format version {data[FORMAT_KEY]!r}, this ipyros reads version {FORMAT}")
+    data.setdefault("handlers", [])  # a model without code: handlers are found by name when loaded
     for key, kind in (("node", dict), ("handlers", list)):
         if not isinstance(data.get(key), kind):
             raise IpyrosError(f"{path}: missing or malformed key {key!r} (a {kind.__name__} is expected)")
@@ -295,7 +403,13 @@ def _define(path: Path, entry: dict, namespace: dict) -> Callable[..., Any]:
                 exec(statement, namespace)  # noqa: S102 - an import line the file names
             except Exception as error:  # noqa: BLE001 - any failure is the file's problem, told in one line
                 raise IpyrosError(f"{what} needs `{statement}`, which fails: {error}") from None
-    filename = f"<ipyros {path.name}: {name}>"
+    return define_function(name, source, namespace, what, f"<ipyros {path.name}: {name}>")
+
+
+def define_function(name: str, source: str, namespace: dict, what: str,
+                    filename: Optional[str] = None) -> Callable[..., Any]:
+    """Run the ``def`` (or lambda expression) ``source`` in ``namespace``; return the function ``name``."""
+    filename = filename or f"<ipyros: {what}>"
     # Kept in linecache like an IPython cell, so inspect.getsource (%handler, save) finds it again.
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
     lambda_ = name == "<lambda>"

@@ -10,11 +10,14 @@ from __future__ import annotations
 import atexit
 import sys
 import threading
+import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Callable, Optional
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Optional
 
 from . import master as master_mod
 from .errors import NodeStateError
+from .journal import Journal
 from .runtime import ProcessNode
 from .slots import HandlerFailure
 
@@ -38,11 +41,19 @@ def print_failure(failure: HandlerFailure) -> None:
 
 @dataclass(frozen=True)
 class Change:
-    """One change a DSL node went through, as it would be typed (``new.subscribe /x [T] -> h``)."""
+    """One change a DSL node went through, as it would be typed (``new.subscribe /x [T] -> h``).
+
+    A change that gives a handler slot a new function also says which slot, the
+    version number it became, and the function's name and source (None if not found).
+    """
 
     time: float
     node: str
     change: str
+    slot: Optional[str] = None
+    version: Optional[int] = None
+    handler: Optional[str] = None
+    source: Optional[str] = None
 
 
 @dataclass
@@ -53,6 +64,8 @@ class SessionConfig:
     start_master: bool = True  # start one on localhost when none answers
     process_node_name: Optional[str] = None  # None: the first node created names it
     keep_recent: int = 20  # messages each subscription keeps for trying a handler on them
+    history_dir: Optional[str] = None  # None: $IPYROS_HISTORY_DIR, else ~/.ipyros/history
+    keep_history: bool = True  # write the history to a file of this session's own as it goes
     announce: Callable[[str], None] = field(default=lambda text: print(text, file=sys.stderr))
 
 
@@ -65,16 +78,32 @@ class Session:
         self.process = ProcessNode()
         self.nodes: dict[str, "rosNode"] = {}  # full name → node, in creation order
         self.history: list[Change] = []  # every change of every node, in order
+        self._journal: Optional[Journal] = None
         self.report: Callable[[HandlerFailure], None] = print_failure
         self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
         self._lock = threading.RLock()
         self.closed = False
 
-    def record(self, node: str, change: str) -> None:
-        """Add a change to the session's history."""
-        import time
+    def record(self, node: str, change: str, **handler: Any) -> Change:
+        """Add a change to the session's history, and to its file (see :mod:`ipyros.journal`)."""
+        entry = Change(time.time(), node, change, **handler)
+        self.history.append(entry)
+        journal = self.journal
+        if journal is not None:
+            try:
+                journal.append(entry)
+            except OSError as error:
+                self.notify(f"ipyros: cannot write the history file in {journal.directory} ({error.strerror or error}); "
+                            "the history is kept in memory only: set SessionConfig.history_dir")
+        return entry
 
-        self.history.append(Change(time.time(), node, change))
+    @property
+    def journal(self) -> Optional[Journal]:
+        """Where the history is written, or None if not kept (``keep_history=False``)."""
+        if self._journal is None and self.config.keep_history:
+            directory = self.config.history_dir
+            self._journal = Journal(Path(directory).expanduser() if directory else None)
+        return self._journal
 
     def notify(self, text: str) -> None:
         """Tell the user something that happened on its own (a basenode died, ...)."""
@@ -124,6 +153,8 @@ class Session:
             self.process.shutdown()
             if self.master is not None:
                 self.master.stop()
+            if self._journal is not None:
+                self._journal.close()
 
 
 _current: Optional[Session] = None

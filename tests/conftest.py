@@ -7,10 +7,13 @@ SIGKILL, the IPython terminal, a Jupyter kernel) start one themselves.
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 import xmlrpc.client
 from pathlib import Path
@@ -22,6 +25,12 @@ sys.path.insert(0, str(HERE))  # tests/helpers.py
 # The test basenodes are a ROS package: found by package + executable, as rosrun finds them.
 os.environ["ROS_PACKAGE_PATH"] = os.pathsep.join(
     p for p in (str(HERE / "nodes"), os.environ.get("ROS_PACKAGE_PATH", "")) if p)
+
+
+# The session history files of the run go to a directory of its own, removed at the end.
+HISTORY_DIR = tempfile.mkdtemp(prefix="ipyros-test-history-")
+os.environ["IPYROS_HISTORY_DIR"] = HISTORY_DIR
+atexit.register(shutil.rmtree, HISTORY_DIR, ignore_errors=True)
 
 
 # Processes that live for the whole run (the master): not leftovers of any one test.

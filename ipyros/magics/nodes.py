@@ -1,4 +1,6 @@
-"""``%handler``, ``%%handler``, ``%try``, ``%status``: working on the handlers of running nodes.
+"""``%handler``, ``%%handler``, ``%try``, ``%versions``, ``%revert``, ``%save_nodes``, ``%load_nodes``, ``%status``.
+
+Working on the handlers of running nodes, and keeping them.
 
 NODE is the variable holding a rosNode (``nd``), or a node's name in this session.
 TOPIC is a subscribed topic as the node names it; a timer's name or a service also
@@ -17,6 +19,7 @@ from rich.table import Table
 from ..dsl import rosNode
 from ..editing import EditWatch, PendingEdit, current_handler, find_target, handler_source, new_functions, redeclare
 from ..errors import IpyrosError
+from ..savefile import restore, save_nodes
 from ..session import current
 from ..tryout import try_candidate
 from .common import ExtensionMagics, evaluate, find_node, split_head
@@ -103,6 +106,67 @@ class NodeMagics(ExtensionMagics):
         node = find_node(self.shell, args.node)
         candidate = evaluate(self.shell, expression, "candidate handler")
         self.ext.printer.show(try_candidate(node, args.topic, candidate, args.last))
+
+    # -- %versions / %revert -------------------------------------------------------------------
+    @magic_arguments()
+    @argument("node", help="the variable holding the rosNode")
+    @argument("topic", help="the subscribed topic (or a timer's name, or a service)")
+    @line_magic
+    def versions(self, line: str) -> None:
+        """Every function the handler of TOPIC on NODE was given, oldest first; (now) marks the live one.
+
+        %revert NODE TOPIC N brings version N back; nd.versions(TOPIC)[N - 1].source is its source.
+        """
+        args = parse_argstring(self.versions, line)
+        self.ext.printer.show(find_node(self.shell, args.node).versions(args.topic))
+
+    @magic_arguments()
+    @argument("node", help="the variable holding the rosNode")
+    @argument("topic", help="the subscribed topic (or a timer's name, or a service)")
+    @argument("version", type=int, help="the version number, as %%versions lists it")
+    @line_magic
+    def revert(self, line: str) -> None:
+        """Serve TOPIC on NODE with handler VERSION again, live (no message lost)."""
+        args = parse_argstring(self.revert, line)
+        node = find_node(self.shell, args.node)
+        node.revert(args.topic, args.version)
+        version = node.versions(args.topic)[args.version - 1]
+        print(f"ipyros: {node.name} {args.topic} is handled by version {args.version} ({version.name}) again")
+
+    # -- %save_nodes / %load_nodes ----------------------------------------------------------------
+    @magic_arguments()
+    @argument("path", help="the file to write: .py (runnable DSL code), or .yaml / .json (one node's model)")
+    @argument("node", nargs="*", help="the variables holding the rosNodes (default: every running node)")
+    @line_magic
+    def save_nodes(self, line: str) -> None:
+        """Save nodes to PATH: the DSL declarations and the source of every handler and helper.
+
+        Run the file to bring them back (python3 PATH, %run PATH, or %load_nodes PATH).
+        """
+        args = parse_argstring(self.save_nodes, line)
+        nodes = [find_node(self.shell, name) for name in args.node] or list(current().nodes.values())
+        if not nodes:
+            raise UsageError("no rosNode is running in this session; name the node to save: %save_nodes PATH nd")
+        if not args.path.endswith(".py"):
+            if len(nodes) != 1:
+                raise UsageError(f"{args.path}: a model file holds one node; name it, or save to a .py file")
+            written = nodes[0].save(args.path, self.shell.user_ns)
+        else:
+            written = save_nodes(nodes, args.path, self.shell.user_ns)
+        print(f"ipyros: saved {', '.join(n.fullname for n in nodes)} to {written}")
+
+    @magic_arguments()
+    @argument("path", help="a file written by %save_nodes or nd.save()")
+    @line_magic
+    def load_nodes(self, line: str) -> None:
+        """Bring back the nodes saved in PATH, running; their handlers land in this namespace (editable)."""
+        args = parse_argstring(self.load_nodes, line)
+        if args.path.endswith(".py"):
+            nodes = restore(args.path, self.shell.user_ns)
+        else:
+            nodes = [rosNode.load(args.path, self.shell.user_ns, create=True)]
+        running = ", ".join(f"{n.fullname} ({'running' if n.created else 'declared'})" for n in nodes)
+        print(f"ipyros: loaded {running or 'no nodes'} from {args.path}")
 
     # -- %status ------------------------------------------------------------------------------
     @magic_arguments()
