@@ -31,7 +31,7 @@ from . import completion, master as master_mod, plan as planning
 from .dsl import rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache
-from .magics import NodeMagics, RosMagics, TopicMagics, WrapMagics
+from .magics import DemoMagics, NodeMagics, RosMagics, TopicMagics, WrapMagics
 from .magics.output import Printer, StderrLogHandler, failure_report, note, note_line
 from .probe import PromptPublisher
 from .session import Session, configure, current
@@ -53,7 +53,8 @@ class Extension:
         self.graph = GraphCache(_slashed(self.settings.master_uri or master_mod.configured_uri()),
                                 period=self.settings.graph_period)
         self.node_magics = NodeMagics(shell, self)
-        self.magics = [self.settings, TopicMagics(shell, self), self.node_magics, WrapMagics(shell, self)]
+        self.magics = [self.settings, TopicMagics(shell, self), self.node_magics, WrapMagics(shell, self),
+                       DemoMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
         self._log_handler = StderrLogHandler()
         self._report = failure_report(lambda: self.settings.handler_tracebacks)

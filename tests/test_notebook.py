@@ -1,37 +1,117 @@
-"""The tour notebook runs top to bottom in a real Jupyter kernel, against the test master."""
+"""Every notebook in notebooks/ runs top to bottom in a fresh Jupyter kernel, and gets the results it should.
+
+Each notebook is executed by nbclient in a real ipykernel (this interpreter, so it sees
+the venv and Debian's rospy) against the test master, as a person would run it:
+the demo robot started with ``%demo``, plots drawn inline (PNG, the Agg renderer).
+Then the checks read what the notebook printed: not only that it ran, but that the
+turtle's circle has the radius v/ω, that the monitor fired after ``speed = 6`` and not
+before, that the base held the robot to 5 m/s. A notebook without checks here fails,
+so a new notebook cannot slip in untested.
+"""
 
 from __future__ import annotations
 
 import re
 import sys
 from pathlib import Path
+from typing import Callable
 
 import nbformat
+import pytest
+from jupyter_client.kernelspec import KernelSpec
 from nbclient import NotebookClient
 
-NOTEBOOK = Path(__file__).resolve().parents[1] / "notebooks" / "tour.ipynb"
+NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
 
 
-def test_the_tour_notebook_runs(ros_master, tmp_path, monkeypatch):
-    nb = nbformat.read(NOTEBOOK, as_version=4)
+def run_notebook(path: Path, master_uri: str, tmp_path: Path, monkeypatch) -> nbformat.NotebookNode:
+    """Execute ``path`` in a fresh kernel on ``master_uri``; the executed notebook."""
+    nb = nbformat.read(path, as_version=4)
     monkeypatch.setenv("IPYTHONDIR", str(tmp_path / "ipython"))
     monkeypatch.setenv("JUPYTER_RUNTIME_DIR", str(tmp_path / "runtime"))
-    # The kernel is this interpreter, so it sees the venv and Debian's rospy.
+    monkeypatch.setenv("MPLBACKEND", "Agg")  # no display here; %matplotlib inline draws with Agg anyway
+    monkeypatch.setenv("IPYROS_HISTORY_DIR", str(tmp_path / "history"))
     client = NotebookClient(nb, timeout=120, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}})
-    client.kernel_manager_class.kernel_cmd = None  # use the kernelspec below
-    from jupyter_client.kernelspec import KernelSpec
-
     spec = KernelSpec(argv=[sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"],
-                      display_name="ipyros", language="python", env={"ROS_MASTER_URI": ros_master})
+                      display_name="ipyros", language="python", env={"ROS_MASTER_URI": master_uri})
     client.km = client.create_kernel_manager()
     client.km._kernel_spec = spec
     client.execute()
-    outputs = {i: cell.get("outputs", []) for i, cell in enumerate(nb.cells) if cell.cell_type == "code"}
-    text = "\n".join(out.get("text", "") or "\n".join(str(v) for v in out.get("data", {}).values())
-                     for cell_outputs in outputs.values() for out in cell_outputs)
-    text = re.sub(r"\x1b\[[0-9;]*m", "", text)  # rich colours text/plain in a kernel; Jupyter renders them
+    return nb
+
+
+def text_of(nb: nbformat.NotebookNode) -> str:
+    """Everything the code cells printed or displayed as text, colours removed."""
+    parts = []
+    for cell in nb.cells:
+        for out in cell.get("outputs", []) if cell.cell_type == "code" else []:
+            parts.append(out.get("text", "") or "\n".join(str(v) for k, v in out.get("data", {}).items()
+                                                           if k.startswith("text/")))
+    return re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(parts))  # rich colours text/plain in a kernel
+
+
+def images(nb: nbformat.NotebookNode) -> int:
+    """How many PNG images the notebook shows (its plots)."""
+    return sum("image/png" in out.get("data", {}) for cell in nb.cells if cell.cell_type == "code"
+               for out in cell.get("outputs", []))
+
+
+def number(pattern: str, text: str) -> tuple[float, ...]:
+    """The numbers ``pattern``'s groups catch in ``text`` (which must match)."""
+    match = re.search(pattern, text)
+    assert match, f"no {pattern!r} in the notebook's output:\n{text}"
+    return tuple(float(g) for g in match.groups())
+
+
+# -- the checks, one function per notebook ---------------------------------------------------
+
+def check_tour(nb: nbformat.NotebookNode, text: str) -> None:
     assert "rosNode /turtle (running) wrapping ipyros_demo/turtle_sim" in text
     assert "rosNode /turtle_control_node (running)" in text
     assert "the turtle is at x=" in text and "x=0.00, y=0.00" not in text
     assert "/turtle1/pose" in text and "geometry_msgs/Pose" in text
     assert "status of /turtle_control_node" in text
+
+
+def check_turtle_circle(nb: nbformat.NotebookNode, text: str) -> None:
+    assert "demo robot turtle (running)" in text
+    for circle, v_over_w in (("1", 2.0 / 1.8), ("2", 2.0 / 3.6)):
+        fitted, printed = number(rf"circle {circle}: radius ([\d.]+) m fitted, v/ω = ([\d.]+) m", text)
+        assert printed == pytest.approx(v_over_w, abs=0.001)
+        assert fitted == pytest.approx(v_over_w, rel=0.05), f"circle {circle}: radius {fitted} m, not v/ω"
+    assert images(nb) == 1, "the trajectory plot is missing"
+    assert "demo robot turtle stopped" in text
+
+
+def check_kobuki(nb: nbformat.NotebookNode, text: str) -> None:
+    assert "demo robot kobuki (running)" in text
+    assert "rosNode /experimental_move_base (running) wrapping ipyros_demo/move_base" in text
+    (relayed,) = number(r"the base is told ([\d.]+) m/s: move_base's own speed, relayed", text)
+    assert relayed == 1.0  # relayVelocity passes move_base's ~speed on
+    assert "before speed = 6: speed_exceeded was [False]" in text, "the monitor fired before speed = 6"
+    (delay,) = number(r"after speed = 6: speed_exceeded went True ([\d.]+) s later", text)
+    assert delay < 2.0
+    top_commanded, top_driven = number(r"top speed: commanded ([\d.]+) m/s, driven ([\d.]+) m/s", text)
+    assert top_commanded == 6.0
+    assert top_driven == pytest.approx(5.0, abs=0.25), "the base did not hold the robot to its 5 m/s limit"
+    assert "speed 6.00 m/s exceeds max_speed 5.00 m/s" in text  # the monitor's own log line
+    assert images(nb) == 1, "the speed plot is missing"
+    assert "demo robot kobuki stopped" in text
+
+
+CHECKS: dict[str, Callable[[nbformat.NotebookNode, str], None]] = {
+    "tour.ipynb": check_tour,
+    "turtle_circle.ipynb": check_turtle_circle,
+    "kobuki.ipynb": check_kobuki,
+}
+
+
+def test_every_notebook_has_checks():
+    found = sorted(p.name for p in NOTEBOOKS.glob("*.ipynb"))
+    assert found == sorted(CHECKS), "a notebook in notebooks/ without checks here, or checks of a notebook gone"
+
+
+@pytest.mark.parametrize("name", sorted(CHECKS))
+def test_the_notebook_runs_and_gets_its_results(name, ros_master, tmp_path, monkeypatch):
+    nb = run_notebook(NOTEBOOKS / name, ros_master, tmp_path, monkeypatch)
+    CHECKS[name](nb, text_of(nb))

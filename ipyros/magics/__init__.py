@@ -3,14 +3,16 @@
 * :class:`RosMagics` (``config.py``): the settings, ``%config RosMagics``;
 * :class:`TopicMagics` (``graph.py``): ``%topics``, ``%echo``, ``%pub``;
 * :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
-* :class:`WrapMagics` (``wrap.py``): ``%wrap``.
+* :class:`WrapMagics` (``wrap.py``): ``%wrap``;
+* :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot.
 
 :mod:`ipyros.extension` creates and registers them; ``%magic?`` shows each one's help.
 """
 
 from .config import RosMagics
+from .demo import DemoMagics
 from .graph import TopicMagics
 from .nodes import NodeMagics
 from .wrap import WrapMagics
 
-__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics"]
+__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics"]
