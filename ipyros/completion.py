@@ -137,7 +137,7 @@ class MagicSpec:
     from ``options`` is a flag, unless ``other_options`` gives the kind of its value.
     """
 
-    positional: tuple[str, ...] = ()
+    positional: tuple[Optional[str], ...] = ()  # None: a word not completed (a path)
     options: Mapping[str, Optional[str]] = field(default_factory=dict)
     other_options: Optional[str] = None
     #: For a positional OWN_TOPIC: which of the node's topics (None: all of them).
@@ -154,6 +154,9 @@ MAGICS: dict[str, MagicSpec] = {
     "pub": MagicSpec((TOPIC, MSG_TYPE), {**_TYPE_OPTIONS, "-r": None, "--rate": None}),
     "try": MagicSpec((DSL_NODE, OWN_TOPIC), {"-n": None, "--last": None}, direction="subscribe"),
     "status": MagicSpec((DSL_NODE,)),
+    "versions": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
+    "revert": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
+    "save_nodes": MagicSpec((None, DSL_NODE, DSL_NODE, DSL_NODE)),
     "wrap": MagicSpec((PACKAGE, EXECUTABLE), {"--as": None, "--name": None, "--namespace": None, "--ns": None},
                       other_options=TOPIC),
 }

@@ -151,6 +151,13 @@ def test_try_and_status_magics_complete_nodes_and_subscriptions(matcher):
     assert "/ct/turtle1/pose" in texts(matcher, "%try nd /ct/turtle1/p")
 
 
+def test_versions_revert_and_save_magics_complete_nodes(matcher):
+    assert texts(matcher, "%versions w") == ["wnode"]
+    assert texts(matcher, "%revert wnode c") == ["cmd_vel"]
+    assert texts(matcher, "%save_nodes lab.py w") == ["wnode"]
+    assert texts(matcher, "%save_nodes lab.py nd w") == ["wnode"]
+
+
 def test_handler_magic_node_then_its_subscriptions(matcher):
     assert texts(matcher, "%handler ") == ["nd", "wnode"]  # variables holding DSL nodes, nothing else
     assert texts(matcher, "%handler w") == ["wnode"]
