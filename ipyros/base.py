@@ -365,7 +365,7 @@ class BaseProcess:
         self.env = {**os.environ, **(env or {}), "PYTHONUNBUFFERED": "1"}  # a Python node's prints reach the log now
         if master_uri:
             self.env["ROS_MASTER_URI"] = master_uri
-        self.log_path = Path(log_path) if log_path else _temp_log(node_name or self.executable.name)
+        self.log_path = Path(log_path) if log_path else temp_log(node_name or self.executable.name)
         self.on_exit = on_exit
         self._run: Optional[_Run] = None
         self._lifecycle = threading.RLock()  # start/stop/restart one at a time
@@ -400,7 +400,7 @@ class BaseProcess:
         return cls(
             path, base.args, node_name=base.node_name, namespace=base.namespace,
             remaps={**base.remaps, **(remaps or {})}, params=base.params,
-            master_uri=master_uri, log_path=log_path, on_exit=on_exit,
+            master_uri=master_uri, log_path=log_path, on_exit=on_exit, env=base.env,
         )
 
     # -- state ---------------------------------------------------------------
@@ -506,8 +506,8 @@ class BaseProcess:
                 self._note(f"on_exit callback failed: {exc!r}")
 
 
-def _temp_log(label: str) -> Path:
-    """A fresh log file in the temp dir, named after the basenode."""
+def temp_log(label: str) -> Path:
+    """A fresh log file in the temp dir, named after the basenode (or what else runs)."""
     fd, path = tempfile.mkstemp(prefix=f"ipyros-{label.strip('/').replace('/', '_')}-", suffix=".log")
     os.close(fd)
     return Path(path)

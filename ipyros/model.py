@@ -55,7 +55,12 @@ class ServiceModel:
 
 @dataclass
 class BaseModel:
-    """The basenode a wrapping node wraps: found as ``rosrun package executable`` finds it."""
+    """The basenode a wrapping node wraps: found as ``rosrun package executable`` finds it.
+
+    A basenode read from a launch file (``baseLaunch``) also keeps ``launch``, the file
+    (absolute, or ``$(find pkg)/...`` as written), and ``launch_node``, its full name in
+    it; its ``env`` comes from the file's ``<env>`` tags.
+    """
 
     executable: Optional[str] = None
     package: Optional[str] = None
@@ -64,6 +69,9 @@ class BaseModel:
     remaps: dict[str, str] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
     args: list[str] = field(default_factory=list)
+    env: dict[str, str] = field(default_factory=dict)
+    launch: Optional[str] = None
+    launch_node: Optional[str] = None
 
 
 @dataclass

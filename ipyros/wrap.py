@@ -1,10 +1,20 @@
 """Wrapping: the DSL side of a node that wraps a basenode (paper section III, figure 1).
 
 Which endpoints run is decided in :mod:`ipyros.plan`. This module resolves base topic
-names the way the basenode will (in its namespace, ``~`` under its name), checks the
-declarations that only make sense together, starts the basenode with its remaps, and
-offers black-box discovery: read a running basenode's interface from the master and
-declare it all as ``reuse`` in one call.
+names the way the basenode will (in its namespace, ``~`` under its name, then through
+its own remaps), checks the declarations that only make sense together, starts the
+basenode with its remaps, and offers black-box discovery: read a running basenode's
+interface from the master and declare it all as ``reuse`` in one call.
+
+A basenode may also come from a launch file (:func:`set_launch_base`, read by
+:mod:`ipyros.launchfile`): then ``create()`` runs the rest of that file too
+(:mod:`ipyros.launch_rest`), and ``nd.base`` stops both.
+
+**One remap per name.** ROS applies at most one remap to a name: no chains. If the
+basenode's own remaps (its launch file's ``<remap>``, or ``baseNode(remaps=...)``) send
+``cmd_vel`` to ``/robot1/base/cmd_vel`` and that is the topic wrapped, the basenode
+must be given ``cmd_vel:=<internal name>`` itself; :func:`basenode_remaps` composes
+the two so.
 """
 
 from __future__ import annotations
@@ -17,7 +27,7 @@ from rosgraph import names as rosnames
 from . import names
 from .errors import BaseNodeError, DeclarationError, TopicTypeConflict
 from .model import BaseModel, NodeModel
-from .plan import base_remaps, internal_name, node_fullname
+from .plan import internal_name, node_fullname
 
 if TYPE_CHECKING:
     from .discovery import Interface
@@ -57,8 +67,33 @@ def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
         if any(d.role == "reuse" and d.name == name for d in declared):
             role = "reuse"
     if role == "reuse" and model.base is not None:
-        return names.resolve(name, base_namespace(model), base_node_name(model.base), kind)
+        resolved = names.resolve(name, base_namespace(model), base_node_name(model.base), kind)
+        return own_remaps(model).get(resolved, resolved)  # the basenode's remaps apply: it talks there
     return names.resolve(name, model.namespace, model.name, kind)
+
+
+def own_remaps(model: NodeModel) -> dict[str, str]:
+    """The basenode's own remaps (launch file or ``baseNode(remaps=...)``), both sides resolved as it resolves them."""
+    if model.base is None:
+        return {}
+    ns, node = base_namespace(model), base_node_name(model.base)
+    return {names.resolve(src, ns, node, "remapped"): names.resolve(dst, ns, node, "remapped")
+            for src, dst in model.base.remaps.items() if not src.startswith("__")}
+
+
+def basenode_remaps(model: NodeModel) -> dict[str, str]:
+    """Every ``from:=to`` the basenode is started with: its own remaps composed with the wrapping's.
+
+    A wrapped name ``T`` (resolved through the own remaps already) goes to its internal
+    name; an own remap ``S:=T`` becomes ``S:=internal(T)``, because ROS would not follow
+    ``S → T → internal(T)``; the other own remaps stay as they are.
+    """
+    wrapped = {t.resolved: internal_name(model, t.resolved) for t in model.topics if t.role == "reuse"}
+    wrapped.update({s.resolved: internal_name(model, s.resolved) for s in model.services if s.role == "reuse"})
+    remaps = {src: wrapped.get(dst, dst) for src, dst in own_remaps(model).items()}
+    for name, inner in wrapped.items():
+        remaps.setdefault(name, inner)
+    return remaps
 
 
 def _reresolve(model: NodeModel) -> None:
@@ -100,6 +135,34 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
     return node
 
 
+def set_launch_base(node: "rosNode", launch: str, node_name: str) -> "rosNode":
+    """Wrap the node ``node_name`` that launch file ``launch`` starts (see :mod:`ipyros.launchfile`).
+
+    The whole basenode comes from the file: package, executable, name, namespace,
+    remaps, private params, args. Like ``baseNode``, the wrapping node lives in the
+    basenode's namespace unless it was given one. Raises :class:`BaseNodeError` for a
+    missing or broken file, a node it does not start, an ambiguous short name, or a
+    node ipyros cannot run as the file says (a remote ``machine=``, ``launch-prefix``).
+    """
+    from .launchfile import read_base
+
+    if node.created:
+        raise DeclarationError(f"{node.name} is already running; declare its basenode before create()")
+    base, notes = read_base(launch, node_name)
+
+    def edit(model: NodeModel) -> None:
+        model.base = base
+        if not node._explicit_namespace:
+            model.namespace = base.namespace or "/"
+        _reresolve(model)
+
+    node._change(edit)
+    node._record(f"baseLaunch({launch!r}, {node_name!r}): {base.package}/{base.executable} as {base.launch_node}")
+    for note in notes:
+        node._session.notify(f"ipyros: {note}")
+    return node
+
+
 def check_reuse(model: NodeModel, resolved: str, direction: str, kind: str = "topic") -> None:
     """A base topic is wrapped once: refuse reuse of it in both directions."""
     if kind != "topic":
@@ -132,7 +195,13 @@ def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # t
 # -- the basenode process ------------------------------------------------------------------
 
 def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
-    """Launch the basenode remapped onto the wrapping node's internal names, and check its types."""
+    """Launch the basenode remapped onto the wrapping node's internal names, and check its types.
+
+    A basenode from a launch file starts after the rest of its file
+    (:class:`~ipyros.launch_rest.LaunchBase`); ``node._base`` holds the one handle
+    whose ``stop()`` stops all of it, set before anything starts, so that the node's
+    shutdown after a failure half-way stops what did start.
+    """
     from .base import BaseProcess, exit_reason
     from .discovery import wait_for_node
 
@@ -140,17 +209,36 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
     if model.base is None:
         return
     session = node._session
-    wrapping = {k: v for k, v in base_remaps(model).items() if k not in model.base.remaps}
+    from_launch = model.base.launch is not None
     base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
-                        "namespace": base_namespace(model)})
+                        "namespace": base_namespace(model), "remaps": basenode_remaps(model),
+                        # from a launch file, the params go on the parameter server as roslaunch puts them
+                        "params": {} if from_launch else model.base.params})
 
     def died(proc: Any, returncode: int, last_lines: list[str]) -> None:
         tail = "\n    ".join(last_lines[-8:])
         session.notify(f"ipyros: basenode {base_fullname(model)} of {node.name} {exit_reason(returncode)}; "
                        f"restart it with {node.name}.base.restart()\n    {tail}")
 
-    process = BaseProcess.from_model(base, remaps=wrapping, master_uri=session.master.uri, on_exit=died)
-    node._base = process.start()
+    process = BaseProcess.from_model(base, master_uri=session.master.uri, on_exit=died)
+    handle: Any = process
+    if from_launch:
+        from .launch_rest import LaunchBase
+
+        launch = model.base.launch
+
+        def rest_died(proc: Any, returncode: int, last_lines: list[str]) -> None:
+            tail = "\n    ".join(last_lines[-8:])
+            session.notify(f"ipyros: the rest of {launch} (run for {node.name}) {exit_reason(returncode)}; "
+                           f"run it again with {node.name}.shutdown() and {node.name}.create()\n    {tail}")
+
+        handle = LaunchBase(model.base, process, node=base_fullname(model), master_uri=session.master.uri,
+                            on_rest_exit=rest_died)
+    node._base = handle
+    handle.start()
+    if getattr(handle, "not_started", None):
+        session.notify(f"ipyros: roslaunch could not start {', '.join(handle.not_started)} of {model.base.launch} "
+                       f"(the rest runs without); why: {node.name}.base.rest.tail()")
     try:
         interface = wait_for_node(session.master.uri, base_fullname(model), timeout=settle_timeout)
     except BaseNodeError:
