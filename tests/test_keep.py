@@ -7,6 +7,7 @@ to the loaded node, export to the script's stand-in object.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import signal
@@ -23,7 +24,7 @@ from std_srvs.srv import Empty, EmptyResponse
 
 from conftest import master_state, wait_for
 
-from ipyros import export, keep, runtime
+from ipyros import export, keep, rosNode, runtime
 from ipyros.errors import IpyrosError
 
 speed = 2.5  # read by showPose when called: exported as a literal
@@ -109,6 +110,27 @@ def test_plain_node_round_trip(make_node, tmp_path):
     assert loaded.handler("/turtle1/pose") is namespace["showPose"] is not showPose
     assert namespace["nd"] is loaded  # the name its handlers write with
     assert keep.save(loaded, tmp_path / "again.yaml").read_text() == text  # the loaded sources are findable too
+
+
+def test_the_model_as_json_round_trips(make_node, tmp_path):
+    nd = turtle_node(make_node)
+    path = nd.save(tmp_path / "turtle.json")
+    data = json.loads(path.read_text())
+    assert data[keep.FORMAT_KEY] == keep.FORMAT and data["node"] == nd.model().to_dict()
+    assert rosNode.load(path, {}).model() == nd.model()
+
+
+def test_a_model_without_handler_sources_takes_them_by_name(make_node, tmp_path):
+    nd = turtle_node(make_node)
+    data = {keep.FORMAT_KEY: keep.FORMAT, "node": nd.model().to_dict()}  # what a model tool would write
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(IpyrosError, match=r"no source for handler\(s\) heartbeat, reset, showPose and they are "
+                                          r"not defined here"):
+        rosNode.load(path, {})
+    namespace = {"showPose": showPose, "heartbeat": heartbeat, "reset": reset}
+    loaded = rosNode.load(path, namespace)
+    assert loaded.model() == nd.model() and loaded.handler("/turtle1/pose") is showPose
 
 
 def test_wrapping_node_round_trip(make_node, tmp_path):
