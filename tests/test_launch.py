@@ -9,6 +9,9 @@ included logger as the file says.
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
 import xmlrpc.client
 from pathlib import Path
 
@@ -219,9 +222,6 @@ def test_base_launch_is_a_declaration(make_node):
 
 def test_the_runner_refuses_to_start_a_master(tmp_path):
     """The rest runs on the session's master only: with none there, the runner says so and starts nothing."""
-    import subprocess
-    import sys
-
     from conftest import free_port
 
     env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{free_port()}/"}
@@ -230,3 +230,52 @@ def test_the_runner_refuses_to_start_a_master(tmp_path):
     assert done.returncode == 2
     assert "ipyros-launch-rest: failed: no ROS master answers at" in done.stdout
     assert not processes_named("controller")
+
+
+def test_the_rest_dies_with_its_runner_and_the_user_is_told(make_node, ros_session):
+    """Even a SIGKILLed runner leaves no node of the rest behind (roslaunch puts each in a session of its own)."""
+    notices: list[str] = []
+    previous, ros_session.notice = ros_session.notice, notices.append
+    try:
+        nd = make_node("runner_kill_wrap").baseLaunch(ROBOT, "planner").create()
+        rest_nodes = processes_named("controller") + processes_named("logger")
+        assert len(rest_nodes) == 2
+        os.kill(nd.base.rest.pid, signal.SIGKILL)
+        wait_for(lambda: not any(map(pid_alive, rest_nodes)), timeout=10, what="the rest's nodes to die with it")
+        wait_for(lambda: any("the rest of" in n and "killed by SIGKILL" in n for n in notices), timeout=10,
+                 what="the news")
+        assert nd.base.running, "the basenode itself keeps running"
+        nd.shutdown()
+    finally:
+        ros_session.notice = previous
+
+
+SCRIPT = """
+import sys
+from ipyros import rosNode
+w = rosNode("orphan_launch_wrap")
+w.baseLaunch(sys.argv[1], "planner").create()
+print("PIDS", w.base.pid, w.base.rest.pid, flush=True)
+if sys.argv[2] == "wait":
+    sys.stdin.read()
+"""
+
+
+@pytest.mark.parametrize("ending", ["exit", "SIGKILL"])
+def test_no_orphan_when_the_interpreter_ends(ros_master, ending):
+    proc = subprocess.Popen([sys.executable, "-c", SCRIPT, ROBOT, "wait" if ending == "SIGKILL" else "exit"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                            env=dict(os.environ))
+    try:
+        line = proc.stdout.readline()  # type: ignore[union-attr]
+        assert line.startswith("PIDS"), line
+        pids = [int(p) for p in line.split()[1:]] + processes_named("controller") + processes_named("logger")
+        assert len(pids) == 4
+        if ending == "SIGKILL":
+            proc.kill()
+        assert proc.wait(30) in (0, -signal.SIGKILL)
+        wait_for(lambda: not any(map(pid_alive, pids)), timeout=15, what=f"everything to stop at {ending}")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
