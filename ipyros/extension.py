@@ -92,10 +92,11 @@ class Extension:
         """Give the session the master settings (keeping the rest); a problem as one line."""
         session = self.session
         uri = self.settings.master_uri or session.config.master_uri
+        # A process node name set on the session already (by a script, by a test) is kept when the trait is unset.
+        name = _global(self.settings.process_node_name) or session.config.process_node_name
         config = dataclasses.replace(session.config, master_uri=_slashed(uri) if uri else None,
                                      start_master=self.settings.start_master, announce=_quiet,
-                                     process_node_name=_global(self.settings.process_node_name),
-                                     keep_recent=self.settings.try_history)
+                                     process_node_name=name, keep_recent=self.settings.try_history)
         try:
             configure(config)
         except IpyrosError as error:  # already attached elsewhere: keep that master

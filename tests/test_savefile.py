@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import json
 import os
+import signal
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -195,3 +198,21 @@ def test_a_file_failing_halfway_leaves_nothing_running(sf, tmp_path):
     assert "restoring half.py, line" in str(error) and "no_such/Type" in str(error)
     assert "stopped /sf_node again" in str(error)
     assert set(session.nodes) == before
+
+
+def test_a_saved_file_runs_as_a_script_until_ctrl_c(sf, tmp_path):
+    ip = sf
+    target = ip.user_ns["nd"].save(tmp_path / "script.py", ip.user_ns)
+    ok(ip, "nd.shutdown()")
+    proc = subprocess.Popen([sys.executable, str(target)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"}, start_new_session=True)
+    try:
+        assert answer(ip, "scripted", timeout=30) == "v1 scripted"
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, out
+    assert "ipyros: running /sf_node; Ctrl-C stops it" in out
