@@ -429,6 +429,9 @@ def define_function(name: str, source: str, namespace: dict, what: str,
 def _declare(node: "rosNode", model: NodeModel, functions: dict[str, Callable[..., Any]]) -> None:
     """Replay ``model`` through the public DSL: base first, then topics, services, timers, params."""
     base = model.base
+    if base is not None and base.launch:  # the launch file says the rest, as it does now
+        node.baseLaunch(base.launch, base.launch_node or base.node_name or "")
+        base = None
     if base is not None and base.executable:
         node.baseNode(base.executable, name=base.node_name, namespace=base.namespace, remaps=base.remaps,
                       params=base.params, args=base.args)

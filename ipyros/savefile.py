@@ -195,9 +195,8 @@ def _base_lines(var: str, model: NodeModel) -> list[str]:
     base = model.base
     if base is None:
         return []
-    launch = getattr(base, "launch", None)
-    if launch:  # a node of a launch file: the launch file says the rest
-        return [f"{var}.baseLaunch({launch!r}, {getattr(base, 'launch_node', None) or base.node_name!r})"]
+    if base.launch:  # a node of a launch file: the launch file says the rest
+        return [f"{var}.baseLaunch({base.launch!r}, {base.launch_node!r})"]
     options = {"name": base.node_name, "namespace": base.namespace, "remaps": base.remaps or None,
                "params": base.params or None, "args": base.args or None}
     text = "".join(f", {k}={v!r}" for k, v in options.items() if v)

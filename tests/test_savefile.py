@@ -18,7 +18,7 @@ import pytest
 from conftest import wait_for
 from shell import error_of, ip, ok  # noqa: F401
 
-from ipyros import journal, savefile
+from ipyros import journal, rosNode, savefile
 from ipyros.errors import IpyrosError
 
 SETUP = '''
@@ -216,3 +216,18 @@ def test_a_saved_file_runs_as_a_script_until_ctrl_c(sf, tmp_path):
             proc.wait()
     assert proc.returncode == 0, out
     assert "ipyros: running /sf_node; Ctrl-C stops it" in out
+
+
+def test_a_node_of_a_launch_file_is_saved_as_baselaunch(make_node, tmp_path):
+    launch = str(Path(__file__).resolve().parent / "launch" / "robot.launch")
+    wrapper = make_node("planner_saved")
+    wrapper.baseLaunch(launch, "/robot1/planner")
+    wrapper.reuse.subscribe("in", type="std_msgs/String")
+    text = wrapper.save(tmp_path / "planner.py").read_text()
+    assert f"planner_saved.baseLaunch({launch!r}, '/robot1/planner')" in text
+    assert "# planner_saved.create()  (it was not running when saved)" in text
+    namespace: dict = {}
+    (restored,) = savefile.restore(tmp_path / "planner.py", namespace)
+    assert restored.model() == wrapper.model() and not restored.created
+    wrapper.save(tmp_path / "planner.yaml")
+    assert rosNode.load(tmp_path / "planner.yaml").model() == wrapper.model()
