@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian bookworm machine (as root):
-#   bash run.sh          install what is missing, then start IPython with ipyros loaded
-#   bash run.sh test     install what is missing, then run the whole test suite
-#   bash run.sh bench    install what is missing, then run the benchmarks
+#   bash run.sh           install what is missing, then start IPython with ipyros loaded and the
+#                         demo turtle running (on the master at ROS_MASTER_URI, started if none answers)
+#   bash run.sh ipython   the same without the demo robot
+#   bash run.sh notebook  the notebooks in Jupyter (installs Jupyter into the venv the first time)
+#   bash run.sh test      install what is missing, then run the whole test suite
+#   bash run.sh bench     install what is missing, then run the benchmarks
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 venv="$here/.venv"
@@ -36,11 +39,36 @@ if [[ ! -f "$stamp" || "$here/pyproject.toml" -nt "$stamp" ]]; then
   touch "$stamp"
 fi
 
-cmd="${1:-ipython}"
+# Jupyter, for the notebook target only (the tests run notebooks without it).
+notebook() {
+  if ! "$venv/bin/python" -c "import notebook" 2>/dev/null; then
+    echo "run.sh: installing Jupyter into $venv" >&2
+    "$venv/bin/pip" install -q --disable-pip-version-check -e "$here[jupyter]" >&2
+  fi
+  # One master for every kernel: each kernel would otherwise start its own, and take it
+  # along when it shuts down. This one stops with the Jupyter server (if it started it).
+  "$venv/bin/python" -c '
+import signal
+from ipyros import master
+signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+handle = master.attach()
+print("run.sh: ipyros:", handle.describe(), flush=True)
+signal.sigwait({signal.SIGINT, signal.SIGTERM})
+handle.stop()' &
+  local master_pid=$!
+  trap 'kill "$master_pid" 2>/dev/null; wait "$master_pid" 2>/dev/null' EXIT
+  local root=()
+  [[ $EUID -ne 0 ]] || root=(--allow-root)  # Jupyter refuses root unless told
+  "$venv/bin/jupyter" notebook --notebook-dir="$here/notebooks" "${root[@]}" "$@"
+}
+
+cmd="${1:-demo}"
 shift || true
 case "$cmd" in
-  ipython) exec "$venv/bin/ipython" --ext ipyros "$@" ;;
-  test)    cd "$here" && exec "$venv/bin/python" -m pytest "$@" ;;
-  bench)   cd "$here" && exec "$venv/bin/python" -m bench "$@" ;;
-  *) echo "usage: bash run.sh [ipython|test|bench] [args...]" >&2; exit 2 ;;
+  demo)     exec "$venv/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
+  ipython)  exec "$venv/bin/ipython" --ext ipyros "$@" ;;
+  notebook) notebook "$@" ;;
+  test)     cd "$here" && exec "$venv/bin/python" -m pytest "$@" ;;
+  bench)    cd "$here" && exec "$venv/bin/python" -m bench "$@" ;;
+  *) echo "usage: bash run.sh [demo|ipython|notebook|test|bench] [args...]" >&2; exit 2 ;;
 esac

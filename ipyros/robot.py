@@ -15,7 +15,9 @@ the master and runs each node itself, as a child process of the session
 (:class:`~ipyros.base.BaseProcess`: a log of its own, stopped by :meth:`DemoRobot.stop`
 and at exit, and killed by the kernel if the interpreter is killed), rather than through
 ``roslaunch``, which would start a master of its own when none answers, and hide which
-node of the set failed.
+node of the set failed. Python nodes run with the session's own interpreter, which can
+import rospy wherever ipyros runs (Debian, a RoboStack environment), whatever their
+``#!`` line says.
 
 One demo robot runs at a time (they share topic names): starting another stops the
 first. Launch arguments are keywords: ``demo_robot("kobuki", planner=True, max_speed=3)``.
@@ -26,6 +28,7 @@ from __future__ import annotations
 import atexit
 import difflib
 import shlex
+import sys
 import threading
 import xml.etree.ElementTree as ET
 import xmlrpc.client
@@ -143,8 +146,9 @@ def read_launch(path: Path, args: Optional[dict[str, Any]] = None) -> tuple[list
     config = ROSLaunchConfig()
     try:
         XmlLoader().load(str(path), config, argv=words, verbose=False)
-    except RLException as error:  # a bad value for an if=, a broken file
-        raise DemoRobotError(f"{path.name}: {str(error).splitlines()[0]}") from None
+    except (RLException, ValueError) as error:  # a broken file; a value an if= or a <param> type refuses
+        raise DemoRobotError(f"{path.name}: {' '.join(str(error).split())}; see its arguments with %demo --list") \
+            from None
     nodes = [LaunchNode(package=n.package, executable=n.type, name=_join(n.namespace, n.name), namespace=n.namespace,
                         args=tuple(shlex.split(n.args or "")), remaps=dict(n.remap_args))
              for n in config.nodes]
@@ -197,7 +201,7 @@ class DemoRobot(Shown):
             if self.processes:
                 return self
             uri = self.master_uri = self.session.attach_master().uri
-            executables = {node.name: find_executable(node.package, node.executable) for node in self.nodes}
+            commands = {node.name: _command(find_executable(node.package, node.executable)) for node in self.nodes}
             for node in self.nodes:
                 _refuse_live_node(uri, node.name, self.kind)
             master = master_proxy(uri)
@@ -205,7 +209,8 @@ class DemoRobot(Shown):
                 master.setParam("/ipyros", name, value)
             try:
                 for node in self.nodes:
-                    process = BaseProcess(executables[node.name], node.args, node_name=node.name.rsplit("/", 1)[1],
+                    executable, *first = commands[node.name]
+                    process = BaseProcess(executable, [*first, *node.args], node_name=node.name.rsplit("/", 1)[1],
                                           namespace=node.namespace if node.namespace != "/" else None,
                                           remaps=node.remaps, master_uri=uri, on_exit=self._died)
                     self.processes[node.name] = process.start()
@@ -264,6 +269,20 @@ class DemoRobot(Shown):
             remaps = ", ".join(f"{a} → {b}" for a, b in node.remaps.items())
             table.add_row(node.name, f"{node.package}/{node.executable}", remaps, how)
         return table
+
+
+def _command(path: Path) -> list[str]:
+    """How to run an executable: a Python script with this interpreter, anything else as it is.
+
+    This interpreter imports rospy (ipyros does), whatever the script's ``#!`` line names:
+    so the demo runs in a conda (RoboStack) environment as well as with Debian's python3.
+    """
+    try:
+        with open(path, "rb") as f:
+            first = f.readline(200)
+    except OSError:
+        first = b""
+    return [sys.executable, str(path)] if first.startswith(b"#!") and b"python" in first else [str(path)]
 
 
 def robot_kind(kind: str) -> RobotKind:
