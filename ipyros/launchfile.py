@@ -208,8 +208,9 @@ def base_model(config: "ROSLaunchConfig", node: "Node", launch: str) -> BaseMode
     )
 
 
-def read_base(launch: str, name: str) -> tuple[BaseModel, list[str]]:
+def read_base(launch: "str | os.PathLike[str]", name: str) -> tuple[BaseModel, list[str]]:
     """Node ``name`` of launch file ``launch`` as a basenode, and notes on what ipyros runs differently."""
+    launch = os.fspath(launch) if isinstance(launch, os.PathLike) else launch
     config = load(launch)
     node = find_node(config, name, launch)
     notes = check_supported(config, node, launch)

@@ -135,7 +135,7 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
     return node
 
 
-def set_launch_base(node: "rosNode", launch: str, node_name: str) -> "rosNode":
+def set_launch_base(node: "rosNode", launch: Any, node_name: str) -> "rosNode":
     """Wrap the node ``node_name`` that launch file ``launch`` starts (see :mod:`ipyros.launchfile`).
 
     The whole basenode comes from the file: package, executable, name, namespace,

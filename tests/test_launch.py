@@ -80,6 +80,7 @@ def test_a_launch_node_read_as_a_basenode(make_node):
     # Short and relative names find the same node; base names resolve through the launch's remaps.
     for name in ("planner", "robot1/planner"):
         assert make_node("planner_reader_" + name.replace("/", "_")).baseLaunch(ROBOT, name).model().base == base
+    assert make_node("planner_reader_path").baseLaunch(Path(ROBOT), "planner").model().base == base
     nd.reuse.publish("out", type=String).subscribe("in", type=String)
     assert {t.name: t.resolved for t in nd.model().topics} == {"out": "/robot1/plan", "in": "/robot1/in"}
 
@@ -279,3 +280,11 @@ def test_no_orphan_when_the_interpreter_ends(ros_master, ending):
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_discovery_of_a_launch_node_finds_its_names_after_the_launch_remaps(make_node):
+    nd = make_node("planner_disc_wrap").baseLaunch(ROBOT, "planner")
+    nd.discover()
+    declared = {(t.name, t.resolved, t.direction) for t in nd.model().topics}
+    assert {("in", "/robot1/in", "subscribe"), ("plan", "/robot1/plan", "publish")} <= declared
+    assert basenode_remaps(nd._model)["/robot1/out"] == "/robot1/planner_disc_wrap/base/robot1/plan"
