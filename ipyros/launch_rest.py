@@ -222,10 +222,11 @@ def _attached_parent(run_id: str, launch: str):
     from .launchfile import fullname
 
     class AttachedParent(ROSLaunchParent):
-        not_started: list[str] = []
+        not_started: list[str]
 
         def _init_runner(self) -> None:
             super()._init_runner()
+            self.not_started = []
             runner = self.runner
             launch_master, launch_node = runner._launch_master, runner.launch_node
 
@@ -238,7 +239,7 @@ def _attached_parent(run_id: str, launch: str):
             def launch_noting(node: Any, core: bool = False) -> Any:
                 proc, success = launch_node(node, core)
                 if not success:
-                    self.not_started = [*self.not_started, fullname(node)]
+                    self.not_started.append(fullname(node))
                 return proc, success
 
             runner._launch_master = attach_only
@@ -280,7 +281,7 @@ def run(launch: str, exclude: str) -> int:
     except (RLException, OSError) as error:
         parent.shutdown()
         return failed(f"roslaunch could not start the rest of {launch}: {error}")
-    if parent.not_started:
+    if getattr(parent, "not_started", None):  # set once roslaunch's runner exists
         print(f"{NOT_STARTED} {', '.join(parent.not_started)}", flush=True)
     names = ", ".join(sorted(launchfile.fullname(n) for n in config.nodes if n.name)) or "no nodes, params only"
     print(f"{READY} {launch} without {exclude}: {names}", flush=True)
@@ -288,7 +289,8 @@ def run(launch: str, exclude: str) -> int:
         # Params only: roslaunch would exit now. Stay until told to stop, so that the
         # session sees the rest "running" as long as the wrapping node runs.
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-        signal.sigwait({signal.SIGINT, signal.SIGTERM})
+        if not parent.pm.is_shutdown:  # a signal that came before the mask went to roslaunch's handler
+            signal.sigwait({signal.SIGINT, signal.SIGTERM})
         parent.shutdown()
         return 0
     parent.spin()  # until SIGINT/SIGTERM (roslaunch's handlers stop the nodes), or a required node dies

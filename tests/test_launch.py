@@ -186,8 +186,8 @@ def test_wrapping_the_only_node_and_a_rest_roslaunch_cannot_start(make_node, ros
     ("$(find no_such_pkg)/robot.launch", "planner", "no ROS package 'no_such_pkg'"),
     (str(LAUNCH / "broken.launch"), "planner", "roslaunch cannot load .*broken.launch: Invalid roslaunch XML syntax"),
     (str(LAUNCH / "needs_arg.launch"), "planner", "requires the 'robot' arg to be set; fix the launch file"),
-    (ROBOT, "/robot1/planer", "starts no node '/robot1/planer': did you mean /robot1/planner.* its nodes: "
-                              "/logger, /robot1/controller, /robot1/planner"),
+    (ROBOT, "/robot1/planer", ("starts no node '/robot1/planer': did you mean /robot1/planner.* its nodes: "
+                               "/logger, /robot1/controller, /robot1/planner")),
     (ROBOT, "navigator", "starts no node 'navigator': its nodes: /logger"),
     (ROBOT, "", "node name '' is empty"),
     (str(LAUNCH / "features.launch"), "relay", "has 2 nodes named 'relay': /left/relay, /right/relay; give the full"),
