@@ -1,20 +1,32 @@
-"""Export a DSL node as a standalone rospy script: the node without ipyros.
+"""Export a DSL node to run without ipyros: one rospy script, or a ROS package with a launch file.
 
 The script walks the same plan the runtime opens (:func:`ipyros.plan.plan`), so the
 script and the live node cannot disagree on wrapping: publishers, subscribers with the
-handlers' sources, AnyMsg relays that forward bytes, timers, services, private params,
-and for a wrapping node the basenode, launched with the same remaps and stopped on exit.
+handlers' sources, AnyMsg relays that forward bytes, timers, services, private params.
 Handler globals are copied in where they can be: imports, plain literals, helper sources.
+
+A wrapping node's basenode runs remapped as ipyros runs it (:func:`ipyros.wrap.basenode_remaps`):
+started and stopped by the script itself in the one-file form (``nd.export("node.py")``),
+or by roslaunch next to the node in the package form (``nd.export("my_node_pkg")``), whose
+launch file a roboticist reads like any other: ``<node>``, ``<remap>``, ``<param>``.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import getpass
+import json
 import os
 import re
+import shlex
 import types
 import warnings
+import xml.etree.ElementTree as ET
 from pathlib import Path
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING, Any, Iterable, Optional
+from xml.sax.saxutils import escape
+
+import yaml
 
 from . import plan as planning
 from .errors import IpyrosError
@@ -87,10 +99,16 @@ def stop_basenode(proc):
 
 
 class _Script:
-    """Collects what the script needs (imports, values, functions) while it is generated."""
+    """Collects what the script needs (imports, values, functions) while it is generated.
 
-    def __init__(self, node: "rosNode", path: "str | os.PathLike[str]", namespace: Optional[dict]) -> None:
+    ``package`` None: one file that does everything, the basenode included. A package name:
+    the script of that package, whose launch file starts the basenode (the script does not).
+    """
+
+    def __init__(self, node: "rosNode", path: "str | os.PathLike[str]", namespace: Optional[dict],
+                 package: Optional[str] = None) -> None:
         self.node, self.model, self.path, self.namespace = node, node.model(), path, namespace
+        self.package = package
         self.imports: dict[str, tuple[str, Optional[str]]] = {"rospy": ("rospy", None)}
         self.values: dict[str, str] = {}  # global name → its assignment line
         self.functions: dict[str, str] = {}  # name in the script → source
@@ -177,27 +195,42 @@ class _Script:
             else:  # ServiceRelaySpec: answer with the basenode's own service
                 srv = self.cls(spec.type, "srv")
                 lines.append(f"rospy.Service({spec.target!r}, {srv}, rospy.ServiceProxy({spec.source!r}, {srv}))")
-        if model.base is None:
+        if not self.starts_base:
             return lines + ["rospy.spin()"]
         return lines + ["basenode = start_basenode()", "try:", "    rospy.spin()", "finally:",
                         "    stop_basenode(basenode)"]
 
+    @property
+    def starts_base(self) -> bool:
+        """Whether the script runs the basenode itself (the single-file export of a wrapping node)."""
+        return self.model.base is not None and self.package is None
+
+    def _docstring(self) -> list[str]:
+        model = self.model
+        run = f"rosrun {self.package} {model.name}" if self.package else f"./{Path(self.path).name}"
+        lines = [f"#!/usr/bin/python3\n\"\"\"{model.name}: a rospy node exported by ipyros from the DSL node "
+                 f"{planning.node_fullname(model)}.\n\nIt needs no ipyros: {run} [from:=to ...] [_param:=value ...]"]
+        if model.base is not None:
+            wrapped = f"{model.base.package}/{model.base.executable}"
+            lines.append(f"It runs its basenode {wrapped} itself, remapped as ipyros ran it, and stops it on exit."
+                         if self.starts_base else
+                         f"Its basenode {wrapped} is started next to it, remapped as ipyros ran it, by\n"
+                         f"roslaunch {self.package} {model.name}.launch (which starts this node too).")
+        return [*lines, '"""']
+
     def render(self) -> str:
         model = self.model
         main = self.main()  # first: it adds the message imports
-        base = _base_argv(model) if model.base is not None else None
-        head = [f"#!/usr/bin/python3\n\"\"\"{model.name}: a rospy node exported by ipyros from the DSL node "
-                f"{planning.node_fullname(model)}.\n\nIt needs no ipyros: ./{Path(self.path).name} "
-                "[from:=to ...] [_param:=value ...]"]
-        if base is not None:
-            wrapped = f"{model.base.package}/{model.base.executable}"  # type: ignore[union-attr]
-            head.append(f"It runs its basenode {wrapped} itself, remapped as ipyros ran it, and stops it on exit.")
-        head.append('"""')
+        base = _base_argv(model) if self.starts_base else None
+        head = self._docstring()
         stdlib = ["os", "signal", "subprocess"] if base else ["os"] if model.namespace != "/" else []
         head += [f"import {m}" for m in stdlib]
-        if model.namespace != "/":
+        if model.namespace != "/" and self.package is None:
             head += ["", "# Before rospy is imported: it reads its namespace then. The names below are resolved in it.",
                      f"os.environ[\"ROS_NAMESPACE\"] = {model.namespace!r}"]
+        elif model.namespace != "/":  # roslaunch's ns= sets ROS_NAMESPACE; rosrun's __ns:= wins over it
+            head += ["", "# Before rospy is imported: it reads its namespace then. The names below are global.",
+                     f"os.environ.setdefault(\"ROS_NAMESPACE\", {model.namespace!r})"]
         head += ["", *_import_lines({n: o for n, o in self.imports.items() if n not in stdlib})]
         if self.values:
             head += ["", "# Globals the handlers read, as they were at export.", *self.values.values()]
@@ -226,30 +259,264 @@ def _import_lines(imports: dict[str, tuple[str, Optional[str]]]) -> list[str]:
     return sorted(lines, key=lambda line: (line.startswith("from"), line))
 
 
-def _base_argv(model: NodeModel) -> list[str]:
-    """The basenode's command line as ipyros launches it (found now; remaps as in plan.base_remaps)."""
-    from .base import BaseProcess
-    from .wrap import base_namespace, base_node_name
+def _placed_base(model: NodeModel) -> BaseModel:
+    """The basenode as ipyros runs it: its name and namespace filled in, its own remaps composed with
+    the wrapping's (:func:`ipyros.wrap.basenode_remaps`, one remap per name)."""
+    from .wrap import base_namespace, base_node_name, basenode_remaps
 
     assert model.base is not None
-    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
-                        "namespace": base_namespace(model)})
-    return BaseProcess.from_model(base, remaps=planning.base_remaps(model), log_path=os.devnull).argv
+    return dataclasses.replace(model.base, node_name=base_node_name(model.base), namespace=base_namespace(model),
+                               remaps=basenode_remaps(model))
+
+
+def _base_argv(model: NodeModel) -> list[str]:
+    """The basenode's command line as ipyros launches it (its executable found now)."""
+    from .base import BaseProcess
+
+    return BaseProcess.from_model(_placed_base(model), log_path=os.devnull).argv
+
+
+# -- the package ----------------------------------------------------------------------------------
+
+# The first line of the comment that marks a package.xml as ipyros's: a later export may replace the
+# package, and only the files that comment lists.
+_MARK = "Exported by ipyros"
+_LISTED = re.compile(r"<!-- " + _MARK + r"\b.*?^\s*files: ([^\n]*)$", re.S | re.M)
+# REP 144: lower case letters, digits and single underscores, starting with a letter.
+_PACKAGE_NAME = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
+
+_CMAKE = """\
+cmake_minimum_required(VERSION 3.0.2)
+project({package})
+
+find_package(catkin REQUIRED)
+catkin_package()
+
+# The node is a Python script: installed with its #! line pointing at the workspace's Python.
+catkin_install_python(PROGRAMS scripts/{node}
+  DESTINATION ${{CATKIN_PACKAGE_BIN_DESTINATION}})
+install(DIRECTORY launch
+  DESTINATION ${{CATKIN_PACKAGE_SHARE_DESTINATION}})
+"""
+
+
+def check_package_name(name: str) -> str:
+    """``name`` if it is a valid ROS package name (REP 144), else a one-line :class:`IpyrosError`."""
+    if len(name) < 2 or not _PACKAGE_NAME.fullmatch(name):
+        raise IpyrosError(f"{name!r} is not a valid ROS package name (lower case letters, digits and single "
+                          "underscores, starting with a letter): export to a directory named like my_robot_node")
+    return name
+
+
+def _dependencies(script: _Script, package: str) -> list[str]:
+    """The ROS packages the exported node needs at run time: rospy, the message and service packages
+    it imports (``pkg.msg``/``pkg.srv``), other imports that are ROS packages, and the basenode's."""
+    from .base import list_packages
+
+    known = set(list_packages())
+    needs = {"rospy"}
+    for module, _attr in script.imports.values():
+        top, _, sub = module.partition(".")
+        if sub in ("msg", "srv") or top in known:
+            needs.add(top)
+    if script.model.base is not None and script.model.base.package:
+        needs.add(script.model.base.package)
+    return sorted(needs - {package})
+
+
+def _maintainer() -> tuple[str, str]:
+    """Who maintains the package: the user, with catkin_create_pkg's placeholder address (``user@todo.todo``)."""
+    try:
+        user = getpass.getuser()
+    except (KeyError, OSError):  # no name for this uid (e.g. in a container)
+        user = "ipyros"
+    return user, re.sub(r"[^-a-zA-Z0-9_%+]", "_", user) + "@todo.todo"
+
+
+def _package_xml(script: _Script, package: str, files: Iterable[str]) -> str:
+    model = script.model
+    user, email = _maintainer()
+    what = f"{model.name}: a rospy node exported by ipyros from the DSL node {planning.node_fullname(model)}"
+    if model.base is not None:
+        what += f", and a launch file that starts it next to its basenode {model.base.package}/{model.base.executable}"
+    depends = "".join(f"  <exec_depend>{dep}</exec_depend>\n" for dep in _dependencies(script, package))
+    return (f'<?xml version="1.0"?>\n'
+            f"<!-- {_MARK} from the DSL node {escape(planning.node_fullname(model))}.\n"
+            f"     Exporting again replaces the package: this file and the files listed here (and only these).\n"
+            f"     files: {' '.join(sorted(files))}\n"
+            f"-->\n"
+            f'<package format="2">\n'
+            f"  <name>{package}</name>\n"
+            f"  <version>0.0.0</version>\n"
+            f"  <description>{escape(what)}.</description>\n"
+            f'  <maintainer email="{escape(email)}">{escape(user)}</maintainer>\n'
+            f"  <license>TODO</license>\n"
+            f"  <buildtool_depend>catkin</buildtool_depend>\n"
+            f"{depends}"
+            f"</package>\n")
+
+
+def _add_params(node: ET.Element, params: dict[str, Any]) -> None:
+    """Private parameters as ``<param>`` (plain scalars) or ``<rosparam>`` (YAML: lists, dicts, and strings
+    that ``<param>`` would change: it strips them and expands ``$(...)`` in them)."""
+    for key, value in params.items():
+        name = key[1:] if key[:1] in ("~", "_") else key  # basenode params may be spelled ~rate or _rate
+        kind = {bool: "bool", int: "int", float: "double", str: "str"}.get(type(value))
+        if kind == "str" and (value != value.strip() or "$(" in value or "\n" in value):
+            kind = None
+        if kind is None:  # a string as JSON: YAML too, and on one line ("a\\nb")
+            text = json.dumps(value) if isinstance(value, str) else \
+                yaml.safe_dump(value, default_flow_style=True, width=1 << 20).strip()
+            ET.SubElement(node, "rosparam", param=name).text = text
+        else:
+            text = ("true" if value else "false") if kind == "bool" else str(value) if kind == "str" else repr(value)
+            ET.SubElement(node, "param", name=name, type=kind, value=text)
+
+
+def _node_element(parent: ET.Element, package: str, executable: str, name: str, namespace: Optional[str],
+                  **attributes: str) -> ET.Element:
+    placed = {"ns": namespace} if namespace and namespace != "/" else {}
+    return ET.SubElement(parent, "node", pkg=package, type=executable, name=name, **placed, output="screen",
+                         **attributes)
+
+
+def _launch_xml(model: NodeModel, package: str) -> str:
+    """The launch file: the exported node with its params, and for a wrapping node its basenode placed and
+    remapped as ipyros runs it (so it talks only to the exported node on the topics it wraps)."""
+    root = ET.Element("launch")
+    wrapping = model.base is not None
+    root.append(_comment(f"{model.name}, exported by ipyros from the DSL node {planning.node_fullname(model)}.",
+                         f"roslaunch {package} {model.name}.launch starts it" +
+                         (" and its basenode, which stops with it (required), as under ipyros." if wrapping else ".")))
+    node = _node_element(root, package, model.name, model.name, model.namespace,
+                         **({"required": "true"} if wrapping else {}))
+    _add_params(node, model.params)
+    if model.base is None:
+        return _xml(root)
+    base = _placed_base(model)
+    if not base.package or not base.executable:
+        raise IpyrosError(f"{model.name}'s basenode has no package, and roslaunch starts nodes by package: "
+                          f"declare it with .basePackage('package') and export again")
+    about = [f"The basenode {base.package}/{base.executable}, remapped onto {model.name}'s internal names:",
+             f"it talks to the rest of the graph only through {model.name}, on the names it wraps."]
+    if base.launch:
+        about += [f"It is {base.launch_node} of {base.launch}, as ipyros wrapped it there.",
+                  "Start the rest of that launch file separately, without this node: roslaunch",
+                  "cannot leave one node of an included file out."]
+    root.append(_comment(*about))
+    bad = next((arg for arg in base.args if "$(" in arg), None)
+    if bad is not None:
+        raise IpyrosError(f"basenode argument {bad!r} holds '$(', which roslaunch would expand: "
+                          "export to a .py script instead, or change the argument")
+    extra = {"args": shlex.join(base.args)} if base.args else {}
+    base_node = _node_element(root, base.package, base.executable, base.node_name, base.namespace, **extra)
+    for name, value in base.env.items():
+        ET.SubElement(base_node, "env", name=name, value=value)
+    for source, target in base.remaps.items():
+        ET.SubElement(base_node, "remap", {"from": source, "to": target})
+    _add_params(base_node, base.params)
+    return _xml(root)
+
+
+def _comment(*lines: str) -> ET.Element:
+    """A comment of the launch file's top level, one line each (``--`` may not stand in a comment)."""
+    return ET.Comment(" " + "\n       ".join(lines).replace("--", "- -") + " ")
+
+
+def _xml(root: ET.Element) -> str:
+    ET.indent(root, space="  ")
+    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _previous_export(directory: Path) -> set[str]:
+    """The files an earlier ipyros export listed in ``directory``; refuse a directory holding anything else."""
+    if not directory.exists():
+        return set()
+    if not directory.is_dir():
+        raise IpyrosError(f"{directory} is a file: export to a directory (a ROS package) or to a .py script")
+    present = {p.relative_to(directory).as_posix() for p in directory.rglob("*") if not p.is_dir()}
+    if not present:
+        return set()
+    try:
+        found = _LISTED.search((directory / "package.xml").read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError):
+        found = None
+    if found is None:
+        shown = ", ".join(sorted(present)[:3]) + (", ..." if len(present) > 3 else "")
+        raise IpyrosError(f"{directory} holds files that ipyros did not export ({shown}): export to a new or empty "
+                          "directory")
+    listed = set(found.group(1).split())
+    foreign = sorted(present - listed - {"package.xml"})
+    if foreign:
+        raise IpyrosError(f"{directory} is an earlier ipyros export, but holds files it did not write "
+                          f"({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''}): move them away, or export "
+                          "to another directory")
+    return listed
+
+
+def export_package(node: "rosNode", directory: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:
+    """Write the ROS package ``directory`` (named after it) that runs ``node`` without ipyros; see :func:`export`."""
+    directory = Path(os.path.abspath(Path(directory).expanduser()))
+    package = check_package_name(directory.name)
+    model = node.model()
+    script_path = directory / "scripts" / model.name
+    script = _Script(node, script_path, namespace, package=package)
+    text = script.render()
+    compile(text, str(script_path), "exec")  # a generated script that does not compile is ipyros's bug
+    files = {f"scripts/{model.name}": (text, 0o755),
+             f"launch/{model.name}.launch": (_launch_xml(model, package), 0o644),
+             "CMakeLists.txt": (_CMAKE.format(package=package, node=model.name), 0o644)}
+    stale = _previous_export(directory) - set(files)
+    try:
+        for folder in ("scripts", "launch"):
+            (directory / folder).mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise IpyrosError(f"cannot create {directory}: {error.strerror}") from None
+    # package.xml first, listing every file that may be there: an export cut short is still replaceable.
+    _write_atomic(directory / "package.xml", _package_xml(script, package, [*files, *stale]))
+    for name, (content, mode) in files.items():
+        _write_atomic(directory / name, content, mode=mode)
+    if stale:
+        for name in stale:
+            (directory / name).unlink(missing_ok=True)
+        _write_atomic(directory / "package.xml", _package_xml(script, package, files))
+    _warn_unset(script, script_path)
+    return directory
 
 
 def export(node: "rosNode", path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:
-    """Write a standalone rospy script (``#!/usr/bin/python3``) that runs ``node`` without ipyros.
+    """Export ``node`` to run without ipyros; return what was written.
+
+    ``path`` ending in ``.py``: one standalone rospy script (``#!/usr/bin/python3``) that
+    does everything, for a wrapping node starting and stopping its basenode itself.
+
+    Any other ``path``: a directory, made a ROS package named after it (drop it into a
+    catkin workspace's ``src/`` or put its parent on ``ROS_PACKAGE_PATH``)::
+
+        package.xml              exec_depend on rospy, the message packages, the basenode's
+        CMakeLists.txt           catkin_make installs the script and the launch file
+        scripts/<node>           the node: rosrun <package> <node>
+        launch/<node>.launch     the node with its params, and its basenode with its remaps
+
+    An existing directory is replaced only if it is an earlier export (its package.xml
+    says so, and it holds nothing else): nobody's own package is overwritten.
 
     Handler globals are looked up in their closure, ``namespace`` (IPython's ``user_ns``)
     and their module: modules and importable names become imports, plain literals become
     assignments, the user's helper functions are copied; anything else becomes
     ``NAME = None  # set me`` and an :class:`ExportWarning` lists them.
     """
+    if Path(path).suffix != ".py":
+        return export_package(node, path, namespace)
     script = _Script(node, path, namespace)
     text = script.render()
     compile(text, str(path), "exec")  # a generated script that does not compile is ipyros's bug: fail here
     written = _write_atomic(path, text, mode=0o755)
+    _warn_unset(script, written)
+    return written
+
+
+def _warn_unset(script: _Script, written: Path) -> None:
     if script.unset:
         warnings.warn(f"ipyros: {written} needs values for {', '.join(script.unset)} (marked '# set me'): "
-                      "they are not plain literals or importable", ExportWarning, stacklevel=2)
-    return written
+                      "they are not plain literals or importable", ExportWarning, stacklevel=3)
