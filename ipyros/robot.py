@@ -322,6 +322,12 @@ def demo_robot(kind: str = "turtle", *, session: Optional[Session] = None, **arg
     returned as it is; another one is stopped first (one runs at a time).
     """
     global _running
+    robot_kind(kind)  # a wrong name is an error at once, even without a master
+    session = session or current()
+    # The master first: extension loading may be starting it on a thread of its own right now.
+    # Reading the launch file imports roslaunch, and a first import while that thread forks can
+    # deadlock (the fork's at-fork hooks against the import lock), so the import waits until it is done.
+    session.attach_master()
     robot = DemoRobot(kind, args, session=session)
     with _running_lock:
         previous = _running

@@ -1,0 +1,91 @@
+"""The README's promise, kept in a real terminal: its first command, then its five lines, and the turtle moves.
+
+``bash run.sh`` runs under tmux exactly as the README says to type it, with a home of
+its own and ``ROS_MASTER_URI`` on a free port where nothing answers: so ipyros starts
+its embedded master there, isolated from the test master and from anyone's roscore.
+The test waits for the demo turtle and the hint, types the README's five lines (read
+from the README itself, so the two cannot drift apart), watches the pose change, and
+exits: the master, rosout and the turtle must all be gone.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import pytest
+from conftest import free_port, wait_for
+from helpers import pid_alive
+from terminal import Terminal, descendants
+from test_terminal import prompt, run
+
+from ipyros.robot import TURTLE_CIRCLE
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The comment above the README's five lines; the ```python block after it holds them.
+MARKER = "<!-- the five lines"
+
+
+def readme_lines() -> list[str]:
+    """The five lines the README tells a new user to type, as they stand in it."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    after = text[text.index(MARKER):]
+    block = re.search(r"```python\n(.*?)```", after, re.S)
+    assert block, f"no ```python block after {MARKER!r} in README.md"
+    return block.group(1).rstrip("\n").split("\n")
+
+
+def test_the_readme_shows_the_lines_the_demo_suggests():
+    assert readme_lines() == list(TURTLE_CIRCLE) and len(TURTLE_CIRCLE) == 5
+
+
+@pytest.fixture
+def readme_terminal(tmp_path):
+    """``bash run.sh`` in tmux, 160x50, on an embedded master of its own; closed (and checked gone) after."""
+    home = tmp_path / "home"
+    home.mkdir()
+    env = {**os.environ, "HOME": str(home), "IPYTHONDIR": str(home / ".ipython"),
+           "ROS_MASTER_URI": f"http://localhost:{free_port()}", "ROS_HOME": str(tmp_path / "ros"),
+           "ROS_LOG_DIR": str(tmp_path / "ros" / "log"), "IPYROS_HISTORY_DIR": str(tmp_path / "history")}
+    for name in ("PYTHONSTARTUP", "COLUMNS", "LINES", "VIRTUAL_ENV"):
+        env.pop(name, None)
+    with Terminal("ipyros_readme", ["bash", str(ROOT / "run.sh")], env, width=160, height=50) as term:
+        yield term
+
+
+def test_the_readme_first_command_and_five_lines_move_the_turtle(readme_terminal):
+    term = readme_terminal
+    # run.sh may have a package to install first (a fresh clone): generous time for the first prompt.
+    term.wait_for(lambda rows: prompt(rows) == (1, "") and rows, timeout=120, what="the first prompt")
+    screen = "\n".join(term.screen(history=True))
+    assert "starting one there" in screen  # nothing answered: ipyros's embedded master
+    assert "demo robot turtle (running)" in screen and "Drive it in a circle" in screen
+    assert all(line in screen for line in TURTLE_CIRCLE)  # the hint is the README's five lines
+
+    for line in readme_lines():
+        run(term, line)
+    assert "rosNode /turtle_control_node (running)" in "\n".join(term.screen(history=True))
+
+    # "poses[-1].position, typed again and again": it changes, away from the origin where the turtle starts.
+    seen: list[tuple[float, float]] = []
+
+    def moved(rows):
+        term.press("C-l")
+        run(term, 'print("AT", poses[-1].position.x, poses[-1].position.y)')
+        found = re.findall(r"^AT (\S+) (\S+)$", "\n".join(term.screen()), re.M)
+        if found:
+            seen.append((float(found[-1][0]), float(found[-1][1])))
+        return len({p for p in seen if p != (0.0, 0.0)}) >= 2
+
+    term.wait_for(moved, timeout=30, what="the turtle to move (two different poses)", interval=0.3)
+    assert all(x * x + (y - 1.111) ** 2 == pytest.approx(1.111 ** 2, rel=0.1) for x, y in seen if (x, y) != (0, 0)), \
+        f"the poses {seen} are not on the circle of radius v/ω around (0, v/ω)"
+
+    # exit: the session stops the turtle, rosout and the master it started.
+    family = descendants(term.pid)
+    assert len(family) >= 3, f"expected the master, rosout and turtle_sim below IPython, found {family}"
+    term.line("exit")
+    term.wait_for(lambda rows: not term.alive() or None, timeout=30, what="IPython to exit")
+    wait_for(lambda: not [pid for pid in {term.pid, *family} if pid_alive(pid)], timeout=15,
+             what="IPython's processes to end")
