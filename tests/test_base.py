@@ -82,7 +82,7 @@ def test_debian_executables_are_found_in_their_libexec_dir():
 def test_packages_on_ros_package_path_and_the_bundled_demo_are_found():
     assert echo_node() == TEST_NODES / "ipyros_test_nodes" / "echo_node"
     assert {"ipyros_test_nodes", "ipyros_demo", "rospy"} <= set(list_packages())
-    assert list_executables("ipyros_demo") == ["move_base", "turtle_sim"]
+    assert list_executables("ipyros_demo") == ["move_base", "speed_monitor", "turtle_sim"]
     assert list_executables("no_such_package") == []
 
 
