@@ -89,8 +89,10 @@ def check_kobuki(nb: nbformat.NotebookNode, text: str) -> None:
     (relayed,) = number(r"the base is told ([\d.]+) m/s: move_base's own speed, relayed", text)
     assert relayed == 1.0  # relayVelocity passes move_base's ~speed on
     assert "before speed = 6: speed_exceeded was [False]" in text, "the monitor fired before speed = 6"
-    (delay,) = number(r"after speed = 6: speed_exceeded went True ([\d.]+) s later", text)
-    assert delay < 2.0
+    # after the first 6 m/s command, not before it (both times are when this kernel saw the messages,
+    # on two threads: a few milliseconds either way are noise, not an early alarm)
+    (delay,) = number(r"after speed = 6: speed_exceeded went True (-?[\d.]+) s after the first 6 m/s command", text)
+    assert -0.05 <= delay < 2.0
     top_commanded, top_driven = number(r"top speed: commanded ([\d.]+) m/s, driven ([\d.]+) m/s", text)
     assert top_commanded == 6.0
     assert top_driven == pytest.approx(5.0, abs=0.25), "the base did not hold the robot to its 5 m/s limit"
