@@ -47,16 +47,23 @@ notebook() {
   fi
   # One master for every kernel: each kernel would otherwise start its own, and take it
   # along when it shuts down. This one stops with the Jupyter server (if it started it).
+  # Ctrl-C is Jupyter's to answer (it asks first): the helper ignores it, and ends on the
+  # SIGTERM of the trap below; its master and rosout get the default SIGINT back, so that
+  # they stop at once when asked.
   "$venv/bin/python" -c '
-import signal
+import signal, threading
 from ipyros import master
-signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+signal.signal(signal.SIGINT, signal.SIG_DFL)
 handle = master.attach()
+signal.signal(signal.SIGINT, signal.SIG_IGN)
 print("run.sh: ipyros:", handle.describe(), flush=True)
-signal.sigwait({signal.SIGINT, signal.SIGTERM})
+stop = threading.Event()
+signal.signal(signal.SIGTERM, lambda *_: stop.set())
+stop.wait()
 handle.stop()' &
   local master_pid=$!
-  trap 'kill "$master_pid" 2>/dev/null; wait "$master_pid" 2>/dev/null' EXIT
+  # Expanded now: master_pid is local, and gone when the trap runs at exit.
+  trap "kill $master_pid 2>/dev/null; wait $master_pid 2>/dev/null" EXIT
   local root=()
   [[ $EUID -ne 0 ]] || root=(--allow-root)  # Jupyter refuses root unless told
   "$venv/bin/jupyter" notebook --notebook-dir="$here/notebooks" "${root[@]}" "$@"
