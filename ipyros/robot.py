@@ -243,7 +243,7 @@ class DemoRobot(Shown):
         """A node of the robot ended without being asked: say so, with its last log lines."""
         tail = "\n    ".join(last_lines[-6:])
         self.session.notify(f"ipyros: demo robot {self.kind}: node {process.node_name} {exit_reason(returncode)}; "
-                            f"start the robot again with %demo --stop, then %demo {self.kind}\n    {tail}")
+                            f"start the robot again with %demo {self.kind}\n    {tail}")
 
     def hint(self) -> str:
         """What to try with this robot, as lines to print."""
