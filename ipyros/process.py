@@ -5,14 +5,21 @@ asks the kernel to send it SIGTERM when its parent dies (``PR_SET_PDEATHSIG``), 
 even a SIGKILLed interpreter leaves no orphan. The death signal is tied to the
 *thread* that forked, so children are spawned from the main thread or from a thread
 that lives as long as the process.
+
+No Python runs in the child between fork and exec: the death signal is set by
+util-linux's ``setpriv --pdeathsig`` exec'ing the program. A ``preexec_fn`` would run
+Python in a child forked while another thread may hold the import lock (a first import
+at the prompt, logging's at-fork hooks), and such a child can deadlock before exec.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
 import ctypes
+import errno
 import os
 import queue
+import shutil
 import signal
 import subprocess
 import threading
@@ -22,8 +29,11 @@ _PR_SET_PDEATHSIG = 1
 _libc = ctypes.CDLL(None, use_errno=True)
 
 
+_SETPRIV = shutil.which("setpriv")
+
+
 def _die_with_parent(parent_pid: int) -> None:
-    # Runs in the child between fork and exec.
+    # Runs in the child between fork and exec; only where setpriv is missing.
     os.setpgid(0, 0)
     _libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
     if os.getppid() != parent_pid:  # the parent died before prctl took effect
@@ -79,10 +89,26 @@ def spawn(argv: Sequence[str], *, env: Optional[dict] = None, log: Optional[int]
     """
     parent = os.getpid()
     out = subprocess.DEVNULL if log is None else log
-    return _launcher.call(lambda: subprocess.Popen(
-        list(argv), env=env, cwd=cwd, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
-        preexec_fn=lambda: _die_with_parent(parent), close_fds=True,
-    ))
+    common: dict[str, Any] = dict(env=env, cwd=cwd, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
+                                  close_fds=True)
+    if _SETPRIV:
+        _check_executable(argv[0], (env or os.environ).get("PATH"))  # setpriv would only exit 126/127
+        command = [_SETPRIV, "--pdeathsig", "TERM", "--", *argv]
+        return _launcher.call(lambda: subprocess.Popen(command, process_group=0, **common))
+    return _launcher.call(lambda: subprocess.Popen(list(argv), preexec_fn=lambda: _die_with_parent(parent), **common))
+
+
+def _check_executable(program: str, path: Optional[str]) -> None:
+    """Raise the ``OSError`` that exec'ing ``program`` would raise: not found, not executable, not a program."""
+    found = program if "/" in program else shutil.which(program, path=path)
+    if found is None or not os.path.isfile(found):
+        raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), program)
+    if not os.access(found, os.X_OK):
+        raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), program)
+    with open(found, "rb") as file:
+        head = file.read(4)
+    if head != b"\x7fELF" and not head.startswith(b"#!"):  # a binary, or a script the kernel can run
+        raise OSError(errno.ENOEXEC, os.strerror(errno.ENOEXEC), program)
 
 
 def stop_process(proc: subprocess.Popen, timeout: float = 5.0) -> Optional[int]:
