@@ -10,9 +10,10 @@ __version__ = "0.1.0"
 
 from .dsl import rosNode  # noqa: E402
 from .errors import IpyrosError  # noqa: E402
+from .robot import demo_robot, stop_demo_robot  # noqa: E402
 from .savefile import restore, restoring, save_session, spin  # noqa: E402
 
-__all__ = ["rosNode", "IpyrosError", "save_session", "restore", "restoring", "spin",
+__all__ = ["rosNode", "IpyrosError", "save_session", "restore", "restoring", "spin", "demo_robot", "stop_demo_robot",
            "load_ipython_extension", "unload_ipython_extension"]
 
 

@@ -58,6 +58,7 @@ DSL_NODE = "DSL node"        # variables in user_ns holding a DSL node
 TIMER = "timer"              # the node's timer names
 PACKAGE = "package"
 EXECUTABLE = "executable"    # executables of the package named by the argument before
+DEMO_ROBOT = "demo robot"    # the robots %demo starts
 
 
 # -- the catalog of installed things ------------------------------------------------
@@ -157,6 +158,7 @@ MAGICS: dict[str, MagicSpec] = {
     "versions": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
     "revert": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
     "save_nodes": MagicSpec((None, DSL_NODE, DSL_NODE, DSL_NODE)),
+    "demo": MagicSpec((DEMO_ROBOT,)),
     "wrap": MagicSpec((PACKAGE, EXECUTABLE), {"--as": None, "--name": None, "--namespace": None, "--ns": None},
                       other_options=TOPIC),
 }
@@ -453,6 +455,10 @@ class Answerer:
             return [(t, kind) for t in _types(self.catalog.service_types(), frag)]
         if kind == PACKAGE:
             return [(p, kind) for p in names_with_prefix(self.catalog.packages(), frag)]
+        if kind == DEMO_ROBOT:
+            from .robot import ROBOTS
+
+            return [(n, kind) for n in ROBOTS if n.startswith(frag)]
         if kind == EXECUTABLE and want.package:
             return [(e, kind) for e in names_with_prefix(self.catalog.executables(want.package), frag)]
         return []

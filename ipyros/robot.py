@@ -336,6 +336,7 @@ def demo_robot(kind: str = "turtle", *, session: Optional[Session] = None, **arg
         if previous is not None:
             previous.stop()
         _running = robot
+    session.on_close(stop_demo_robot)  # an explicit session.close() stops it too, before the master
     return robot.start()
 
 

@@ -79,6 +79,7 @@ class Session:
         self.nodes: dict[str, "rosNode"] = {}  # full name → node, in creation order
         self.history: list[Change] = []  # every change of every node, in order
         self._journal: Optional[Journal] = None
+        self._on_close: list[Callable[[], None]] = []
         self.report: Callable[[HandlerFailure], None] = print_failure
         self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
         self._lock = threading.RLock()
@@ -139,12 +140,22 @@ class Session:
             if self.nodes.get(node.fullname) is node:
                 del self.nodes[node.fullname]
 
+    def on_close(self, stop: Callable[[], None]) -> None:
+        """Have ``stop`` run first when the session closes (things started beside the nodes: the demo robot)."""
+        if stop not in self._on_close:
+            self._on_close.append(stop)
+
     def close(self) -> None:
         """Stop every node and basenode, the process node, and the master if we started it."""
         with self._lock:
             if self.closed:
                 return
             self.closed = True
+            for stop in reversed(self._on_close):
+                try:
+                    stop()
+                except Exception as error:  # keep closing the rest
+                    print(f"ipyros: error while closing: {error}", file=sys.stderr)
             for node in reversed(list(self.nodes.values())):
                 try:
                     node.shutdown()

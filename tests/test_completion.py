@@ -156,6 +156,7 @@ def test_versions_revert_and_save_magics_complete_nodes(matcher):
     assert texts(matcher, "%revert wnode c") == ["cmd_vel"]
     assert texts(matcher, "%save_nodes lab.py w") == ["wnode"]
     assert texts(matcher, "%save_nodes lab.py nd w") == ["wnode"]
+    assert texts(matcher, "%demo k") == ["kobuki"]
 
 
 def test_handler_magic_node_then_its_subscriptions(matcher):
