@@ -71,6 +71,12 @@ def check_tour(nb: nbformat.NotebookNode, text: str) -> None:
     assert "the turtle is at x=" in text and "x=0.00, y=0.00" not in text
     assert "/turtle1/pose" in text and "geometry_msgs/Pose" in text
     assert "status of /turtle_control_node" in text
+    assert "versions of the handler of turtle_control_node /turtle1/pose" in text
+    assert "live handler: showPose version 1" in text
+    assert "ipyros: saved /turtle_control_node to" in text and "with restoring():" in text
+    assert "ipyros: loaded /turtle_control_node (running)" in text
+    restored, versions = number(r"poses since the restore: (\d+) \| handler versions: (\d+)", text)
+    assert restored > 5 and versions == 2, "the restored node does not get poses, or lost a handler version"
 
 
 def check_turtle_circle(nb: nbformat.NotebookNode, text: str) -> None:
