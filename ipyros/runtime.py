@@ -15,6 +15,7 @@ Performance choices (measured in bench/relay.py):
 
 from __future__ import annotations
 
+import copy
 import os
 import struct
 import threading
@@ -123,16 +124,36 @@ class Publication:
 
 
 class Subscription:
-    """A typed subscriber whose callback is a :class:`HandlerSlot`."""
+    """A typed subscriber whose callback is a :class:`HandlerSlot`.
+
+    rospy deserialises a message once per process and hands the same object to every
+    callback of the topic. Nodes in separate processes each get their own copy, and
+    handlers are written for that (the paper's ``controlVelocity`` edits ``data`` in
+    place and publishes it): so while several subscriptions of this session share a
+    topic, each gets a copy of its own. Alone on it, a handler gets the message itself.
+    """
+
+    _sharing: dict[str, int] = {}  # topic → subscriptions of this process on it
+    _sharing_lock = threading.Lock()
 
     def __init__(self, topic: str, cls: type, slot: HandlerSlot) -> None:
         self.topic, self.cls, self.slot = topic, cls, slot
-        self._sub = rospy.Subscriber(topic, cls, slot, queue_size=None, buff_size=_BUFF_SIZE, tcp_nodelay=True)
+        self._sub = rospy.Subscriber(topic, cls, self._deliver, queue_size=None, buff_size=_BUFF_SIZE,
+                                     tcp_nodelay=True)
+        with self._sharing_lock:
+            self._sharing[topic] = self._sharing.get(topic, 0) + 1
+
+    def _deliver(self, msg: Any) -> None:
+        self.slot(copy.deepcopy(msg) if self._sharing.get(self.topic, 0) > 1 else msg)
 
     def connections(self) -> int:
         return self._sub.get_num_connections()
 
     def close(self) -> None:
+        with self._sharing_lock:
+            self._sharing[self.topic] -= 1
+            if not self._sharing[self.topic]:
+                del self._sharing[self.topic]
         self._sub.unregister()
 
 

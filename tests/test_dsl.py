@@ -23,6 +23,24 @@ def test_two_nodes_share_the_process_node(make_node, ros_master):
     assert pubs["/dsl_shared/a"] == ["/ipyros_test"] and pubs["/dsl_shared/b"] == ["/ipyros_test"]
 
 
+def test_nodes_of_one_session_on_one_topic_each_get_their_own_message(make_node):
+    """As nodes in separate processes would: a handler that edits its message in place (the paper's
+    controlVelocity) must not change what another node of the session sees."""
+    edited, watched = [], []
+
+    def edit(msg):
+        msg.data = "edited"
+        edited.append(msg.data)
+
+    make_node("dsl_editor").new.subscribe("/dsl_shared_msg", handler=edit, msgType=String).create()
+    make_node("dsl_watcher").new.subscribe("/dsl_shared_msg", handler=lambda m: watched.append(m.data),
+                                          msgType=String).create()
+    talker = make_node("dsl_shared_talker").new.publish("/dsl_shared_msg", msgType=String).create()
+    wait_for(lambda: talker.write("/dsl_shared_msg", String("original")) or (edited and watched),
+             interval=0.1, what="both handlers called")
+    assert set(watched) == {"original"}
+
+
 def test_a_second_running_node_with_the_same_name_is_refused(make_node):
     make_node("dsl_twin").create()
     with pytest.raises(errors.NodeStateError, match="already running in this session"):
