@@ -30,8 +30,7 @@ import yaml
 
 from . import plan as planning
 from .errors import IpyrosError
-from .keep import (_MISSING, _WRITER, _is_literal, _lookup, _write_atomic, global_names, handler_slots,
-                   handler_source, import_of, import_statement)
+from .keep import _WRITER, Bindings, _write_atomic, handler_slots, handler_source, import_of
 from .model import BaseModel, NodeModel
 from .slots import call_arity
 
@@ -47,7 +46,7 @@ class ExportWarning(UserWarning):
 
 # Names the generated script defines itself; a handler global with one of them would clash.
 _SCRIPT_NAMES = {"rospy", "os", "signal", "subprocess", "NodeHandle", "relay", "main", "BASENODE",
-                 "start_basenode", "stop_basenode"}
+                 "BASENODE_ENV", "start_basenode", "stop_basenode"}
 
 _HANDLE = '''
 class NodeHandle:
@@ -80,7 +79,7 @@ def relay(source, target, msg_class):
 _BASE = '''
 def start_basenode():
     """Run the wrapped node as a child, in its own process group (so it is stopped as a whole)."""
-    proc = subprocess.Popen(BASENODE, start_new_session=True)
+    proc = subprocess.Popen(BASENODE, env={**os.environ, **BASENODE_ENV}, start_new_session=True)
     print(f"started basenode {BASENODE[0]} (pid {proc.pid})", flush=True)
     return proc
 
@@ -109,15 +108,18 @@ class _Script:
                  package: Optional[str] = None) -> None:
         self.node, self.model, self.path, self.namespace = node, node.model(), path, namespace
         self.package = package
-        self.imports: dict[str, tuple[str, Optional[str]]] = {"rospy": ("rospy", None)}
-        self.values: dict[str, str] = {}  # global name → its assignment line
-        self.functions: dict[str, str] = {}  # name in the script → source
+        # The handlers' sources go in with their globals: a global named like a handler is that handler.
+        self.bindings = Bindings(imports={"rospy": ("rospy", None)})
+        self.imports = self.bindings.imports  # message classes join the handlers' imports
         self.names: dict[str, str] = {}  # slot → the handler's name in the script
-        self.unset: list[str] = []
+        self.unset: dict[str, str] = {}  # global name → its "set me" line
         sources = {slot: self._handler(slot, f"{node.name} {label}") for slot, label in handler_slots(self.model)}
         self.writers = sorted({w for src in sources.values() for w in _WRITER.findall(src)}) or ["this_node"]
         for slot, label in handler_slots(self.model):
-            self._globals(node._handlers[slot], sources[slot])
+            fn = node._handlers[slot]
+            self.bindings.bind(fn, sources[slot], namespace, skip=lambda name, value, fn=fn: self._skip(fn, name, value))
+            for name in [n for n in self.bindings.unbound if n not in self.unset]:
+                self.unset[name] = f"{name} = None  # set me: used by handler {fn.__name__}"
 
     def _handler(self, slot: str, label: str) -> str:
         fn = self.node._handlers[slot]
@@ -126,37 +128,25 @@ class _Script:
         if name == "<lambda>":  # a name of its own: on_turtle1_pose, timer_tick, ...
             name = re.sub(r"\W+", "_", slot.replace("topic ", "on ", 1)).strip("_")
             source = f"{name} = {source}"
-        if self.functions.get(name, source) != source:
+        functions = self.bindings.functions
+        if functions.get(name, source) != source:
             raise IpyrosError(f"two different handlers of {self.node.name} are named {name}; "
                               "rename one (def another_name(msg): ...) and declare it again")
-        self.functions[name], self.names[slot] = source, name
+        functions[name], self.names[slot] = source, name
         return source
 
-    def _globals(self, fn: types.FunctionType, source: str) -> None:
-        """Bind every global ``source`` reads: an import, a literal, a helper function, or a set-me."""
-        for name in global_names(source):
-            if self._taken(name) or name in self.imports:
-                continue
-            value = _lookup(name, fn, self.namespace)
-            origin = None if value is _MISSING else import_of(value, fn.__module__)
-            if name in _SCRIPT_NAMES and origin != (name, None):
-                raise IpyrosError(f"handler {fn.__name__} uses the global {name}, a name the exported script "
-                                  "needs for itself; rename it")
-            if origin is not None:
-                self.imports[name] = origin
-            elif isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
-                helper = handler_source(value, f"helper {name} of {fn.__name__}")
-                self.functions[name] = f"{name} = {helper}" if value.__name__ == "<lambda>" else \
-                    helper if value.__name__ == name else f"{helper}{name} = {value.__name__}\n"
-                self._globals(value, helper)
-            elif value is not _MISSING and _is_literal(value):
-                self.values[name] = f"{name} = {value!r}"
-            else:
-                self.values[name] = f"{name} = None  # set me: used by handler {fn.__name__}"
-                self.unset.append(name)
+    def _skip(self, fn: types.FunctionType, name: str, value: Any) -> bool:
+        """Globals the script binds itself: the node the handlers write with; refuse one it needs for itself."""
+        if name in self.writers:
+            return True
+        if name in _SCRIPT_NAMES and import_of(value, fn.__module__) != (name, None):
+            raise IpyrosError(f"handler {fn.__name__} uses the global {name}, a name the exported script "
+                              "needs for itself; rename it")
+        return False
 
     def _taken(self, name: str) -> bool:
-        return name in self.writers or name in self.functions or name in self.values
+        """Whether ``name`` means something else than an import in the script."""
+        return name in self.writers or (self.bindings.has(name) and name not in self.imports)
 
     def cls(self, type_name: str, kind: str = "msg") -> str:
         """The script's name for a message/service class, imported once (``pkg_Type`` if taken)."""
@@ -231,32 +221,22 @@ class _Script:
         elif model.namespace != "/":  # roslaunch's ns= sets ROS_NAMESPACE; rosrun's __ns:= wins over it
             head += ["", "# Before rospy is imported: it reads its namespace then. The names below are global.",
                      f"os.environ.setdefault(\"ROS_NAMESPACE\", {model.namespace!r})"]
-        head += ["", *_import_lines({n: o for n, o in self.imports.items() if n not in stdlib})]
-        if self.values:
-            head += ["", "# Globals the handlers read, as they were at export.", *self.values.values()]
+        head += ["", *self.bindings.import_lines(skip=stdlib)]
+        values = [*self.bindings.values.values(), *self.unset.values()]
+        if values:
+            head += ["", "# Globals the handlers read, as they were at export.", *values]
         parts = ["\n".join(head), _HANDLE.strip("\n"), f"{' = '.join(self.writers)} = NodeHandle()"]
         if base is not None:
             parts.append("# The basenode, remapped so that it talks only to this node on the topics it wraps.\n"
-                         "BASENODE = [\n" + "".join(f"    {arg!r},\n" for arg in base) + "]")
+                         "BASENODE = [\n" + "".join(f"    {arg!r},\n" for arg in base) + "]\n"
+                         f"BASENODE_ENV = {self.model.base.env!r}  # its launch file's <env> tags, if any")
             parts.append(_BASE.strip("\n"))
         if any(isinstance(s, planning.RelaySpec) for s in planning.plan(model)):
             parts.append(_RELAY.strip("\n"))
-        parts += [src.rstrip("\n") for src in self.functions.values()]
+        parts += [src.rstrip("\n") for src in self.bindings.functions.values()]
         parts.append("def main():\n" + "".join(f"    {line}\n" for line in main).rstrip("\n"))
         parts.append('if __name__ == "__main__":\n    main()')
         return "\n\n\n".join(parts) + "\n"
-
-
-def _import_lines(imports: dict[str, tuple[str, Optional[str]]]) -> list[str]:
-    """``import m`` lines, then ``from m import a, b`` lines (one per module), sorted."""
-    lines, froms = [], {}
-    for name, (module, attr) in imports.items():
-        if attr == name:
-            froms.setdefault(module, []).append(name)
-        else:
-            lines.append(import_statement(name, (module, attr)))
-    lines += [f"from {module} import {', '.join(sorted(names))}" for module, names in froms.items()]
-    return sorted(lines, key=lambda line: (line.startswith("from"), line))
 
 
 def _placed_base(model: NodeModel) -> BaseModel:

@@ -15,7 +15,6 @@ import re
 import signal
 import subprocess
 import threading
-import xmlrpc.client
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Iterator
@@ -140,7 +139,7 @@ def check_wrapper(make_node, ns: str, output: Output) -> None:
     wait_for(lambda: tick, timeout=10, what="the timer's message")
 
     base = f"{ns}/echo_node"
-    assert node_uri(base), "the basenode runs at its own name"
+    assert listed(base), "the basenode runs at its own name"
     assert base in master_state(os.environ["ROS_MASTER_URI"])["sub"][f"{ns}/export_wrapper/base{ns}/in"]
     assert runtime.get_param(f"{ns}/export_wrapper") == {"volume": 11, "mode": "loud"}
     assert runtime.get_param(f"{base}/exit_after") == 0
@@ -150,9 +149,13 @@ def check_wrapper(make_node, ns: str, output: Output) -> None:
     wait_for(printed(output, "reset"), timeout=10, what="echo_node to print reset")
 
 
-def node_uri(name: str) -> str | None:
-    code, _, uri = xmlrpc.client.ServerProxy(os.environ["ROS_MASTER_URI"]).lookupNode("/test_export", name)
-    return uri if code == 1 else None
+def listed(node: str) -> bool:
+    """Whether ``rosnode list`` would list ``node``: it has a publication, subscription or service.
+
+    (Not the master's lookupNode, which can keep a name whose registrations are all gone.)
+    """
+    return any(node in nodes for kind in master_state(os.environ["ROS_MASTER_URI"]).values()
+               for nodes in kind.values())
 
 
 def test_live_nodes_pass_the_checks(make_node, ros_master, capsys):
@@ -239,7 +242,7 @@ def assert_stops_everything(run: Run, *nodes: str) -> None:
     for name, pid in pids.items():
         wait_for(lambda pid=pid: not pid_alive(pid), timeout=10, what=f"{name} (pid {pid}) to end")
     for node in nodes:
-        assert node_uri(node) is None, f"{node} is still registered"
+        assert not listed(node), f"{node} is still registered"
 
 
 def test_exported_plain_package_runs_under_roslaunch(make_node, tmp_path, ros_master, no_ipyros):
@@ -278,6 +281,23 @@ def test_exported_wrapper_package_starts_its_basenode_under_roslaunch(make_node,
     assert "echo_node shut down" in launch.lines  # stopped by SIGINT, so it unregistered
 
 
+def test_the_basenode_stops_with_the_exported_node(make_node, tmp_path, ros_master, no_ipyros):
+    """As under ipyros, the basenode does not outlive its wrapper: the launch file marks the node required."""
+    ns = "/required_wrapper"
+    export.export(wrapper_node(make_node, ns), tmp_path / "required_pkg")
+    with running(["roslaunch", "required_pkg", "export_wrapper.launch"], export_env(tmp_path, no_ipyros)) as launch:
+        pids = wait_for(lambda: len(launch.started()) == 2 and launch.started(), timeout=30, what="both nodes")
+        # Both well into their spin: rospy can deadlock on a SIGINT that lands while it registers.
+        wait_for(printed(lambda: launch.lines, "echo_node ready"), timeout=30, what="echo_node to be up")
+        driver, heard = world(make_node, ns, {f"{ns}/chatter": String}, {f"{ns}/loud": String})
+        wait_for(lambda: driver.write(f"{ns}/chatter", String("hey")) or heard[f"{ns}/loud"], timeout=30,
+                 what=f"the wrapper to answer (output: {launch.lines[-5:]})")
+        os.kill(pids[f"{ns[1:]}/export_wrapper"], signal.SIGINT)  # the wrapper alone ends
+        assert launch.proc.wait(30) == 0, launch.lines[-10:]
+        wait_for(lambda: not pid_alive(pids[f"{ns[1:]}/echo_node"]), timeout=10, what="the basenode to end")
+    assert not listed(f"{ns}/echo_node")
+
+
 def test_exported_plain_node_runs_with_rosrun(make_node, tmp_path, ros_master, no_ipyros):
     """rosrun, without the launch file: the script sets its params' defaults, a _param:= given wins."""
     ns = "/rosrun_plain"
@@ -285,7 +305,7 @@ def test_exported_plain_node_runs_with_rosrun(make_node, tmp_path, ros_master, n
     with running(["rosrun", "rosrun_pkg", "export_plain", "_gain:=4.0"], export_env(tmp_path, no_ipyros)) as run:
         check_plain(make_node, ns, lambda: run.lines, gain=4.0)
         assert run.interrupt() == 0, run.lines[-10:]
-    assert node_uri(f"{ns}/export_plain") is None
+    assert not listed(f"{ns}/export_plain")
 
 
 # -- the files, read by ROS's own tools ---------------------------------------------------------------
@@ -374,7 +394,7 @@ def test_an_earlier_export_is_replaced(make_node, tmp_path):
     export.export(plain_node(make_node, "/again"), target)
     other = make_node("other_node")
     other.new.publish("/again/x", msgType=String)
-    export.export(other, target)
+    assert other.export(target) == target  # the DSL method, the same export
     files = sorted(p.relative_to(target).as_posix() for p in target.rglob("*") if p.is_file())
     assert files == ["CMakeLists.txt", "launch/other_node.launch", "package.xml", "scripts/other_node"]
     assert "files: CMakeLists.txt launch/other_node.launch scripts/other_node\n" in \
