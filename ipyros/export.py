@@ -106,8 +106,7 @@ class _Script:
 
     def __init__(self, node: "rosNode", path: "str | os.PathLike[str]", namespace: Optional[dict],
                  package: Optional[str] = None) -> None:
-        self.node, self.model, self.path, self.namespace = node, node.model(), path, namespace
-        self.package = package
+        self.node, self.model, self.path, self.package = node, node.model(), path, package
         # The handlers' sources go in with their globals: a global named like a handler is that handler.
         self.bindings = Bindings(imports={"rospy": ("rospy", None)})
         self.imports = self.bindings.imports  # message classes join the handlers' imports
@@ -115,9 +114,10 @@ class _Script:
         self.unset: dict[str, str] = {}  # global name → its "set me" line
         sources = {slot: self._handler(slot, f"{node.name} {label}") for slot, label in handler_slots(self.model)}
         self.writers = sorted({w for src in sources.values() for w in _WRITER.findall(src)}) or ["this_node"]
-        for slot, label in handler_slots(self.model):
+        for slot, _label in handler_slots(self.model):
             fn = node._handlers[slot]
-            self.bindings.bind(fn, sources[slot], namespace, skip=lambda name, value, fn=fn: self._skip(fn, name, value))
+            self.bindings.bind(fn, sources[slot], namespace,
+                               skip=lambda name, value, fn=fn: self._skip(fn, name, value))
             for name in [n for n in self.bindings.unbound if n not in self.unset]:
                 self.unset[name] = f"{name} = None  # set me: used by handler {fn.__name__}"
 
