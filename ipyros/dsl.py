@@ -301,7 +301,9 @@ class rosNode:  # noqa: N801 - the paper's name
         return node.create() if create else node
 
     def export(self, path: Any, namespace: Optional[dict] = None) -> Any:
-        """Write a standalone rospy script that runs this node without ipyros; see :mod:`ipyros.export`."""
+        """Export this node to run without ipyros: a ``.py`` path is one standalone rospy script; any other
+        path becomes a ROS package (package.xml, scripts/<node>, launch/<node>.launch with its basenode);
+        see :mod:`ipyros.export`."""
         from .export import export
 
         return export(self, path, namespace)

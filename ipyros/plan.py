@@ -1,4 +1,4 @@
-"""From a node model to the endpoints that must run, and the basenode's remaps.
+"""From a node model to the endpoints that must run, and the internal names of wrapped topics.
 
 This is where the wrapping semantics live (DESIGN.md, "Wrapping, precisely"), as a
 pure function of the model: the runtime only opens what the plan lists and closes
@@ -94,18 +94,6 @@ def node_fullname(model: NodeModel) -> str:
 def internal_name(model: NodeModel, resolved: str) -> str:
     """Where the basenode is remapped to for base topic/service ``resolved``."""
     return node_fullname(model) + "/base" + resolved
-
-
-def base_remaps(model: NodeModel) -> dict[str, str]:
-    """The ``from:=to`` remaps the basenode is launched with (user remaps first)."""
-    remaps = dict(model.base.remaps) if model.base else {}
-    for t in model.topics:
-        if t.role == "reuse":
-            remaps[t.resolved] = internal_name(model, t.resolved)
-    for s in model.services:
-        if s.role == "reuse":
-            remaps[s.resolved] = internal_name(model, s.resolved)
-    return remaps
 
 
 def plan(model: NodeModel) -> dict[Spec, None]:
