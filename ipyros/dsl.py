@@ -17,6 +17,7 @@ from __future__ import annotations
 import copy
 import re
 import threading
+import time
 from collections.abc import MutableMapping
 from typing import Any, Callable, Iterator, Optional
 
@@ -448,7 +449,7 @@ class rosNode:  # noqa: N801 - the paper's name
         if self._reverting is not None:
             version = versions[self._reverting - 1]
         else:
-            version = HandlerVersion(len(versions) + 1, versions_mod.now(), _name_of(handler) or "handler",
+            version = HandlerVersion(len(versions) + 1, time.time(), _name_of(handler) or "handler",
                                      versions_mod.source_of(handler), handler)
             versions.append(version)
         self._current_version[slot] = version.number

@@ -41,6 +41,7 @@ from rich.table import Table
 from .base import DEMO_DIR, BaseProcess, exit_reason, find_executable
 from .display import Shown
 from .errors import BaseNodeError, IpyrosError
+from .launchfile import fullname, one_line
 from .master import master_proxy
 from .session import Session, current
 
@@ -147,9 +148,9 @@ def read_launch(path: Path, args: Optional[dict[str, Any]] = None) -> tuple[list
     try:
         XmlLoader().load(str(path), config, argv=words, verbose=False)
     except (RLException, ValueError) as error:  # a broken file; a value an if= or a <param> type refuses
-        raise DemoRobotError(f"{path.name}: {' '.join(str(error).split())}; see its arguments with %demo --list") \
+        raise DemoRobotError(f"{path.name}: {one_line(error)}; see its arguments with %demo --list") \
             from None
-    nodes = [LaunchNode(package=n.package, executable=n.type, name=_join(n.namespace, n.name), namespace=n.namespace,
+    nodes = [LaunchNode(package=n.package, executable=n.type, name=fullname(n), namespace=n.namespace,
                         args=tuple(shlex.split(n.args or "")), remaps=dict(n.remap_args))
              for n in config.nodes]
     return nodes, {name: param.value for name, param in config.params.items()}
@@ -158,10 +159,6 @@ def read_launch(path: Path, args: Optional[dict[str, Any]] = None) -> tuple[list
 def _launch_value(value: Any) -> str:
     """A Python value as a launch argument: booleans as roslaunch spells them."""
     return str(value).lower() if isinstance(value, bool) else str(value)
-
-
-def _join(namespace: str, name: str) -> str:
-    return "/" + "/".join(p for p in (*namespace.split("/"), name) if p)
 
 
 # -- the robot ------------------------------------------------------------------------------

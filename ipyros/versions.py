@@ -9,7 +9,6 @@ from a saved file has only its source, compiled when it is brought back.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any, Callable, Optional
@@ -57,7 +56,3 @@ def compile_version(version: HandlerVersion, namespace: dict, label: str) -> Cal
     if version.source is None:
         raise IpyrosError(f"version {version.number} of {label} ({version.name}) has no source to run again")
     return define_function(version.name, version.source, namespace, f"version {version.number} of {label}")
-
-
-def now() -> float:
-    return time.time()
