@@ -70,19 +70,29 @@ class Rows(Shown):
 
 @dataclass(frozen=True)
 class StatusRow:
+    """One line of a node's status: a handler (subscription, timer, service) or a topic it sends on.
+
+    For a handler ``calls`` counts its calls; for a publication or relay (no handler, no
+    timing) the messages sent, to ``connections`` subscribers, of which slow ones have
+    ``waiting`` messages queued and lost ``dropped`` so far.
+    """
+
     kind: str
     name: str
     handler: str
     calls: int
-    rate_hz: float
-    mean_ms: float
-    max_ms: float
-    errors: int
+    rate_hz: float = 0.0
+    mean_ms: float = 0.0
+    max_ms: float = 0.0
+    errors: int = 0
+    connections: int = 0
+    waiting: int = 0
+    dropped: int = 0
 
 
 @dataclass(frozen=True)
 class NodeStatus(Shown):
-    """Per handler of a node: calls, rate, handler time and exceptions; rich-renderable."""
+    """Per handler and per topic sent on: calls, rate, handler time, exceptions, drops; rich-renderable."""
 
     node: str
     running: bool
@@ -91,11 +101,14 @@ class NodeStatus(Shown):
     @classmethod
     def of(cls, node: "rosNode") -> "NodeStatus":
         rows = []
-        for key, slot in sorted(node._slots.items()):
+        for key, slot in sorted(node.slots().items()):
             kind, name = key.split(" ", 1)
             f = slot.figures()
             rows.append(StatusRow(kind, name, getattr(slot.handler, "__name__", "?"), f.calls, f.rate_hz,
                                   f.mean_ms, f.max_ms, f.errors))
+        for sent in node.sent():
+            rows.append(StatusRow(sent.kind, sent.topic, "", sent.messages, connections=sent.connections,
+                                  waiting=sent.waiting, dropped=sent.dropped))
         return cls(node.fullname, node.created, tuple(rows))
 
     def row(self, name: str) -> StatusRow:
@@ -106,12 +119,17 @@ class NodeStatus(Shown):
                       title_justify="left")
         for column, justify in (("kind", "left"), ("name", "left"), ("handler", "left"), ("calls", "right"),
                                 ("rate Hz", "right"), ("mean ms", "right"), ("max ms", "right"),
-                                ("errors", "right")):
+                                ("errors", "right"), ("subscribers", "right"), ("dropped", "right")):
             table.add_column(column, justify=justify)  # type: ignore[arg-type]
         for r in self.rows:
             errors = f"[red]{r.errors}[/]" if r.errors else "0"
-            table.add_row(r.kind, r.name, r.handler, str(r.calls), f"{r.rate_hz:.1f}", f"{r.mean_ms:.3f}",
-                          f"{r.max_ms:.3f}", errors)
+            if r.handler:
+                timing = (f"{r.rate_hz:.1f}", f"{r.mean_ms:.3f}", f"{r.max_ms:.3f}", errors, "", "")
+            else:  # a topic sent on: who gets it, and what slow subscribers lost
+                waiting = f" ({r.waiting} waiting)" if r.waiting else ""
+                dropped = f"[red]{r.dropped}[/]{waiting}" if r.dropped else f"0{waiting}"
+                timing = ("", "", "", "", str(r.connections), dropped)
+            table.add_row(r.kind, r.name, r.handler, str(r.calls), *timing)
         return table
 
 

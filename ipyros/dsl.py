@@ -317,7 +317,19 @@ class rosNode:  # noqa: N801 - the paper's name
         return NodeStatus.of(self)
 
     def slot(self, key: str) -> Optional[HandlerSlot]:
+        """The handler slot ``key`` (see :mod:`ipyros.plan`: ``"topic /x"``, ``"timer t"``), if it runs."""
         return self._slots.get(key)
+
+    def slots(self) -> dict[str, HandlerSlot]:
+        """Every running handler slot of the node, by key."""
+        with self._lock:
+            return dict(self._slots)
+
+    def sent(self) -> list[Any]:
+        """Per topic the node sends on (publications, relays): messages, subscribers, and drops
+        for subscribers that could not keep up (:class:`ipyros.slots.SendFigures`)."""
+        with self._lock:
+            return [endpoint.figures() for endpoint in self._live.values() if hasattr(endpoint, "figures")]
 
     def __repr__(self) -> str:
         state = "running" if self.created else "declared"

@@ -7,6 +7,8 @@ it. Endpoints are small objects with a ``close()``; the DSL decides which exist
 
 Performance choices (measured in bench/relay.py):
 - publishers are synchronous (``queue_size=None``): no hand-off to a publisher thread;
+  the bytes go to each connection through :mod:`ipyros.sending`, where a subscriber that
+  cannot keep up gets a bounded backlog of its own instead of blocking the writer;
 - relays subscribe with :class:`rospy.AnyMsg` and write the received bytes as they are,
   through a publisher advertised up front with the concrete class, so the type, md5 and
   message definition are right from the first message and none is lost at start;
@@ -16,18 +18,21 @@ Performance choices (measured in bench/relay.py):
 from __future__ import annotations
 
 import copy
+import io
 import os
-import struct
 import threading
 import warnings
 import xmlrpc.client
 from typing import Any, Callable, Optional
 
+import genpy
 import rospy
+from rospy.msg import serialize_message
 
-from .errors import IpyrosError, MasterError, NodeStateError
+from . import sending
+from .errors import MasterError, MessageTypeError, NodeStateError
 from .master import master_proxy
-from .slots import HandlerSlot
+from .slots import HandlerSlot, SendFigures
 
 def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
     """A synchronous publisher (``queue_size=None`` on purpose; see the module docstring)."""
@@ -40,7 +45,6 @@ def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
 # 128 KiB on glibc serves it with mmap/munmap (~15 µs a read, per small message); just
 # under costs ~1.5 µs and still reads a 1 MiB image in 8 calls (bench/README.md).
 _BUFF_SIZE = 127 * 1024
-_LENGTH = struct.Struct("<I")
 
 
 class ProcessNode:
@@ -103,24 +107,70 @@ def _refuse_taken_name(master_uri: str, name: str) -> None:
 
 
 class Publication:
-    """A synchronous publisher: ``write`` serialises and sends in the caller's thread."""
+    """A publisher whose ``write`` serialises and sends in the caller's thread, never blocking.
+
+    The message is serialised into a buffer of its own before any connection is touched:
+    a message that cannot be serialised (a field of the wrong type, a time out of range)
+    is refused with one line and leaves every connection as it was. (rospy's own publish
+    serialises into the publisher's shared buffer and, when that fails, leaves the half
+    message there for good: every later message reaches the subscribers corrupted.) The
+    bytes then go out through :mod:`ipyros.sending`, where a slow subscriber queues and
+    loses its own oldest messages instead of blocking the writer.
+    """
 
     def __init__(self, topic: str, cls: type, latch: bool = False) -> None:
         self.topic, self.cls = topic, cls
+        self.count = 0
         self._pub = _publisher(topic, cls, latch)
+        self._impl = self._pub.impl
 
     def write(self, msg: Any) -> None:
+        if not isinstance(msg, genpy.Message) or msg._md5sum != self.cls._md5sum:
+            # A class is not a message; a message of the same name but another md5 (another
+            # version of its package) would be read as garbage by every subscriber.
+            got = getattr(msg, "_type", None) or type(msg).__name__
+            what = f"the class {got}" if isinstance(msg, type) else f"a {got} of another definition" \
+                if got == self.cls._type else got
+            raise MessageTypeError(f"{self.topic} carries {self.cls._type}, not {what}; "
+                                   f"write a message: {self.cls.__name__}(...)")
+        impl = self._impl
+        impl.acquire()
         try:
-            self._pub.publish(msg)
-        except rospy.ROSSerializationException as error:
-            raise IpyrosError(f"cannot send this {self.cls._type} on {self.topic}: {error}; "
-                              "check the field types") from None
+            if impl.closed:
+                raise NodeStateError(f"the publisher of {self.topic} was closed; declare the topic again")
+            buffer = io.BytesIO()
+            try:
+                serialize_message(buffer, impl.seq + 1, msg)
+            except Exception as error:  # genpy's SerializationError, struct.error, TypeError, ...
+                raise MessageTypeError(f"cannot send this {self.cls._type} on {self.topic}: {_first_line(error)}; "
+                                       "nothing was sent: check the field types and ranges") from None
+            impl.seq += 1
+            if impl.is_latch:
+                impl.latch = msg  # rospy sends it to a subscriber connecting later
+            sending.send_to_all(impl.connections, self.topic, buffer.getvalue()[4:])
+            impl.message_data_sent += buffer.tell()
+            self.count += 1
+        finally:
+            impl.release()
 
     def connections(self) -> int:
         return self._pub.get_num_connections()
 
+    def figures(self) -> SendFigures:
+        return _send_figures(self.topic, "publish", self.count, self._impl)
+
     def close(self) -> None:
         self._pub.unregister()
+
+
+def _send_figures(topic: str, kind: str, count: int, impl: Any) -> SendFigures:
+    backlog = sending.backlog(topic)
+    return SendFigures(topic, kind, count, len(impl.connections), backlog.messages, backlog.dropped)
+
+
+def _first_line(error: BaseException) -> str:
+    text = str(error).strip().splitlines()
+    return text[0] if text else type(error).__name__
 
 
 class Subscription:
@@ -208,15 +258,11 @@ class Relay:
                 self._impl.enable_latch()
             self._header_seen = header
         impl = self._impl
-        body = raw._buff
-        size = len(body)
-        parts = (_LENGTH.pack(size), body)
         impl.acquire()
         try:
             if impl.is_latch:
                 impl.latch = raw  # what a subscriber connecting later gets first
-            for conn in impl.connections:
-                _send(conn, parts, size + 4)
+            sending.send_to_all(impl.connections, self.target, raw._buff)
         finally:
             impl.release()
         self.count += 1
@@ -226,28 +272,12 @@ class Relay:
         if self.dropped == 1 and self._on_wrong_type is not None:
             self._on_wrong_type(got)
 
+    def figures(self) -> SendFigures:
+        return _send_figures(self.target, "relay", self.count, self._impl)
+
     def close(self) -> None:
         self._sub.unregister()
         self._pub.unregister()
-
-
-def _send(conn: Any, parts: tuple[bytes, bytes], size: int) -> None:
-    """Write one length-prefixed message to a subscriber connection, without joining the bytes.
-
-    What rospy's publish does minus serialising: ``sendmsg`` sends the length and the
-    body we received in one call. A connection that fails is closed, and rospy drops it.
-    """
-    sock = getattr(conn, "socket", None)
-    if sock is None or getattr(conn, "done", False):
-        return
-    try:
-        sent = sock.sendmsg(parts)
-        if sent < size:  # cut short (a signal, a full buffer): send the rest
-            sock.sendall(b"".join(parts)[sent:])
-        conn.stat_bytes += size
-        conn.stat_num_msg += 1
-    except OSError:
-        conn.close()
 
 
 class Timer:

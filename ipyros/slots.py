@@ -45,6 +45,18 @@ class SlotFigures:
     max_ms: float
 
 
+@dataclass(frozen=True)
+class SendFigures:
+    """What one publication or relay of a node has sent, and what its slow subscribers lost."""
+
+    topic: str
+    kind: str  # "publish" or "relay"
+    messages: int
+    connections: int
+    waiting: int  # messages queued now for subscribers that cannot keep up
+    dropped: int  # messages dropped for them so far
+
+
 class HandlerSlot:
     """Calls the current handler; counts calls, time and exceptions.
 
