@@ -86,7 +86,29 @@ class Extension:
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
         self.graph.start()
         self._completion = completion.install(shell, self.graph)
+        self._stop_nodes_before_namespace_goes()
         print(f"ipyros: {line or self._attach()}")
+
+    def _stop_nodes_before_namespace_goes(self) -> None:
+        """Close the session before the terminal's exit clears the user namespace.
+
+        ``TerminalInteractiveShell.mainloop`` ends with ``_atexit_once()``, which empties the
+        namespace before any ``atexit`` hook runs: handlers still called by ROS then failed
+        on globals that were gone (``NameError: name 'speed' is not defined``). IPython has
+        no exit event, so the shell's own method is wrapped, on this shell only.
+        """
+        shell = self.shell
+        original = getattr(shell, "_atexit_once", None)
+        if original is None:  # an IPython without it: the atexit hook closes the session
+            return
+        self._saved["atexit_once"] = original
+
+        def close_session_first() -> None:
+            if not getattr(shell, "_atexit_once_called", False):
+                self.session.close()
+            original()
+
+        shell._atexit_once = close_session_first
 
     def _configure_session(self) -> Optional[str]:
         """Give the session the master settings (keeping the rest); a problem as one line."""
@@ -184,6 +206,8 @@ class Extension:
         else:
             session.config = dataclasses.replace(session.config, announce=saved.announce)
         shell.custom_exceptions, shell.CustomTB = self._saved["custom_exc"]
+        if "atexit_once" in self._saved:
+            del shell._atexit_once  # the class's method again
         shell.drop_by_id({"rosNode": rosNode})
         for magics in self.magics:
             _unregister(shell, magics)

@@ -8,6 +8,8 @@ everything ipyros started: nodes, basenodes, and the master if ipyros started it
 from __future__ import annotations
 
 import atexit
+import os
+import signal
 import sys
 import threading
 import time
@@ -125,7 +127,9 @@ class Session:
             if self.closed:
                 raise NodeStateError("this ipyros session was closed; restart the interpreter")
             uri = self.attach_master().uri
-            return self.process.start(self.config.process_node_name or fullname, uri)
+            name = self.process.start(self.config.process_node_name or fullname, uri)
+            stop_on_termination()
+            return name
 
     def add(self, node: "rosNode") -> None:
         with self._lock:
@@ -195,3 +199,37 @@ def configure(config: SessionConfig) -> Session:
 def _close_at_exit() -> None:
     if _current is not None:
         _current.close()
+
+
+#: Signals that end the process without Python's exit: ``kill PID``, ``timeout``, a service
+#: manager (SIGTERM), the terminal closing (SIGHUP).
+TERMINATING = (signal.SIGTERM, signal.SIGHUP)
+
+
+def stop_on_termination() -> None:
+    """Make SIGTERM and SIGHUP stop the session as cleanly as Ctrl-C at exit does.
+
+    By default these signals end the process at once: no atexit, so the master keeps the
+    session's node and its basenodes as dead entries (``rosnode list`` shows them, ``rosnode
+    ping`` fails) and a C++ basenode, which dies on SIGTERM without unregistering, stays
+    listed too. Installed only from the main thread, and only over the default action: a
+    handler the program set itself is left alone.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for signum in TERMINATING:
+        if signal.getsignal(signum) is signal.SIG_DFL:
+            signal.signal(signum, _terminated)
+
+
+def _terminated(signum: int, frame: Any) -> None:
+    """Close the session (nodes unregistered, basenodes stopped with SIGINT), then die of ``signum``.
+
+    The closing runs on a thread of its own with a deadline: the main thread, interrupted
+    here, may hold a lock the closing needs.
+    """
+    closing = threading.Thread(target=_close_at_exit, name="ipyros-terminated", daemon=True)
+    closing.start()
+    closing.join(10.0)
+    signal.signal(signum, signal.SIG_DFL)
+    os.kill(os.getpid(), signum)
