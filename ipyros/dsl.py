@@ -145,6 +145,25 @@ class rosNode:  # noqa: N801 - the paper's name
         """The running basenode process (log tail, stop, restart), or None."""
         return self._base
 
+    @property
+    def basenode_name(self) -> Optional[str]:
+        """The basenode's full ROS name (``/move_base``), or None for a node that wraps nothing."""
+        from .wrap import base_fullname
+
+        model = self._model
+        return base_fullname(model) if model.base is not None else None
+
+    @property
+    def called(self) -> str:
+        """How the user refers to this node, for advice in messages: the variable holding it, else its name."""
+        return self._session.call_name(self)
+
+    def register_params(self) -> int:
+        """Set the node's parameters on the parameter server again (after a master restart); how many."""
+        params = self.model().params
+        self._set_params(params)
+        return len(params)
+
     # -- lifecycle ------------------------------------------------------------------
     def create(self) -> "rosNode":
         """Start the node: everything declared so far begins to run."""
@@ -157,6 +176,7 @@ class rosNode:  # noqa: N801 - the paper's name
             self._session.add(self)
             try:
                 self._session.start_process_node(self.fullname)
+                self._session.require_master(f"{self.called}.create()")
                 self._check_live_types(self._model.topics)
                 self._set_params(self._model.params)
                 self._open(planning.plan(self._model))
@@ -281,12 +301,14 @@ class rosNode:  # noqa: N801 - the paper's name
 
     @classmethod
     def load(cls, path: Any, namespace: Optional[dict] = None, create: bool = False, *,
-             session: Optional[Session] = None) -> "rosNode":
+             session: Optional[Session] = None, trust: bool = False) -> "rosNode":
         """Bring back a node saved by :meth:`save` (``.py`` runs the file; a model file is declared).
 
         Handlers are defined in ``namespace`` (in IPython: ``get_ipython().user_ns``); a
         ``.py`` file creates the node if it was running when saved; ``create=True`` also
-        creates a node loaded from a model file.
+        creates a node loaded from a model file. A model file that carries code (imports,
+        handler sources) is refused unless ``trust=True``: it looks like data, so its code
+        does not run without being asked; a ``.py`` file is code and runs as such.
         """
         from .keep import load
         from .savefile import restore
@@ -298,7 +320,7 @@ class rosNode:  # noqa: N801 - the paper's name
                                        "ipyros.restore(path) brings them all back")
             node = nodes[0]
         else:
-            node = load(path, namespace, session=session)
+            node = load(path, namespace, session=session, trust=trust)
         return node.create() if create else node
 
     def export(self, path: Any, namespace: Optional[dict] = None) -> Any:
@@ -381,6 +403,8 @@ class rosNode:  # noqa: N801 - the paper's name
         new = planning.plan(new_model)
         removed = [s for s in old if s not in new]
         added = [s for s in new if s not in old]
+        if added:
+            self._session.require_master(f"opening {', '.join(_describe(s) for s in added)} on {self.name}")
         # Swap first: a slot that stays keeps its subscription, so no message is lost.
         for key, (handler, takes) in handlers.items():
             if key in self._slots:
@@ -712,6 +736,7 @@ class NodeParams(MutableMapping):
         node = self._node
         with node._lock:
             if node.created:
+                node._session.require_master(f"{node.called}.params[{key!r}] = ...")
                 runtime.set_param(name, value)
             node._model.params[key] = value
             node._record(f"params[{key!r}] = {value!r}")
@@ -762,6 +787,15 @@ def _one_type(msg_type: Any, type_: Any, name: str) -> Any:
         raise MessageTypeError(f"{name}: no message type given; add msgType=... e.g. msgType=Twist "
                                "or msgType='geometry_msgs/Twist'")
     return chosen
+
+
+def _describe(spec: Spec) -> str:
+    """``publisher /x``, ``relay /a -> /b``: an endpoint of the plan in a few words."""
+    kind = {"PublishSpec": "publisher", "SubscribeSpec": "subscriber", "ServiceRelaySpec": "service relay"}.get(
+        type(spec).__name__, type(spec).__name__.removesuffix("Spec").lower())
+    if isinstance(spec, (planning.RelaySpec, planning.ServiceRelaySpec)):
+        return f"{kind} {spec.source} -> {spec.target}"
+    return f"{kind} {getattr(spec, 'topic', None) or getattr(spec, 'name', '')}"
 
 
 def _defined_name(source: str) -> str:

@@ -39,7 +39,7 @@ from .session import Session, configure, current
 log = logging.getLogger(__name__)
 
 #: Settings whose change must reach something already running.
-_LIVE_SETTINGS = ["master_uri", "start_master", "graph_period", "log_level"]
+_LIVE_SETTINGS = ["master_uri", "start_master", "graph_period", "log_level", "restart_basenodes"]
 
 
 class Extension:
@@ -81,6 +81,8 @@ class Extension:
         self.session.report = self._report
         self._saved["notice"] = self.session.notice
         self.session.notice = note_line
+        self._saved["call_name"] = self.session.call_name
+        self.session.call_name = self._variable_of
         self._start_logging()
         shell.events.register("post_run_cell", self._after_cell)
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
@@ -118,7 +120,8 @@ class Extension:
         name = _global(self.settings.process_node_name) or session.config.process_node_name
         config = dataclasses.replace(session.config, master_uri=_slashed(uri) if uri else None,
                                      start_master=self.settings.start_master, announce=_quiet,
-                                     process_node_name=name, keep_recent=self.settings.try_history)
+                                     process_node_name=name, keep_recent=self.settings.try_history,
+                                     restart_basenodes=self.settings.restart_basenodes)
         try:
             configure(config)
         except IpyrosError as error:  # already attached elsewhere: keep that master
@@ -157,6 +160,11 @@ class Extension:
         logger.propagate = False  # the root logger would print it a second time
         logger.setLevel(self.settings.log_level.upper())
 
+    def _variable_of(self, node: Any) -> str:
+        """The user's variable holding ``node`` (for advice like ``wnode.base.restart()``), else its name."""
+        names = sorted(k for k, v in list(self.shell.user_ns.items()) if v is node and not k.startswith("_"))
+        return names[0] if names else node.name
+
     # -- while loaded ------------------------------------------------------------------------
     def _after_cell(self, result: Any = None) -> None:
         """``post_run_cell``: swap edited handlers in; give new subscriptions their history size."""
@@ -178,6 +186,8 @@ class Extension:
             self.graph.period = value
         elif name == "log_level":
             logging.getLogger("ipyros").setLevel(value.upper())
+        elif name == "restart_basenodes":
+            self.session.config = dataclasses.replace(self.session.config, restart_basenodes=value)
         else:  # master_uri, start_master
             problem = self._configure_session()
             print(f"ipyros: {problem or self._attach()}")
@@ -200,6 +210,8 @@ class Extension:
             session.report = self._saved["report"]
         if session.notice is note_line:
             session.notice = self._saved["notice"]
+        if session.call_name == self._variable_of:
+            session.call_name = self._saved["call_name"]
         saved = self._saved["config"]
         if session.master is None or saved.master_uri in (None, session.master.uri):
             session.config = saved  # the master settings as they were before loading

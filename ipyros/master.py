@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import sys
 import time
 import xmlrpc.client
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ from .errors import MasterError
 from .process import spawn, stop_process
 
 DEFAULT_URI = "http://localhost:11311/"
+LOOPBACK = "127.0.0.1"
 
 
 class _TimeoutTransport(xmlrpc.client.Transport):
@@ -48,6 +50,15 @@ def answers(uri: str, timeout: float = 0.5) -> bool:
         return False
 
 
+def is_registered(uri: str, node: str, timeout: float = 2.0) -> bool:
+    """Whether the master at ``uri`` has a node called ``node`` registered (False if it does not answer)."""
+    try:
+        code, _, _ = master_proxy(uri, timeout).lookupNode("/ipyros", node)
+        return code == 1
+    except (OSError, xmlrpc.client.Error):
+        return False
+
+
 def configured_uri() -> str:
     return os.environ.get("ROS_MASTER_URI") or DEFAULT_URI
 
@@ -61,7 +72,8 @@ class MasterHandle:
     processes: list[subprocess.Popen] = field(default_factory=list)
 
     def describe(self) -> str:
-        how = "started by ipyros (stops when this session exits)" if self.started else "found running"
+        how = ("started by ipyros, local: listening on 127.0.0.1 only; it stops when this session exits"
+               if self.started else "found running")
         return f"ROS master {self.uri} ({how})"
 
     def stop(self) -> None:
@@ -93,6 +105,11 @@ def attach(uri: Optional[str] = None, start: bool = True, timeout: float = 15.0)
         raise MasterError("no ROS master answers and 'rosmaster' is not installed; "
                           "apt-get install python3-rosmaster (or run: bash run.sh)")
     port = parsed.port or 11311
+    # The master ipyros starts is this machine's alone: it, rosout, this session's node and the
+    # basenodes it starts all listen on loopback (ROS binds to 127.0.0.1 when ROS_IP is a loopback
+    # address, else to every interface, where anyone on the network could set parameters).
+    os.environ.pop("ROS_HOSTNAME", None)  # it would win over ROS_IP
+    os.environ["ROS_IP"] = LOOPBACK
     env = {**os.environ, "ROS_MASTER_URI": uri}
     handle = MasterHandle(uri, started=True)
     handle.processes.append(spawn(["rosmaster", "--core", "-p", str(port), "-w", "3"], env=env))
@@ -103,8 +120,7 @@ def attach(uri: Optional[str] = None, start: bool = True, timeout: float = 15.0)
             raise MasterError(f"could not start a ROS master on port {port} (is the port taken?); "
                               "set ROS_MASTER_URI to another port")
         time.sleep(0.05)
-    rosout = "/usr/lib/rosout/rosout"
-    if os.access(rosout, os.X_OK):  # roscore's logger: /rosout_agg for tools that read it
-        handle.processes.append(spawn([rosout, "__name:=rosout"], env=env))
+    # roscore's logger, for tools that read /rosout_agg (rospy's: Debian's C++ one listens everywhere)
+    handle.processes.append(spawn([sys.executable, "-m", "ipyros.rosout"], env=env))
     os.environ["ROS_MASTER_URI"] = uri
     return handle

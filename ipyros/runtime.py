@@ -75,6 +75,32 @@ class ProcessNode:
             self.name, self.master_uri = rospy.get_name(), master_uri
             return self.name
 
+    def register_again(self) -> tuple[int, int, int]:
+        """Tell a restarted master every publication, subscription and service of this process.
+
+        What rospy's registration thread does once at start, done again: subscriptions get
+        the master's list of publishers back, and rospy connects to them. Returns how many
+        publications, subscriptions and services were registered.
+        """
+        from rospy.impl.registration import RegManager, get_registration_listeners, get_service_manager, \
+            get_topic_manager
+
+        topics, services = get_topic_manager(), get_service_manager()
+        manager = next((listener for listener in get_registration_listeners().listeners
+                        if isinstance(listener, RegManager)), None)
+        master, caller, uri = master_proxy(self.master_uri, timeout=5.0), rospy.get_name(), rospy.core.get_node_uri()
+        publications, subscriptions = topics.get_publications(), topics.get_subscriptions()
+        for name, type_name in publications:
+            master.registerPublisher(caller, name, type_name, uri)
+        for name, type_name in subscriptions:
+            code, _, publishers = master.registerSubscriber(caller, name, type_name, uri)
+            if code == 1 and manager is not None:
+                manager.publisher_update(name, publishers)
+        served = services.get_services()
+        for name, service_uri in served:
+            master.registerService(caller, name, service_uri, uri)
+        return len(publications), len(subscriptions), len(served)
+
     def shutdown(self, reason: str = "ipyros exit") -> None:
         if self.name is not None and not rospy.core.is_shutdown():
             rospy.signal_shutdown(reason)

@@ -18,8 +18,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Optional
 
 from . import master as master_mod
-from .errors import NodeStateError
+from .errors import MasterError, NodeStateError
 from .journal import Journal
+from .masterwatch import MasterWatch
 from .runtime import ProcessNode
 from .slots import HandlerFailure
 
@@ -68,6 +69,7 @@ class SessionConfig:
     keep_recent: int = 20  # messages each subscription keeps for trying a handler on them
     history_dir: Optional[str] = None  # None: $IPYROS_HISTORY_DIR, else ~/.ipyros/history
     keep_history: bool = True  # write the history to a file of this session's own as it goes
+    restart_basenodes: bool = False  # restart basenodes that do not register with a restarted master
     announce: Callable[[str], None] = field(default=lambda text: print(text, file=sys.stderr))
 
 
@@ -84,7 +86,10 @@ class Session:
         self._on_close: list[Callable[[], None]] = []
         self.report: Callable[[HandlerFailure], None] = print_failure
         self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
+        #: How advice names a node (``nd.base.restart()``): the extension finds the user's variable.
+        self.call_name: Callable[["rosNode"], str] = lambda node: node.name
         self._lock = threading.RLock()
+        self.watch: Optional[MasterWatch] = None
         self.closed = False
 
     def record(self, node: str, change: str, **handler: Any) -> Change:
@@ -129,7 +134,66 @@ class Session:
             uri = self.attach_master().uri
             name = self.process.start(self.config.process_node_name or fullname, uri)
             stop_on_termination()
+            if self.watch is None:
+                self.watch = MasterWatch(uri, self._master_down, self.master_back).start()
             return name
+
+    # -- the master going away and coming back ------------------------------------------
+    def require_master(self, doing: str) -> None:
+        """Fail in a moment when the master does not answer, rather than hang.
+
+        rospy retries registering a new endpoint with an absent master forever, freezing the
+        prompt; so whatever would register something asks here first.
+        """
+        if self.master is None:
+            return
+        up = self.watch.check_now() if self.watch is not None else master_mod.answers(self.master.uri, 2.0)
+        if not up:
+            raise MasterError(f"the ROS master at {self.master.uri} does not answer, so {doing} was not done "
+                              "(nothing changed); do it again when the master is back (ipyros registers "
+                              "your running nodes with it again by itself)")
+
+    def _master_down(self) -> None:
+        self.notify(f"ipyros: the ROS master at {self.master.uri if self.master else '?'} does not answer; "
+                    "your nodes keep the connections they have, new declarations fail until it is back")
+
+    def master_back(self, restarted: bool) -> None:
+        """The master answers again: register every endpoint and parameter of the session with it again.
+
+        Basenodes (rospy and roscpp nodes do not register again by themselves) are checked a
+        moment later: restarted if ``restart_basenodes`` is set, else reported with the line
+        that restarts them.
+        """
+        uri = self.master.uri if self.master else "?"
+        try:
+            publications, subscriptions, services = self.process.register_again()
+            params = sum(node.register_params() for node in list(self.nodes.values()) if node.created)
+        except Exception as error:  # noqa: BLE001 - told, not raised: this runs on the watch thread
+            self.notify(f"ipyros: the ROS master at {uri} is back, but registering this session with it failed "
+                        f"({error}); restart the interpreter if topics stay missing")
+            return
+        self.notify(f"ipyros: the ROS master at {uri} is back{' (restarted)' if restarted else ''}: "
+                    f"registered {publications} publications, {subscriptions} subscriptions, {services} services "
+                    f"and {params} parameters of this session again")
+        check = threading.Timer(2.0, self._check_basenodes)
+        check.daemon = True
+        check.start()
+
+    def _check_basenodes(self) -> None:
+        """After a master restart: the basenodes that did not register again, restarted or reported."""
+        if self.master is None or self.closed:
+            return
+        for node in list(self.nodes.values()):
+            base, name = node.base, node.basenode_name
+            if base is None or not base.running or name is None or master_mod.is_registered(self.master.uri, name):
+                continue
+            if self.config.restart_basenodes:
+                base.restart()
+                self.notify(f"ipyros: basenode {name} of {node.name} did not register with the restarted master; "
+                            "restarted it")
+            else:
+                self.notify(f"ipyros: basenode {name} of {node.name} did not register with the restarted master "
+                            f"(ROS 1 nodes do not); restart it: {node.called}.base.restart()")
 
     def add(self, node: "rosNode") -> None:
         with self._lock:
@@ -155,6 +219,8 @@ class Session:
             if self.closed:
                 return
             self.closed = True
+            if self.watch is not None:
+                self.watch.stop()
             for stop in reversed(self._on_close):
                 try:
                     stop()

@@ -45,9 +45,46 @@ def test_an_embedded_master_is_started_used_and_stopped_at_exit(ros_home):
         print("PUBS", dict(state[0]).get("/embedded/out"))
     """, {"ROS_MASTER_URI": uri})
     assert result.returncode == 0, result.stderr
-    assert f"ipyros: ROS master {uri} (started by ipyros (stops when this session exits))" in result.stderr
+    assert f"ipyros: ROS master {uri} (started by ipyros, local: listening on 127.0.0.1 only; it stops when this " \
+           "session exits)" in result.stderr
     assert "PUBS ['/embedded_user']" in result.stdout
     assert not masters.answers(uri), "the embedded master must stop when the interpreter exits"
+
+
+def listening(pid: int) -> set[str]:
+    """The addresses ``pid`` listens on (TCP), as ``address:port``."""
+    out = subprocess.run(["ss", "-ltnpH"], capture_output=True, text=True, check=True).stdout
+    return {line.split()[3] for line in out.splitlines() if f"pid={pid}," in line}
+
+
+def test_an_embedded_master_and_what_it_starts_listen_on_loopback_only(ros_home):
+    uri = f"http://localhost:{free_port()}/"
+    env = {k: v for k, v in os.environ.items() if k not in ("ROS_IP", "ROS_HOSTNAME")}
+    code = textwrap.dedent("""
+        import os, subprocess, sys
+        from ipyros import rosNode
+        from ipyros.session import current
+        from std_msgs.msg import String
+        w = rosNode("loopback_wrapper")
+        w.baseNode("echo_node").basePackage("ipyros_test_nodes").reuse.publish("out", type=String)
+        w.create()
+        pids = [os.getpid(), w.base.pid] + [p.pid for p in current().master.processes]
+        print("PIDS", *pids, flush=True)
+        sys.stdin.read()
+    """)
+    proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env={**env, "ROS_MASTER_URI": uri})
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("PIDS"), proc.stderr.read() if proc.poll() is not None else line
+        pids = [int(p) for p in line.split()[1:]]
+        assert len(pids) == 4  # this session, the basenode, rosmaster, rosout
+        for pid in pids:
+            addresses = wait_for(lambda: listening(pid), what=f"pid {pid} to listen")
+            assert all(a.startswith("127.0.0.1:") for a in addresses), (pid, open(f"/proc/{pid}/cmdline").read(), addresses)
+    finally:
+        proc.stdin.close()
+        proc.wait(30)
 
 
 def test_exit_stops_the_nodes_of_the_session(ros_master):

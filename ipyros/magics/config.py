@@ -78,6 +78,12 @@ class RosMagics(Magics):
         help="How many of the last messages each subscription of a node keeps, for %try.",
     ).tag(config=True)
 
+    restart_basenodes = Bool(
+        False,
+        help="When the ROS master restarts, restart the basenodes that do not register with it again "
+             "(rospy and roscpp nodes do not); False only reports them, with the line that restarts them.",
+    ).tag(config=True)
+
     rich_output = Bool(
         True,
         help="Render tables and messages with rich: colour in a terminal, HTML in Jupyter. "

@@ -152,6 +152,9 @@ class TopicMagics(ExtensionMagics):
 
     # -- shared ----------------------------------------------------------------------------
     def _snapshot(self) -> GraphSnapshot:
+        watch = self.ext.session.watch
+        if watch is not None:
+            watch.check_now()  # a master just restarted: the session registers again before it is read
         snap = self.ext.graph.refresh_now()
         if not snap.master_up:
             raise MasterError(f"no ROS master answers at {self.ext.graph.master_uri}; start roscore, "
