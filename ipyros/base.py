@@ -39,6 +39,7 @@ import functools
 import os
 import shlex
 import signal
+import sys
 import tempfile
 import threading
 import time
@@ -226,18 +227,29 @@ def find_executable(package: str, executable: str) -> Path:
         raise BaseNodeError(
             "a basenode needs a package and an executable, e.g. basePackage('topic_tools') and baseNode('relay')"
         )
+    if os.path.isabs(executable) or executable.startswith("~"):
+        raise BaseNodeError(f"with a package, the executable is a name in it (e.g. 'talker'), not the path "
+                            f"{executable!r}; to run a file by its path, give no package: baseNode({executable!r})")
     for fresh in (False, True):  # the second try forgets the caches: something new may have appeared
         if fresh:
             refresh_packages()
         if "/" in executable:  # rosrun takes a path as relative to the package dir
             package_dir = _index(_env_key()).get(package)
             if package_dir is not None and _is_executable_file(package_dir / executable):
-                return package_dir / executable
+                return _inside(package_dir, package_dir / executable, package, executable)
             continue
         candidates = _executables(package, _env_key()).get(executable)
         if candidates:
             return _pick(package, executable, candidates)
     raise _lookup_error(package, executable)
+
+
+def _inside(package_dir: Path, path: Path, package: str, executable: str) -> Path:
+    """``path``, if it lies inside ``package_dir`` (after links and ``..``): a package runs only its own files."""
+    if not os.path.realpath(path).startswith(os.path.realpath(package_dir) + os.sep):
+        raise BaseNodeError(f"{executable!r} leads out of package {package!r} ({os.path.realpath(path)}); name an "
+                            f"executable inside it, or run a file by its path with no package: baseNode('/path/to/node')")
+    return path
 
 
 def _pick(package: str, executable: str, candidates: tuple[Path, ...]) -> Path:
@@ -264,6 +276,26 @@ def _lookup_error(package: str, executable: str) -> BaseNodeError:
     hint = _did_you_mean(executable.rsplit("/", 1)[-1], names)
     listing = f"its executables: {', '.join(names)}" if names else "it has no executable files"
     return BaseNodeError(f"package {package!r} has no executable {executable!r}: {hint + ' ' if hint else ''}{listing}")
+
+
+def script_command(executable: str, args: Sequence[str] = ()) -> tuple[Path, list[str]]:
+    """What runs a basenode given by its path (no package): the file itself, or Python running it.
+
+    An executable file runs as it is; a ``.py`` file that is not executable runs with this
+    interpreter (which imports ROS, as ipyros does). A bare name is not a path: it needs its
+    package.
+    """
+    if "/" not in executable and not executable.startswith("~"):
+        raise BaseNodeError(f"basenode {executable!r} needs its package: add .basePackage('package'), "
+                            f"or give the path of the file to run, e.g. baseNode('./{executable}')")
+    path = Path(executable).expanduser().absolute()
+    if _is_executable_file(path):
+        return path, list(args)
+    if path.is_file() and path.suffix == ".py":
+        return Path(sys.executable), [str(path), *args]
+    raise BaseNodeError(f"basenode {executable!r} is not an executable file or a .py script"
+                        f"{' (no such file)' if not path.exists() else ''}; give the path of the node to run, "
+                        "or its package with basePackage('...')")
 
 
 # ---------------------------------------------------------------------------
@@ -388,17 +420,13 @@ class BaseProcess:
             raise BaseNodeError(
                 "no basenode executable declared: call baseNode('executable') and basePackage('package')"
             )
+        args = list(base.args)
         if base.package:
             path = find_executable(base.package, base.executable)
         else:
-            path = Path(base.executable).expanduser()
-            if not _is_executable_file(path):
-                raise BaseNodeError(
-                    f"basenode {base.executable!r} is not an executable file: "
-                    "give its package with basePackage('...'), or a path to an executable"
-                )
+            path, args = script_command(base.executable, args)
         return cls(
-            path, base.args, node_name=base.node_name, namespace=base.namespace,
+            path, args, node_name=base.node_name, namespace=base.namespace,
             remaps={**base.remaps, **(remaps or {})}, params=base.params,
             master_uri=master_uri, log_path=log_path, on_exit=on_exit, env=base.env,
         )

@@ -1,7 +1,8 @@
 """The session's history on disk: one JSON line per change, written as it happens.
 
 A crash of the interpreter loses nothing already recorded: each line is flushed and
-synced before the change returns. Every session writes a file of its own, created
+synced before the change returns. The files hold handler sources and parameter values, so
+the directory is created 0700 and each file 0600. Every session writes a file of its own, created
 exclusively (``<start time>-<pid>.jsonl`` in the history directory), so no session
 ever overwrites another's history. A line looks like::
 
@@ -59,16 +60,21 @@ class Journal:
             raise
 
     def _open(self):  # type: ignore[no-untyped-def]
-        self.directory.mkdir(parents=True, exist_ok=True)
+        # Handler sources and parameter values (tokens, passwords typed at the prompt) are in
+        # here: the directory is the user's alone (0700), each file too (0600).
+        self.directory.mkdir(mode=0o700, parents=True, exist_ok=True)
+        info = self.directory.stat()
+        if info.st_uid == os.getuid() and info.st_mode & 0o077:
+            self.directory.chmod(0o700)  # made before ipyros kept it private
         stem = time.strftime("%Y%m%d-%H%M%S") + f"-{os.getpid()}"
         for n in range(1000):
             path = self.directory / (stem + (f"-{n}" if n else "") + ".jsonl")
-            try:
-                handle = open(path, "x", encoding="utf-8")  # "x": never an existing file
+            try:  # O_EXCL: never an existing file
+                fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
             except FileExistsError:
                 continue
             self.path = path
-            return handle
+            return os.fdopen(fd, "w", encoding="utf-8")
         raise FileExistsError(f"{self.directory} has 1000 history files named {stem}*")
 
     def close(self) -> None:

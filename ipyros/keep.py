@@ -314,8 +314,14 @@ def save(node: "rosNode", path: "str | os.PathLike[str]") -> Path:
 # -- load -------------------------------------------------------------------------------------
 
 def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
-         session: Optional["Session"] = None) -> "rosNode":
+         session: Optional["Session"] = None, trust: bool = False) -> "rosNode":
     """Rebuild the node saved in ``path``, declared but not created.
+
+    A model file looks like data and travels like data, so the code in it (imports and
+    handler sources) runs only when asked: ``trust=True``. Without it, a file that carries
+    code is refused, in one line naming what would run; a model without code (its handlers
+    taken by name from ``namespace``) loads as it is. A saved ``.py`` file is code, and runs
+    as Python files do (:func:`ipyros.savefile.restore`).
 
     Handler sources run in ``namespace`` (default: a fresh dict); pass IPython's
     ``user_ns`` so the handlers read the user's globals. Names the handlers call
@@ -326,6 +332,12 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
     path = Path(path).expanduser()
     namespace = {} if namespace is None else namespace
     data = _read(path)
+    if data["handlers"] and not trust:
+        imports = sorted({line for entry in data["handlers"] for line in entry.get("imports") or []})
+        code = f"imports {'; '.join(imports)} and " if imports else ""
+        raise IpyrosError(f"{path} carries code that loading would run: {code}the handlers "
+                          f"{', '.join(entry['name'] for entry in data['handlers'])}; read it, and if you trust it "
+                          f"load it with trust=True (rosNode.load({str(path)!r}, trust=True), %load_nodes --trust)")
     try:
         model = NodeModel.from_dict(data["node"])
     except (TypeError, ValueError, AttributeError) as error:

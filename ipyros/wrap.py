@@ -181,9 +181,12 @@ def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # t
             raise DeclarationError(f"{model.name} reuses {', '.join(reuses)} but has no basenode; declare it: "
                                    f"{model.name}.baseNode('executable').basePackage('package')")
         return
-    if not model.base.executable or not model.base.package:
-        missing = "baseNode('executable')" if not model.base.executable else "basePackage('package')"
-        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .{missing}")
+    executable = model.base.executable
+    if not executable:
+        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .baseNode('executable')")
+    if not model.base.package and not model.base.launch and "/" not in executable and not executable.startswith("~"):
+        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .basePackage('package'), or give the "
+                               f"path of the file to run: baseNode('./{executable}')")
     mine = base_fullname(model)
     for other in others:
         if other.base is None or base_fullname(other) != mine:

@@ -137,6 +137,24 @@ def test_unknown_executable_error_suggests_and_lists_the_package_executables():
         find_executable("ipyros_demo", "turtlesim")
 
 
+def test_a_package_runs_only_its_own_files():
+    with pytest.raises(BaseNodeError, match=r"with a package, the executable is a name in it .* not the path '/bin/sh'; "
+                                            r"to run a file by its path, give no package: baseNode\('/bin/sh'\)"):
+        find_executable("topic_tools", "/bin/sh")
+    with pytest.raises(BaseNodeError, match=r"'../../../../../../bin/true' leads out of package 'ipyros_test_nodes'"):
+        find_executable("ipyros_test_nodes", "../../../../../../bin/true")
+
+
+def test_a_basenode_given_by_its_path_runs_as_a_script(tmp_path):
+    script = tmp_path / "node.py"
+    script.write_text(echo_node().read_text())  # a .py file, not executable: run with this interpreter
+    proc = BaseProcess.from_model(BaseModel(executable=str(script), node_name="scripted"))
+    assert proc.argv[:2] == [sys.executable, str(script)] and "__name:=scripted" in proc.argv
+    assert BaseProcess.from_model(BaseModel(executable=str(echo_node()))).argv[0] == str(echo_node())
+    with pytest.raises(BaseNodeError, match=r"basenode 'echo_node' needs its package: add .basePackage"):
+        BaseProcess.from_model(BaseModel(executable="echo_node"))
+
+
 def test_from_model_looks_the_executable_up_and_adds_the_wrapping_remaps():
     model = BaseModel(executable="echo_node", package="ipyros_test_nodes", node_name="b", namespace="/ns",
                       remaps={"/ns/x": "/y"}, params={"rate": 2.5, "label": "5"}, args=["--prefix", "P"])

@@ -105,7 +105,7 @@ def test_plain_node_round_trip(make_node, tmp_path):
                                                      "service /turtle_control_node/reset"]
 
     namespace: dict = {}
-    loaded = keep.load(path, namespace)
+    loaded = keep.load(path, namespace, trust=True)
     assert not loaded.created and loaded.model() == nd.model()
     assert loaded.handler("/turtle1/pose") is namespace["showPose"] is not showPose
     assert namespace["nd"] is loaded  # the name its handlers write with
@@ -117,7 +117,7 @@ def test_the_model_as_json_round_trips(make_node, tmp_path):
     path = nd.save(tmp_path / "turtle.json")
     data = json.loads(path.read_text())
     assert data[keep.FORMAT_KEY] == keep.FORMAT and data["node"] == nd.model().to_dict()
-    assert rosNode.load(path, {}).model() == nd.model()
+    assert rosNode.load(path, {}, trust=True).model() == nd.model()
 
 
 def test_a_model_without_handler_sources_takes_them_by_name(make_node, tmp_path):
@@ -135,7 +135,7 @@ def test_a_model_without_handler_sources_takes_them_by_name(make_node, tmp_path)
 
 def test_wrapping_node_round_trip(make_node, tmp_path):
     wnode = wrapper_node(make_node)
-    loaded = keep.load(keep.save(wnode, tmp_path / "wrapper.yaml"))
+    loaded = keep.load(keep.save(wnode, tmp_path / "wrapper.yaml"), trust=True)
     assert loaded.model() == wnode.model()
     assert loaded.model().base.args == ["--prefix", "echo> "] and loaded.params["volume"] == 11
 
@@ -143,7 +143,7 @@ def test_wrapping_node_round_trip(make_node, tmp_path):
 def test_loaded_node_runs_its_handlers_in_the_namespace_given(make_node, tmp_path):
     path = keep.save(turtle_node(make_node), tmp_path / "turtle.yaml")
     namespace = {"speed": 4.0}
-    loaded = keep.load(path, namespace)
+    loaded = keep.load(path, namespace, trust=True)
     try:
         loaded.create()
         driver, heard = world(make_node, "keep_turtle_world", ("/turtle1/pose", Pose), ("/turtle1/cmd_vel", Twist))
@@ -162,7 +162,7 @@ def test_lambda_handlers(make_node, tmp_path):
     path = keep.save(nd, tmp_path / "lambdas.yaml")
     assert yaml.safe_load(path.read_text())["handlers"][0]["source"] == "lambda m: got.append(m.data)\n"
     namespace = {"got": []}
-    loaded = keep.load(path, namespace)
+    loaded = keep.load(path, namespace, trust=True)
     loaded.handler("/keep/a")(String("x"))
     assert namespace["got"] == ["x"] and loaded.model() == nd.model()
 
@@ -189,7 +189,7 @@ def test_handler_typed_at_an_ipython_prompt(make_node, tmp_path):
         nd.new.subscribe("/keep/chatter", handler=shell.user_ns["onChatter"], msgType=String)
         path = keep.save(nd, tmp_path / "prompt.yaml")
         assert "def onChatter(msg):\n        print('heard', msg.data)" in path.read_text()
-        keep.load(path, shell.user_ns)
+        keep.load(path, shell.user_ns, trust=True)
         assert shell.user_ns["onChatter"] is not nd.handler("/keep/chatter")  # rebound by the load
 
 
@@ -214,7 +214,24 @@ def test_load_names_a_handler_that_does_not_compile(make_node, tmp_path):
     path = keep.save(turtle_node(make_node), tmp_path / "turtle.yaml")
     path.write_text(path.read_text().replace("def heartbeat():", "def heartbeat() oops:"))
     with pytest.raises(IpyrosError, match=r"handler heartbeat \(timer heartbeat\) does not compile: .* line 1"):
-        keep.load(path)
+        keep.load(path, trust=True)
+
+
+def test_a_model_file_carrying_code_is_not_run_unless_trusted(make_node, tmp_path):
+    path = keep.save(turtle_node(make_node), tmp_path / "turtle.yaml")
+    planted = tmp_path / "planted"
+    data = yaml.safe_load(path.read_text())
+    data["handlers"][0]["imports"] = [f"import os; open({str(planted)!r}, 'w').close()"]
+    path.write_text(yaml.safe_dump(data))
+    namespace: dict = {}
+    with pytest.raises(IpyrosError) as error:
+        rosNode.load(path, namespace)
+    text = str(error.value)
+    assert text.startswith(f"{path} carries code that loading would run: imports ") and "import os; open(" in text \
+        and "the handlers showPose, heartbeat, reset; read it, and if you trust it load it with trust=True" in text
+    assert not planted.exists() and not namespace, "nothing ran"
+    keep.load(path, namespace, trust=True)
+    assert planted.exists()
 
 
 # -- export ----------------------------------------------------------------------------------
@@ -320,6 +337,6 @@ def test_the_dsl_methods_save_load_and_export(make_node, tmp_path, ros_session):
 
     nd = turtle_node(make_node)
     saved = nd.save(tmp_path / "nd.yaml")
-    again = rosNode.load(saved, {}, session=ros_session)
+    again = rosNode.load(saved, {}, session=ros_session, trust=True)
     assert again.model() == nd.model()
     assert nd.export(tmp_path / "nd.py").read_text().startswith("#!/usr/bin/python3")

@@ -113,6 +113,20 @@ def test_the_history_is_written_to_a_file_of_its_own_as_it_goes(sf):
     assert f"kept in {path}" in str(ip.user_ns["nd"].history().__rich__().title)
 
 
+def test_history_files_are_the_users_alone(tmp_path):
+    """Handler sources and parameter values (tokens typed at the prompt) are in there."""
+    from ipyros.session import Change
+
+    made_open = tmp_path / "history"
+    made_open.mkdir(mode=0o755)  # as an older ipyros left it
+    for directory in (tmp_path / "fresh" / "history", made_open):
+        kept = journal.Journal(directory)
+        kept.append(Change(0.0, "/n", "params['token'] = 'secret'"))
+        kept.close()
+        assert directory.stat().st_mode & 0o777 == 0o700
+        assert Path(kept.path).stat().st_mode & 0o777 == 0o600
+
+
 def test_a_saved_file_is_readable_python_that_brings_the_node_back(sf, tmp_path):
     ip = sf
     ok(ip, V2)

@@ -135,6 +135,24 @@ def test_a_python_basenode_in_a_namespace(make_node, ros_master):
     assert out[0].data == "echo:x"
 
 
+def test_a_script_given_by_its_path_is_wrapped_like_any_basenode(make_node, tmp_path):
+    from helpers import TEST_NODES
+
+    script = tmp_path / "my_echo.py"  # a script of the user's, in no package, not executable
+    script.write_text((TEST_NODES / "ipyros_test_nodes" / "echo_node").read_text())
+    out = listen(make_node, "script_listener", "/scripted/out", String)
+    feeder = make_node("script_feeder").new.publish("/scripted/in", msgType=String).create()
+    w = make_node("script_wrapper")
+    w.baseNode(str(script), namespace="scripted", args=["--prefix", "py:"])
+    w.reuse.subscribe("in", type=String).publish("out", type=String)
+    w.create()
+    assert w.basenode_name == "/scripted/my_echo"
+    wait_for(lambda: feeder.write("/scripted/in", String("x")) or out, timeout=20, what="echo through the script")
+    assert out[0].data == "py:x"
+    w.base.restart()
+    assert w.base.running
+
+
 def test_discovery_declares_the_whole_interface(make_node):
     w = make_node("disc_wrapper")
     w.baseNode("echo_node").basePackage("ipyros_test_nodes")

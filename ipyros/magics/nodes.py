@@ -157,14 +157,20 @@ class NodeMagics(ExtensionMagics):
 
     @magic_arguments()
     @argument("path", help="a file written by %save_nodes or nd.save()")
+    @argument("--trust", action="store_true",
+              help="run the code a model file (.yaml/.json) carries: its imports and handler sources")
     @line_magic
     def load_nodes(self, line: str) -> None:
-        """Bring back the nodes saved in PATH, running; their handlers land in this namespace (editable)."""
+        """Bring back the nodes saved in PATH, running; their handlers land in this namespace (editable).
+
+        A .py file is Python and runs as %run would run it. A model file (.yaml/.json) looks
+        like data, so the code in it runs only with --trust.
+        """
         args = parse_argstring(self.load_nodes, line)
         if args.path.endswith(".py"):
             nodes = restore(args.path, self.shell.user_ns)
         else:
-            nodes = [rosNode.load(args.path, self.shell.user_ns, create=True)]
+            nodes = [rosNode.load(args.path, self.shell.user_ns, create=True, trust=args.trust)]
         running = ", ".join(f"{n.fullname} ({'running' if n.created else 'declared'})" for n in nodes)
         print(f"ipyros: loaded {running or 'no nodes'} from {args.path}")
 
