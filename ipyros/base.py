@@ -37,10 +37,10 @@ import atexit
 import difflib
 import functools
 import os
+import re
 import shlex
 import signal
 import sys
-import tempfile
 import threading
 import time
 import xml.etree.ElementTree as ET
@@ -534,11 +534,41 @@ class BaseProcess:
                 self._note(f"on_exit callback failed: {exc!r}")
 
 
+def log_dir() -> Path:
+    """Where basenode logs go: ipyros/ in the ROS log directory, as ROS tools pick it.
+
+    ``ROS_LOG_DIR``, else ``$ROS_HOME/log``, else ``~/.ros/log`` (the same rule on ROS 1
+    and ROS 2), so that they sit beside the other ROS logs and ``rosclean`` sweeps them.
+    """
+    if os.environ.get("ROS_LOG_DIR"):
+        root = Path(os.environ["ROS_LOG_DIR"])
+    else:
+        root = Path(os.environ.get("ROS_HOME") or Path.home() / ".ros") / "log"
+    path = root.expanduser() / "ipyros"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
 def temp_log(label: str) -> Path:
-    """A fresh log file in the temp dir, named after the basenode (or what else runs)."""
-    fd, path = tempfile.mkstemp(prefix=f"ipyros-{label.strip('/').replace('/', '_')}-", suffix=".log")
-    os.close(fd)
-    return Path(path)
+    """A fresh log file in :func:`log_dir`, named after the basenode (or what else runs) and the time."""
+    stem = f"{label.strip('/').replace('/', '_') or 'node'}-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
+    directory = log_dir()
+    for n in range(1000):
+        path = directory / (f"{stem}.log" if n == 0 else f"{stem}-{n}.log")
+        try:
+            os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644))
+            return path
+        except FileExistsError:
+            continue
+    raise BaseNodeError(f"cannot create a log file for {label} in {directory}; clean it up (rosclean purge)")
+
+
+_ESCAPES = re.compile(r"\x1b\[[0-9;?]*[ -/]*[@-~]|\x1b\][^\x07]*\x07|\x1b[@-Z\\-_]")
+
+
+def plain(line: str) -> str:
+    """A log line without terminal escape codes (rospy and roscpp colour their warnings and errors)."""
+    return _ESCAPES.sub("", line)
 
 
 def _last_lines(path: Path, n: int) -> list[str]:
@@ -556,7 +586,7 @@ def _last_lines(path: Path, n: int) -> list[str]:
                 end = start
     except FileNotFoundError:
         return []
-    return data.decode("utf-8", errors="replace").splitlines()[-n:]
+    return [plain(line) for line in data.decode("utf-8", errors="replace").splitlines()[-n:]]
 
 
 @atexit.register

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Callable, Optional
 
 from rich.table import Table
 
@@ -82,12 +82,14 @@ def discover(master_uri: str, node_name: str, timeout: float = 5.0) -> Interface
         time.sleep(0.05)
 
 
-def wait_for_node(master_uri: str, node_name: str, timeout: float = 10.0, settle: float = 0.5) -> Interface:
+def wait_for_node(master_uri: str, node_name: str, timeout: float = 10.0, settle: float = 0.5,
+                  alive: Optional[Callable[[], bool]] = None) -> Interface:
     """Wait until ``node_name`` is registered and its interface has been unchanged for ``settle`` seconds.
 
     Returns the interface then (with service types). A node still registering things
     when ``timeout`` runs out is returned as it is at that moment; one that never
-    registered raises :class:`BaseNodeError`.
+    registered raises :class:`BaseNodeError`, at once when ``alive()`` (of the process
+    that should register it) turns False: a node that crashed at start is not waited for.
     """
     node = global_node_name(node_name)
     deadline = time.monotonic() + timeout
@@ -101,6 +103,8 @@ def wait_for_node(master_uri: str, node_name: str, timeout: float = 10.0, settle
             last, stable_since = current, now
         elif current is not None and now - stable_since >= settle:
             break
+        if alive is not None and not alive():
+            raise BaseNodeError(f"node {node} ended before it settled")
         if now > deadline:
             if current is None:
                 raise _not_registered(master_uri, node, snapshot, timeout)

@@ -29,9 +29,10 @@ from .plan import Spec
 from .session import Session, current
 from .slots import HandlerSlot, call_arity
 from .versions import HandlerVersion
-from .wrap import check_reuse
+from .wrap import check_reuse, check_wrapping
 
 _UNSET: Any = object()
+MIN_TIMER_PERIOD = 1e-4  # seconds; below it a timer would only spin a core (and rospy divides by it)
 
 
 class rosNode:  # noqa: N801 - the paper's name
@@ -45,7 +46,7 @@ class rosNode:  # noqa: N801 - the paper's name
         self._session = session or current()
         # A wrapping node without a namespace of its own lives in its basenode's (see wrap.set_base).
         self._explicit_namespace = namespace is not None
-        ns = names.default_namespace() if namespace is None else names.rosnames.make_global_ns(namespace)
+        ns = names.default_namespace() if namespace is None else names.check_namespace(namespace)
         self._model = NodeModel(name=names.check_node_name(name), namespace=ns)
         self._handlers: dict[str, Callable[..., Any]] = {}  # slot key → the user's function
         self._takes_argument: dict[str, bool] = {}  # slot key → call the handler with the message/event?
@@ -170,7 +171,7 @@ class rosNode:  # noqa: N801 - the paper's name
         with self._lock:
             if self.created:
                 return self
-            from .wrap import check_wrapping, start_base
+            from .wrap import start_base
 
             check_wrapping(self._model, [n._model for n in self._session.nodes.values() if n is not self and n.created])
             self._session.add(self)
@@ -207,8 +208,10 @@ class rosNode:  # noqa: N801 - the paper's name
 
         Declaring a timer with the same ``name`` (default: the handler's name) replaces it.
         """
-        if isinstance(period, bool) or not isinstance(period, (int, float)) or not period > 0:
-            raise DeclarationError(f"timer period must be a positive number of seconds, not {period!r}")
+        if (isinstance(period, bool) or not isinstance(period, (int, float))
+                or not MIN_TIMER_PERIOD <= period < float("inf")):
+            raise DeclarationError(f"timer period must be a number of seconds from {MIN_TIMER_PERIOD:g} "
+                                   f"(10 kHz) up, not {period!r}")
         name = name or getattr(handler, "__name__", "timer")
         label = f"{self.name} timer {name}"
         takes_event = call_arity(handler, "timer", label)
@@ -386,6 +389,7 @@ class rosNode:  # noqa: N801 - the paper's name
             new_model = copy.deepcopy(self._model)
             edit(new_model)
             if self.created:
+                check_wrapping(new_model)  # e.g. a reuse declared on a running node with no basenode
                 self._check_live_types(check)
                 self._reconcile(new_model, handlers or {})
             for key in drop:
@@ -615,7 +619,7 @@ class TopicHandler:
         # A chain typed at the prompt shows what it did, in one line, not an object address.
         node = self._node
         state = "live" if node.created else "declared, not created yet"
-        done = "; ".join(self._done[-3:]) or "subscribe(), publish(), service(), unsubscribe(), unpublish()"
+        done = "; ".join(self._done) or "subscribe(), publish(), service(), unsubscribe(), unpublish()"
         self._done.clear()
         return f"{node.name}.{self._role}: {done} ({state})"
 
@@ -733,6 +737,7 @@ class NodeParams(MutableMapping):
 
     def __setitem__(self, key: str, value: Any) -> None:
         name = self._name(key)
+        runtime.check_param(name, value)
         node = self._node
         with node._lock:
             if node.created:

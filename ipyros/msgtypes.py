@@ -54,6 +54,13 @@ def _resolve(spec: Any, kind: str) -> tuple[str, type]:
         hint = _hint(spec.split("/")[-1], kind)
         raise MessageTypeError(f"malformed {what} type {spec!r}: write 'package/Type'{hint}")
     package, name = parts
+    other = "srv" if kind == "msg" else "msg"
+    if name not in _index(kind).get(package, ()) and name in _index(other).get(package, ()):
+        # "std_srvs/Empty" where a message is wanted: say so, not "did you mean std_msgs".
+        use = ("a topic needs a message type such as 'std_msgs/Empty'" if kind == "msg"
+               else "a service needs a service type such as 'std_srvs/Empty'")
+        raise MessageTypeError(f"{spec!r} is a {'service' if other == 'srv' else 'message'} type, "
+                               f"not a {what} type; {use}")
     try:
         module = importlib.import_module(f"{package}.{kind}")
     except ImportError:

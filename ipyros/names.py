@@ -19,6 +19,17 @@ def default_namespace() -> str:
     return rosnames.make_global_ns(os.environ.get("ROS_NAMESPACE", "/") or "/")
 
 
+def check_namespace(namespace: str) -> str:
+    """A namespace as a global one (``robot1`` → ``/robot1/``), refused unless a legal ROS name."""
+    if not isinstance(namespace, str):
+        raise TopicNameError(f"namespace {namespace!r} is a {type(namespace).__name__}, not a string; "
+                             "give one like '/robot1'")
+    if namespace.strip("/") and not rosnames.is_legal_name(namespace.strip("/")) or "~" in namespace:
+        raise TopicNameError(f"invalid namespace {namespace!r}: use letters, digits, _ and / (each part "
+                             "starting with a letter), e.g. '/robot1'")
+    return rosnames.make_global_ns(namespace or "/")
+
+
 def check_node_name(name: str) -> str:
     """A node's base name: a legal ROS name without namespace separators or ``~``."""
     if not isinstance(name, str) or not name:
@@ -36,7 +47,10 @@ def resolve(name: str, namespace: str, node_name: str, kind: str = "topic") -> s
 
     ``kind`` only words the error ("topic", "service", "parameter").
     """
-    if not isinstance(name, str) or not name.strip():
+    if not isinstance(name, str):
+        raise TopicNameError(f"{kind} name {name!r} is a {type(name).__name__}, not a string; "
+                             "give a name like '/turtle1/cmd_vel'")
+    if not name.strip():
         raise TopicNameError(f"{kind} name {name!r} is empty; give a name like '/turtle1/cmd_vel'")
     if not rosnames.is_legal_name(name) or name.endswith("/") and name != "/":
         raise TopicNameError(

@@ -27,10 +27,11 @@ from typing import Any, Callable, Optional
 
 import genpy
 import rospy
+from rospy.impl.tcpros_service import convert_return_to_response
 from rospy.msg import serialize_message
 
 from . import sending
-from .errors import MasterError, MessageTypeError, NodeStateError
+from .errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
 from .master import master_proxy
 from .slots import HandlerSlot, SendFigures
 
@@ -67,7 +68,7 @@ class ProcessNode:
             if rospy.core.is_shutdown_requested() or rospy.core.is_initialized():
                 raise NodeStateError("rospy was already initialised or shut down in this process; "
                                      "restart the interpreter to use ipyros")
-            _refuse_taken_name(master_uri, name)
+            refuse_taken_name(master_uri, name)
             os.environ["ROS_MASTER_URI"] = master_uri
             namespace, base = name.rsplit("/", 1)
             # Signals stay IPython's: Ctrl-C must interrupt the prompt, not kill the node.
@@ -112,8 +113,9 @@ class ProcessNode:
             raise NodeStateError("the ROS node of this session was shut down; restart the interpreter")
 
 
-def _refuse_taken_name(master_uri: str, name: str) -> None:
-    """Refuse to start under a name a live node has: the master would kill that node."""
+def refuse_taken_name(master_uri: str, name: str) -> None:
+    """Refuse a node name a live node has: the master would kill that node (or, for a DSL node
+    hosted in the process node, ``rosnode info`` of the name would show the other one)."""
     try:
         code, _, api = master_proxy(master_uri).lookupNode("/ipyros", name)
     except OSError as error:
@@ -322,7 +324,26 @@ class ServiceServer:
 
     def __init__(self, name: str, cls: type, slot: HandlerSlot) -> None:
         self.name, self.cls, self.slot = name, cls, slot
-        self._service = rospy.Service(name, cls, slot)
+        self._service = rospy.Service(name, cls, self._serve)
+
+    def _serve(self, request: Any) -> Any:
+        # A wrong answer is checked here, where the session can be told and %status count it;
+        # rospy would only log it and send the caller an error.
+        ok, result = self.slot.run(request)
+        if not ok:
+            raise rospy.ServiceException(f"the handler of {self.name} raised an exception (the ipyros session shows it)")
+        response_class = self.cls._response_class  # type: ignore[attr-defined]
+        try:
+            response = convert_return_to_response(result, response_class)
+            response.serialize(io.BytesIO())
+        except Exception as error:  # noqa: BLE001 - whatever the value, the caller gets one line
+            detail = str(error).splitlines()[0][:120] if str(error) else type(error).__name__
+            problem = HandlerError(f"the handler of service {self.name} returned {_short(result)}, which is not a "
+                                   f"{response_class.__name__} ({detail}); return {response_class.__name__}(...) "
+                                   "with its fields filled")
+            self.slot.fail(problem)
+            raise rospy.ServiceException(str(problem)) from None
+        return response
 
     def close(self) -> None:
         self._service.shutdown("removed")
@@ -341,6 +362,11 @@ class ServiceRelay:
         self._proxy.close()
 
 
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def service_proxy(name: str, cls: type) -> rospy.ServiceProxy:
     """A client for ``name``; call it like a function."""
     return rospy.ServiceProxy(name, cls)
@@ -355,7 +381,45 @@ def get_param(name: str, default: Any = KeyError) -> Any:
     return rospy.get_param(name, default)
 
 
+_INT32 = range(-2**31, 2**31)
+
+
+def check_param(name: str, value: Any, _depth: int = 0) -> None:
+    """Refuse, in one line, a value the ROS 1 parameter server cannot hold.
+
+    It speaks XML-RPC: booleans, 32-bit integers, floats, strings, lists and dicts with
+    string keys, nothing else. Without this check a bad value fails deep in xmlrpc with
+    a traceback (``None``, ``object()``) or half-way through a nested dict.
+    """
+    if value is None:
+        raise DeclarationError(f"parameter {name} = None: the ROS parameter server has no null; "
+                               f"to remove the parameter use del nd.params[...]")
+    if isinstance(value, bool) or isinstance(value, (float, str)):
+        return
+    if isinstance(value, int):
+        if value not in _INT32:
+            raise DeclarationError(f"parameter {name} = {value} does not fit the 32-bit integer the ROS "
+                                   f"parameter server holds; pass it as a float ({float(value)!r}) or a string")
+        return
+    if _depth > 50:
+        raise DeclarationError(f"parameter {name} is nested more than 50 levels deep; flatten it")
+    if isinstance(value, (list, tuple)):
+        for i, item in enumerate(value):
+            check_param(f"{name}[{i}]", item, _depth + 1)
+        return
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise DeclarationError(f"parameter {name} has key {key!r}: the parameter server takes "
+                                       f"string keys only; use {str(key)!r}")
+            check_param(f"{name}/{key}", item, _depth + 1)
+        return
+    raise DeclarationError(f"parameter {name} = {value!r} is a {type(value).__name__}: the ROS parameter "
+                           "server holds bool, int, float, str, and lists or dicts of those")
+
+
 def set_param(name: str, value: Any) -> None:
+    check_param(name, value)
     rospy.set_param(name, value)
 
 

@@ -21,7 +21,7 @@ from . import master as master_mod
 from .errors import MasterError, NodeStateError
 from .journal import Journal
 from .masterwatch import MasterWatch
-from .runtime import ProcessNode
+from .runtime import ProcessNode, refuse_taken_name
 from .slots import HandlerFailure
 
 if TYPE_CHECKING:
@@ -133,6 +133,8 @@ class Session:
                 raise NodeStateError("this ipyros session was closed; restart the interpreter")
             uri = self.attach_master().uri
             name = self.process.start(self.config.process_node_name or fullname, uri)
+            if fullname != name:  # a DSL node hosted in the process node: its name must be free too
+                refuse_taken_name(uri, fullname)
             stop_on_termination()
             if self.watch is None:
                 self.watch = MasterWatch(uri, self._master_down, self.master_back).start()

@@ -102,15 +102,19 @@ class HandlerSlot:
         return self._current[1]
 
     def __call__(self, arg: Any = None) -> Any:
+        return self.run(arg)[1]
+
+    def run(self, arg: Any = None) -> tuple[bool, Any]:
+        """Call the handler: ``(True, what it returned)``, or ``(False, None)`` once its exception is reported."""
         handler, pass_argument = self._current
         if arg is not None:
             self.recent.append(arg)
         start = time.perf_counter()
         try:
-            return handler(arg) if pass_argument else handler()
+            return True, (handler(arg) if pass_argument else handler())
         except Exception as error:  # a handler's bug must never kill the node
             self._failed(handler, error)
-            return None
+            return False, None
         finally:
             elapsed = time.perf_counter() - start
             with self._lock:
@@ -119,7 +123,11 @@ class HandlerSlot:
                 self._max_s = max(self._max_s, elapsed)
                 self._stamps.append(start)
 
-    def _failed(self, handler: Callable[..., Any], error: Exception) -> None:
+    def fail(self, error: Exception) -> None:
+        """Count and report a failure found after the handler returned (e.g. a wrong response)."""
+        self._failed(self.handler, error, with_traceback=False)
+
+    def _failed(self, handler: Callable[..., Any], error: Exception, with_traceback: bool = True) -> None:
         with self._lock:
             self._errors += 1
             now = time.monotonic()
@@ -128,8 +136,8 @@ class HandlerSlot:
                 return
             self._last_report, suppressed, self._suppressed = now, self._suppressed, 0
         # Drop this frame: the user wants their handler's traceback, not ours.
-        tb = error.__traceback__.tb_next if error.__traceback__ else None
-        text = "".join(traceback.format_exception(type(error), error, tb))
+        tb = error.__traceback__.tb_next if error.__traceback__ and with_traceback else None
+        text = "".join(traceback.format_exception(type(error), error, tb)) if with_traceback else f"{error}\n"
         name = getattr(handler, "__name__", repr(handler))
         self._report(HandlerFailure(self.label, name, error, text, suppressed))
 
@@ -153,11 +161,19 @@ def call_arity(handler: Any, what: str, label: str) -> bool:
     if not callable(handler):
         raise HandlerError(f"handler for {label} is {type(handler).__name__} {handler!r}, not a function; "
                            "pass the function itself, e.g. handler=showPose (no parentheses)")
+    name = getattr(handler, "__name__", "handler")
+    # ROS calls handlers on its own threads and uses what they return at once: a coroutine
+    # or generator would be created and dropped without its body ever running.
+    if inspect.iscoroutinefunction(handler) or inspect.isasyncgenfunction(handler):
+        raise HandlerError(f"handler {name} for {label} is an async def: ROS calls it on its own thread "
+                           "and would never await it; make it a plain def (call asyncio.run(...) inside if needed)")
+    if inspect.isgeneratorfunction(handler):
+        raise HandlerError(f"handler {name} for {label} is a generator (it yields): ROS would never run "
+                           "its body; make it a plain def that returns")
     try:
         signature = inspect.signature(handler)
     except (TypeError, ValueError):
         return True  # builtins without a signature: trust the user
-    name = getattr(handler, "__name__", "handler")
     try:
         signature.bind(None)
         return True

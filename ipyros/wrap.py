@@ -20,6 +20,7 @@ the two so.
 from __future__ import annotations
 
 import re
+import threading
 from typing import TYPE_CHECKING, Any, Optional
 
 from rosgraph import names as rosnames
@@ -120,6 +121,7 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
             raise DeclarationError(f"{what} needs a non-empty name")
     if fields.get("name"):
         names.check_node_name(fields["name"])
+    _check_base_options(fields)
 
     def edit(model: NodeModel) -> None:
         base = model.base or BaseModel()
@@ -133,6 +135,30 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
     node._change(edit)
     node._record("base " + ", ".join(f"{k}={v!r}" for k, v in fields.items()))
     return node
+
+
+def _check_base_options(fields: dict[str, Any]) -> None:
+    """One line for a basenode option of the wrong shape, before anything is recorded."""
+    from . import runtime
+
+    if fields.get("namespace") is not None:
+        names.check_namespace(fields["namespace"])
+    remaps = fields.get("remaps")
+    if remaps is not None and (not isinstance(remaps, dict)
+                               or not all(isinstance(k, str) and isinstance(v, str) for k, v in remaps.items())):
+        raise DeclarationError(f"baseNode(remaps={remaps!r}): give a dict of names, "
+                               "e.g. remaps={'scan': '/robot1/scan'}")
+    args = fields.get("args")
+    if args is not None and (isinstance(args, (str, bytes)) or not isinstance(args, (list, tuple))
+                             or not all(isinstance(a, str) for a in args)):
+        raise DeclarationError(f"baseNode(args={args!r}): give a list of strings, e.g. args=['--rate', '5']")
+    params = fields.get("params")
+    if params is not None:
+        if not isinstance(params, dict) or not all(isinstance(k, str) and k for k in params):
+            raise DeclarationError(f"baseNode(params={params!r}): give a dict of private parameters, "
+                                   "e.g. params={'rate': 5}")
+        for key, value in params.items():
+            runtime.check_param(f"~{key.lstrip('~_')}", value)
 
 
 def set_launch_base(node: "rosNode", launch: Any, node_name: str) -> "rosNode":
@@ -218,10 +244,15 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
                         # from a launch file, the params go on the parameter server as roslaunch puts them
                         "params": {} if from_launch else model.base.params})
 
+    starting = threading.Event()  # while set, an exit is create()'s error to raise, not a notice
+    starting.set()
+
     def died(proc: Any, returncode: int, last_lines: list[str]) -> None:
+        if starting.is_set():
+            return
         tail = "\n    ".join(last_lines[-8:])
-        session.notify(f"ipyros: basenode {base_fullname(model)} of {node.name} {exit_reason(returncode)}; "
-                       f"restart it with {node.name}.base.restart()\n    {tail}")
+        session.notify(f"ipyros: basenode {base_fullname(model)} of {node.called} {exit_reason(returncode)}; "
+                       f"restart it with {node.called}.base.restart()\n    {tail}")
 
     process = BaseProcess.from_model(base, master_uri=session.master.uri, on_exit=died)
     handle: Any = process
@@ -233,7 +264,7 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
         def rest_died(proc: Any, returncode: int, last_lines: list[str]) -> None:
             tail = "\n    ".join(last_lines[-8:])
             session.notify(f"ipyros: the rest of {launch} (run for {node.name}) {exit_reason(returncode)}; "
-                           f"run it again with {node.name}.shutdown() and {node.name}.create()\n    {tail}")
+                           f"run it again with {node.called}.shutdown() and {node.called}.create()\n    {tail}")
 
         handle = LaunchBase(model.base, process, node=base_fullname(model), master_uri=session.master.uri,
                             on_rest_exit=rest_died)
@@ -241,13 +272,18 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
     handle.start()
     if getattr(handle, "not_started", None):
         session.notify(f"ipyros: roslaunch could not start {', '.join(handle.not_started)} of {model.base.launch} "
-                       f"(the rest runs without); why: {node.name}.base.rest.tail()")
+                       f"(the rest runs without); why: {node.called}.base.rest.tail()")
     try:
-        interface = wait_for_node(session.master.uri, base_fullname(model), timeout=settle_timeout)
+        interface = wait_for_node(session.master.uri, base_fullname(model), timeout=settle_timeout,
+                                  alive=lambda: process.running)
+        starting.clear()
+        if not process.running:  # it ended after settling, before a notice could be sent
+            raise BaseNodeError("ended")
     except BaseNodeError:
         if not process.running:
-            raise BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(process.returncode or 0)} at start; "
-                                f"last log lines: {' | '.join(process.tail(5))}") from None
+            raise BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(process.returncode or 0)} at start "
+                                f"(nothing of {node.called} was left running); last log lines: "
+                                f"{' | '.join(process.tail(5)) or 'none'}") from None
         raise
     check_base_types(model, interface)
 

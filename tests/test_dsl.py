@@ -159,7 +159,7 @@ def test_timer_declare_replace_remove(make_node):
 
 def test_timer_errors(make_node):
     nd = make_node("dsl_timer_bad")
-    with pytest.raises(errors.DeclarationError, match="positive number of seconds"):
+    with pytest.raises(errors.DeclarationError, match="a number of seconds from 0.0001"):
         nd.timer(0, lambda: None)
     with pytest.raises(errors.HandlerError, match="must take one argument, the timer event"):
         nd.timer(1.0, lambda a, b: None)

@@ -133,7 +133,22 @@ def test_config_magic_lists_and_sets_the_settings(ip, capsys, caplog):
     assert logging.getLogger("ipyros").level == logging.INFO
     ok(ip, "%config RosMagics.hz_window = -1")  # %config logs the refusal
     assert extension.settings.hz_window == 1.0
-    assert "hz_window must be a positive number of seconds, not -1" in caplog.text
+    assert "hz_window must be from 0.05 to 600 seconds, not -1" in caplog.text
+    refused = {"graph_period = 1e9": "graph_period must be from 0.05 to 3600 seconds, not 1000000000.0",
+               "hz_window = float('nan')": "hz_window must be from 0.05 to 600 seconds, not nan",
+               "echo_count = 10**9": "echo_count must be from 0 to 1,000,000, not 1000000000",
+               "try_history = -1": "try_history must be from 0 to 10,000, not -1",
+               "master_uri = 'localhost'": "master_uri 'localhost' is not a ROS master URI; write it like "
+                                           "'http://localhost:11311/'",
+               "master_uri = 'http://robot/'": "master_uri 'http://robot/' is not a ROS master URI",
+               "process_node_name = 'my node'": "process_node_name 'my node': invalid node name 'my node'"}
+    before = {name: getattr(extension.settings, name) for name in ("graph_period", "hz_window", "echo_count",
+                                                                   "try_history", "master_uri", "process_node_name")}
+    for assignment, message in refused.items():
+        caplog.clear()
+        ok(ip, f"%config RosMagics.{assignment}")
+        assert message in caplog.text, assignment
+    assert {name: getattr(extension.settings, name) for name in before} == before
 
 
 def test_changing_the_master_after_attaching_says_it_is_too_late(ip, ros_master, capsys):

@@ -53,3 +53,21 @@ def test_wrap_default_variable_and_errors(ip, capsys):
     assert isinstance(error, BaseNodeError) and "no_such_package_here" in str(error)
     assert "give a Python variable name" in str(error_of(ip, "%wrap ipyros_test_nodes echo_node --as 2x"))
     assert "the following arguments are required: executable" in str(error_of(ip, "%wrap ipyros_test_nodes"))
+
+
+def test_wrap_does_not_rebind_a_variable_holding_a_running_node(ip, ros_master):
+    try:
+        ok(ip, "busy = rosNode('mw_busy').create()")
+        error = error_of(ip, "%wrap ipyros_test_nodes echo_node --as busy --name mw_never")
+        assert isinstance(error, UsageError)
+        assert "--as busy holds the running node /mw_busy; give another name with --as, or stop that one " \
+               "first: busy.shutdown()" in str(error)
+        assert ip.user_ns["busy"].created and ip.user_ns["busy"].name == "mw_busy"
+        assert "/mw_never" not in master_state(ros_master)["pub"].get("/rosout", [])  # nothing was started
+        ok(ip, "echo_node_wrapper = rosNode('mw_default_holder').create()")
+        assert "the default variable echo_node_wrapper holds the running node" in str(
+            error_of(ip, "%wrap ipyros_test_nodes echo_node --name mw_never"))
+    finally:
+        for variable in ("busy", "echo_node_wrapper"):
+            if variable in ip.user_ns:
+                ok(ip, f"{variable}.shutdown()")

@@ -7,11 +7,16 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
+
+import pytest
 
 from std_msgs.msg import Int32, String
 
 from conftest import master_state, wait_for
+
+from ipyros.errors import BaseNodeError
 
 
 def alive(pid: int) -> bool:
@@ -62,6 +67,38 @@ def test_a_crash_is_reported_with_exit_code_and_log(make_node, ros_session):
         in told[0]
     assert "echo_node ready" in told[0], "the last log lines come with the report"
     assert not w.base.running and w.base.returncode == 3
+
+
+def test_a_basenode_that_ends_at_start_fails_create_at_once_in_one_notice(make_node, ros_session, tmp_path):
+    script = tmp_path / "broken_node.py"
+    script.write_text("import sys, time\n"
+                      "print('\\x1b[31m[FATAL] [1.0]: no map given\\x1b[0m', flush=True)\n"
+                      "time.sleep(0.3)\n"
+                      "sys.exit(4)\n")
+    told = []
+    previous = ros_session.notice
+    ros_session.notice = told.append
+    try:
+        broken = make_node("broken_wrapper")
+        broken.baseNode(str(script)).reuse.publish("map", type=String)
+        started = time.monotonic()
+        with pytest.raises(BaseNodeError) as caught:
+            broken.create()
+        took = time.monotonic() - started
+    finally:
+        ros_session.notice = previous
+    message = str(caught.value)
+    assert "\n" not in message and "exited with code 4 at start" in message
+    assert "[FATAL] [1.0]: no map given" in message and "\x1b" not in message, "the log line, without colour codes"
+    assert took < 6, f"reported after {took:.1f} s: the 10 s registration wait was not cut short"
+    assert not broken.created and broken.base is None
+    assert told == [], "create()'s error says it all: no second notice"
+
+
+def test_basenode_logs_go_to_the_ros_log_directory(make_node, ros_home):
+    w = wrapped_echo(make_node, "log_wrapper")
+    assert w.base.log_path.parent == Path(os.environ["ROS_LOG_DIR"]) / "ipyros"
+    assert w.base.log_path.name.startswith("echo_node-")
 
 
 SCRIPT = """

@@ -20,8 +20,12 @@ it is attached) are applied when they change by :mod:`ipyros.extension`.
 
 from __future__ import annotations
 
+import urllib.parse
+
 from IPython.core.magic import Magics, magics_class
 from traitlets import Bool, CaselessStrEnum, Float, Int, TraitError, Unicode, validate
+
+from ..errors import IpyrosError
 
 
 @magics_class
@@ -90,14 +94,49 @@ class RosMagics(Magics):
              "False prints plain text. Either way there is no colour when output is not a terminal.",
     ).tag(config=True)
 
+    # Bounds: a value out of them is refused where it is set, not ignored later. The upper
+    # ones keep a typo from freezing the prompt (%topics --hz waiting an hour) or filling memory.
+    _seconds = {"graph_period": (0.05, 3600.0), "hz_window": (0.05, 600.0)}
+    _counts = {"echo_count": 1_000_000, "try_history": 10_000}
+
     @validate("graph_period", "hz_window")
-    def _positive_seconds(self, proposal):
-        if not proposal.value > 0:
-            raise TraitError(f"{proposal.trait.name} must be a positive number of seconds, not {proposal.value}")
+    def _seconds_in_range(self, proposal):
+        low, high = self._seconds[proposal.trait.name]
+        if not low <= proposal.value <= high:  # NaN fails this too
+            raise TraitError(f"{proposal.trait.name} must be from {low:g} to {high:g} seconds, not {proposal.value}")
         return proposal.value
 
     @validate("echo_count", "try_history")
-    def _not_negative(self, proposal):
-        if proposal.value < 0:
-            raise TraitError(f"{proposal.trait.name} must be 0 or more, not {proposal.value}")
+    def _count_in_range(self, proposal):
+        high = self._counts[proposal.trait.name]
+        if not 0 <= proposal.value <= high:
+            raise TraitError(f"{proposal.trait.name} must be from 0 to {high:,}, not {proposal.value}")
         return proposal.value
+
+    @validate("master_uri")
+    def _master_uri(self, proposal):
+        uri = proposal.value.strip()
+        if uri:
+            parts = urllib.parse.urlsplit(uri)
+            try:
+                port = parts.port
+            except ValueError:
+                port = None
+            if parts.scheme not in ("http", "https") or not parts.hostname or port is None:
+                raise TraitError(f"master_uri {uri!r} is not a ROS master URI; write it like "
+                                 "'http://localhost:11311/' (or '' for ROS_MASTER_URI)")
+        return uri
+
+    @validate("process_node_name")
+    def _process_node_name(self, proposal):
+        name = proposal.value.strip()
+        if name:
+            from ..names import check_node_name, check_namespace
+
+            namespace, _, base = ("/" + name.strip("/")).rpartition("/")
+            try:
+                check_namespace(namespace or "/")
+                check_node_name(base)
+            except IpyrosError as error:
+                raise TraitError(f"process_node_name {name!r}: {error}") from None
+        return name

@@ -47,13 +47,27 @@ class WrapMagics(ExtensionMagics):
         if args.var is not None and not _is_variable(args.var):
             raise UsageError(f"--as {args.var}: give a Python variable name, e.g. --as turtle")
         remaps, params, extra_args = rosrun_words(args.extra)
-        from ..wrap import wrap
+        from ..model import BaseModel
+        from ..wrap import base_node_name, wrap
 
+        default = f"{base_node_name(BaseModel(executable=args.executable))}_wrapper"
+        self._refuse_running_variable(args.var or _variable_for(default), "--as" if args.var else "")
         node = wrap(args.package, args.executable, args.var, node_name=args.name, namespace=args.namespace,
                     remaps=remaps or None, params=params or None, args=extra_args or None)
         variable = args.var or _variable_for(node.name)
         self.shell.user_ns[variable] = node
         self.ext.printer.show(node, f"bound to [bold]{variable}[/]")
+
+
+    def _refuse_running_variable(self, variable: str, option: str) -> None:
+        """Binding the new node must not drop the only handle on a node that runs (it would run on, unreachable)."""
+        from ..dsl import rosNode
+
+        held = self.shell.user_ns.get(variable)
+        if isinstance(held, rosNode) and held.created:
+            how = f"--as {variable}" if option else f"the default variable {variable}"
+            raise UsageError(f"{how} holds the running node {held.fullname}; give another name with --as, "
+                             f"or stop that one first: {variable}.shutdown()")
 
 
 def rosrun_words(words: list[str]) -> tuple[dict[str, str], dict[str, Any], list[str]]:
