@@ -18,6 +18,7 @@ no ROS node, no network.
 from __future__ import annotations
 
 import ast
+import math
 import re
 import time
 from typing import Any
@@ -50,6 +51,9 @@ def parse_data(text: str) -> Any:
         pass
     try:
         return yaml.safe_load(text)
+    except RecursionError:
+        raise MessageTypeError("cannot read the message data: it is nested too deeply (no ROS message nests "
+                               "like that); give a dict like {'data': 'hi'} or YAML like 'data: hi'") from None
     except yaml.YAMLError as error:
         where = getattr(error, "problem_mark", None)
         at = f" (line {where.line + 1}, column {where.column + 1})" if where is not None else ""
@@ -58,16 +62,17 @@ def parse_data(text: str) -> Any:
                                "give a dict like {'data': 'hi'} or YAML like 'data: hi'") from None
 
 
-def build_message(msg_type: Any, data: Any = None) -> genpy.Message:
+def build_message(msg_type: Any, data: Any = None, *, nonfinite: bool = False) -> genpy.Message:
     """A message of ``msg_type`` (class or ``"pkg/Type"``) filled from ``data``.
 
     ``data`` is None (all defaults), a dict of fields (nested dicts for nested messages),
     a list of every field's value in declaration order, a single value for a message with
-    one field, or already a message of that type.
+    one field, or already a message of that type. NaN and infinities are refused unless
+    ``nonfinite``: typed by mistake they would reach a controller as a command.
     """
     type_name, cls = msgtypes.resolve_message(msg_type)
     try:
-        return _message(cls, data, "")
+        return _Builder(nonfinite).message(cls, data, "")
     except _FieldError as error:
         raise MessageTypeError(f"{type_name}: {error}") from None
 
@@ -79,61 +84,82 @@ class _FieldError(Exception):
         super().__init__(f"{path}: {problem}" if path else problem)
 
 
-def _message(cls: type, data: Any, path: str) -> genpy.Message:
-    if isinstance(data, cls):
-        return data
-    if isinstance(data, genpy.Message):
-        raise _FieldError(path, f"expected a {cls._type}, got a {data._type}")
-    fields, types = list(cls.__slots__), list(cls._slot_types)
-    if data is None:
-        return cls()
-    if isinstance(data, dict):
-        values = {}
-        for key, value in data.items():
-            if key not in fields:
-                where = _join(path, str(key))
-                raise _FieldError(where, f"no such field ({cls._type} has {', '.join(fields) or 'no fields'})")
-            values[key] = _value(types[fields.index(key)], value, _join(path, key))
-        return cls(**values)
-    if isinstance(data, (list, tuple)):
-        if len(data) != len(fields):
-            raise _FieldError(path, f"{len(data)} values for {cls._type}, which has {len(fields)} fields "
-                                    f"({', '.join(fields)}); give all of them in order, or a dict")
-        return cls(**{f: _value(t, v, _join(path, f)) for f, t, v in zip(fields, types, data)})
-    if len(fields) == 1:  # "hello" for std_msgs/String, 3 for std_msgs/Int32
-        return cls(**{fields[0]: _value(types[0], data, _join(path, fields[0]))})
-    raise _FieldError(path, f"expected a dict of fields for {cls._type} ({', '.join(fields)}), "
-                            f"got {_describe(data)}")
+class _Builder:
+    """Builds a message field by field, every value checked; ``nonfinite`` lets NaN and inf through."""
 
+    def __init__(self, nonfinite: bool) -> None:
+        self.nonfinite = nonfinite
 
-def _value(field_type: str, value: Any, path: str) -> Any:
-    """``value`` checked (and converted where lossless) for a field of ``field_type``."""
-    array = _ARRAY.match(field_type)
-    if array:
-        return _array(array["base"], int(array["size"]) if array["size"] else None, value, path)
-    if field_type in _INT_BITS or field_type in _UINT_BITS:
-        return _integer(field_type, value, path)
-    if field_type in _FLOATS:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise _FieldError(path, f"expected a number ({field_type}), got {_describe(value)}")
-        return float(value)
-    if field_type == "bool":
-        if not isinstance(value, bool):
-            raise _FieldError(path, f"expected True or False, got {_describe(value)}")
-        return value
-    if field_type == "string":
-        if not isinstance(value, str):
-            raise _FieldError(path, f"expected a string, got {_describe(value)}; quote it")
-        return value
-    if field_type in ("time", "duration"):
-        return _stamp(field_type, value, path)
-    if "/" not in field_type:  # "Header" in very old messages
-        field_type = "std_msgs/Header" if field_type == "Header" else field_type
-    try:
-        _, cls = msgtypes.resolve_message(field_type)
-    except MessageTypeError as error:
-        raise _FieldError(path, str(error)) from None
-    return _message(cls, value, path)
+    def message(self, cls: type, data: Any, path: str) -> genpy.Message:
+        if isinstance(data, cls):
+            return data
+        if isinstance(data, genpy.Message):
+            raise _FieldError(path, f"expected a {cls._type}, got a {data._type}")
+        fields, types = list(cls.__slots__), list(cls._slot_types)
+        if data is None:
+            return cls()
+        if isinstance(data, dict):
+            values = {}
+            for key, value in data.items():
+                if key not in fields:
+                    where = _join(path, str(key))
+                    raise _FieldError(where, f"no such field ({cls._type} has {', '.join(fields) or 'no fields'})")
+                values[key] = self.value(types[fields.index(key)], value, _join(path, key))
+            return cls(**values)
+        if isinstance(data, (list, tuple)):
+            if len(data) != len(fields):
+                raise _FieldError(path, f"{len(data)} values for {cls._type}, which has {len(fields)} fields "
+                                        f"({', '.join(fields)}); give all of them in order, or a dict")
+            return cls(**{f: self.value(t, v, _join(path, f)) for f, t, v in zip(fields, types, data)})
+        if len(fields) == 1:  # "hello" for std_msgs/String, 3 for std_msgs/Int32
+            return cls(**{fields[0]: self.value(types[0], data, _join(path, fields[0]))})
+        raise _FieldError(path, f"expected a dict of fields for {cls._type} ({', '.join(fields)}), "
+                                f"got {_describe(data)}")
+
+    def value(self, field_type: str, value: Any, path: str) -> Any:
+        """``value`` checked (and converted where lossless) for a field of ``field_type``."""
+        array = _ARRAY.match(field_type)
+        if array:
+            return self.array(array["base"], int(array["size"]) if array["size"] else None, value, path)
+        if field_type in _INT_BITS or field_type in _UINT_BITS:
+            return _integer(field_type, value, path)
+        if field_type in _FLOATS:
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise _FieldError(path, f"expected a number ({field_type}), got {_describe(value)}")
+            if not self.nonfinite and not math.isfinite(value):
+                raise _FieldError(path, f"{value} is not a number a robot can use; give a finite number "
+                                        "(or, if it is meant, e.g. a Range's inf, allow it: %pub --nonfinite)")
+            return float(value)
+        if field_type == "bool":
+            if not isinstance(value, bool):
+                raise _FieldError(path, f"expected True or False, got {_describe(value)}")
+            return value
+        if field_type == "string":
+            if not isinstance(value, str):
+                raise _FieldError(path, f"expected a string, got {_describe(value)}; quote it")
+            return value
+        if field_type in ("time", "duration"):
+            return _stamp(field_type, value, path)
+        if "/" not in field_type:  # "Header" in very old messages
+            field_type = "std_msgs/Header" if field_type == "Header" else field_type
+        try:
+            _, cls = msgtypes.resolve_message(field_type)
+        except MessageTypeError as error:
+            raise _FieldError(path, str(error)) from None
+        return self.message(cls, value, path)
+
+    def array(self, base: str, size: int | None, value: Any, path: str) -> Any:
+        if base in ("uint8", "char") and isinstance(value, (bytes, bytearray)):
+            items: Any = bytes(value)
+        elif isinstance(value, (list, tuple)):
+            items = [self.value(base, v, f"{path}[{i}]") for i, v in enumerate(value)]
+            if base in ("uint8", "char"):  # genpy wants bytes for uint8[]
+                items = bytes(items)
+        else:
+            raise _FieldError(path, f"expected a list of {base}, got {_describe(value)}")
+        if size is not None and len(items) != size:
+            raise _FieldError(path, f"expected exactly {size} values ({base}[{size}]), got {len(items)}")
+        return items
 
 
 def _integer(field_type: str, value: Any, path: str) -> int:
@@ -149,20 +175,6 @@ def _integer(field_type: str, value: Any, path: str) -> int:
     return value
 
 
-def _array(base: str, size: int | None, value: Any, path: str) -> Any:
-    if base in ("uint8", "char") and isinstance(value, (bytes, bytearray)):
-        items: Any = bytes(value)
-    elif isinstance(value, (list, tuple)):
-        items = [_value(base, v, f"{path}[{i}]") for i, v in enumerate(value)]
-        if base in ("uint8", "char"):  # genpy wants bytes for uint8[]
-            items = bytes(items)
-    else:
-        raise _FieldError(path, f"expected a list of {base}, got {_describe(value)}")
-    if size is not None and len(items) != size:
-        raise _FieldError(path, f"expected exactly {size} values ({base}[{size}]), got {len(items)}")
-    return items
-
-
 def _stamp(field_type: str, value: Any, path: str) -> Any:
     cls = genpy.Time if field_type == "time" else genpy.Duration
     if isinstance(value, cls):
@@ -172,12 +184,19 @@ def _stamp(field_type: str, value: Any, path: str) -> Any:
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         if field_type == "time" and value < 0:
             raise _FieldError(path, f"a time cannot be negative, got {value}")
+        limit = (1 << 32) if field_type == "time" else (1 << 31)
+        if not -limit <= value < limit:  # NaN fails this too
+            raise _FieldError(path, f"{value} does not fit a {field_type} (up to {limit - 1} s)")
         return cls.from_sec(value)
     if isinstance(value, dict) and set(value) <= {"secs", "nsecs"} and value:
         secs, nsecs = value.get("secs", 0), value.get("nsecs", 0)
         for key, part in (("secs", secs), ("nsecs", nsecs)):
             if isinstance(part, bool) or not isinstance(part, int):
                 raise _FieldError(_join(path, key), f"expected an integer, got {_describe(part)}")
+        high = (1 << 32) - 1 if field_type == "time" else (1 << 31) - 1
+        low = 0 if field_type == "time" else -(1 << 31)
+        if not low <= secs <= high:
+            raise _FieldError(_join(path, "secs"), f"{secs} does not fit a {field_type} ({low}..{high} s)")
         return cls(secs, nsecs)
     now = " or 'now'" if field_type == "time" else ""
     raise _FieldError(path, f"expected seconds (a number), {{secs: S, nsecs: N}}{now} for a {field_type}, "

@@ -151,3 +151,20 @@ def test_pub_at_a_rate_until_ctrl_c(ip, capsys):
         sent = int(out.split("published ")[1].split()[0])
         assert 10 <= sent <= 30 and "at 20 Hz" in out
         wait_for(lambda: sum("data: 7" in line for line in listener.lines) >= 5, what="the beats")
+
+
+def test_pub_values_that_do_not_fit_are_one_line_errors(ip):
+    for value, message in (
+            ("{linear: {x: .nan}}", "linear.x: nan is not a number a robot can use; give a finite number"),
+            ("{linear: {x: .inf}}", "linear.x: inf is not a number a robot can use"),
+            ("{linear: {x: -.inf}}", "linear.x: -inf is not a number"),
+            ("[" * 5000 + "]" * 5000, "nested too deeply"),
+            ("{a: " * 3000 + "1" + "}" * 3000, "nested too deeply")):
+        error = error_of(ip, f"%pub /mg/twist geometry_msgs/Twist {value}")
+        assert isinstance(error, (MessageTypeError, UsageError)), (value[:20], error)
+        assert message in str(error) and "\n" not in str(error), (value[:20], str(error))
+    error = error_of(ip, '%pub "bad topic" std_msgs/String hi')
+    assert "invalid topic name '\"bad topic\"'" in str(error) and "\n" not in str(error)
+    error = error_of(ip, "%pub /mg/time std_msgs/Time {data: {secs: 99999999999}}")
+    assert "data.secs: 99999999999 does not fit" in str(error) and "\n" not in str(error)
+    ok(ip, "%pub --nonfinite /mg/range std_msgs/Float32 .inf")  # when it is meant

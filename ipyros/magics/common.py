@@ -94,5 +94,5 @@ def split_head(line: str, value_options: set[str], positional: Callable[[int, st
         rest = rest[match.end():]
 
 
-_WORD = re.compile(r"\s*(\S+)")
+_WORD = re.compile(r"""\s*("[^"]*"|'[^']*'|\S+)""")  # a quoted word is one word, as the shell reads it
 _NUMBER = re.compile(r"-\.?\d")

@@ -100,6 +100,8 @@ class TopicMagics(ExtensionMagics):
               "fields left out keep their defaults, unknown or mistyped fields are errors")
     @argument("-t", "--type", dest="type_option", metavar="TYPE", help="the message type, as an option")
     @argument("-r", "--rate", type=float, help="publish again at this rate (Hz) until Ctrl-C")
+    @argument("--nonfinite", action="store_true", help="let NaN and infinities through (refused otherwise: "
+              "typed by mistake they reach a controller as a command)")
     @no_var_expand
     @line_cell_magic
     def pub(self, line: str, cell: Optional[str] = None) -> None:
@@ -132,7 +134,7 @@ class TopicMagics(ExtensionMagics):
         topic = global_topic(args.topic)
         given = args.type or args.type_option
         type_name = msgtypes.resolve_message(given)[0] if given else self._live_type(topic, for_pub=True)
-        msg = build_message(type_name, parse_data(data))
+        msg = build_message(type_name, parse_data(data), nonfinite=args.nonfinite)
         if args.rate is None:
             sender = self.ext.publisher.publish(topic, type_name, msg)
             print(f"published a {type_name} on {topic} (from {sender})")
