@@ -44,7 +44,9 @@ class Interface:
     topic subscribed to as "any type" (rospy.AnyMsg, topic_tools' ShapeShifter: the
     master records no type for those) that nobody publishes yet, or a service that did
     not answer the probe. ``left_out`` names the ROS plumbing that was seen but is not
-    part of the interface (e.g. ``"/rosout (publishes)"``).
+    part of the interface (e.g. ``"/rosout (publishes)"``); ``not_seen`` the names
+    declared for it that it did not use while it was watched (some nodes advertise only
+    after their first input).
     """
 
     node: str
@@ -52,6 +54,7 @@ class Interface:
     subscriptions: list[tuple[str, str]] = field(default_factory=list)
     services: list[tuple[str, str]] = field(default_factory=list)
     left_out: list[str] = field(default_factory=list)
+    not_seen: list[str] = field(default_factory=list)
 
     def __rich__(self) -> Table:
         return interface_table(self)
@@ -189,6 +192,10 @@ def interface_table(interface: Interface) -> Table:
             table.add_row(label, name, type_ or "[dim]unknown[/]")
     if not (interface.publications or interface.subscriptions or interface.services):
         table.add_row("", "[dim]no topics or services[/]", "")
+    if interface.not_seen:
+        table.add_section()
+        table.add_row("[yellow]not seen[/]", ", ".join(interface.not_seen), "[dim]declared; may come after its first "
+                      "input[/]")
     if interface.left_out:
         node_prefix = interface.node + "/"
         short = (entry.split(" ")[0].replace(node_prefix, "~", 1) for entry in interface.left_out)

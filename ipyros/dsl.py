@@ -121,16 +121,22 @@ class rosNode:  # noqa: N801 - the paper's name
 
         return set_base(self, package=package)
 
-    def baseLaunch(self, launch: str, node: str) -> "rosNode":  # noqa: N802 - named like baseNode
+    def baseLaunch(self, launch: str, node: str, args: Optional[dict[str, Any]] = None,
+                   **arg_values: Any) -> "rosNode":  # noqa: N802 - named like baseNode
         """Wrap the node ``node`` that the launch file ``launch`` starts (``/robot1/planner``).
 
-        Its package, executable, name, namespace, remaps, params and args come from the
-        launch file; ``create()`` runs the rest of the launch file untouched, and this
-        node wrapped where it was. The launch file itself is not edited.
+        The file's ``<arg>`` values are given as keywords (``rate=5``) or, for names that
+        are not Python identifiers, as ``args={"use-sim": True}``, like
+        ``roslaunch FILE rate:=5``. Its package, executable, name, namespace, remaps,
+        params and args come from the launch file; ``create()`` runs the rest of the launch
+        file untouched, and this node wrapped where it was. The file itself is not edited.
         """
         from .wrap import set_launch_base
 
-        return set_launch_base(self, launch, node)
+        if args is not None and not isinstance(args, dict):
+            raise DeclarationError(f"baseLaunch(args={args!r}): give a dict of the launch file's args, "
+                                   "e.g. args={'rate': 5}")
+        return set_launch_base(self, launch, node, {**(args or {}), **arg_values})
 
     def discover(self, timeout: float = 10.0) -> Any:
         """Run the basenode once, read its topics and services from the master, reuse them all.

@@ -380,7 +380,9 @@ def _launch_xml(model: NodeModel, package: str) -> str:
     about = [f"The basenode {base.package}/{base.executable}, remapped onto {model.name}'s internal names:",
              f"it talks to the rest of the graph only through {model.name}, on the names it wraps."]
     if base.launch:
-        about += [f"It is {base.launch_node} of {base.launch}, as ipyros wrapped it there.",
+        given = " ".join(f"{name}:={value}" for name, value in base.launch_args.items())
+        about += [f"It is {base.launch_node} of {base.launch}" + (f" (with {given})" if given else "") +
+                  ", as ipyros wrapped it there.",
                   "Start the rest of that launch file separately, without this node: roslaunch",
                   "cannot leave one node of an included file out."]
     root.append(_comment(*about))

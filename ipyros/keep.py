@@ -442,7 +442,7 @@ def _declare(node: "rosNode", model: NodeModel, functions: dict[str, Callable[..
     """Replay ``model`` through the public DSL: base first, then topics, services, timers, params."""
     base = model.base
     if base is not None and base.launch:  # the launch file says the rest, as it does now
-        node.baseLaunch(base.launch, base.launch_node or base.node_name or "")
+        node.baseLaunch(base.launch, base.launch_node or base.node_name or "", args=base.launch_args)
         base = None
     if base is not None and base.executable:
         node.baseNode(base.executable, name=base.node_name, namespace=base.namespace, remaps=base.remaps,

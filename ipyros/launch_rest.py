@@ -73,7 +73,9 @@ class LaunchBase:
         self._up = False  # an exit during start() is raised by start(), not reported as well
         self.not_started: list[str] = []  # nodes of the rest that roslaunch could not start (it goes on without)
         self.rest = BaseProcess(
-            sys.executable, ["-m", "ipyros.launch_rest", base.launch, "--exclude", base.launch_node],
+            sys.executable, ["-m", "ipyros.launch_rest", base.launch,
+                             *[f"{name}:={value}" for name, value in base.launch_args.items()],
+                             "--exclude", base.launch_node],
             master_uri=master_uri, on_exit=self._rest_exited,
             log_path=temp_log(f"rest-of-{Path(base.launch).stem}"),
         )
@@ -249,8 +251,8 @@ def _attached_parent(run_id: str, launch: str):
                           sigterm_timeout=NODE_SIGTERM_TIMEOUT)
 
 
-def run(launch: str, exclude: str) -> int:
-    """Run ``launch`` without node ``exclude`` until SIGINT or SIGTERM; print READY once it runs."""
+def run(launch: str, exclude: str, args: Optional[dict[str, str]] = None) -> int:
+    """Run ``launch`` (with ``args``) without node ``exclude`` until SIGINT or SIGTERM; print READY once it runs."""
     import roslaunch
     import roslaunch.rlutil
     from roslaunch.core import RLException
@@ -262,7 +264,7 @@ def run(launch: str, exclude: str) -> int:
         return 2
 
     try:
-        config = launchfile.without(launchfile.load(launch), exclude)
+        config = launchfile.without(launchfile.load(launch, args), exclude)
     except IpyrosError as error:
         return failed(str(error))
     if not config.master.is_running():  # checked again by the parent, at the moment it matters
@@ -303,8 +305,10 @@ def main(argv: Optional[list[str]] = None) -> int:
         description="Run a launch file without one of its nodes, on the running ROS master (ipyros runs that node).")
     parser.add_argument("launch", help="the launch file: a path, or $(find pkg)/launch/x.launch")
     parser.add_argument("--exclude", required=True, help="full name of the node not to start, e.g. /robot1/planner")
+    parser.add_argument("args", nargs="*", metavar="NAME:=VALUE", help="the launch file's args, as for roslaunch")
     options = parser.parse_args(argv)
-    return run(options.launch, options.exclude)
+    args = dict(word.split(":=", 1) for word in options.args if ":=" in word)
+    return run(options.launch, options.exclude, args)
 
 
 if __name__ == "__main__":

@@ -73,21 +73,68 @@ def stored_path(launch: str) -> str:
     return launch.strip() if "$(" in launch else str(launch_path(launch))
 
 
-def load(launch: str) -> "ROSLaunchConfig":
-    """The launch file loaded by roslaunch's own loader, with its args' defaults.
+def load(launch: str, args: "dict[str, str] | None" = None) -> "ROSLaunchConfig":
+    """The launch file loaded by roslaunch's own loader, with ``args`` (``roslaunch FILE a:=1``).
 
-    Machines are not assigned (that would look remote hosts up on the network); a
-    roslaunch error becomes one :class:`BaseNodeError` line naming the file.
+    Args not given take their defaults; an arg the file does not declare, or a required
+    one (no default) not given, is refused first with the line that fixes it. Machines
+    are not assigned (that would look remote hosts up on the network); a roslaunch
+    error becomes one :class:`BaseNodeError` line naming the file.
     """
     import roslaunch.config
     from roslaunch.core import RLException
 
     path = launch_path(launch)
+    args = check_args(path, args or {})
+    argv = [f"{name}:={value}" for name, value in args.items()]
     try:
-        return roslaunch.config.load_config_default([str(path)], None, verbose=False, assign_machines=False)
+        return roslaunch.config.load_config_default([(str(path), argv)], None, verbose=False,
+                                                    assign_machines=False)
     except (RLException, ValueError, KeyError, OSError) as error:
-        raise BaseNodeError(f"roslaunch cannot load {path}: {one_line(error)}; fix the launch file (ipyros reads "
-                            "it with its args' defaults; check it with: roslaunch --nodes FILE)") from None
+        raise BaseNodeError(f"roslaunch cannot load {path}: {one_line(error)}; fix the launch file (check it with: "
+                            f"roslaunch --nodes {shlex.join([str(path), *argv])})") from None
+
+
+def declared_args(path: Path) -> dict[str, bool]:
+    """The file's own ``<arg>`` names (not those of ``<include>``), each with whether it must be given."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError) as error:
+        raise BaseNodeError(f"roslaunch cannot load {path}: Invalid roslaunch XML syntax: {error}; "
+                            "fix the launch file") from None
+    found: dict[str, bool] = {}
+
+    def walk(element: Any) -> None:
+        for child in element:
+            if child.tag == "include":
+                continue  # its <arg> children pass values in; they declare nothing here
+            if child.tag == "arg" and child.get("name"):
+                found[child.get("name")] = child.get("default") is None and child.get("value") is None
+            walk(child)
+
+    walk(root)
+    return found
+
+
+def check_args(path: Path, args: "dict[str, Any]") -> dict[str, str]:
+    """``args`` as roslaunch reads them (strings; True as ``true``), refused unless the file declares them."""
+    declared = declared_args(path)
+    unknown = sorted(set(args) - set(declared))
+    if unknown:
+        close = [m for name in unknown for m in difflib.get_close_matches(name, declared, n=1)]
+        hint = f"did you mean {', '.join(close)}? " if close else ""
+        raise BaseNodeError(f"launch file {path.name} has no arg {', '.join(unknown)}; {hint}its args: "
+                            f"{', '.join(sorted(declared)) or 'none'}")
+    text = {name: ("true" if value is True else "false" if value is False else str(value))
+            for name, value in args.items()}
+    missing = sorted(name for name, required in declared.items() if required and name not in text)
+    if missing:
+        example = ", ".join(f"{name}=..." for name in missing)
+        raise BaseNodeError(f"launch file {path.name} needs arg {', '.join(missing)} (no default); give it: "
+                            f"baseLaunch({path.name!r}, node, {example})")
+    return text
 
 
 def one_line(error: Any) -> str:
@@ -208,13 +255,18 @@ def base_model(config: "ROSLaunchConfig", node: "Node", launch: str) -> BaseMode
     )
 
 
-def read_base(launch: "str | os.PathLike[str]", name: str) -> tuple[BaseModel, list[str]]:
-    """Node ``name`` of launch file ``launch`` as a basenode, and notes on what ipyros runs differently."""
+def read_base(launch: "str | os.PathLike[str]", name: str,
+              args: "dict[str, Any] | None" = None) -> tuple[BaseModel, list[str]]:
+    """Node ``name`` of launch file ``launch`` (loaded with ``args``) as a basenode, and notes on
+    what ipyros runs differently."""
     launch = os.fspath(launch) if isinstance(launch, os.PathLike) else launch
-    config = load(launch)
+    args = check_args(launch_path(launch), args or {})
+    config = load(launch, args)
     node = find_node(config, name, launch)
     notes = check_supported(config, node, launch)
-    return base_model(config, node, launch), notes
+    base = base_model(config, node, launch)
+    base.launch_args = args
+    return base, notes
 
 
 # -- the rest --------------------------------------------------------------------------------

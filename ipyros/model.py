@@ -58,8 +58,9 @@ class BaseModel:
     """The basenode a wrapping node wraps: found as ``rosrun package executable`` finds it.
 
     A basenode read from a launch file (``baseLaunch``) also keeps ``launch``, the file
-    (absolute, or ``$(find pkg)/...`` as written), and ``launch_node``, its full name in
-    it; its ``env`` comes from the file's ``<env>`` tags.
+    (absolute, or ``$(find pkg)/...`` as written), ``launch_node``, its full name in it,
+    and ``launch_args``, the ``<arg>`` values it was read with (as ``roslaunch file a:=1``);
+    its ``env`` comes from the file's ``<env>`` tags.
     """
 
     executable: Optional[str] = None
@@ -72,6 +73,7 @@ class BaseModel:
     env: dict[str, str] = field(default_factory=dict)
     launch: Optional[str] = None
     launch_node: Optional[str] = None
+    launch_args: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass

@@ -10,7 +10,7 @@ it, so B talks only to W there:
 declared                        runs
 ==============================  ==========================================================
 reuse.publish(T)                relay internal(T) → T (bytes, not deserialised)
-reuse.publish(T) + new.subscribe(T, h)   h gets B's messages; nothing reaches T unless h writes it
+reuse.publish(T) + new.subscribe(T, h)   h gets B's messages; W publishes T, on which ``write(T)`` sends
 reuse.subscribe(T)              relay T → internal(T)
 reuse.subscribe(T) + new.subscribe(T, h) h gets T's messages; ``write(T)`` feeds B
 new.publish(X) / new.subscribe(X, h)     plain publisher / subscriber on X
@@ -114,6 +114,9 @@ def plan(model: NodeModel) -> dict[Spec, None]:
         elif t.direction == "publish":  # reuse: B's output out to the world, unless intercepted
             if t.resolved not in intercepted:
                 specs[RelaySpec(internal_name(model, t.resolved), t.resolved, t.type)] = None
+            elif model.topic(t.resolved, "publish", "new") is None:
+                # W takes T over: its handler writes what reaches T (write(T), as in the paper)
+                specs[PublishSpec(t.resolved, t.type, t.latch)] = None
         elif t.resolved not in intercepted:  # reuse subscribe: the world into B
             specs[RelaySpec(t.resolved, internal_name(model, t.resolved), t.type)] = None
 
@@ -130,11 +133,14 @@ def plan(model: NodeModel) -> dict[Spec, None]:
 
 
 def write_target(model: NodeModel, resolved: str) -> str | None:
-    """Where ``write(resolved)`` sends: its own publication, or B's input for a reused subscription."""
+    """Where ``write(resolved)`` sends: its own publication (declared, or an intercepted output of B
+    taken over), or B's input for a reused subscription."""
     for t in model.topics:
         if t.resolved == resolved and t.role == "new" and t.direction == "publish":
             return resolved
     intercepted = model.topic(resolved, "subscribe", "new") is not None
     if intercepted and model.topic(resolved, "subscribe", "reuse") is not None:
         return internal_name(model, resolved)
+    if intercepted and model.topic(resolved, "publish", "reuse") is not None:
+        return resolved
     return None

@@ -196,7 +196,8 @@ def _base_lines(var: str, model: NodeModel) -> list[str]:
     if base is None:
         return []
     if base.launch:  # a node of a launch file: the launch file says the rest
-        return [f"{var}.baseLaunch({base.launch!r}, {base.launch_node!r})"]
+        args = f", args={base.launch_args!r}" if base.launch_args else ""
+        return [f"{var}.baseLaunch({base.launch!r}, {base.launch_node!r}{args})"]
     options = {"name": base.node_name, "namespace": base.namespace, "remaps": base.remaps or None,
                "params": base.params or None, "args": base.args or None}
     text = "".join(f", {k}={v!r}" for k, v in options.items() if v)

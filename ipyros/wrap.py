@@ -161,8 +161,8 @@ def _check_base_options(fields: dict[str, Any]) -> None:
             runtime.check_param(f"~{key.lstrip('~_')}", value)
 
 
-def set_launch_base(node: "rosNode", launch: Any, node_name: str) -> "rosNode":
-    """Wrap the node ``node_name`` that launch file ``launch`` starts (see :mod:`ipyros.launchfile`).
+def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional[dict] = None) -> "rosNode":
+    """Wrap the node ``node_name`` that launch file ``launch`` starts, read with ``args`` (see :mod:`ipyros.launchfile`).
 
     The whole basenode comes from the file: package, executable, name, namespace,
     remaps, private params, args. Like ``baseNode``, the wrapping node lives in the
@@ -174,7 +174,9 @@ def set_launch_base(node: "rosNode", launch: Any, node_name: str) -> "rosNode":
 
     if node.created:
         raise DeclarationError(f"{node.name} is already running; declare its basenode before create()")
-    base, notes = read_base(launch, node_name)
+    if args is not None and not (isinstance(args, dict) and all(isinstance(k, str) for k in args)):
+        raise DeclarationError(f"baseLaunch(args={args!r}): give a dict of the launch file's args, e.g. {{'rate': 5}}")
+    base, notes = read_base(launch, node_name, args)
 
     def edit(model: NodeModel) -> None:
         model.base = base
@@ -183,7 +185,8 @@ def set_launch_base(node: "rosNode", launch: Any, node_name: str) -> "rosNode":
         _reresolve(model)
 
     node._change(edit)
-    node._record(f"baseLaunch({launch!r}, {node_name!r}): {base.package}/{base.executable} as {base.launch_node}")
+    given = "".join(f", {name}={value!r}" for name, value in base.launch_args.items())
+    node._record(f"baseLaunch({launch!r}, {node_name!r}{given}): {base.package}/{base.executable} as {base.launch_node}")
     for note in notes:
         node._session.notify(f"ipyros: {note}")
     return node
@@ -286,6 +289,7 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
                                 f"{' | '.join(process.tail(5)) or 'none'}") from None
         raise
     check_base_types(model, interface)
+    report_unused_reuses(node, interface)
 
 
 def check_base_types(model: NodeModel, interface: "Interface") -> None:
@@ -333,6 +337,7 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
     starts it again, remapped). Returns the interface, which displays as a table.
     """
     from .base import BaseProcess
+    from .base import exit_reason
     from .discovery import wait_for_node
 
     model = node._model
@@ -344,15 +349,43 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
                         "namespace": base_namespace(model)})
     probe = BaseProcess.from_model(base, master_uri=uri).start()
     try:
-        interface = wait_for_node(uri, base_fullname(model), timeout=timeout)
+        interface = wait_for_node(uri, base_fullname(model), timeout=timeout, alive=lambda: probe.running)
     except BaseNodeError:
         if not probe.running:
-            raise BaseNodeError(f"basenode {base_fullname(model)} exited at start; last log lines: "
-                                f"{' | '.join(probe.tail(5))}") from None
+            raise BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(probe.returncode or 0)} at start; "
+                                f"last log lines: {' | '.join(probe.tail(5)) or 'none'}") from None
         raise
     finally:
         probe.stop()
+    # Without the wrapping remaps, the basenode used the public names themselves.
+    interface.not_seen = [f"{t.resolved} ({t.direction})" for t in model.topics
+                          if t.role == "reuse" and not _uses(interface, t.direction, t.resolved)]
+    if interface.not_seen:
+        node._session.notify(f"ipyros: {interface.node} did not use {', '.join(interface.not_seen)} while it was "
+                             f"discovered: {_LATE}; they stay declared")
+    elif not interface.publications and interface.subscriptions:
+        node._session.notify(f"ipyros: {interface.node} publishes nothing yet: {_LATE}; declare what it will "
+                             f"publish: {node.called}.reuse.publish('name', type=...)")
     return declare_interface(node, interface)
+
+
+_LATE = "a node may advertise only after its first input (topic_tools throttle and mux do)"
+
+
+def _uses(interface: "Interface", direction: str, name: str) -> bool:
+    entries = interface.publications if direction == "publish" else interface.subscriptions
+    return any(entry == name for entry, _ in entries)
+
+
+def report_unused_reuses(node: "rosNode", interface: "Interface") -> None:
+    """Say, once per start, which ``reuse`` declarations the settled basenode does not use (yet)."""
+    model = node._model
+    unused = [f"reuse.{t.direction}({t.name!r})" for t in model.topics
+              if t.role == "reuse" and not _uses(interface, t.direction, internal_name(model, t.resolved))]
+    if unused:
+        node._session.notify(f"ipyros: basenode {interface.node} does not use {', '.join(unused)} of {node.called} "
+                             f"(yet): nothing is relayed there until it does ({_LATE}); if a name is wrong, "
+                             f"{node.called}.remove('name') and declare the right one")
 
 
 def wrap(package: str, executable: str, name: Optional[str] = None, *, node_name: Optional[str] = None,

@@ -185,7 +185,8 @@ def test_wrapping_the_only_node_and_a_rest_roslaunch_cannot_start(make_node, ros
     ("no/such.launch", "planner", r"launch file 'no/such.launch' not found \(relative to .*\); give its path"),
     ("$(find no_such_pkg)/robot.launch", "planner", "no ROS package 'no_such_pkg'"),
     (str(LAUNCH / "broken.launch"), "planner", "roslaunch cannot load .*broken.launch: Invalid roslaunch XML syntax"),
-    (str(LAUNCH / "needs_arg.launch"), "planner", "requires the 'robot' arg to be set; fix the launch file"),
+    (str(LAUNCH / "needs_arg.launch"), "planner", r"launch file needs_arg.launch needs arg robot \(no default\); "
+                                                  r"give it: baseLaunch\('needs_arg.launch', node, robot=...\)"),
     (ROBOT, "/robot1/planer", ("starts no node '/robot1/planer': did you mean /robot1/planner.* its nodes: "
                                "/logger, /robot1/controller, /robot1/planner")),
     (ROBOT, "navigator", "starts no node 'navigator': its nodes: /logger"),
@@ -200,6 +201,34 @@ def test_bad_launch_input_is_one_line_and_changes_nothing(make_node, launch, nod
         nd.baseLaunch(launch, node)
     assert "\n" not in str(caught.value)
     assert nd.model().base is None and nd.fullname == "/bad_launch_wrap"
+
+
+def test_launch_args_are_given_like_roslaunch_file_name_value(make_node, ros_master, tmp_path):
+    from ipyros import rosNode
+
+    with pytest.raises(errors.BaseNodeError) as caught:
+        make_node("arg_typo").baseLaunch(ROBOT, "planner", prefx="fast: ")
+    assert str(caught.value) == "launch file robot.launch has no arg prefx; did you mean prefix? its args: prefix"
+    with pytest.raises(errors.DeclarationError, match="give a dict of the launch file's args"):
+        make_node("arg_list").baseLaunch(ROBOT, "planner", args=["prefix:=x"])
+
+    out = listen(make_node, "arg_listener", "/out")
+    feeder = make_node("arg_feeder").new.publish("/in", msgType=String).create()
+    nd = make_node("r2_wrap").baseLaunch(str(LAUNCH / "needs_arg.launch"), "r2_planner", robot="r2")
+    assert nd.model().base.launch_args == {"robot": "r2"} and nd.basenode_name == "/r2_planner"
+    nd.reuse.subscribe("in", type=String).publish("out", type=String)
+    nd.save(tmp_path / "r2.py")
+    assert "args={'robot': 'r2'}" in (tmp_path / "r2.py").read_text()
+    nd.save(tmp_path / "r2.yaml")
+    try:
+        nd.create()
+        wait_for(lambda: master_state(ros_master)["sub"].get("/r2_wrap/base/in") == ["/r2_planner"],
+                 what="the planner named from the arg, remapped onto the wrapper")
+        wait_for(lambda: feeder.write("/in", String("x")) or out, timeout=20, what="a message through it")
+    finally:
+        nd.shutdown()
+    again = rosNode.load(tmp_path / "r2.yaml", session=nd._session)
+    assert again.model().base.launch_args == {"robot": "r2"} and again.basenode_name == "/r2_planner"
 
 
 def test_what_ipyros_runs_differently_is_said_and_the_full_name_picks_one(make_node, ros_session):

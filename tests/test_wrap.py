@@ -115,6 +115,11 @@ def test_wrapping_debians_cpp_relay(make_node, ros_master):
     assert all(m.data == "plain" for m in out_seen[:out_count]) and len(out_seen) == out_count, \
         "while intercepted, the basenode's output does not reach /cpp/out"
 
+    # Or write the intercepted output back on its own public name, changed: it works with no more declared.
+    w.new.subscribe("/cpp/out", handler=lambda m: w.write("/cpp/out", String(m.data + "!")), msgType=String)
+    wait_for(lambda: send("back") or any(m.data == "back!" for m in out_seen), timeout=20, what="written back")
+    assert not any(m.data == "back" for m in out_seen), "the basenode's own message does not also reach /cpp/out"
+
     # Give the topic back to the relay: remove the interception.
     w.new.unsubscribe("/cpp/out")
     wait_for(lambda: send("again") or any(m.data == "again" for m in out_seen), timeout=20, what="relay back")

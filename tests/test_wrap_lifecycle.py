@@ -135,3 +135,34 @@ def test_no_orphan_when_the_interpreter_is_killed(ros_master):
     proc.send_signal(signal.SIGKILL)
     proc.wait(10)
     wait_for(lambda: not alive(base_pid), what="the basenode to die with its SIGKILLed interpreter")
+
+
+def test_a_node_that_advertises_after_its_first_input(make_node, ros_session, ros_master):
+    """topic_tools throttle (Debian's C++ node) subscribes IN at once but advertises OUT only when
+    the first message tells it the type: discovery and create() say so, and the wrap works once it does."""
+    told = []
+    previous = ros_session.notice
+    ros_session.notice = told.append
+    try:
+        nd = make_node("throttle_wrap", namespace="/thr")
+        nd.baseNode("throttle", args=["messages", "in", "50", "out"]).basePackage("topic_tools")
+        nd.reuse.publish("out", type=String)
+        interface = nd.discover()
+        assert interface.not_seen == ["/thr/out (publish)"]
+        assert any("/throttle did not use /thr/out (publish) while it was discovered: a node may advertise only "
+                   "after its first input" in line for line in told), told
+        assert nd.model().topic("/thr/out", "publish", "reuse") is not None, "it stays declared"
+        nd.reuse.subscribe("in", type=String)  # ShapeShifter: the master has no type for it
+        told.clear()
+        nd.create()
+        assert any("basenode /thr/throttle does not use reuse.publish('out') of throttle_wrap (yet)" in line
+                   for line in told), told
+        heard = []
+        make_node("throttle_listener").new.subscribe("/thr/out", handler=heard.append, msgType=String).create()
+        feeder = make_node("throttle_feeder").new.publish("/thr/in", msgType=String).create()
+        wait_for(lambda: feeder.write("/thr/in", String("go")) or heard, timeout=20,
+                 what="a message through throttle once it advertised")
+        assert heard[0].data == "go"
+        assert master_state(ros_master)["pub"]["/thr/throttle_wrap/base/thr/out"] == ["/thr/throttle"]
+    finally:
+        ros_session.notice = previous
