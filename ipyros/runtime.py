@@ -83,12 +83,10 @@ class ProcessNode:
         the master's list of publishers back, and rospy connects to them. Returns how many
         publications, subscriptions and services were registered.
         """
-        from rospy.impl.registration import RegManager, get_registration_listeners, get_service_manager, \
-            get_topic_manager
+        from rospy.impl.registration import get_service_manager, get_topic_manager
 
         topics, services = get_topic_manager(), get_service_manager()
-        manager = next((listener for listener in get_registration_listeners().listeners
-                        if isinstance(listener, RegManager)), None)
+        manager = _registration_manager()
         master, caller, uri = master_proxy(self.master_uri, timeout=5.0), rospy.get_name(), rospy.core.get_node_uri()
         publications, subscriptions = topics.get_publications(), topics.get_subscriptions()
         for name, type_name in publications:
@@ -111,6 +109,71 @@ class ProcessNode:
             raise NodeStateError("the ROS node is not running; call create() on a node first")
         if rospy.core.is_shutdown():
             raise NodeStateError("the ROS node of this session was shut down; restart the interpreter")
+
+
+def _registration_manager() -> Any:
+    """rospy's RegManager: given a topic's publishers, it connects to those it lacks."""
+    from rospy.impl.registration import RegManager, get_registration_listeners
+
+    return next((listener for listener in get_registration_listeners().listeners
+                 if isinstance(listener, RegManager)), None)
+
+
+class _Reconnect:
+    """Connect a subscription again when one of its connections ends while its publisher is still there.
+
+    rospy loses a publisher for good when the connection to it ends but the master's
+    update about that publisher came while the old connection was still listed (a node
+    that re-advertises quickly, one that starts up as another of the same URI goes): the
+    update is ignored as "already connected", then the connection goes. So whenever a
+    connection of a subscription of this process ends, the master is asked a moment later
+    for the topic's publishers, and rospy connects to those it lacks. A publisher that is
+    really gone is not listed any more, and nothing happens.
+    """
+
+    _pending: set[str] = set()
+    _lock = threading.Lock()
+
+    @classmethod
+    def guard(cls, subscriber: Any) -> None:
+        impl = subscriber.impl
+        if getattr(impl, "_ipyros_reconnect", False):
+            return
+        original = impl.remove_connection
+
+        def remove_connection(connection: Any) -> None:
+            original(connection)
+            if not impl.closed:
+                cls._soon(impl.resolved_name, impl.type)
+
+        impl.remove_connection = remove_connection  # what rospy hands each new connection as its cleanup
+        impl._ipyros_reconnect = True
+
+    @classmethod
+    def _soon(cls, topic: str, type_name: str) -> None:
+        with cls._lock:
+            if topic in cls._pending:
+                return
+            cls._pending.add(topic)
+        timer = threading.Timer(0.3, cls._ask, (topic, type_name))
+        timer.daemon = True
+        timer.start()
+
+    @classmethod
+    def _ask(cls, topic: str, type_name: str) -> None:
+        with cls._lock:
+            cls._pending.discard(topic)
+        manager = _registration_manager()
+        if manager is None or rospy.core.is_shutdown():
+            return
+        try:
+            master = master_proxy(os.environ.get("ROS_MASTER_URI", ""), timeout=2.0)
+            code, _, publishers = master.registerSubscriber(rospy.get_name(), topic, type_name,
+                                                            rospy.core.get_node_uri())
+        except (OSError, xmlrpc.client.Error):
+            return  # no master now: when it is back, the master watch registers everything again
+        if code == 1:
+            manager.publisher_update(topic, publishers)
 
 
 def refuse_taken_name(master_uri: str, name: str) -> None:
@@ -218,6 +281,7 @@ class Subscription:
         self.topic, self.cls, self.slot = topic, cls, slot
         self._sub = rospy.Subscriber(topic, cls, self._deliver, queue_size=None, buff_size=_BUFF_SIZE,
                                      tcp_nodelay=True)
+        _Reconnect.guard(self._sub)
         with self._sharing_lock:
             self._sharing[topic] = self._sharing.get(topic, 0) + 1
 
@@ -275,6 +339,7 @@ class Relay:
         self._impl = self._pub.impl
         self._sub = rospy.Subscriber(source, raw_class(cls), self._forward,
                                      queue_size=None, buff_size=_BUFF_SIZE, tcp_nodelay=True)
+        _Reconnect.guard(self._sub)
 
     def _forward(self, raw: rospy.AnyMsg) -> None:
         header = raw._connection_header

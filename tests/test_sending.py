@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 
 import pytest
+from std_msgs.msg import UInt32
 from conftest import wait_for
 from peer import Peer
 
@@ -51,7 +52,10 @@ def test_a_pub_that_cannot_be_serialized_breaks_nothing(ip, capsys):
         peer.wait_line("ready")
         ok(ip, "%pub /reject/stamp std_msgs/Time {data: 5}")
         peer.wait_line("secs: 5")
-        error = error_of(ip, "%pub /reject/stamp std_msgs/Time {data: 99999999999}")
+        error = error_of(ip, "%pub /reject/stamp std_msgs/Time {data: 99999999999}")  # caught when built
+        assert isinstance(error, MessageTypeError) and "does not fit a time" in str(error)
+        # nsecs carried into secs overflow only when serialised: caught there, before any connection
+        error = error_of(ip, "%pub /reject/stamp std_msgs/Time {data: {secs: 4294967295, nsecs: 2000000000}}")
         assert isinstance(error, MessageTypeError) and "nothing was sent" in str(error)
         ok(ip, "%pub /reject/stamp std_msgs/Time {data: 7}")
         peer.wait_line("secs: 7")
@@ -83,3 +87,21 @@ def test_a_slow_subscriber_blocks_neither_the_writer_nor_the_others(make_node):
         row = nd.status().row("/slow/image")
         assert row.calls == 60 and row.dropped > 0, row
         assert "got 2" not in slow.lines, "the slow peer is still in its first callback"
+
+
+def test_a_publisher_that_closes_and_reopens_its_topic_is_followed(make_node):
+    """rospy drops a publisher for good when it unregisters and advertises again faster than the
+    master's updates arrive (the old connection is still listed when the new update comes, then
+    ends): the subscription asks the master again whenever a connection ends."""
+    heard = []
+    make_node("reopen_listener").new.subscribe("/reopen", handler=lambda m: heard.append(m.data),
+                                               msgType=UInt32).create()
+    with Peer("reopen_topic.py", "/reopen") as peer:
+        peer.wait_line("ready")
+        wait_for(lambda: heard, timeout=20, what="the first messages")
+        for n in range(1, 16):
+            peer.proc.stdin.write("reopen\n")
+            peer.proc.stdin.flush()
+            peer.wait_line(f"reopened {n}")
+            count = len(heard)
+            wait_for(lambda: len(heard) > count + 5, timeout=10, what=f"messages after reopen {n}")
