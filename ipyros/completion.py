@@ -36,8 +36,8 @@ from functools import lru_cache
 from typing import Any, Callable, Mapping, Optional, Sequence
 
 from IPython.core.completer import CompletionContext, SimpleCompletion, SimpleMatcherResult, context_matcher
-from rosgraph import names as rosnames
 
+from . import names
 from .graph import GraphCache, GraphSnapshot, names_with_prefix
 from .model import NodeModel
 from .names import default_namespace
@@ -495,7 +495,7 @@ def _as_typed(name: str, resolved: str, fragment: str, namespace: str) -> str:
     if fragment.startswith("/"):
         return resolved
     if fragment and not fragment.startswith("~") and name.startswith("/"):
-        ns = rosnames.make_global_ns(namespace)
+        ns = names.global_ns(namespace)
         return resolved[len(ns):] if resolved.startswith(ns) else resolved
     return name
 
@@ -507,7 +507,7 @@ def _relative_or_global(sorted_names: Sequence[str], fragment: str, namespace: s
         return [(n, n) for n in names_with_prefix(sorted_names, fragment)]
     if fragment.startswith("~"):
         return []  # private names only make sense for the node's own declarations
-    ns = rosnames.make_global_ns(namespace)
+    ns = names.global_ns(namespace)
     return [(n[len(ns):], n) for n in names_with_prefix(sorted_names, ns + fragment)]
 
 

@@ -27,7 +27,6 @@ import socket
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rosgraph import names as rosnames
 
 from . import names
 from .errors import BaseNodeError
@@ -147,7 +146,7 @@ def one_line(error: Any) -> str:
 
 def fullname(node: "Node") -> str:
     """``/robot1/planner``: the name the node registers with."""
-    return rosnames.ns_join(rosnames.make_global_ns(node.namespace or "/"), node.name)
+    return names.join(names.global_ns(node.namespace or "/"), node.name)
 
 
 def find_node(config: "ROSLaunchConfig", name: str, launch: str) -> "Node":
@@ -245,7 +244,7 @@ def private_params(config: "ROSLaunchConfig", node_fullname: str) -> dict[str, A
 def base_model(config: "ROSLaunchConfig", node: "Node", launch: str) -> BaseModel:
     """The node as a basenode: what ``roslaunch`` would run, as plain data."""
     full = fullname(node)
-    namespace = rosnames.make_global_ns(node.namespace or "/")
+    namespace = names.global_ns(node.namespace or "/")
     remaps = {names.resolve(src, namespace, node.name, "remapped"): names.resolve(dst, namespace, node.name, "remapped")
               for src, dst in node.remap_args}
     return BaseModel(

@@ -1,22 +1,79 @@
-"""ROS graph names: checked and resolved the way ROS resolves them, without rospy.
+"""ROS graph names: checked and resolved the way ROS resolves them, in plain Python.
 
 A DSL node resolves every name itself (relative names in its namespace, ``~name``
 under the node), so that the names in the model are global and do not depend on the
-process node rospy happens to be running as.
+process node a ROS client library happens to be running as. The rules are the ones
+ROS 1 and ROS 2 share (``/`` separates, ``~`` is the node's own, a part starts with a
+letter); nothing here imports a ROS package, so the model, the plan and the wrapping
+rules stay the same whichever ROS runs them.
 """
 
 from __future__ import annotations
 
 import os
-
-from rosgraph import names as rosnames
+import re
 
 from .errors import TopicNameError
+
+SEP = "/"
+_LEGAL_NAME = re.compile(r"[~/A-Za-z][\w/]*")
+_LEGAL_BASE_NAME = re.compile(r"[A-Za-z]\w*")
+
+
+def is_legal_name(name: str) -> bool:
+    """A graph name as ROS allows it: ``cmd_vel``, ``/a/b``, ``~status`` (no ``//``; empty is the namespace)."""
+    return name == "" or (_LEGAL_NAME.fullmatch(name) is not None and "//" not in name)
+
+
+def is_legal_base_name(name: str) -> bool:
+    """A name without namespace: a letter, then letters, digits and ``_``."""
+    return _LEGAL_BASE_NAME.fullmatch(name) is not None
+
+
+def global_ns(name: str) -> str:
+    """``robot1`` → ``/robot1/``: a namespace as a global name with its trailing ``/``."""
+    if name.startswith("~"):
+        raise ValueError(f"cannot turn {name!r} into a global namespace")
+    name = name if name.startswith(SEP) else SEP + name
+    return name if name.endswith(SEP) else name + SEP
+
+
+def join(namespace: str, name: str) -> str:
+    """``name`` inside ``namespace``, unless it is global or private already."""
+    if name.startswith((SEP, "~")) or not namespace:
+        return name
+    if namespace == "~":
+        return "~" + name
+    return namespace + name if namespace.endswith(SEP) else namespace + SEP + name
+
+
+def _canonical(name: str) -> str:
+    """No repeated and no trailing ``/``: ``/a//b/`` → ``/a/b``."""
+    parts = SEP.join(part for part in name.split(SEP) if part)
+    return SEP + parts if name.startswith(SEP) else parts
+
+
+def namespace_of(name: str) -> str:
+    """The namespace containing a name (``/a/b`` → ``/a/``; ``/a`` → ``/``)."""
+    name = name.rstrip(SEP)
+    return name[:name.rfind(SEP) + 1] or SEP
+
+
+def resolve_in(name: str, caller: str) -> str:
+    """``name`` resolved for the node ``caller`` (a global node name): ROS's rule, with no remapping."""
+    if not name:
+        return namespace_of(caller)
+    name = _canonical(name)
+    if name.startswith(SEP):
+        return name
+    if name.startswith("~"):
+        return _canonical(caller + SEP + name[1:])
+    return _canonical(namespace_of(caller) + name)
 
 
 def default_namespace() -> str:
     """The namespace nodes start in: ``ROS_NAMESPACE`` if set, else ``/``."""
-    return rosnames.make_global_ns(os.environ.get("ROS_NAMESPACE", "/") or "/")
+    return global_ns(os.environ.get("ROS_NAMESPACE", "/") or "/")
 
 
 def check_namespace(namespace: str) -> str:
@@ -24,17 +81,17 @@ def check_namespace(namespace: str) -> str:
     if not isinstance(namespace, str):
         raise TopicNameError(f"namespace {namespace!r} is a {type(namespace).__name__}, not a string; "
                              "give one like '/robot1'")
-    if namespace.strip("/") and not rosnames.is_legal_name(namespace.strip("/")) or "~" in namespace:
+    if namespace.strip("/") and not is_legal_name(namespace.strip("/")) or "~" in namespace:
         raise TopicNameError(f"invalid namespace {namespace!r}: use letters, digits, _ and / (each part "
                              "starting with a letter), e.g. '/robot1'")
-    return rosnames.make_global_ns(namespace or "/")
+    return global_ns(namespace or "/")
 
 
 def check_node_name(name: str) -> str:
     """A node's base name: a legal ROS name without namespace separators or ``~``."""
     if not isinstance(name, str) or not name:
         raise TopicNameError(f"node name {name!r} is not a string; give a name like 'turtle_control_node'")
-    if "/" in name.strip("/") or name.startswith("~") or not rosnames.is_legal_base_name(name.strip("/")):
+    if "/" in name.strip("/") or name.startswith("~") or not is_legal_base_name(name.strip("/")):
         raise TopicNameError(
             f"invalid node name {name!r}: use letters, digits and _ (start with a letter), "
             "and put a namespace in namespace=... instead"
@@ -52,15 +109,9 @@ def resolve(name: str, namespace: str, node_name: str, kind: str = "topic") -> s
                              "give a name like '/turtle1/cmd_vel'")
     if not name.strip():
         raise TopicNameError(f"{kind} name {name!r} is empty; give a name like '/turtle1/cmd_vel'")
-    if not rosnames.is_legal_name(name) or name.endswith("/") and name != "/":
+    if not is_legal_name(name) or name.endswith("/") and name != "/":
         raise TopicNameError(
             f"invalid {kind} name {name!r}: use letters, digits, _ and / (each part starting with a letter), "
             "e.g. '/turtle1/cmd_vel', 'cmd_vel' or '~status'"
         )
-    caller_id = rosnames.ns_join(rosnames.make_global_ns(namespace), node_name)
-    return rosnames.resolve_name(name, caller_id)
-
-
-def namespace_of(name: str) -> str:
-    """The namespace containing a global name (``/a/b`` → ``/a/``)."""
-    return rosnames.namespace(name)
+    return resolve_in(name, join(global_ns(namespace), node_name))

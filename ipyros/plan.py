@@ -24,8 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Union
 
-from rosgraph import names as rosnames
-
+from . import names
 from .model import NodeModel
 
 
@@ -88,7 +87,7 @@ def service_slot(resolved: str) -> str:
 
 
 def node_fullname(model: NodeModel) -> str:
-    return rosnames.ns_join(rosnames.make_global_ns(model.namespace), model.name)
+    return names.join(names.global_ns(model.namespace), model.name)
 
 
 def internal_name(model: NodeModel, resolved: str) -> str:

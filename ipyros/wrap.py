@@ -23,7 +23,6 @@ import re
 import threading
 from typing import TYPE_CHECKING, Any, Optional
 
-from rosgraph import names as rosnames
 
 from . import names
 from .errors import BaseNodeError, DeclarationError, TopicTypeConflict
@@ -49,12 +48,12 @@ def base_node_name(base: BaseModel) -> str:
 
 def base_namespace(model: NodeModel) -> str:
     base = model.base
-    return rosnames.make_global_ns(base.namespace) if base and base.namespace else model.namespace
+    return names.global_ns(base.namespace) if base and base.namespace else model.namespace
 
 
 def base_fullname(model: NodeModel) -> str:
     assert model.base is not None
-    return rosnames.ns_join(base_namespace(model), base_node_name(model.base))
+    return names.join(base_namespace(model), base_node_name(model.base))
 
 
 def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
@@ -129,7 +128,7 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
             setattr(base, _BASE_OPTIONS.get(key, key), value)
         model.base = base
         if fields.get("namespace") and not node._explicit_namespace:
-            model.namespace = rosnames.make_global_ns(fields["namespace"])
+            model.namespace = names.global_ns(fields["namespace"])
         _reresolve(model)
 
     node._change(edit)
@@ -307,7 +306,7 @@ def check_base_types(model: NodeModel, interface: "Interface") -> None:
 def declare_interface(node: "rosNode", interface: "Interface") -> "Interface":
     """Declare every topic and service of a basenode's interface as ``reuse`` on ``node``."""
     model = node._model
-    prefix = rosnames.make_global_ns(base_namespace(model))
+    prefix = names.global_ns(base_namespace(model))
     untyped = [name for name, type_ in interface.publications + interface.subscriptions + interface.services
                if not type_]
     for name, type_ in interface.publications:
