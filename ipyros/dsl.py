@@ -95,6 +95,33 @@ class rosNode:  # noqa: N801 - the paper's name
         """The global name ``name`` has for this node."""
         return self._resolve(name, "topic")
 
+    # -- the surface the rest of ipyros uses (wrap, keep, savefile, export) --------------
+    @property
+    def session(self) -> Session:
+        """The session this node lives in (its master, its process node, where notices go)."""
+        return self._session
+
+    @property
+    def explicit_namespace(self) -> bool:
+        """Whether the namespace was given; a wrapping node without one lives in its basenode's."""
+        return self._explicit_namespace
+
+    def handlers(self) -> dict[str, Callable[..., Any]]:
+        """The user's function serving each handler slot, by slot key (``"topic /x"``, ``"timer t"``)."""
+        with self._lock:
+            return dict(self._handlers)
+
+    def slot_versions(self, slot: str) -> tuple[list[HandlerVersion], Optional[int]]:
+        """Every function slot ``slot`` was given, oldest first, and the number of the one serving now."""
+        with self._lock:
+            return list(self._versions.get(slot, ())), self._current_version.get(slot)
+
+    def apply(self, edit: Callable[[NodeModel], None], change: str) -> "rosNode":
+        """Edit the model as one change (all or nothing; made live at once if the node runs) and record it."""
+        self._change(edit)
+        self._record(change)
+        return self
+
     def _resolve(self, name: str, kind: str) -> str:
         return names.resolve(name, self._model.namespace, self._model.name, kind)
 
@@ -151,6 +178,11 @@ class rosNode:  # noqa: N801 - the paper's name
     def base(self) -> Any:
         """The running basenode process (log tail, stop, restart), or None."""
         return self._base
+
+    @base.setter
+    def base(self, handle: Any) -> None:
+        # Set by wrap.start_base before the process starts: shutdown() stops whatever did start.
+        self._base = handle
 
     @property
     def basenode_name(self) -> Optional[str]:

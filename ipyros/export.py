@@ -115,14 +115,14 @@ class _Script:
         sources = {slot: self._handler(slot, f"{node.name} {label}") for slot, label in handler_slots(self.model)}
         self.writers = sorted({w for src in sources.values() for w in _WRITER.findall(src)}) or ["this_node"]
         for slot, _label in handler_slots(self.model):
-            fn = node._handlers[slot]
+            fn = node.handlers()[slot]
             self.bindings.bind(fn, sources[slot], namespace,
                                skip=lambda name, value, fn=fn: self._skip(fn, name, value))
             for name in [n for n in self.bindings.unbound if n not in self.unset]:
                 self.unset[name] = f"{name} = None  # set me: used by handler {fn.__name__}"
 
     def _handler(self, slot: str, label: str) -> str:
-        fn = self.node._handlers[slot]
+        fn = self.node.handlers()[slot]
         source = handler_source(fn, label)
         name = fn.__name__
         if name == "<lambda>":  # a name of its own: on_turtle1_pose, timer_tick, ...
@@ -176,7 +176,7 @@ class _Script:
             elif isinstance(spec, planning.RelaySpec):
                 lines.append(f"relay({spec.source!r}, {spec.target!r}, {self.cls(spec.type)})")
             elif isinstance(spec, planning.TimerSpec):
-                fn, name = self.node._handlers[spec.slot], self.names[spec.slot]
+                fn, name = self.node.handlers()[spec.slot], self.names[spec.slot]
                 call = name if call_arity(fn, "timer", name) else f"lambda event: {name}()"
                 oneshot = ", oneshot=True" if spec.oneshot else ""
                 lines.append(f"rospy.Timer(rospy.Duration({spec.period!r}), {call}{oneshot})")

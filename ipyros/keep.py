@@ -280,7 +280,7 @@ def handler_sources(nodes: Iterable["rosNode"]) -> dict[tuple[int, str], str]:
     sources, missing = {}, []
     for node in nodes:
         for slot, label in handler_slots(node.model()):
-            fn = node._handlers[slot]
+            fn = node.handlers()[slot]
             try:
                 sources[(id(node), slot)] = handler_source(fn, f"{node.name} {label}")
             except IpyrosError as error:
@@ -298,7 +298,7 @@ def save(node: "rosNode", path: "str | os.PathLike[str]") -> Path:
     sources = handler_sources([node])
     entries = []
     for slot, _ in handler_slots(model):
-        fn, source = node._handlers[slot], sources[(id(node), slot)]
+        fn, source = node.handlers()[slot], sources[(id(node), slot)]
         origins = {n: import_of(_lookup(n, fn, None), fn.__module__) for n in global_names(source)}
         entry: dict[str, Any] = {"slot": slot, "name": fn.__name__}
         imports = [import_statement(n, o) for n, o in origins.items() if o is not None]

@@ -85,7 +85,7 @@ class _SavedFile:
         for node in self.nodes:
             for slot, _ in handler_slots(node.model()):
                 self._handler(node, slot)
-                for version in node._versions.get(slot, []):  # what an earlier version needs, to revert to it
+                for version in node.slot_versions(slot)[0]:  # what an earlier version needs, to revert to it
                     if isinstance(version.function, types.FunctionType) and version.source:
                         self.bindings.bind(version.function, version.source, self.namespace, self._skip)
 
@@ -95,7 +95,7 @@ class _SavedFile:
         taken: set[str] = set(_OWN_NAMES)
         chosen: dict[int, str] = {}
         for node in self.nodes:
-            scopes = [self.namespace or {}] + [fn.__globals__ for fn in node._handlers.values()
+            scopes = [self.namespace or {}] + [fn.__globals__ for fn in node.handlers().values()
                                                if isinstance(fn, types.FunctionType)]
             bound = [k for scope in scopes for k, v in scope.items() if v is node and not k.startswith("_")]
             writers = [w for (owner, _), src in self.sources.items() if owner == id(node) for w in _WRITER.findall(src)]
@@ -111,7 +111,7 @@ class _SavedFile:
 
     # -- handlers ----------------------------------------------------------------------------
     def _handler(self, node: "rosNode", slot: str) -> None:
-        fn, source = node._handlers[slot], self.sources[(id(node), slot)]
+        fn, source = node.handlers()[slot], self.sources[(id(node), slot)]
         name = fn.__name__
         if name == "<lambda>":  # a name of its own: on_cmd_vel, timer_tick, ...
             name = _identifier(re.sub(r"\W+", "_", slot.replace("topic ", "on ", 1)).strip("_"))
@@ -180,11 +180,11 @@ class _SavedFile:
         """``restore_versions`` calls for the handlers that had more than one version."""
         lines = []
         for slot, _ in handler_slots(model):
-            versions = node._versions.get(slot, [])
+            versions, current = node.slot_versions(slot)
             if len(versions) < 2 or any(v.source is None for v in versions):
                 continue
             what = _declared_name(model, slot)
-            current = node._current_version.get(slot, len(versions))
+            current = current or len(versions)
             lines.append(f"{var}.restore_versions({what!r}, [  # {var}.versions({what!r}) lists them")
             lines += [f"    ({v.when!r}, {_python_string(v.source)})," for v in versions]  # type: ignore[arg-type]
             lines.append(f"], current={current})")

@@ -127,13 +127,11 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
         for key, value in fields.items():
             setattr(base, _BASE_OPTIONS.get(key, key), value)
         model.base = base
-        if fields.get("namespace") and not node._explicit_namespace:
+        if fields.get("namespace") and not node.explicit_namespace:
             model.namespace = names.global_ns(fields["namespace"])
         _reresolve(model)
 
-    node._change(edit)
-    node._record("base " + ", ".join(f"{k}={v!r}" for k, v in fields.items()))
-    return node
+    return node.apply(edit, "base " + ", ".join(f"{k}={v!r}" for k, v in fields.items()))
 
 
 def _check_base_options(fields: dict[str, Any]) -> None:
@@ -179,15 +177,15 @@ def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional
 
     def edit(model: NodeModel) -> None:
         model.base = base
-        if not node._explicit_namespace:
+        if not node.explicit_namespace:
             model.namespace = base.namespace or "/"
         _reresolve(model)
 
-    node._change(edit)
     given = "".join(f", {name}={value!r}" for name, value in base.launch_args.items())
-    node._record(f"baseLaunch({launch!r}, {node_name!r}{given}): {base.package}/{base.executable} as {base.launch_node}")
+    node.apply(edit, f"baseLaunch({launch!r}, {node_name!r}{given}): {base.package}/{base.executable} "
+                     f"as {base.launch_node}")
     for note in notes:
-        node._session.notify(f"ipyros: {note}")
+        node.session.notify(f"ipyros: {note}")
     return node
 
 
@@ -229,17 +227,17 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
     """Launch the basenode remapped onto the wrapping node's internal names, and check its types.
 
     A basenode from a launch file starts after the rest of its file
-    (:class:`~ipyros.launch_rest.LaunchBase`); ``node._base`` holds the one handle
+    (:class:`~ipyros.launch_rest.LaunchBase`); ``node.base`` holds the one handle
     whose ``stop()`` stops all of it, set before anything starts, so that the node's
     shutdown after a failure half-way stops what did start.
     """
     from .base import BaseProcess, exit_reason
     from .discovery import wait_for_node
 
-    model = node._model
+    model = node.model()
     if model.base is None:
         return
-    session = node._session
+    session = node.session
     from_launch = model.base.launch is not None
     base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
                         "namespace": base_namespace(model), "remaps": basenode_remaps(model),
@@ -270,7 +268,7 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
 
         handle = LaunchBase(model.base, process, node=base_fullname(model), master_uri=session.master.uri,
                             on_rest_exit=rest_died)
-    node._base = handle
+    node.base = handle
     handle.start()
     if getattr(handle, "not_started", None):
         session.notify(f"ipyros: roslaunch could not start {', '.join(handle.not_started)} of {model.base.launch} "
@@ -305,7 +303,7 @@ def check_base_types(model: NodeModel, interface: "Interface") -> None:
 
 def declare_interface(node: "rosNode", interface: "Interface") -> "Interface":
     """Declare every topic and service of a basenode's interface as ``reuse`` on ``node``."""
-    model = node._model
+    model = node.model()
     prefix = names.global_ns(base_namespace(model))
     untyped = [name for name, type_ in interface.publications + interface.subscriptions + interface.services
                if not type_]
@@ -319,7 +317,7 @@ def declare_interface(node: "rosNode", interface: "Interface") -> "Interface":
         if type_:
             node.reuse.service(_relative(name, prefix), type=type_)
     if untyped:
-        node._session.notify(f"ipyros: {', '.join(untyped)} of {interface.node} have no known type yet "
+        node.session.notify(f"ipyros: {', '.join(untyped)} of {interface.node} have no known type yet "
                              "(nobody publishes them); declare them yourself with type=...")
     return interface
 
@@ -339,11 +337,11 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
     from .base import exit_reason
     from .discovery import wait_for_node
 
-    model = node._model
+    model = node.model()
     check_wrapping(model)
     if node.created:
         raise DeclarationError(f"{node.name} is already running; discover() its basenode before create()")
-    uri = node._session.attach_master().uri
+    uri = node.session.attach_master().uri
     base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),  # type: ignore[union-attr]
                         "namespace": base_namespace(model)})
     probe = BaseProcess.from_model(base, master_uri=uri).start()
@@ -360,10 +358,10 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
     interface.not_seen = [f"{t.resolved} ({t.direction})" for t in model.topics
                           if t.role == "reuse" and not _uses(interface, t.direction, t.resolved)]
     if interface.not_seen:
-        node._session.notify(f"ipyros: {interface.node} did not use {', '.join(interface.not_seen)} while it was "
+        node.session.notify(f"ipyros: {interface.node} did not use {', '.join(interface.not_seen)} while it was "
                              f"discovered: {_LATE}; they stay declared")
     elif not interface.publications and interface.subscriptions:
-        node._session.notify(f"ipyros: {interface.node} publishes nothing yet: {_LATE}; declare what it will "
+        node.session.notify(f"ipyros: {interface.node} publishes nothing yet: {_LATE}; declare what it will "
                              f"publish: {node.called}.reuse.publish('name', type=...)")
     return declare_interface(node, interface)
 
@@ -378,11 +376,11 @@ def _uses(interface: "Interface", direction: str, name: str) -> bool:
 
 def report_unused_reuses(node: "rosNode", interface: "Interface") -> None:
     """Say, once per start, which ``reuse`` declarations the settled basenode does not use (yet)."""
-    model = node._model
+    model = node.model()
     unused = [f"reuse.{t.direction}({t.name!r})" for t in model.topics
               if t.role == "reuse" and not _uses(interface, t.direction, internal_name(model, t.resolved))]
     if unused:
-        node._session.notify(f"ipyros: basenode {interface.node} does not use {', '.join(unused)} of {node.called} "
+        node.session.notify(f"ipyros: basenode {interface.node} does not use {', '.join(unused)} of {node.called} "
                              f"(yet): nothing is relayed there until it does ({_LATE}); if a name is wrong, "
                              f"{node.called}.remove('name') and declare the right one")
 
