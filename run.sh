@@ -52,7 +52,7 @@ notebook() {
   # they stop at once when asked.
   "$venv/bin/python" -c '
 import signal, threading
-from ipyros import master
+from ipyros.ros1 import master
 signal.signal(signal.SIGINT, signal.SIG_DFL)
 handle = master.attach()
 signal.signal(signal.SIGINT, signal.SIG_IGN)

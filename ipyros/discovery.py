@@ -26,7 +26,7 @@ from rich.table import Table
 
 from .errors import BaseNodeError, MasterError
 from .graph import GraphSnapshot, fetch_snapshot
-from .master import master_proxy
+from .ros1.master import master_proxy
 
 CALLER_ID = "/ipyros_discovery"
 

@@ -2,7 +2,7 @@
 
 Each call validates its input, edits the node's :class:`~ipyros.model.NodeModel`, and,
 once the node runs, makes the live node match at once (:mod:`ipyros.plan` says which
-endpoints must exist; :mod:`ipyros.runtime` opens and closes them). A rejected
+endpoints must exist; the session's backend, :mod:`ipyros.backend`, opens and closes them). A rejected
 declaration raises a one-line error and changes nothing, neither model nor running node.
 
     nd = rosNode("turtle_control_node")
@@ -21,7 +21,7 @@ import time
 from collections.abc import MutableMapping
 from typing import Any, Callable, Iterator, Optional
 
-from . import msgtypes, names, plan as planning, runtime, versions as versions_mod
+from . import msgtypes, names, plan as planning, versions as versions_mod
 from .errors import (DeclarationError, HandlerError, IpyrosError, MessageTypeError, NodeStateError,
                      NotDeclaredError, TopicTypeConflict)
 from .model import NodeModel, ServiceModel, TimerModel, TopicModel
@@ -487,16 +487,17 @@ class rosNode:  # noqa: N801 - the paper's name
                                        f"{getattr(spec, 'topic', None) or getattr(spec, 'name', '')}: {error}") from None
 
     def _open_one(self, spec: Spec, handlers: dict[str, Callable[..., Any]], takes_arg: dict[str, bool]) -> Any:
+        backend = self._session.backend
         if isinstance(spec, planning.PublishSpec):
-            return runtime.Publication(spec.topic, msgtypes.resolve_message(spec.type)[1], spec.latch)
+            return backend.publication(spec.topic, msgtypes.resolve_message(spec.type)[1], spec.latch)
         if isinstance(spec, planning.RelaySpec):
             def wrong_type(got: str, spec: planning.RelaySpec = spec) -> None:
                 self._session.notify(f"ipyros: {spec.source} carries {got}, but {self.name} relays it as {spec.type}; "
                                      f"messages are dropped: declare type={got!r}")
 
-            return runtime.Relay(spec.source, spec.target, msgtypes.resolve_message(spec.type)[1], wrong_type)
+            return backend.relay(spec.source, spec.target, msgtypes.resolve_message(spec.type)[1], wrong_type)
         if isinstance(spec, planning.ServiceRelaySpec):
-            return runtime.ServiceRelay(spec.source, spec.target, msgtypes.resolve_service(spec.type)[1])
+            return backend.service_relay(spec.source, spec.target, msgtypes.resolve_service(spec.type)[1])
         slot = self._slots.get(spec.slot)
         if slot is None:
             label = f"{self.name} {spec.slot.split(' ', 1)[1]}"
@@ -504,10 +505,10 @@ class rosNode:  # noqa: N801 - the paper's name
                                keep=self._session.config.keep_recent)
             self._slots[spec.slot] = slot
         if isinstance(spec, planning.SubscribeSpec):
-            return runtime.Subscription(spec.topic, msgtypes.resolve_message(spec.type)[1], slot)
+            return backend.subscription(spec.topic, msgtypes.resolve_message(spec.type)[1], slot)
         if isinstance(spec, planning.TimerSpec):
-            return runtime.Timer(spec.period, slot, spec.oneshot)
-        return runtime.ServiceServer(spec.name, msgtypes.resolve_service(spec.type)[1], slot)
+            return backend.timer(spec.period, slot, spec.oneshot)
+        return backend.service(spec.name, msgtypes.resolve_service(spec.type)[1], slot)
 
     def _record(self, change: str) -> None:
         pending, self._new_version = self._new_version, None
@@ -642,7 +643,7 @@ class rosNode:  # noqa: N801 - the paper's name
 
     def _set_params(self, params: dict[str, Any]) -> None:
         for key, value in params.items():
-            runtime.set_param(self._resolve("~" + key, "parameter"), value)
+            self._session.backend.set_param(self._resolve("~" + key, "parameter"), value)
 
 
 class TopicHandler:
@@ -759,6 +760,7 @@ class NodeParams(MutableMapping):
 
     def __init__(self, node: rosNode) -> None:
         self._node = node
+        self._backend = node.session.backend
 
     def _name(self, key: str) -> str:
         if not isinstance(key, str) or key.startswith(("/", "~")):
@@ -768,19 +770,19 @@ class NodeParams(MutableMapping):
     def __getitem__(self, key: str) -> Any:
         name = self._name(key)
         if self._node.created:
-            if not runtime.has_param(name):
+            if not self._backend.has_param(name):
                 raise KeyError(key)
-            return runtime.get_param(name)
+            return self._backend.get_param(name)
         return self._node._model.params[key]
 
     def __setitem__(self, key: str, value: Any) -> None:
         name = self._name(key)
-        runtime.check_param(name, value)
+        self._backend.check_param(name, value)
         node = self._node
         with node._lock:
             if node.created:
                 node._session.require_master(f"{node.called}.params[{key!r}] = ...")
-                runtime.set_param(name, value)
+                self._backend.set_param(name, value)
             node._model.params[key] = value
             node._record(f"params[{key!r}] = {value!r}")
 
@@ -788,10 +790,10 @@ class NodeParams(MutableMapping):
         name = self._name(key)
         node = self._node
         with node._lock:
-            if key not in node._model.params and not (node.created and runtime.has_param(name)):
+            if key not in node._model.params and not (node.created and self._backend.has_param(name)):
                 raise KeyError(key)
-            if node.created and runtime.has_param(name):
-                runtime.delete_param(name)
+            if node.created and self._backend.has_param(name):
+                self._backend.delete_param(name)
             node._model.params.pop(key, None)
 
     def __iter__(self) -> Iterator[str]:

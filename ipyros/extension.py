@@ -27,7 +27,8 @@ import threading
 from collections import deque
 from typing import Any, Optional
 
-from . import completion, master as master_mod, plan as planning
+from . import completion, plan as planning
+from .ros1 import master as master_mod
 from .dsl import rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache

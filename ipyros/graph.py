@@ -34,7 +34,7 @@ from types import MappingProxyType
 from typing import Iterable, Mapping, Optional, Sequence
 from xml.parsers.expat import ExpatError
 
-from .master import master_proxy
+from .ros1.master import master_proxy
 
 #: The caller id the master sees in its logs for our read-only queries.
 CALLER_ID = "/ipyros_graph"

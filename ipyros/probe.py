@@ -2,7 +2,7 @@
 
 ``%echo``, ``%topics --hz`` and ``%pub`` need what ``rostopic`` needs: a subscriber for a
 moment, a publisher for one message. They get it from ordinary DSL nodes (so rospy stays
-behind :mod:`ipyros.runtime`), named ``ipyros_<purpose>_<pid>``:
+behind :mod:`ipyros.ros1.runtime`), named ``ipyros_<purpose>_<pid>``:
 
 * :class:`Echo` and :func:`measure_rates` create a node, subscribe, and shut it down
   when done, so nothing is left subscribed;

@@ -41,8 +41,8 @@ from rich.table import Table
 from .base import DEMO_DIR, BaseProcess, exit_reason, find_executable
 from .display import Shown
 from .errors import BaseNodeError, IpyrosError
-from .launchfile import fullname, one_line
-from .master import master_proxy
+from .ros1.launchfile import fullname, one_line
+from .ros1.master import master_proxy
 from .session import Session, current
 
 LAUNCH_DIR = DEMO_DIR / "launch"

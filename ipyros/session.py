@@ -17,11 +17,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Optional
 
-from . import master as master_mod
+from .ros1 import master as master_mod
+from .backend import Backend, choose as choose_backend
 from .errors import MasterError, NodeStateError
 from .journal import Journal
-from .masterwatch import MasterWatch
-from .runtime import ProcessNode, refuse_taken_name
+from .ros1.masterwatch import MasterWatch
 from .slots import HandlerFailure
 
 if TYPE_CHECKING:
@@ -79,7 +79,8 @@ class Session:
     def __init__(self, config: Optional[SessionConfig] = None) -> None:
         self.config = config or SessionConfig()
         self.master: Optional[master_mod.MasterHandle] = None
-        self.process = ProcessNode()
+        self.backend: Backend = choose_backend()
+        self.process = self.backend.process
         self.nodes: dict[str, "rosNode"] = {}  # full name → node, in creation order
         self.history: list[Change] = []  # every change of every node, in order
         self._journal: Optional[Journal] = None
@@ -134,7 +135,7 @@ class Session:
             uri = self.attach_master().uri
             name = self.process.start(self.config.process_node_name or fullname, uri)
             if fullname != name:  # a DSL node hosted in the process node: its name must be free too
-                refuse_taken_name(uri, fullname)
+                self.backend.refuse_taken_name(uri, fullname)
             stop_on_termination()
             if self.watch is None:
                 self.watch = MasterWatch(uri, self._master_down, self.master_back).start()

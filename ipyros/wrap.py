@@ -7,8 +7,8 @@ basenode with its remaps, and offers black-box discovery: read a running basenod
 interface from the master and declare it all as ``reuse`` in one call.
 
 A basenode may also come from a launch file (:func:`set_launch_base`, read by
-:mod:`ipyros.launchfile`): then ``create()`` runs the rest of that file too
-(:mod:`ipyros.launch_rest`), and ``nd.base`` stops both.
+:mod:`ipyros.ros1.launchfile`): then ``create()`` runs the rest of that file too
+(:mod:`ipyros.ros1.launch_rest`), and ``nd.base`` stops both.
 
 **One remap per name.** ROS applies at most one remap to a name: no chains. If the
 basenode's own remaps (its launch file's ``<remap>``, or ``baseNode(remaps=...)``) send
@@ -120,7 +120,7 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
             raise DeclarationError(f"{what} needs a non-empty name")
     if fields.get("name"):
         names.check_node_name(fields["name"])
-    _check_base_options(fields)
+    _check_base_options(fields, node.session.backend)
 
     def edit(model: NodeModel) -> None:
         base = model.base or BaseModel()
@@ -134,10 +134,8 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
     return node.apply(edit, "base " + ", ".join(f"{k}={v!r}" for k, v in fields.items()))
 
 
-def _check_base_options(fields: dict[str, Any]) -> None:
+def _check_base_options(fields: dict[str, Any], backend: Any) -> None:
     """One line for a basenode option of the wrong shape, before anything is recorded."""
-    from . import runtime
-
     if fields.get("namespace") is not None:
         names.check_namespace(fields["namespace"])
     remaps = fields.get("remaps")
@@ -155,11 +153,11 @@ def _check_base_options(fields: dict[str, Any]) -> None:
             raise DeclarationError(f"baseNode(params={params!r}): give a dict of private parameters, "
                                    "e.g. params={'rate': 5}")
         for key, value in params.items():
-            runtime.check_param(f"~{key.lstrip('~_')}", value)
+            backend.check_param(f"~{key.lstrip('~_')}", value)
 
 
 def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional[dict] = None) -> "rosNode":
-    """Wrap the node ``node_name`` that launch file ``launch`` starts, read with ``args`` (see :mod:`ipyros.launchfile`).
+    """Wrap the node ``node_name`` that launch file ``launch`` starts, read with ``args`` (see :mod:`ipyros.ros1.launchfile`).
 
     The whole basenode comes from the file: package, executable, name, namespace,
     remaps, private params, args. Like ``baseNode``, the wrapping node lives in the
@@ -167,7 +165,7 @@ def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional
     missing or broken file, a node it does not start, an ambiguous short name, or a
     node ipyros cannot run as the file says (a remote ``machine=``, ``launch-prefix``).
     """
-    from .launchfile import read_base
+    from .ros1.launchfile import read_base
 
     if node.created:
         raise DeclarationError(f"{node.name} is already running; declare its basenode before create()")
@@ -227,7 +225,7 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
     """Launch the basenode remapped onto the wrapping node's internal names, and check its types.
 
     A basenode from a launch file starts after the rest of its file
-    (:class:`~ipyros.launch_rest.LaunchBase`); ``node.base`` holds the one handle
+    (:class:`~ipyros.ros1.launch_rest.LaunchBase`); ``node.base`` holds the one handle
     whose ``stop()`` stops all of it, set before anything starts, so that the node's
     shutdown after a failure half-way stops what did start.
     """
@@ -257,7 +255,7 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
     process = BaseProcess.from_model(base, master_uri=session.master.uri, on_exit=died)
     handle: Any = process
     if from_launch:
-        from .launch_rest import LaunchBase
+        from .ros1.launch_rest import LaunchBase
 
         launch = model.base.launch
 

@@ -27,7 +27,8 @@ from std_srvs.srv import Empty
 from conftest import master_state, wait_for
 from helpers import pid_alive
 
-from ipyros import export, runtime
+from ipyros import export
+from ipyros.ros1 import runtime
 from ipyros.errors import IpyrosError
 from ipyros.wrap import basenode_remaps
 

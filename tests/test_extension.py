@@ -16,7 +16,8 @@ from IPython.core.error import UsageError
 from peer import Peer
 from traitlets.config import Config
 
-from ipyros import IpyrosError, master as master_mod, rosNode
+from ipyros import IpyrosError, rosNode
+from ipyros.ros1 import master as master_mod
 from ipyros.completion import IDENTIFIER
 from ipyros.extension import _loaded
 from ipyros.magics import RosMagics
@@ -217,7 +218,7 @@ def test_embedded_master_starts_in_the_background_and_outlives_the_load(tmp_path
         start = time.monotonic()
         ip.run_line_magic('load_ext', 'ipyros')
         print('load took', round(time.monotonic() - start, 3), flush=True)
-        from ipyros import master
+        from ipyros.ros1 import master
         while not master.answers('{uri}'):
             time.sleep(0.05)
         time.sleep(0.5)  # the thread that started it has finished its work: the master must live on

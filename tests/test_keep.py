@@ -24,7 +24,8 @@ from std_srvs.srv import Empty, EmptyResponse
 
 from conftest import master_state, wait_for
 
-from ipyros import export, keep, rosNode, runtime
+from ipyros import export, keep, rosNode
+from ipyros.ros1 import runtime
 from ipyros.errors import IpyrosError
 
 speed = 2.5  # read by showPose when called: exported as a literal

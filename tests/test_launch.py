@@ -255,7 +255,7 @@ def test_the_runner_refuses_to_start_a_master(tmp_path):
     from conftest import free_port
 
     env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{free_port()}/"}
-    done = subprocess.run([sys.executable, "-m", "ipyros.launch_rest", ROBOT, "--exclude", "/robot1/planner"],
+    done = subprocess.run([sys.executable, "-m", "ipyros.ros1.launch_rest", ROBOT, "--exclude", "/robot1/planner"],
                           env=env, capture_output=True, text=True, timeout=60)
     assert done.returncode == 2
     assert "ipyros-launch-rest: failed: no ROS master answers at" in done.stdout

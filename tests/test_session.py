@@ -11,7 +11,7 @@ import pytest
 
 from conftest import free_port, master_state, wait_for
 
-from ipyros import master as masters
+from ipyros.ros1 import master as masters
 from ipyros.errors import MasterError
 
 

@@ -7,7 +7,7 @@ it. Endpoints are small objects with a ``close()``; the DSL decides which exist
 
 Performance choices (measured in bench/relay.py):
 - publishers are synchronous (``queue_size=None``): no hand-off to a publisher thread;
-  the bytes go to each connection through :mod:`ipyros.sending`, where a subscriber that
+  the bytes go to each connection through :mod:`ipyros.ros1.sending`, where a subscriber that
   cannot keep up gets a bounded backlog of its own instead of blocking the writer;
 - relays subscribe with :class:`rospy.AnyMsg` and write the received bytes as they are,
   through a publisher advertised up front with the concrete class, so the type, md5 and
@@ -31,9 +31,9 @@ from rospy.impl.tcpros_service import convert_return_to_response
 from rospy.msg import serialize_message
 
 from . import sending
-from .errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
+from ..errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
 from .master import master_proxy
-from .slots import HandlerSlot, SendFigures
+from ..slots import HandlerSlot, SendFigures
 
 def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
     """A synchronous publisher (``queue_size=None`` on purpose; see the module docstring)."""
@@ -205,7 +205,7 @@ class Publication:
     is refused with one line and leaves every connection as it was. (rospy's own publish
     serialises into the publisher's shared buffer and, when that fails, leaves the half
     message there for good: every later message reaches the subscribers corrupted.) The
-    bytes then go out through :mod:`ipyros.sending`, where a slow subscriber queues and
+    bytes then go out through :mod:`ipyros.ros1.sending`, where a slow subscriber queues and
     loses its own oldest messages instead of blocking the writer.
     """
 

@@ -4,7 +4,7 @@ Every ROS node publishes its log lines on ``/rosout``; roscore's ``rosout`` node
 on ``/rosout_agg`` (which rqt_console and ``rostopic echo /rosout_agg`` read). Debian's
 rosout is a roscpp node, and roscpp's XML-RPC server listens on every interface whatever
 ``ROS_IP`` says; this rospy one binds where ``ROS_IP`` tells it (127.0.0.1 for the embedded
-master, see :mod:`ipyros.master`). Run as ``python -m ipyros.rosout``.
+master, see :mod:`ipyros.ros1.master`). Run as ``python -m ipyros.ros1.rosout``.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ doing, so ipyros reads exactly what ``roslaunch`` would run) and answers two que
   remaps (resolved as the node resolves them), private params (``<param>`` and
   ``<rosparam>`` inside the node, nested again), args and environment;
 - **the rest** (:func:`without`): the same loaded configuration minus that node and
-  its private params, which :mod:`ipyros.launch_rest` runs as roslaunch would.
+  its private params, which :mod:`ipyros.ros1.launch_rest` runs as roslaunch would.
 
 Both load the file the same way (:func:`load`), so the wrapper and the rest runner see
 the same nodes. Nothing here starts a process or talks to the master.
@@ -28,9 +28,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 
-from . import names
-from .errors import BaseNodeError
-from .model import BaseModel
+from .. import names
+from ..errors import BaseNodeError
+from ..model import BaseModel
 
 if TYPE_CHECKING:
     from roslaunch.config import ROSLaunchConfig

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 from typing import Optional
 from urllib.parse import urlparse
 
-from .errors import MasterError
-from .process import spawn, stop_process
+from ..errors import MasterError
+from ..process import spawn, stop_process
 
 DEFAULT_URI = "http://localhost:11311/"
 LOOPBACK = "127.0.0.1"
@@ -121,6 +121,6 @@ def attach(uri: Optional[str] = None, start: bool = True, timeout: float = 15.0)
                               "set ROS_MASTER_URI to another port")
         time.sleep(0.05)
     # roscore's logger, for tools that read /rosout_agg (rospy's: Debian's C++ one listens everywhere)
-    handle.processes.append(spawn([sys.executable, "-m", "ipyros.rosout"], env=env))
+    handle.processes.append(spawn([sys.executable, "-m", "ipyros.ros1.rosout"], env=env))
     os.environ["ROS_MASTER_URI"] = uri
     return handle

@@ -3,9 +3,9 @@
 ``nd.baseLaunch("robot.launch", "/robot1/planner")`` followed by ``nd.create()`` runs
 two things, held by one handle, :class:`LaunchBase` (``nd.base``):
 
-1. **the rest**, as roslaunch runs it: ``python -m ipyros.launch_rest FILE --exclude
+1. **the rest**, as roslaunch runs it: ``python -m ipyros.ros1.launch_rest FILE --exclude
    /robot1/planner`` is a child process of the session that loads the file with
-   roslaunch's loader (:mod:`ipyros.launchfile`), drops that node and its private
+   roslaunch's loader (:mod:`ipyros.ros1.launchfile`), drops that node and its private
    params, and runs the rest with roslaunch's own ``ROSLaunchParent``: params uploaded,
    nodes started, monitored and respawned as the file says. It uses the session's
    master and never starts one of its own (roslaunch would), and it stops like
@@ -32,10 +32,10 @@ import time
 from pathlib import Path
 from typing import Any, Optional
 
-from .base import BaseProcess, OnExit, temp_log
-from .errors import BaseNodeError, IpyrosError
+from ..base import BaseProcess, OnExit, temp_log
+from ..errors import BaseNodeError, IpyrosError
 from .master import master_proxy
-from .model import BaseModel
+from ..model import BaseModel
 
 #: Lines the runner prints to say how its start went (the session reads its log for them).
 READY = "ipyros-launch-rest: running"
@@ -73,7 +73,7 @@ class LaunchBase:
         self._up = False  # an exit during start() is raised by start(), not reported as well
         self.not_started: list[str] = []  # nodes of the rest that roslaunch could not start (it goes on without)
         self.rest = BaseProcess(
-            sys.executable, ["-m", "ipyros.launch_rest", base.launch,
+            sys.executable, ["-m", "ipyros.ros1.launch_rest", base.launch,
                              *[f"{name}:={value}" for name, value in base.launch_args.items()],
                              "--exclude", base.launch_node],
             master_uri=master_uri, on_exit=self._rest_exited,
@@ -301,7 +301,7 @@ def run(launch: str, exclude: str, args: Optional[dict[str, str]] = None) -> int
 
 def main(argv: Optional[list[str]] = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m ipyros.launch_rest",
+        prog="python -m ipyros.ros1.launch_rest",
         description="Run a launch file without one of its nodes, on the running ROS master (ipyros runs that node).")
     parser.add_argument("launch", help="the launch file: a path, or $(find pkg)/launch/x.launch")
     parser.add_argument("--exclude", required=True, help="full name of the node not to start, e.g. /robot1/planner")
