@@ -168,3 +168,44 @@ def test_pub_values_that_do_not_fit_are_one_line_errors(ip):
     error = error_of(ip, "%pub /mg/time std_msgs/Time {data: {secs: 99999999999}}")
     assert "data.secs: 99999999999 does not fit" in str(error) and "\n" not in str(error)
     ok(ip, "%pub --nonfinite /mg/range std_msgs/Float32 .inf")  # when it is meant
+
+
+def test_echo_fields_filter_and_the_messages_kept(ip, capsys, rate_peer):
+    wait_listed(ip, "/mg/rate")
+    capsys.readouterr()
+    ok(ip, "odd = 1")
+    ok(ip, "kept = %echo /mg/rate -n 3 --filter 'm.data % 2 == odd' --field data")
+    out = capsys.readouterr().out
+    values = [int(line.split()[1]) for line in out.splitlines() if line.startswith("data: ")]
+    assert len(values) == 3 and all(v % 2 == 1 for v in values), out
+    kept = ip.user_ns["kept"]
+    assert [m.data for m in kept] == values and repr(kept) == "<3 messages from /mg/rate: a list>"
+    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+
+    error = error_of(ip, "%echo /mg/rate -n 1 --filter 'm.data >'")
+    assert isinstance(error, UsageError) and "--filter 'm.data >' is not a Python expression" in str(error)
+    error = error_of(ip, "%echo /mg/rate -n 1 --filter 'm.nothing > 0'")
+    assert isinstance(error, UsageError) and "raised AttributeError" in str(error) and "on message 1" in str(error)
+    error = error_of(ip, "%echo /mg/rate -n 1 --field dta")
+    assert isinstance(error, UsageError) and "--field dta: no field 'dta' in std_msgs/UInt32 (it has data)" in str(error)
+    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "nothing left listening"
+
+
+def test_echo_output_is_yaml_that_pub_takes_back(ip, capsys):
+    with Peer("echo_topic.py", "/mg/round", "geometry_msgs/Twist") as listener:
+        listener.wait_line("ready")
+        ok(ip, "src = rosNode('mg_round_src').new.publish('/mg/round_src', msgType='geometry_msgs/Twist').create()")
+        wait_listed(ip, "/mg/round_src")
+        ok(ip, "import threading, time\nfrom geometry_msgs.msg import Twist\n"
+               "t = Twist(); t.linear.x = 1.5; t.angular.z = -0.25\n"
+               "stop = threading.Event()\n"
+               "def feed():\n    while not stop.wait(0.05):\n        src.write('/mg/round_src', t)\n"
+               "feeder = threading.Thread(target=feed, daemon=True); feeder.start()")
+        capsys.readouterr()
+        ok(ip, "heard = %echo /mg/round_src -n 1")
+        text = str(ip.user_ns["heard"][0])
+        assert "x: 1.5" in text
+        ok(ip, "%%pub /mg/round geometry_msgs/Twist\n" + text)  # what %echo printed, sent as it is
+        listener.wait_line("x: 1.5")
+        listener.wait_line("z: -0.25")
+        ok(ip, "stop.set(); feeder.join(5); src.shutdown()")

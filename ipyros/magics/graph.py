@@ -25,6 +25,54 @@ from ..msgbuild import build_message, parse_data
 from ..probe import Echo, Rate, measure_rates
 from .common import ExtensionMagics, global_topic, split_head
 
+class Messages(list):
+    """What ``%echo`` heard: a list of messages that shows as one line, not as all of them again."""
+
+    def __init__(self, topic: str) -> None:
+        super().__init__()
+        self.topic = topic
+
+    def __repr__(self) -> str:
+        return f"<{len(self)} message{'s' * (len(self) != 1)} from {self.topic}: a list>"
+
+
+def _compile_filter(expression: str, namespace: dict) -> Any:
+    """``--filter EXPR`` compiled once; the returned test says for message ``m`` whether to keep it."""
+    expression = expression.strip()
+    if len(expression) > 1 and expression[0] == expression[-1] and expression[0] in "'\"":
+        expression = expression[1:-1]  # IPython's argument split keeps the quotes
+    try:
+        code = compile(expression, "<%echo --filter>", "eval")
+    except SyntaxError as error:
+        raise UsageError(f"--filter {expression!r} is not a Python expression ({error.msg}); "
+                         "write one over the message m, e.g. --filter 'm.linear.x > 0'") from None
+
+    def keep(msg: Any, number: int) -> bool:
+        try:
+            return bool(eval(code, namespace, {"m": msg}))  # noqa: S307 - the user's own expression
+        except Exception as error:  # noqa: BLE001 - said in one line, and the listening stops
+            raise UsageError(f"--filter {expression!r} raised {type(error).__name__}: {error} on message "
+                             f"{number}; fix the expression (the message is m)") from None
+
+    return keep
+
+
+def _fields_yaml(msg: Any, fields: list[str], type_name: str) -> str:
+    """The chosen fields of ``msg`` as YAML lines, ``linear.x: 1.0``, each read by its dotted path."""
+    lines = []
+    for path in fields:
+        value = msg
+        for part in path.split("."):
+            if part not in getattr(value, "__slots__", ()):
+                have = ", ".join(getattr(value, "__slots__", ())) or "no fields"
+                raise UsageError(f"--field {path}: no field {part!r} in {getattr(value, '_type', type_name)} "
+                                 f"(it has {have})")
+            value = getattr(value, part)
+        text = str(value)
+        lines.append(f"{path}: {text}" if "\n" not in text else f"{path}:\n  " + text.replace("\n", "\n  "))
+    return "\n".join(lines)
+
+
 # "pkg/Type" or "pkg/msg/Type": how %pub tells a type from the message data after the topic.
 _TYPE_WORD = re.compile(r"[A-Za-z]\w*/(msg/)?[A-Za-z]\w*")
 
@@ -66,30 +114,42 @@ class TopicMagics(ExtensionMagics):
     @argument("topic", help="the live topic to listen to")
     @argument("-n", "--count", type=int, default=None,
               help="stop after this many messages (default c.RosMagics.echo_count; 0: until Ctrl-C)")
+    @argument("--field", action="append", metavar="A.B",
+              help="print only this field (repeat for several), e.g. --field linear.x --field angular.z")
+    @argument("--filter", metavar="EXPR",
+              help="only messages for which this Python expression over m is true, e.g. 'm.linear.x > 0'; "
+                   "it sees your namespace")
+    @no_var_expand
     @line_magic
-    def echo(self, line: str) -> None:
-        """Print the messages arriving on TOPIC until Ctrl-C (or -n of them).
+    def echo(self, line: str) -> "Messages":
+        """Print the messages arriving on TOPIC until Ctrl-C (or -n of them); return them.
 
-        Ctrl-C stops only the listening: nodes keep running. The subscription made for
-        listening is removed when it stops.
+        The output is YAML that ``%pub`` takes back. ``msgs = %echo /x -n 20`` keeps the
+        messages (a list). Ctrl-C stops only the listening: nodes keep running. The
+        subscription made for listening is removed when it stops.
         """
         args = parse_argstring(self.echo, line)
         count = self.ext.settings.echo_count if args.count is None else args.count
         if count < 0:
             raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {count}")
         topic = global_topic(args.topic)
+        keep = _compile_filter(args.filter, self.shell.user_ns) if args.filter else None
         type_name = self._live_type(topic)
-        shown = 0
+        fields = [f.strip("'\"") for f in args.field or []]
         printer = self.ext.printer
+        seen = Messages(topic)
         with Echo(topic, type_name) as echo:
             try:
-                while not count or shown < count:
+                while not count or len(seen) < count:
                     msg = echo.get(timeout=0.1)  # short waits: Ctrl-C gets through between them
-                    if msg is not None:
-                        shown += 1
-                        printer.show(Syntax(str(msg), "yaml", background_color="default"), "---")
+                    # (no `continue` here: CPython 3.11 can raise Ctrl-C at that jump, outside this try)
+                    if msg is not None and (keep is None or keep(msg, len(seen) + 1)):
+                        seen.append(msg)
+                        text = _fields_yaml(msg, fields, type_name) if fields else str(msg)
+                        printer.show(Syntax(text, "yaml", background_color="default"), "---")
             except KeyboardInterrupt:
-                print(f"stopped listening to {topic} after {shown} message{'s' * (shown != 1)}")
+                print(f"stopped listening to {topic} after {len(seen)} message{'s' * (len(seen) != 1)}")
+        return seen
 
     # -- %pub / %%pub ----------------------------------------------------------------------
     @magic_arguments()
