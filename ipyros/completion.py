@@ -59,6 +59,7 @@ TIMER = "timer"              # the node's timer names
 PACKAGE = "package"
 EXECUTABLE = "executable"    # executables of the package named by the argument before
 DEMO_ROBOT = "demo robot"    # the robots %demo starts
+MSG_TEMPLATE = "template"    # a message of the type before it, every field at its default
 
 
 # -- the catalog of installed things ------------------------------------------------
@@ -75,18 +76,20 @@ class Catalog:
     service_types: Callable[[], Sequence[str]]
     packages: Callable[[], Sequence[str]]
     executables: Callable[[str], Sequence[str]]
+    templates: Callable[[str], str] = field(default=lambda msg_type: _template(msg_type))
 
     def __post_init__(self) -> None:
-        self._sources = (self.message_types, self.service_types, self.packages, self.executables)
+        self._sources = (self.message_types, self.service_types, self.packages, self.executables, self.templates)
         self.refresh()
 
     def refresh(self) -> None:
         """Forget every cached scan; the next completion scans again."""
-        types, srvs, pkgs, exes = self._sources
+        types, srvs, pkgs, exes, templates = self._sources
         self.message_types = _sorted_once(types)
         self.service_types = _sorted_once(srvs)
         self.packages = _sorted_once(pkgs)
         self.executables = lru_cache(maxsize=512)(lambda package: tuple(sorted(exes(package))))
+        self.templates = lru_cache(maxsize=256)(templates)
 
     def warm(self) -> None:
         """Run the whole-catalog scans now, so the first TAB does not pay for them."""
@@ -94,6 +97,12 @@ class Catalog:
             self.message_types(), self.service_types(), self.packages()
         except Exception:  # a broken scanner shows up (at debug level) on TAB instead
             log.debug("warming the completion catalog failed", exc_info=True)
+
+
+def _template(msg_type: str) -> str:
+    from .msgbuild import template
+
+    return template(msg_type)
 
 
 def _sorted_once(source: Callable[[], Sequence[str]]) -> Callable[[], tuple[str, ...]]:
@@ -120,7 +129,8 @@ class Want:
     ``fragment`` is the part of the line the completions replace (a suffix of the text
     before the cursor). ``model`` is the DSL node in play, if any; ``direction`` picks
     which of its topics come first ("publish", "subscribe" or None for all);
-    ``package`` is the package whose executables are wanted.
+    ``package`` is the package whose executables are wanted; ``before`` the positional
+    words before the one typed (``%pub``'s topic, then its type).
     """
 
     kind: str
@@ -128,6 +138,7 @@ class Want:
     model: Optional[NodeModel] = None
     direction: Optional[str] = None
     package: Optional[str] = None
+    before: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -152,7 +163,7 @@ MAGICS: dict[str, MagicSpec] = {
     "topics": MagicSpec((TOPIC,), {**_TYPE_OPTIONS, "--node": NODE, "-n": NODE}),
     "echo": MagicSpec((TOPIC,), {"-n": None, "--count": None}),
     "handler": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
-    "pub": MagicSpec((TOPIC, MSG_TYPE), {**_TYPE_OPTIONS, "-r": None, "--rate": None}),
+    "pub": MagicSpec((TOPIC, MSG_TYPE, MSG_TEMPLATE), {**_TYPE_OPTIONS, "-r": None, "--rate": None}),
     "try": MagicSpec((DSL_NODE, OWN_TOPIC), {"-n": None, "--last": None}, direction="subscribe"),
     "status": MagicSpec((DSL_NODE,)),
     "versions": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
@@ -229,7 +240,7 @@ def magic_want(line: str, user_ns: Mapping[str, Any], line_magics: Optional[Mapp
     fragment = re.split(r"[=:]", current)[-1] if current.startswith("-") or ":=" in current else current
     model = _model_of(user_ns, positionals[0]) if kind == OWN_TOPIC and positionals else None
     package = positionals[0] if kind == EXECUTABLE and positionals else None
-    return Want(kind, fragment, model, spec.direction, package)
+    return Want(kind, fragment, model, spec.direction, package, tuple(positionals))
 
 
 def _classify(spec: MagicSpec, words: list[str], current: str) -> tuple[Optional[str], list[str]]:
@@ -450,7 +461,18 @@ class Answerer:
             return sorted((k, type(v).__name__) for k, v in list(user_ns.items())
                           if k.startswith(frag) and not k.startswith("_") and is_dsl_node(v))
         if kind == MSG_TYPE:
-            return [(t, kind) for t in _types(self.catalog.message_types(), frag)]
+            found = [(t, kind) for t in _types(self.catalog.message_types(), frag)]
+            live = snap.topics.get(_global(want.before[0])) if want.before else None
+            if live and live.startswith(frag):  # %pub TOPIC <TAB>: the type the topic carries, first
+                found = [(live, f"carried by {_global(want.before[0])}")] + [f for f in found if f[0] != live]
+            return found
+        if kind == MSG_TEMPLATE:
+            if frag or len(want.before) < 2:
+                return []  # a template replaces nothing: it is offered before anything is typed
+            try:
+                return [(self.catalog.templates(want.before[1]), f"{want.before[1]}, every field at its default")]
+            except Exception:  # an unknown type: %pub itself will say so, in one line
+                return []
         if kind == SRV_TYPE:
             return [(t, kind) for t in _types(self.catalog.service_types(), frag)]
         if kind == PACKAGE:
@@ -477,6 +499,10 @@ class Answerer:
         namespace = model.namespace if model is not None else default_namespace()
         own = _own(model.services if model else [], None, frag, namespace)
         return own + [(text, SERVICE) for text, _ in _relative_or_global(tuple(snap.services), frag, namespace)]
+
+
+def _global(name: str) -> str:
+    return names.resolve(name, default_namespace(), "ipyros", "topic") if name else name
 
 
 def _own(declared: Sequence[Any], direction: Optional[str], fragment: str, namespace: str) -> list[tuple[str, str]]:

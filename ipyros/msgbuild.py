@@ -77,6 +77,29 @@ def build_message(msg_type: Any, data: Any = None, *, nonfinite: bool = False) -
         raise MessageTypeError(f"{type_name}: {error}") from None
 
 
+def template(msg_type: Any) -> str:
+    """A message of ``msg_type`` with every field at its default, as one line of YAML.
+
+    What TAB after ``%pub TOPIC TYPE`` inserts: nested, every field named, ready to edit
+    and send (``%pub`` reads it back as it is).
+    """
+    _, cls = msgtypes.resolve_message(msg_type)
+    return yaml.safe_dump(_as_data(cls()), default_flow_style=True, width=1 << 20, sort_keys=False).strip()
+
+
+def _as_data(value: Any) -> Any:
+    """A message as plain data: dicts of fields, times as {secs, nsecs}, byte arrays as lists."""
+    if isinstance(value, genpy.Message):
+        return {name: _as_data(getattr(value, name)) for name in value.__slots__}
+    if isinstance(value, (genpy.Time, genpy.Duration)):
+        return {"secs": value.secs, "nsecs": value.nsecs}
+    if isinstance(value, (bytes, bytearray)):
+        return list(value)
+    if isinstance(value, (list, tuple)):
+        return [_as_data(item) for item in value]
+    return value
+
+
 class _FieldError(Exception):
     """A problem at a field path; :func:`build_message` prefixes the type name."""
 

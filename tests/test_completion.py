@@ -145,6 +145,22 @@ def test_pub_magic_topic_then_type(matcher):
         "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
 
 
+def test_pub_magic_offers_the_live_type_then_a_template(matcher):
+    # After the topic: the type it carries first, then the others.
+    assert texts(matcher, "%pub /ct/turtle1/pose ")[:2] == ["geometry_msgs/Pose2D", "geometry_msgs/Pose"]
+    result = ask(matcher, "%pub /ct/turtle1/pose ")
+    assert result["completions"][0].type == "carried by /ct/turtle1/pose"
+    # After the type: the whole message, every field at its default, which %pub reads back.
+    (template,) = texts(matcher, "%pub /ct/turtle2/cmd_vel geometry_msgs/Twist ")
+    assert template == "{linear: {x: 0.0, y: 0.0, z: 0.0}, angular: {x: 0.0, y: 0.0, z: 0.0}}"
+    from ipyros.msgbuild import build_message, parse_data
+
+    assert build_message("geometry_msgs/Twist", parse_data(template)).linear.x == 0.0
+    assert texts(matcher, "%pub /ct/odom std_msgs/String ") == ["{data: ''}"]
+    assert texts(matcher, "%pub /ct/odom std_msgs/String {da") == []  # typing the data: nothing to add
+    assert texts(matcher, "%pub /ct/odom std_msgs/Strin ") == []  # an unknown type: %pub will say so
+
+
 def test_try_and_status_magics_complete_nodes_and_subscriptions(matcher):
     assert texts(matcher, "%status w") == ["wnode"]
     assert texts(matcher, "%try ") == ["nd", "wnode"]
@@ -310,6 +326,8 @@ def test_through_the_shell(ip, graph):
             "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
         assert [c.text for c in complete(ip, "%wrap turtlesim turtle")] == ["turtle_teleop_key", "turtlesim_node"]
         assert [c.text for c in complete(ip, "%handler w")] == ["wnode"]
+        found = complete(ip, "%pub /ct/odom std_msgs/String ")  # a template, inserted at the cursor
+        assert [(c.text, c.start) for c in found] == [("{data: ''}", len("%pub /ct/odom std_msgs/String "))]
         # Ours but nothing matches: no file names crowd in (the file matcher would list /ct...).
         assert complete(ip, "%topics /ct/nothing") == []
         assert complete(ip, 'x.subscribe(topic="/') != [] and all(c.text.startswith("/") and c.text != "/usr/"
