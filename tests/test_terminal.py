@@ -110,6 +110,13 @@ def test_a_session_at_the_terminal(ipython, ticks, ros_master):
     table = term.wait_for(lambda rows: [row for row in rows if TOPIC in row and "│" in row], what="the topics table")
     assert "std_msgs/UInt32" in table[0] and "/ticker_" in table[0]
 
+    # After %pub TOPIC TYPE, TAB inserts the message with every field at its default; Enter sends it.
+    term.type("%pub /e2e_template std_msgs/ColorRGBA ")
+    term.press("Tab")
+    prompt_reads(term, "%pub /e2e_template std_msgs/ColorRGBA {r: 0.0, g: 0.0, b: 0.0, a: 0.0}")
+    term.press("Enter")
+    term.wait_for("published a std_msgs/ColorRGBA on /e2e_template")
+
     # %topics alone lists it too, among the others (the table may be longer than the screen).
     run(term, "%topics")
     rows = term.screen(history=True)
