@@ -4,7 +4,9 @@
 #                         demo turtle running (on the master at ROS_MASTER_URI, started if none answers)
 #   bash run.sh ipython   the same without the demo robot
 #   bash run.sh notebook  the notebooks in Jupyter (installs Jupyter into the venv the first time)
-#   bash run.sh test      install what is missing, then run the whole test suite
+#   bash run.sh test      install what is missing, then run the whole test suite (ROS 1, then ROS 2
+#                         in a venv of its own, rclpy from PyPI)
+#   bash run.sh test-ros2 the ROS 2 suite alone
 #   bash run.sh bench     install what is missing, then run the benchmarks
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -38,6 +40,22 @@ if [[ ! -f "$stamp" || "$here/pyproject.toml" -nt "$stamp" ]]; then
   "$venv/bin/pip" install -q --disable-pip-version-check -e "$here[test]" >&2
   touch "$stamp"
 fi
+
+# ROS 2 from PyPI, in a venv of its own: it must not see the system's site-packages, where
+# Debian's ROS 1 message packages (std_msgs, ...) would shadow the ROS 2 ones.
+venv2="$here/.venv-ros2"
+ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs ros-rcl-interfaces)
+ros2_venv() {
+  if [[ ! -x "$venv2/bin/python" ]]; then
+    /usr/bin/python3 -m venv "$venv2"
+  fi
+  local stamp2="$venv2/.ipyros-installed"
+  if [[ ! -f "$stamp2" || "$here/pyproject.toml" -nt "$stamp2" ]]; then
+    echo "run.sh: installing ROS 2 (rclpy, from PyPI) into $venv2" >&2
+    "$venv2/bin/pip" install -q --disable-pip-version-check "${ros2_packages[@]}" pytest pytest-timeout -e "$here" >&2
+    touch "$stamp2"
+  fi
+}
 
 # Jupyter, for the notebook target only (the tests run notebooks without it).
 notebook() {
@@ -75,7 +93,10 @@ case "$cmd" in
   demo)     exec "$venv/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   ipython)  exec "$venv/bin/ipython" --ext ipyros "$@" ;;
   notebook) notebook "$@" ;;
-  test)     cd "$here" && exec "$venv/bin/python" -m pytest "$@" ;;
+  test)     # ROS 1 (tests/), then ROS 2 (tests_ros2/); with arguments, pytest gets them on ROS 1 only
+            cd "$here" && "$venv/bin/python" -m pytest "$@"
+            if (($# == 0)); then ros2_venv && exec "$venv2/bin/python" -m pytest tests_ros2; fi ;;
+  test-ros2) cd "$here" && ros2_venv && exec "$venv2/bin/python" -m pytest tests_ros2 "$@" ;;
   bench)    cd "$here" && exec "$venv/bin/python" -m bench "$@" ;;
-  *) echo "usage: bash run.sh [demo|ipython|notebook|test|bench] [args...]" >&2; exit 2 ;;
+  *) echo "usage: bash run.sh [demo|ipython|notebook|test|test-ros2|bench] [args...]" >&2; exit 2 ;;
 esac

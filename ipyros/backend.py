@@ -4,18 +4,20 @@ The DSL, the node model, the plan and the magics are the same on ROS 1 and ROS 2
 :class:`Backend` is what runs them on one ROS. A session holds exactly one, chosen when
 it starts (:func:`choose`). Each endpoint it makes has ``close()``; publications and
 relays also ``figures()`` (:class:`~ipyros.slots.SendFigures`), and publications
-``write(msg)``.
+``write(msg)``. ``host`` is the full name of the DSL node an endpoint belongs to: on ROS 2
+each DSL node is a ROS node of its own, on ROS 1 they share the process's.
 
 =====================  ===================================================================
 the DSL asks           what the backend gives
 =====================  ===================================================================
 a node process         ``process``: started once, named, registered again after a master
-                       restart, shut down (``ProcessNode`` on ROS 1)
-publish / write        ``publication(topic, cls, latch)``
-subscribe(h)           ``subscription(topic, cls, slot)``: the slot calls the handler
-reuse relay            ``relay(source, target, cls, on_wrong_type)``: bytes, not objects
-timer                  ``timer(period, slot, oneshot)``
-service / reuse        ``service(name, cls, slot)``, ``service_relay(source, target, cls)``
+                       restart, shut down (``ProcessNode`` on ROS 1); ``has_master``
+publish / write        ``publication(host, topic, cls, latch)``
+subscribe(h)           ``subscription(host, topic, cls, slot)``: the slot calls the handler
+reuse relay            ``relay(host, source, target, cls, on_wrong_type)``: bytes, not objects
+timer                  ``timer(host, period, slot, oneshot)``
+service / reuse        ``service(host, name, cls, slot)``, ``service_relay(host, source, target, cls)``
+a DSL node's life      ``open_host(host)`` at create(), ``close_host(host)`` at shutdown()
 params                 ``check_param``, ``get_param``, ``set_param``, ``has_param``,
                        ``delete_param`` (by global name)
 a free node name       ``refuse_taken_name(uri, name)``
@@ -24,8 +26,11 @@ a free node name       ``refuse_taken_name(uri, name)``
 
 from __future__ import annotations
 
+import importlib.util
+import os
 from typing import Any, Callable, Optional, Protocol
 
+from .errors import IpyrosError
 from .slots import HandlerSlot
 
 __all__ = ["Backend", "choose"]
@@ -35,15 +40,18 @@ class Backend(Protocol):
     """One ROS, as the DSL sees it (see the module's table)."""
 
     name: str  # "ROS 1", "ROS 2"
+    has_master: bool  # a ROS 1 master to find, start and watch; ROS 2 discovers peers itself
     process: Any
 
-    def publication(self, topic: str, cls: type, latch: bool) -> Any: ...
-    def subscription(self, topic: str, cls: type, slot: HandlerSlot) -> Any: ...
-    def relay(self, source: str, target: str, cls: type,
+    def publication(self, host: str, topic: str, cls: type, latch: bool) -> Any: ...
+    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot) -> Any: ...
+    def relay(self, host: str, source: str, target: str, cls: type,
               on_wrong_type: Optional[Callable[[str], None]]) -> Any: ...
-    def timer(self, period: float, slot: HandlerSlot, oneshot: bool) -> Any: ...
-    def service(self, name: str, cls: type, slot: HandlerSlot) -> Any: ...
-    def service_relay(self, source: str, target: str, cls: type) -> Any: ...
+    def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool) -> Any: ...
+    def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> Any: ...
+    def service_relay(self, host: str, source: str, target: str, cls: type) -> Any: ...
+    def open_host(self, host: str) -> None: ...
+    def close_host(self, host: str) -> None: ...
     def check_param(self, name: str, value: Any) -> None: ...
     def get_param(self, name: str) -> Any: ...
     def set_param(self, name: str, value: Any) -> None: ...
@@ -53,7 +61,22 @@ class Backend(Protocol):
 
 
 def choose() -> Backend:
-    """The backend of a new session. Only ROS 1 exists yet; ROS 2 joins here (issue 10)."""
-    from .ros1.backend import Ros1
+    """The backend of a new session: ``IPYROS_ROS`` (``1`` or ``2``) if set, else ``ROS_VERSION``
+    (what a sourced ROS install sets), else ROS 1 if rospy is importable, else ROS 2."""
+    wanted = os.environ.get("IPYROS_ROS") or os.environ.get("ROS_VERSION") or ""
+    if wanted not in ("", "1", "2"):
+        raise IpyrosError(f"IPYROS_ROS={wanted!r}: give 1 (ROS 1, rospy) or 2 (ROS 2, rclpy)")
+    if not wanted:
+        wanted = "1" if importlib.util.find_spec("rospy") is not None else "2"
+    try:
+        if wanted == "2":
+            from .ros2.backend import Ros2
 
-    return Ros1()
+            return Ros2()
+        from .ros1.backend import Ros1
+
+        return Ros1()
+    except ImportError as error:
+        which = "ROS 2 (rclpy: pip install 'ros-rclpy[fastrtps]')" if wanted == "2" else "ROS 1 (rospy)"
+        raise IpyrosError(f"ipyros was asked for {which}, which this Python cannot import ({error}); "
+                          "install it, or set IPYROS_ROS to the ROS you have") from None

@@ -215,6 +215,7 @@ class rosNode:  # noqa: N801 - the paper's name
             self._session.add(self)
             try:
                 self._session.start_process_node(self.fullname)
+                self._session.backend.open_host(self.fullname)
                 self._session.require_master(f"{self.called}.create()")
                 self._check_live_types(self._model.topics)
                 self._set_params(self._model.params)
@@ -236,6 +237,7 @@ class rosNode:  # noqa: N801 - the paper's name
                 self._base.stop()
                 self._base = None
             self._close_all()
+            self._session.backend.close_host(self.fullname)
             self.created = False
             self._session.remove(self)
 
@@ -299,8 +301,9 @@ class rosNode:  # noqa: N801 - the paper's name
         if writer is None:
             writer = self._writer(topic)
         publication, type_name = writer
-        if getattr(msg, "_type", None) != type_name:
-            got = getattr(msg, "_type", None) or type(msg).__name__
+        got = msgtypes.type_name(msg)  # a class of the right type is refused by the publication, in its words
+        if got != type_name:
+            got = got or type(msg).__name__
             raise MessageTypeError(f"{topic} carries {type_name}, not {got}; "
                                    f"build a {type_name.split('/')[1]}() and write that")
         publication.write(msg)
@@ -487,17 +490,17 @@ class rosNode:  # noqa: N801 - the paper's name
                                        f"{getattr(spec, 'topic', None) or getattr(spec, 'name', '')}: {error}") from None
 
     def _open_one(self, spec: Spec, handlers: dict[str, Callable[..., Any]], takes_arg: dict[str, bool]) -> Any:
-        backend = self._session.backend
+        backend, host = self._session.backend, self.fullname
         if isinstance(spec, planning.PublishSpec):
-            return backend.publication(spec.topic, msgtypes.resolve_message(spec.type)[1], spec.latch)
+            return backend.publication(host, spec.topic, msgtypes.resolve_message(spec.type)[1], spec.latch)
         if isinstance(spec, planning.RelaySpec):
             def wrong_type(got: str, spec: planning.RelaySpec = spec) -> None:
                 self._session.notify(f"ipyros: {spec.source} carries {got}, but {self.name} relays it as {spec.type}; "
                                      f"messages are dropped: declare type={got!r}")
 
-            return backend.relay(spec.source, spec.target, msgtypes.resolve_message(spec.type)[1], wrong_type)
+            return backend.relay(host, spec.source, spec.target, msgtypes.resolve_message(spec.type)[1], wrong_type)
         if isinstance(spec, planning.ServiceRelaySpec):
-            return backend.service_relay(spec.source, spec.target, msgtypes.resolve_service(spec.type)[1])
+            return backend.service_relay(host, spec.source, spec.target, msgtypes.resolve_service(spec.type)[1])
         slot = self._slots.get(spec.slot)
         if slot is None:
             label = f"{self.name} {spec.slot.split(' ', 1)[1]}"
@@ -505,10 +508,10 @@ class rosNode:  # noqa: N801 - the paper's name
                                keep=self._session.config.keep_recent)
             self._slots[spec.slot] = slot
         if isinstance(spec, planning.SubscribeSpec):
-            return backend.subscription(spec.topic, msgtypes.resolve_message(spec.type)[1], slot)
+            return backend.subscription(host, spec.topic, msgtypes.resolve_message(spec.type)[1], slot)
         if isinstance(spec, planning.TimerSpec):
-            return backend.timer(spec.period, slot, spec.oneshot)
-        return backend.service(spec.name, msgtypes.resolve_service(spec.type)[1], slot)
+            return backend.timer(host, spec.period, slot, spec.oneshot)
+        return backend.service(host, spec.name, msgtypes.resolve_service(spec.type)[1], slot)
 
     def _record(self, change: str) -> None:
         pending, self._new_version = self._new_version, None

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import difflib
 import importlib
+import re
 import sys
 from functools import lru_cache
 from pathlib import Path
@@ -17,9 +18,25 @@ from .errors import MessageTypeError
 
 
 def type_name(cls: Any) -> str | None:
-    """The ROS type name of a generated message class (or instance), else None."""
+    """The ROS type name ``"pkg/Type"`` of a generated message or service class (or instance), else None.
+
+    ROS 1 classes say it (``_type``); ROS 2 classes live in ``pkg.msg._snake_name`` (or
+    ``.srv``) and are recognised by their metaclass's ``_TYPE_SUPPORT``. Both are named
+    ``"pkg/Type"`` in the model, so a node saved on one ROS reads the same on the other.
+    """
     name = getattr(cls, "_type", None)
-    return name if isinstance(name, str) and "/" in name else None
+    if isinstance(name, str) and "/" in name:
+        return name
+    cls = cls if isinstance(cls, type) else type(cls)
+    parts = getattr(cls, "__module__", "").split(".")
+    if len(parts) == 3 and parts[1] in ("msg", "srv") and hasattr(type(cls), "_TYPE_SUPPORT"):
+        return f"{parts[0]}/{cls.__name__}"
+    return None
+
+
+def is_service(cls: type) -> bool:
+    """A service class: ROS 1's have ``_request_class``, ROS 2's ``Request``."""
+    return hasattr(cls, "_request_class") or (hasattr(cls, "Request") and hasattr(cls, "Response"))
 
 
 def resolve_message(spec: Any) -> tuple[str, type]:
@@ -38,8 +55,7 @@ def _resolve(spec: Any, kind: str) -> tuple[str, type]:
         raise MessageTypeError(f"no {what} type given; pass msgType=... e.g. Twist or 'geometry_msgs/Twist'")
     if isinstance(spec, type):
         name = type_name(spec)
-        is_service = hasattr(spec, "_request_class")
-        if name is None or is_service != (kind == "srv"):
+        if name is None or is_service(spec) != (kind == "srv"):
             raise MessageTypeError(
                 f"{spec.__name__} is not a ROS {what} class; pass a generated type such as "
                 + ("geometry_msgs.msg.Twist" if kind == "msg" else "std_srvs.srv.Empty")
@@ -90,10 +106,25 @@ def _index(kind: str) -> dict[str, tuple[str, ...]]:
         root = Path(entry or ".")
         if not root.is_dir():
             continue
-        for module in root.glob(f"*/{kind}/_*.py"):
-            if module.name != "__init__.py":
-                found.setdefault(module.parent.parent.name, set()).add(module.stem[1:])
+        for init in root.glob(f"*/{kind}/__init__.py"):
+            names = _type_names(init)
+            if names:
+                found.setdefault(init.parent.parent.name, set()).update(names)
     return {pkg: tuple(sorted(types)) for pkg, types in sorted(found.items())}
+
+
+_EXPORTED = re.compile(r"^from \S+ import (\w+)", re.M)  # ROS 2: from pkg.msg._twist import Twist
+
+
+def _type_names(init: Path) -> set[str]:
+    """The types a generated ``pkg/msg/__init__.py`` exports (ROS 1: one ``_Type.py`` module each)."""
+    names = {m.stem[1:] for m in init.parent.glob("_*.py") if m.name != "__init__.py" and m.stem[1:2].isupper()}
+    if names:
+        return names
+    try:
+        return {name for name in _EXPORTED.findall(init.read_text(errors="replace")) if name[:1].isupper()}
+    except OSError:
+        return set()
 
 
 def _packages(kind: str) -> list[str]:

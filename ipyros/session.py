@@ -132,6 +132,10 @@ class Session:
         with self._lock:
             if self.closed:
                 raise NodeStateError("this ipyros session was closed; restart the interpreter")
+            if not self.backend.has_master:  # ROS 2: peers find each other, nothing to attach or watch
+                name = self.process.start(self.config.process_node_name or fullname)
+                stop_on_termination()
+                return name
             uri = self.attach_master().uri
             name = self.process.start(self.config.process_node_name or fullname, uri)
             if fullname != name:  # a DSL node hosted in the process node: its name must be free too

@@ -22,6 +22,8 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))  # tests/helpers.py
+
+from support import node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
 # The test basenodes are a ROS package: found by package + executable, as rosrun finds them.
 os.environ["ROS_PACKAGE_PATH"] = os.pathsep.join(
     p for p in (str(HERE / "nodes"), os.environ.get("ROS_PACKAGE_PATH", "")) if p)
@@ -41,18 +43,6 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
-
-
-def wait_for(predicate, timeout: float = 10.0, interval: float = 0.02, what: str = "condition"):
-    """Poll ``predicate`` until it returns a truthy value; fail the test after ``timeout``."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout}s waiting for {what}")
-        time.sleep(interval)
 
 
 def _master_answers(uri: str) -> bool:
@@ -155,18 +145,7 @@ def failures(ros_session):
 @pytest.fixture
 def make_node(ros_session):
     """Build rosNodes that are shut down when the test ends."""
-    from ipyros import rosNode
-
-    nodes = []
-
-    def make(name: str, **kwargs):
-        node = rosNode(name, session=ros_session, **kwargs)
-        nodes.append(node)
-        return node
-
-    yield make
-    for node in nodes:
-        node.shutdown()
+    yield from node_maker(ros_session)
 
 
 def master_state(uri: str) -> dict:

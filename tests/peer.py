@@ -1,4 +1,4 @@
-"""Run ROS peer nodes (scripts in tests/peers/) as subprocesses and read what they print."""
+"""Run ROS peer nodes (scripts in tests/peers/, or a suite's own ``PEERS``) as subprocesses and read what they print."""
 
 from __future__ import annotations
 
@@ -9,17 +9,22 @@ import sys
 import threading
 from pathlib import Path
 
-from conftest import wait_for
+from support import wait_for
 
 PEERS = Path(__file__).resolve().parent / "peers"
 
 
 class Peer:
-    """A peer process; ``lines`` fills as it prints. Use as a context manager."""
+    """A peer process; ``lines`` fills as it prints. Use as a context manager.
+
+    ``script`` is found in ``PEERS`` (a subclass may point elsewhere: the ROS 2 suite does).
+    """
+
+    PEERS = PEERS
 
     def __init__(self, script: str, *args: str) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, str(PEERS / script), *map(str, args)],  # an absolute path stays as it is
+            [sys.executable, str(self.PEERS / script), *map(str, args)],  # an absolute path stays as it is
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
             env={**os.environ, "PYTHONUNBUFFERED": "1"},
         )

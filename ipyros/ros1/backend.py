@@ -11,31 +11,42 @@ __all__ = ["Ros1"]
 
 
 class Ros1:
-    """rospy behind the seam: one process node hosts every DSL node's endpoints."""
+    """rospy behind the seam: one process node hosts every DSL node's endpoints.
+
+    ``host`` (the DSL node's full name) does not matter here: rospy allows one node per
+    process, and the names are resolved already.
+    """
 
     name = "ROS 1"
+    has_master = True
 
     def __init__(self) -> None:
         self.process = runtime.ProcessNode()
 
-    def publication(self, topic: str, cls: type, latch: bool) -> runtime.Publication:
+    def publication(self, host: str, topic: str, cls: type, latch: bool) -> runtime.Publication:
         return runtime.Publication(topic, cls, latch)
 
-    def subscription(self, topic: str, cls: type, slot: HandlerSlot) -> runtime.Subscription:
+    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot) -> runtime.Subscription:
         return runtime.Subscription(topic, cls, slot)
 
-    def relay(self, source: str, target: str, cls: type,
+    def relay(self, host: str, source: str, target: str, cls: type,
               on_wrong_type: Optional[Callable[[str], None]]) -> runtime.Relay:
         return runtime.Relay(source, target, cls, on_wrong_type)
 
-    def timer(self, period: float, slot: HandlerSlot, oneshot: bool) -> runtime.Timer:
+    def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool) -> runtime.Timer:
         return runtime.Timer(period, slot, oneshot)
 
-    def service(self, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
+    def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
         return runtime.ServiceServer(name, cls, slot)
 
-    def service_relay(self, source: str, target: str, cls: type) -> runtime.ServiceRelay:
+    def service_relay(self, host: str, source: str, target: str, cls: type) -> runtime.ServiceRelay:
         return runtime.ServiceRelay(source, target, cls)
+
+    def open_host(self, host: str) -> None:
+        """Nothing to do: the DSL node's endpoints live in the process node."""
+
+    def close_host(self, host: str) -> None:
+        """Nothing to do: the process node stays for the session's other nodes."""
 
     # The parameter server and the master, by global name.
     check_param = staticmethod(runtime.check_param)

@@ -1,0 +1,90 @@
+"""ROS 2 as a :class:`~ipyros.backend.Backend`: the seam's calls, answered by :mod:`.runtime`."""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Optional
+
+from ..errors import DeclarationError
+from ..slots import HandlerSlot
+from . import runtime
+
+__all__ = ["Ros2"]
+
+
+class Ros2:
+    """rclpy behind the seam: each DSL node (``host``) is a ROS 2 node of its own."""
+
+    name = "ROS 2"
+    has_master = False
+
+    def __init__(self) -> None:
+        self.process = runtime.ProcessNode()
+
+    def publication(self, host: str, topic: str, cls: type, latch: bool) -> runtime.Publication:
+        return runtime.Publication(self.process.host(host), topic, cls, latch)
+
+    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot) -> runtime.Subscription:
+        return runtime.Subscription(self.process.host(host), topic, cls, slot)
+
+    def relay(self, host: str, source: str, target: str, cls: type,
+              on_wrong_type: Optional[Callable[[str], None]]) -> runtime.Relay:
+        return runtime.Relay(self.process.host(host), source, target, cls, on_wrong_type)
+
+    def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool) -> runtime.Timer:
+        return runtime.Timer(self.process.host(host), period, slot, oneshot)
+
+    def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
+        return runtime.ServiceServer(self.process.host(host), name, cls, slot)
+
+    def service_relay(self, host: str, source: str, target: str, cls: type) -> Any:
+        raise DeclarationError(f"relaying the service {source} is not there on ROS 2 yet; serve {target} with "
+                               "new.service(..., handler=...) instead")
+
+    def open_host(self, host: str) -> None:
+        self.process.host(host)
+
+    def close_host(self, host: str) -> None:
+        self.process.close_host(host)
+
+    # -- parameters: each belongs to its node --------------------------------------------
+    check_param = staticmethod(runtime.check_param)
+
+    def _owner(self, name: str) -> tuple[Any, str]:
+        """The ROS 2 node a parameter ``/ns/node/key`` belongs to, and its key there."""
+        for fullname in sorted(self.process.hosts(), key=len, reverse=True):
+            if name.startswith(fullname + "/"):
+                return self.process.host(fullname), name[len(fullname) + 1:].replace("/", ".")
+        raise DeclarationError(f"parameter {name}: on ROS 2 a parameter belongs to a node; set it as that "
+                               "node's own, nd.params['key'] = value, while it runs")
+
+    def get_param(self, name: str) -> Any:
+        node, key = self._owner(name)
+        return node.get_parameter(key).value
+
+    def set_param(self, name: str, value: Any) -> None:
+        from rcl_interfaces.msg import ParameterDescriptor
+        from rclpy.parameter import Parameter
+
+        runtime.check_param(name, value)
+        node, key = self._owner(name)
+        if node.has_parameter(key):
+            node.set_parameters([Parameter(key, value=list(value) if isinstance(value, tuple) else value)])
+        else:  # any type later, as nd.params allows on ROS 1
+            node.declare_parameter(key, value, ParameterDescriptor(dynamic_typing=True))
+
+    def has_param(self, name: str) -> bool:
+        try:
+            node, key = self._owner(name)
+        except DeclarationError:
+            return False
+        return node.has_parameter(key)
+
+    def delete_param(self, name: str) -> None:
+        node, key = self._owner(name)
+        node.undeclare_parameter(key)
+
+    def refuse_taken_name(self, uri: Optional[str], name: str) -> None:
+        """ROS 2 lets two nodes share a name (it only warns); checking the graph for it is issue 10's."""
+
+    def __repr__(self) -> str:
+        return f"<ipyros backend {self.name}>"

@@ -1,0 +1,252 @@
+"""rclpy: the session's ROS 2 nodes and their endpoints.
+
+Unlike rospy, rclpy lets a process hold many nodes: each DSL node is a ROS 2 node of its
+own (``ros2 node list`` shows each by its name), all in one context, their callbacks
+run by one multi-threaded executor on a thread of its own, so that the prompt stays
+free and a handler that blocks does not stop the others. Signals stay IPython's: Ctrl-C
+interrupts the prompt, not the nodes.
+
+Endpoints mirror :mod:`ipyros.ros1.runtime`: each has ``close()``; handlers go through
+a :class:`~ipyros.slots.HandlerSlot`; relays forward serialized bytes (``raw=True``),
+never deserialising.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable, Optional
+
+import rclpy
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from ..errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
+from ..slots import HandlerSlot, SendFigures
+
+#: Reliable, and deep enough that a burst is not cut short: what ROS 1's unbounded
+#: subscriber queue gave. Publishers of other QoS are the QoS issue's (issue 10) to match.
+_DEPTH = 1000
+
+
+def _qos(latch: bool = False) -> QoSProfile:
+    durability = DurabilityPolicy.TRANSIENT_LOCAL if latch else DurabilityPolicy.VOLATILE
+    return QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.RELIABLE, durability=durability)
+
+
+class ProcessNode:
+    """rclpy in this process: one context, one executor thread, one ROS 2 node per DSL node."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self.name: Optional[str] = None  # the first node's name, for messages (there is no one process node)
+        self._context: Any = None
+        self._executor: Any = None
+        self._spinner: Optional[threading.Thread] = None
+        self._hosts: dict[str, Node] = {}
+
+    @property
+    def started(self) -> bool:
+        return self.name is not None
+
+    def start(self, name: str, master_uri: Optional[str] = None) -> str:
+        """Initialise rclpy and start the executor thread (once); ``master_uri`` is ROS 1's and unused."""
+        with self._lock:
+            if self.name is not None:
+                return self.name
+            from rclpy.signals import SignalHandlerOptions
+
+            context = rclpy.Context()
+            rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
+            executor = MultiThreadedExecutor(num_threads=4, context=context)
+            self._spinner = threading.Thread(target=self._spin, args=(executor,), name="ipyros-rclpy", daemon=True)
+            self._spinner.start()
+            self._context, self._executor, self.name = context, executor, name
+            return name
+
+    @staticmethod
+    def _spin(executor: Any) -> None:
+        try:
+            executor.spin()
+        except Exception:  # the context shut down under it: the session is closing
+            pass
+
+    def host(self, fullname: str) -> Node:
+        """The ROS 2 node of the DSL node ``fullname`` (``/ns/name``), made on first use."""
+        with self._lock:
+            if self.name is None:
+                raise NodeStateError("the ROS 2 nodes are not running; call create() on a node first")
+            node = self._hosts.get(fullname)
+            if node is None:
+                namespace, base = fullname.rsplit("/", 1)
+                node = Node(base, namespace=namespace or "/", context=self._context)
+                self._executor.add_node(node)
+                self._hosts[fullname] = node
+            return node
+
+    def hosts(self) -> list[str]:
+        """The full names of the DSL nodes that have a ROS 2 node now."""
+        with self._lock:
+            return list(self._hosts)
+
+    def close_host(self, fullname: str) -> None:
+        with self._lock:
+            node = self._hosts.pop(fullname, None)
+            if node is not None:
+                self._executor.remove_node(node)
+                node.destroy_node()
+
+    def register_again(self) -> tuple[int, int, int]:
+        """Nothing to do: ROS 2 has no master to forget what was declared."""
+        return 0, 0, 0
+
+    def shutdown(self, reason: str = "ipyros exit") -> None:
+        with self._lock:
+            if self.name is None:
+                return
+            for node in self._hosts.values():
+                self._executor.remove_node(node)
+                node.destroy_node()
+            self._hosts.clear()
+            self._executor.shutdown(timeout_sec=2.0)
+            rclpy.try_shutdown(context=self._context)
+            if self._spinner is not None:  # a spinning thread left at exit aborts the interpreter
+                self._spinner.join(timeout=5.0)
+            self.name = None
+
+
+class Publication:
+    """A publisher; ``write`` checks the message, then publishes it."""
+
+    def __init__(self, node: Node, topic: str, cls: type, latch: bool = False) -> None:
+        self.topic, self.cls, self.count = topic, cls, 0
+        self._node = node
+        self._pub = node.create_publisher(cls, topic, _qos(latch))
+
+    def write(self, msg: Any) -> None:
+        if isinstance(msg, type):
+            raise MessageTypeError(f"{self.topic}: write() got the class {msg.__name__}, not a message; "
+                                   f"build one, {msg.__name__}(), and write that (nothing was sent)")
+        try:
+            self._pub.publish(msg)
+        except (TypeError, ValueError, AssertionError) as error:
+            raise MessageTypeError(f"{self.topic}: the message cannot be sent ({error}); nothing was sent") from None
+        self.count += 1
+
+    def connections(self) -> int:
+        return self._pub.get_subscription_count()
+
+    def figures(self) -> SendFigures:
+        return SendFigures(self.topic, "publish", self.count, self.connections(), 0, 0)
+
+    def close(self) -> None:
+        self._node.destroy_publisher(self._pub)
+
+
+class Subscription:
+    """A subscription whose callback is a :class:`HandlerSlot`."""
+
+    def __init__(self, node: Node, topic: str, cls: type, slot: HandlerSlot) -> None:
+        self.topic, self.cls, self.slot = topic, cls, slot
+        self._node = node
+        self._sub = node.create_subscription(cls, topic, slot, _qos())
+
+    def connections(self) -> int:
+        return self._sub.get_publisher_count()
+
+    def close(self) -> None:
+        self._node.destroy_subscription(self._sub)
+
+
+class Relay:
+    """Forward ``source`` to ``target`` as serialized bytes, never deserialised."""
+
+    def __init__(self, node: Node, source: str, target: str, cls: type,
+                 on_wrong_type: Optional[Callable[[str], None]] = None) -> None:
+        self.source, self.target, self.cls, self.count = source, target, cls, 0
+        self._node = node
+        self._pub = node.create_publisher(cls, target, _qos())
+        self._sub = node.create_subscription(cls, source, self._forward, _qos(), raw=True)
+
+    def _forward(self, raw: bytes) -> None:
+        self._pub.publish(raw)
+        self.count += 1
+
+    def figures(self) -> SendFigures:
+        return SendFigures(self.target, "relay", self.count, self._pub.get_subscription_count(), 0, 0)
+
+    def close(self) -> None:
+        self._node.destroy_subscription(self._sub)
+        self._node.destroy_publisher(self._pub)
+
+
+class Timer:
+    """A periodic (or one-shot) callback through a :class:`HandlerSlot`."""
+
+    def __init__(self, node: Node, period: float, slot: HandlerSlot, oneshot: bool = False) -> None:
+        self.period, self.slot, self._oneshot = period, slot, oneshot
+        self._node = node
+        self._timer = node.create_timer(period, self._tick)
+
+    def _tick(self) -> None:
+        if self._oneshot:
+            self._timer.cancel()
+        self.slot(None)
+
+    def close(self) -> None:
+        self._node.destroy_timer(self._timer)
+
+
+class ServiceServer:
+    """A service whose handler is a :class:`HandlerSlot` (it returns the response)."""
+
+    def __init__(self, node: Node, name: str, cls: type, slot: HandlerSlot) -> None:
+        self.name, self.cls, self.slot = name, cls, slot
+        self._node = node
+        self._service = node.create_service(cls, name, self._serve)
+
+    def _serve(self, request: Any, response: Any) -> Any:
+        # ROS 2 has no error reply: a failing or wrong answer is reported to the session
+        # and counted in %status, and the caller gets the default response.
+        ok, result = self.slot.run(request)
+        if not ok:
+            return response
+        if not isinstance(result, self.cls.Response):  # type: ignore[attr-defined]
+            expected = f"{self.cls.__name__}.Response"
+            self.slot.fail(HandlerError(f"the handler of service {self.name} returned {result!r:.60}, which is not "
+                                        f"a {expected}; return {expected}(...) with its fields filled"))
+            return response
+        return result
+
+    def close(self) -> None:
+        self._node.destroy_service(self._service)
+
+
+# -- parameters: a node's own, by global name ----------------------------------------------
+
+_INT64 = range(-2**63, 2**63)
+
+
+def check_param(name: str, value: Any) -> None:
+    """Refuse, in one line, a value a ROS 2 parameter cannot hold.
+
+    bool, 64-bit int, float, str, bytes, and lists of one of bool, int, float or str.
+    """
+    if value is None:
+        raise DeclarationError(f"parameter {name} = None: a ROS 2 parameter cannot be unset that way; "
+                               "use del nd.params[...]")
+    if isinstance(value, (bool, float, str, bytes)):
+        return
+    if isinstance(value, int):
+        if value not in _INT64:
+            raise DeclarationError(f"parameter {name} = {value} does not fit the 64-bit integer a ROS 2 parameter "
+                                   "holds; pass it as a float or a string")
+        return
+    if isinstance(value, (list, tuple)):
+        kinds = {bool if isinstance(v, bool) else type(v) for v in value}
+        if len(kinds) <= 1 and kinds <= {bool, int, float, str}:
+            return
+        raise DeclarationError(f"parameter {name} = {value!r:.60}: a ROS 2 parameter list holds one type "
+                               "(bool, int, float or str)")
+    raise DeclarationError(f"parameter {name} = {value!r:.60} is a {type(value).__name__}: a ROS 2 parameter "
+                           "holds bool, int, float, str, bytes or a list of one of those")

@@ -1,0 +1,74 @@
+"""ROS 2 fixtures: a DDS domain of this run's own, discovery on this machine only.
+
+Run with the ROS 2 venv (``bash run.sh test`` makes it): rclpy from PyPI, no ROS 1.
+Each DSL node is a ROS 2 node of its own in the pytest process; peers are rclpy
+scripts in ``peers/``, started and stopped by the tests.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+PEERS = HERE / "peers"
+sys.path.insert(0, str(HERE.parent / "tests"))  # the helpers both suites share (no ROS in them)
+
+from peer import Peer as SharedPeer  # noqa: E402
+from support import node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
+
+# Set before rclpy starts: the backend, a domain no other run on this machine uses, and
+# discovery kept to this machine.
+os.environ["IPYROS_ROS"] = "2"
+os.environ["ROS_DOMAIN_ID"] = str(1 + os.getpid() % 100)  # 1..100: the ids safe on Linux
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
+HISTORY_DIR = tempfile.mkdtemp(prefix="ipyros-ros2-test-history-")
+os.environ["IPYROS_HISTORY_DIR"] = HISTORY_DIR
+atexit.register(shutil.rmtree, HISTORY_DIR, ignore_errors=True)
+
+
+class Peer(SharedPeer):
+    """An rclpy peer process from ``tests_ros2/peers/``."""
+
+    PEERS = PEERS
+
+
+@pytest.fixture(scope="session")
+def ros2_session():
+    """The ipyros session of this pytest process, on ROS 2."""
+    from ipyros import session as sessions
+
+    session = sessions.configure(sessions.SessionConfig(start_master=False))
+    assert session.backend.name == "ROS 2"
+    yield session
+    session.close()
+
+
+@pytest.fixture
+def failures(ros2_session):
+    seen: list = []
+    previous, ros2_session.report = ros2_session.report, seen.append
+    yield seen
+    ros2_session.report = previous
+
+
+@pytest.fixture
+def make_node(ros2_session):
+    """Build rosNodes that are shut down when the test ends."""
+    yield from node_maker(ros2_session)
+
+
+@pytest.fixture(autouse=True)
+def no_leftover_processes():
+    """A test leaves no child process behind."""
+    yield
+    children = Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children")
+    left = children.read_text().split() if children.exists() else []
+    assert not left, f"processes left running: {left}"
