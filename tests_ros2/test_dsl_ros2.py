@@ -107,6 +107,15 @@ def test_timers_params_and_services(make_node, failures):
         assert call(True).message == ""
         assert "returned 'yes', which is not a SetBool.Response" in str(failures[-1].error)
         assert nd.status().row("/r2/worker/set").errors >= 1
+        # A change made from outside, through the node's parameter services, is what nd.params reads.
+        from rclpy.parameter import Parameter
+        from rclpy.parameter_client import AsyncParameterClient
+
+        params = AsyncParameterClient(client_node, "/r2/worker")
+        assert params.wait_for_services(timeout_sec=10)
+        wait_for(lambda: executor.spin_until_future_complete(
+            params.set_parameters([Parameter("gain", value=7)]), timeout_sec=1) or nd.params["gain"] == 7,
+            timeout=15, what="the outside change in nd.params")
         executor.shutdown()
         client_node.destroy_node()
     finally:
