@@ -87,7 +87,8 @@ class Extension:
         self._start_logging()
         shell.events.register("post_run_cell", self._after_cell)
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
-        self.graph.start()
+        if self.session.backend.has_master:  # the graph view reads a ROS 1 master (ROS 2's is issue 11)
+            self.graph.start()
         self._completion = completion.install(shell, self.graph)
         self._stop_nodes_before_namespace_goes()
         print(f"ipyros: {line or self._attach()}")
@@ -140,6 +141,8 @@ class Extension:
         a master is silenced (``_quiet``): this line already says it.
         """
         session = self.session
+        if not session.backend.has_master:
+            return session.backend.describe()  # type: ignore[attr-defined]
         if session.master is not None:
             return session.master.describe()
         uri = self.graph.master_uri

@@ -23,8 +23,12 @@ import re
 import time
 from typing import Any
 
-import genpy
 import yaml
+
+try:
+    import genpy
+except ImportError:  # ROS 2: its message classes are built another way (issue 11); see _need_genpy
+    genpy = None
 
 from . import msgtypes
 from .errors import MessageTypeError
@@ -71,6 +75,7 @@ def build_message(msg_type: Any, data: Any = None, *, nonfinite: bool = False) -
     ``nonfinite``: typed by mistake they would reach a controller as a command.
     """
     type_name, cls = msgtypes.resolve_message(msg_type)
+    _need_genpy("%pub")
     try:
         return _Builder(nonfinite).message(cls, data, "")
     except _FieldError as error:
@@ -84,6 +89,7 @@ def template(msg_type: Any) -> str:
     and send (``%pub`` reads it back as it is).
     """
     _, cls = msgtypes.resolve_message(msg_type)
+    _need_genpy("a message template")
     return yaml.safe_dump(_as_data(cls()), default_flow_style=True, width=1 << 20, sort_keys=False).strip()
 
 
@@ -98,6 +104,12 @@ def _as_data(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [_as_data(item) for item in value]
     return value
+
+
+def _need_genpy(what: str) -> None:
+    if genpy is None:
+        raise MessageTypeError(f"{what} builds ROS 1 messages only so far; on ROS 2 build the message in Python "
+                               "(String(data='hi')) and write it from a node: nd.write(topic, msg)")
 
 
 class _FieldError(Exception):

@@ -86,5 +86,30 @@ class Ros2:
     def refuse_taken_name(self, uri: Optional[str], name: str) -> None:
         """ROS 2 lets two nodes share a name (it only warns); checking the graph for it is issue 10's."""
 
+    def describe(self) -> str:
+        """One line for ``%load_ext``: which ROS 2, which domain, which middleware, how far discovery reaches."""
+        return describe()
+
     def __repr__(self) -> str:
         return f"<ipyros backend {self.name}>"
+
+
+_DISTROS = {3: "Humble", 7: "Jazzy", 9: "Kilted"}  # rclpy's major version in each distro
+
+
+def describe() -> str:
+    import os
+    from importlib.metadata import PackageNotFoundError, version
+
+    import rclpy
+
+    try:
+        release = version("rclpy")
+    except PackageNotFoundError:
+        release = "?"
+    distro = os.environ.get("ROS_DISTRO") or _DISTROS.get(int(release.split(".")[0]) if release[:1].isdigit() else -1)
+    reach = os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE") or (
+        "LOCALHOST" if os.environ.get("ROS_LOCALHOST_ONLY") == "1" else "SUBNET")
+    return (f"ROS 2{f' {distro.capitalize()}' if distro else ''} (rclpy {release}), ROS_DOMAIN_ID "
+            f"{os.environ.get('ROS_DOMAIN_ID') or 0}, {rclpy.get_rmw_implementation_identifier()}, discovery "
+            f"{reach.lower()}; so far the DSL runs here, not yet %topics, %wrap or live-name completion")
