@@ -384,15 +384,25 @@ class BaseProcess:
         log_path: "str | os.PathLike[str] | None" = None,
         on_exit: Optional[OnExit] = None,
         env: Optional[Mapping[str, str]] = None,
+        ros2: bool = False,
     ) -> None:
         self.executable = Path(executable)
         self.argv: list[str] = [str(self.executable), *map(str, args)]
-        if node_name:
-            self.argv.append(f"__name:={node_name}")
-        if namespace:
-            self.argv.append(f"__ns:={namespace}")
-        self.argv += [f"{src}:={dst}" for src, dst in (remaps or {}).items()]
-        self.argv += [param_arg(k, v) for k, v in (params or {}).items()]
+        if ros2:  # after --ros-args: -r for the name, namespace and remaps, -p for params
+            rules = ([f"__node:={node_name}"] if node_name else [])
+            rules += [f"__ns:={namespace.rstrip('/') or '/'}"] if namespace else []  # ROS 2: no trailing /
+            rules += [f"{src}:={dst}" for src, dst in (remaps or {}).items()]
+            settings = [param_arg(k, v)[1:] for k, v in (params or {}).items()]  # key:=value, no leading _
+            if rules or settings:
+                self.argv += ["--ros-args", *[w for r in rules for w in ("-r", r)],
+                              *[w for p in settings for w in ("-p", p)]]
+        else:
+            if node_name:
+                self.argv.append(f"__name:={node_name}")
+            if namespace:
+                self.argv.append(f"__ns:={namespace}")
+            self.argv += [f"{src}:={dst}" for src, dst in (remaps or {}).items()]
+            self.argv += [param_arg(k, v) for k, v in (params or {}).items()]
         self.node_name = node_name
         self.env = {**os.environ, **(env or {}), "PYTHONUNBUFFERED": "1"}  # a Python node's prints reach the log now
         if master_uri:
@@ -411,10 +421,12 @@ class BaseProcess:
         master_uri: Optional[str] = None,
         log_path: "str | os.PathLike[str] | None" = None,
         on_exit: Optional[OnExit] = None,
+        ros2: bool = False,
     ) -> "BaseProcess":
         """The process for a declared basenode; ``remaps`` (the wrapping's) add to the model's own.
 
-        Without a package, ``base.executable`` must be a path to an executable file.
+        Without a package, ``base.executable`` must be a path to an executable file. ``ros2``:
+        name, namespace, remaps and params go after ``--ros-args``, as ROS 2 nodes read them.
         """
         if not base.executable:
             raise BaseNodeError(
@@ -428,7 +440,7 @@ class BaseProcess:
         return cls(
             path, args, node_name=base.node_name, namespace=base.namespace,
             remaps={**base.remaps, **(remaps or {})}, params=base.params,
-            master_uri=master_uri, log_path=log_path, on_exit=on_exit, env=base.env,
+            master_uri=master_uri, log_path=log_path, on_exit=on_exit, env=base.env, ros2=ros2,
         )
 
     # -- state ---------------------------------------------------------------

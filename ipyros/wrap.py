@@ -230,7 +230,6 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
     shutdown after a failure half-way stops what did start.
     """
     from .base import BaseProcess, exit_reason
-    from .discovery import wait_for_node
 
     model = node.model()
     if model.base is None:
@@ -252,7 +251,8 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
         session.notify(f"ipyros: basenode {base_fullname(model)} of {node.called} {exit_reason(returncode)}; "
                        f"restart it with {node.called}.base.restart()\n    {tail}")
 
-    process = BaseProcess.from_model(base, master_uri=session.master.uri, on_exit=died)
+    uri = session.master.uri if session.master is not None else None  # ROS 2 has no master
+    process = BaseProcess.from_model(base, master_uri=uri, on_exit=died, ros2=not session.backend.has_master)
     handle: Any = process
     if from_launch:
         from .ros1.launch_rest import LaunchBase
@@ -272,8 +272,8 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
         session.notify(f"ipyros: roslaunch could not start {', '.join(handle.not_started)} of {model.base.launch} "
                        f"(the rest runs without); why: {node.called}.base.rest.tail()")
     try:
-        interface = wait_for_node(session.master.uri, base_fullname(model), timeout=settle_timeout,
-                                  alive=lambda: process.running)
+        interface = session.backend.wait_for_node(uri, base_fullname(model), timeout=settle_timeout,
+                                                  alive=lambda: process.running)
         starting.clear()
         if not process.running:  # it ended after settling, before a notice could be sent
             raise BaseNodeError("ended")
@@ -331,20 +331,24 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
     The basenode runs briefly without remaps (it is stopped before the wrapping node
     starts it again, remapped). Returns the interface, which displays as a table.
     """
-    from .base import BaseProcess
-    from .base import exit_reason
-    from .discovery import wait_for_node
+    from .base import BaseProcess, exit_reason
 
     model = node.model()
     check_wrapping(model)
     if node.created:
         raise DeclarationError(f"{node.name} is already running; discover() its basenode before create()")
-    uri = node.session.attach_master().uri
+    session = node.session
+    if session.backend.has_master:
+        uri: Optional[str] = session.attach_master().uri
+    else:  # ROS 2: the graph is read by a node of the session's own, so the session starts now
+        uri = None
+        session.start_process_node(node.fullname)
     base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),  # type: ignore[union-attr]
                         "namespace": base_namespace(model)})
-    probe = BaseProcess.from_model(base, master_uri=uri).start()
+    probe = BaseProcess.from_model(base, master_uri=uri, ros2=not session.backend.has_master).start()
     try:
-        interface = wait_for_node(uri, base_fullname(model), timeout=timeout, alive=lambda: probe.running)
+        interface = session.backend.wait_for_node(uri, base_fullname(model), timeout=timeout,
+                                                  alive=lambda: probe.running)
     except BaseNodeError:
         if not probe.running:
             raise BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(probe.returncode or 0)} at start; "

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from typing import Any, Callable, Optional
 
 from ..slots import HandlerSlot
 from . import runtime
@@ -41,6 +41,13 @@ class Ros1:
 
     def service_relay(self, host: str, source: str, target: str, cls: type) -> runtime.ServiceRelay:
         return runtime.ServiceRelay(source, target, cls)
+
+    def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
+                      alive: Optional[Callable[[], bool]] = None) -> Any:
+        """The interface of the running node ``name``, read from the master once it has settled."""
+        from ..discovery import wait_for_node
+
+        return wait_for_node(master_uri or "", name, timeout=timeout, alive=alive)
 
     def open_host(self, host: str) -> None:
         """Nothing to do: the DSL node's endpoints live in the process node."""

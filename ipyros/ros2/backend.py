@@ -40,6 +40,11 @@ class Ros2:
         raise DeclarationError(f"relaying the service {source} is not there on ROS 2 yet; serve {target} with "
                                "new.service(..., handler=...) instead")
 
+    def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
+                      alive: Optional[Callable[[], bool]] = None) -> Any:
+        """The interface of the running node ``name`` once it has settled (``master_uri`` is ROS 1's)."""
+        return runtime.wait_for_node(self.process.graph(), name, timeout, alive=alive)
+
     def open_host(self, host: str) -> None:
         self.process.host(host)
 

@@ -13,7 +13,9 @@ never deserialising.
 
 from __future__ import annotations
 
+import os
 import threading
+import time
 from typing import Any, Callable, Optional
 
 import rclpy
@@ -83,6 +85,10 @@ class ProcessNode:
                 self._executor.add_node(node)
                 self._hosts[fullname] = node
             return node
+
+    def graph(self) -> Node:
+        """A hidden node of ipyros's own that reads the ROS 2 graph (it hosts no endpoint of yours)."""
+        return self.host(f"/_ipyros_graph_{os.getpid()}")
 
     def hosts(self) -> list[str]:
         """The full names of the DSL nodes that have a ROS 2 node now."""
@@ -220,6 +226,82 @@ class ServiceServer:
 
     def close(self) -> None:
         self._node.destroy_service(self._service)
+
+
+# -- the graph: a node's interface, as discovery sees it ---------------------------------------
+
+#: What every rclpy node has: not part of the interface a wrapper would reuse.
+_PLUMBING_TOPICS = {"/rosout", "/parameter_events"}
+_PLUMBING_SERVICES = ("/describe_parameters", "/get_parameter_types", "/get_parameters", "/list_parameters",
+                      "/set_parameters", "/set_parameters_atomically", "/get_type_description",
+                      "/get_logger_levels", "/set_logger_levels")
+
+
+def _short(type_name: str) -> str:
+    """``std_msgs/msg/String`` → ``std_msgs/String``, as the model names types on both ROS."""
+    parts = type_name.split("/")
+    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else type_name
+
+
+def node_interface(graph: Node, fullname: str) -> Any:
+    """The publications, subscriptions and services of the running node ``fullname``, or None if unseen."""
+    from ..discovery import Interface
+
+    namespace, name = fullname.rsplit("/", 1)
+    namespace = namespace or "/"
+    if (name, namespace) not in graph.get_node_names_and_namespaces():
+        return None
+    left_out: list[str] = []
+
+    def entries(found: list[tuple[str, list[str]]], plumbing: Callable[[str], bool], what: str) -> list:
+        kept = []
+        for topic, types in sorted(found):
+            if plumbing(topic):
+                left_out.append(f"{topic} ({what})")
+            else:
+                kept.append((topic, _short(types[0]) if len(types) == 1 else ""))
+        return kept
+
+    return Interface(
+        node=fullname,
+        publications=entries(graph.get_publisher_names_and_types_by_node(name, namespace),
+                             lambda t: t in _PLUMBING_TOPICS, "publishes"),
+        subscriptions=entries(graph.get_subscriber_names_and_types_by_node(name, namespace),
+                              lambda t: t in _PLUMBING_TOPICS, "subscribes"),
+        services=entries(graph.get_service_names_and_types_by_node(name, namespace),
+                         lambda s: s.startswith(fullname + "/") and s.endswith(_PLUMBING_SERVICES), "serves"),
+        left_out=left_out,
+    )
+
+
+def wait_for_node(graph: Node, fullname: str, timeout: float = 10.0, settle: float = 0.5,
+                  alive: Optional[Callable[[], bool]] = None) -> Any:
+    """Wait until ``fullname`` is in the graph and its interface has been unchanged for ``settle`` s.
+
+    Raises :class:`BaseNodeError` if it never shows up, at once when ``alive()`` turns False.
+    """
+    from ..errors import BaseNodeError
+
+    deadline = time.monotonic() + timeout
+    last, stable_since = None, time.monotonic()
+    while True:
+        current = node_interface(graph, fullname)
+        now = time.monotonic()
+        if current != last:
+            last, stable_since = current, now
+        elif current is not None and now - stable_since >= settle:
+            return current
+        if alive is not None and not alive():
+            raise BaseNodeError(f"node {fullname} ended before it settled")
+        if now > deadline:
+            if current is None:
+                names = ", ".join(sorted(ns.rstrip("/") + "/" + n for n, ns in graph.get_node_names_and_namespaces()
+                                         if not n.startswith("_"))) or "none"
+                raise BaseNodeError(f"node {fullname} did not appear in the ROS 2 graph (ROS_DOMAIN_ID "
+                                    f"{os.environ.get('ROS_DOMAIN_ID') or 0}) after {timeout:g}s: start it first "
+                                    f"(nodes seen: {names})")
+            return current
+        time.sleep(0.05)
 
 
 # -- parameters: a node's own, by global name ----------------------------------------------

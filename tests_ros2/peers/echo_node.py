@@ -1,0 +1,21 @@
+"""Basenode for the ROS 2 wrapping tests: "in" → prefix + data → "out" (std_msgs/String), names relative.
+
+Its parameter ``prefix`` (default "echo:") is what it puts in front. It spins until Ctrl-C.
+"""
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from std_msgs.msg import String
+
+rclpy.init()
+node = rclpy.create_node("echo_node")
+prefix = node.declare_parameter("prefix", "echo:").value
+out = node.create_publisher(String, "out", 10)
+node.create_subscription(String, "in", lambda m: out.publish(String(data=prefix + m.data)), 10)
+print("echo_node ready", flush=True)
+try:
+    rclpy.spin(node)
+except (KeyboardInterrupt, ExternalShutdownException):
+    pass
+finally:
+    node.destroy_node()
+    rclpy.try_shutdown()

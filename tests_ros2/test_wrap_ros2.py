@@ -1,0 +1,68 @@
+"""Wrapping a running ROS 2 node: launched remapped onto the wrapper, relayed, intercepted, live."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from conftest import wait_for
+from std_msgs.msg import String
+
+ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
+
+
+def listen(make_node, name, topic):
+    seen: list[str] = []
+    make_node(name).new.subscribe(topic, handler=lambda m: seen.append(m.data), msgType=String).create()
+    return seen
+
+
+def test_wrapping_a_python_basenode_in_a_namespace(make_node, failures):
+    out = listen(make_node, "w2_listener", "/robot2/out")
+    shouted = listen(make_node, "w2_shout_listener", "/robot2/shouted")
+    feeder = make_node("w2_feeder").new.publish("/robot2/in", msgType=String).create()
+    send = lambda text: feeder.write("/robot2/in", String(data=text))  # noqa: E731
+
+    w = make_node("w2")
+    w.baseNode(ECHO_NODE, namespace="robot2", params={"prefix": "B:"})
+    w.reuse.subscribe("in", type=String).publish("out", type=String)
+    assert w.fullname == "/robot2/w2"
+    w.create()
+    assert w.base.running and "--ros-args" in w.base.argv
+    wait_for(lambda: any("echo_node ready" in line for line in w.base.tail()), what="the basenode's log")
+    # Relayed both ways through the wrapper: in → basenode → out.
+    wait_for(lambda: send("a") or "B:a" in out, timeout=20, interval=0.1, what="a message through the wrap")
+
+    # Intercept its output live with a handler that writes a new topic.
+    w.new.publish("/robot2/shouted", msgType=String)
+    w.new.subscribe("out", handler=lambda m: w.write("/robot2/shouted", String(data=m.data.upper())), msgType=String)
+    wait_for(lambda: send("b") or "B:B" in shouted, timeout=20, interval=0.1, what="the intercepting handler")
+    count = len(out)
+    wait_for(lambda: send("c") or "B:C" in shouted, timeout=20, interval=0.1, what="more through the handler")
+    assert len(out) == count, "while intercepted, the basenode's output does not reach /robot2/out"
+
+    # Give it back: the relay serves /robot2/out again.
+    w.new.unsubscribe("out")
+    wait_for(lambda: send("d") or "B:d" in out, timeout=20, interval=0.1, what="the relay back")
+    pid = w.base.pid
+    w.shutdown()
+    assert w.base is None and not Path(f"/proc/{pid}").exists() or _zombie(pid)
+    assert failures == []
+
+
+def _zombie(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except OSError:
+        return True
+
+
+def test_discovery_reads_the_basenode_from_the_ros2_graph(make_node):
+    w = make_node("w2_discovered")
+    w.baseNode(ECHO_NODE, namespace="robot3")
+    interface = w.discover()
+    assert interface.node == "/robot3/echo_node"
+    assert ("/robot3/out", "std_msgs/String") in interface.publications
+    assert ("/robot3/in", "std_msgs/String") in interface.subscriptions
+    assert "/rosout (publishes)" in interface.left_out
+    assert [(t.name, t.direction, t.role) for t in w.model().topics] == [("out", "publish", "reuse"),
+                                                                          ("in", "subscribe", "reuse")]
