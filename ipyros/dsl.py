@@ -163,6 +163,9 @@ class rosNode:  # noqa: N801 - the paper's name
         if args is not None and not isinstance(args, dict):
             raise DeclarationError(f"baseLaunch(args={args!r}): give a dict of the launch file's args, "
                                    "e.g. args={'rate': 5}")
+        if not self._session.backend.has_master:
+            raise DeclarationError(f"baseLaunch reads ROS 1 launch files, and this session runs ROS 2; give the "
+                                   f"node itself: {self.called}.baseNode('/path/to/node', namespace=..., params=...)")
         return set_launch_base(self, launch, node, {**(args or {}), **arg_values})
 
     def discover(self, timeout: float = 10.0) -> Any:

@@ -28,6 +28,12 @@ def test_each_dsl_node_is_a_ros2_node_and_talks_to_other_processes(make_node):
         assert talker.ros_name == talker.session.process.name  # the session's first node names it
         with pytest.raises(errors.MessageTypeError, match="chatter carries std_msgs/String, not std_msgs/UInt32"):
             talker.write("chatter", UInt32(data=1))
+        # The peer's name is taken: a DSL node of that name is refused, and nothing of it runs.
+        taker = make_node("echo_peer")
+        taker.new.publish("/r2/taken", msgType=String)
+        with pytest.raises(errors.NodeStateError, match="a node named /echo_peer is already running in the ROS 2 graph"):
+            taker.create()
+        assert not taker.created and "/echo_peer" not in talker.session.process.hosts()
 
 
 def test_a_handler_swapped_under_a_200_hz_stream_loses_none_and_doubles_none(make_node):
@@ -136,4 +142,6 @@ def test_bad_input_is_the_same_line_as_on_ros1(make_node):
         nd.new.publish("/r2/x", msgType="std_srvs/SetBool")
     with pytest.raises(errors.DeclarationError, match="but has no basenode"):
         nd.reuse.publish("/r2/y", msgType=String)
+    with pytest.raises(errors.DeclarationError, match="baseLaunch reads ROS 1 launch files, and this session runs ROS 2"):
+        make_node("bad_launch").baseLaunch("robot.launch", "planner")
     assert nd.model().topics == [] and nd.model().timers == []

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import os
 from typing import Any, Callable, Optional
 
-from ..errors import DeclarationError
+from ..errors import DeclarationError, NodeStateError
 from ..slots import HandlerSlot
 from . import runtime
 
@@ -46,6 +47,8 @@ class Ros2:
         return runtime.wait_for_node(self.process.graph(), name, timeout, alive=alive)
 
     def open_host(self, host: str) -> None:
+        if host not in self.process.hosted:  # a name of ours lingers in the graph for a while after shutdown
+            self.refuse_taken_name(None, host)
         self.process.host(host)
 
     def close_host(self, host: str) -> None:
@@ -89,7 +92,16 @@ class Ros2:
         node.undeclare_parameter(key)
 
     def refuse_taken_name(self, uri: Optional[str], name: str) -> None:
-        """ROS 2 lets two nodes share a name (it only warns); checking the graph for it is issue 10's."""
+        """Refuse a node name that a node elsewhere in the graph has (``uri`` is ROS 1's).
+
+        ROS 2 lets two nodes share a name and only warns, but tools then mix them up
+        (parameters, ``ros2 node info``); as on ROS 1, the name is refused. What the graph
+        has not discovered yet (a node started this very moment) cannot be seen.
+        """
+        namespace, base = name.rsplit("/", 1)
+        if (base, namespace or "/") in self.process.graph().get_node_names_and_namespaces():
+            raise NodeStateError(f"a node named {name} is already running in the ROS 2 graph (ROS_DOMAIN_ID "
+                                 f"{os.environ.get('ROS_DOMAIN_ID') or 0}); give this node another name")
 
     def describe(self) -> str:
         """One line for ``%load_ext``: which ROS 2, which domain, which middleware, how far discovery reaches."""

@@ -46,6 +46,7 @@ class ProcessNode:
         self._executor: Any = None
         self._spinner: Optional[threading.Thread] = None
         self._hosts: dict[str, Node] = {}
+        self.hosted: set[str] = set()  # every name this process has had a node at (the graph lags behind)
 
     @property
     def started(self) -> bool:
@@ -84,6 +85,7 @@ class ProcessNode:
                 node = Node(base, namespace=namespace or "/", context=self._context)
                 self._executor.add_node(node)
                 self._hosts[fullname] = node
+                self.hosted.add(fullname)
             return node
 
     def graph(self) -> Node:
