@@ -433,7 +433,11 @@ class BaseProcess:
                 "no basenode executable declared: call baseNode('executable') and basePackage('package')"
             )
         args = list(base.args)
-        if base.package:
+        if base.package and ros2:
+            from .ros2.packages import find_executable as find_in_ament
+
+            path = find_in_ament(base.package, base.executable)
+        elif base.package:
             path = find_executable(base.package, base.executable)
         else:
             path, args = script_command(base.executable, args)

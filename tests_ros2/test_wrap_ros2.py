@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from conftest import wait_for
 from std_msgs.msg import String
 
@@ -66,3 +67,39 @@ def test_discovery_reads_the_basenode_from_the_ros2_graph(make_node):
     assert "/rosout (publishes)" in interface.left_out
     assert [(t.name, t.direction, t.role) for t in w.model().topics] == [("out", "publish", "reuse"),
                                                                           ("in", "subscribe", "reuse")]
+
+
+def test_a_basenode_by_package_is_found_in_the_ament_index(make_node, tmp_path, monkeypatch):
+    """An installed package, as colcon lays one out: a marker in the resource index, executables in lib/."""
+    import os
+    import shutil
+    import sys
+
+    from ipyros import errors
+
+    prefix = tmp_path / "install"
+    (prefix / "share" / "ament_index" / "resource_index" / "packages").mkdir(parents=True)
+    (prefix / "share" / "ament_index" / "resource_index" / "packages" / "echo_pkg").touch()
+    (prefix / "lib" / "echo_pkg").mkdir(parents=True)
+    node = prefix / "lib" / "echo_pkg" / "echo_node"
+    node.write_text(f"#!{sys.executable}\n" + Path(ECHO_NODE).read_text())
+    node.chmod(0o755)
+    monkeypatch.setenv("AMENT_PREFIX_PATH", os.pathsep.join([str(prefix), sys.prefix]))
+
+    with pytest.raises(errors.BaseNodeError, match="package 'echo_pkg' has no executable 'echo_nod'; did you mean "
+                                                  "echo_node\\? its executables: echo_node"):
+        make_node("w2_typo").baseNode("echo_nod").basePackage("echo_pkg").create()
+    with pytest.raises(errors.BaseNodeError, match="unknown ROS 2 package 'echo_pk': did you mean echo_pkg\\?"):
+        make_node("w2_typo2").baseNode("echo_node").basePackage("echo_pk").create()
+
+    out = listen(make_node, "w2_pkg_listener", "/robot4/out")
+    feeder = make_node("w2_pkg_feeder").new.publish("/robot4/in", msgType=String).create()
+    w = make_node("w2_pkg")
+    w.baseNode("echo_node", namespace="robot4").basePackage("echo_pkg")
+    w.reuse.subscribe("in", type=String).publish("out", type=String)
+    w.create()
+    assert w.base.argv[0] == str(node)
+    wait_for(lambda: feeder.write("/robot4/in", String(data="p")) or "echo:p" in out, timeout=20, interval=0.1,
+             what="a message through the packaged basenode")
+    w.shutdown()
+    shutil.rmtree(prefix)
