@@ -72,3 +72,37 @@ def no_leftover_processes():
     children = Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children")
     left = children.read_text().split() if children.exists() else []
     assert not left, f"processes left running: {left}"
+
+
+@pytest.fixture
+def caller():
+    """``call(service, cls, request)`` from a context of its own, as another process would call.
+
+    Right after discovery a reply can go out before the caller's reply reader is matched,
+    and DDS drops it: the call is made again, as ROS 2 clients do, up to 5 times.
+    """
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("test_caller", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    clients: dict = {}
+
+    def call(service: str, cls: type, request):
+        client = clients.get(service) or clients.setdefault(service, node.create_client(cls, service))
+        assert client.wait_for_service(timeout_sec=10), f"no service {service}"
+        for _ in range(5):
+            future = client.call_async(request)
+            executor.spin_until_future_complete(future, timeout_sec=3)
+            if future.done():
+                return future.result()
+            client.remove_pending_request(future)
+        raise AssertionError(f"no answer from {service} in 5 tries")
+
+    yield call
+    executor.shutdown()
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)

@@ -57,6 +57,22 @@ def _zombie(pid: int) -> bool:
         return True
 
 
+def test_a_basenode_service_relayed_then_intercepted(make_node, caller):
+    from std_srvs.srv import SetBool
+
+    w = make_node("w2_srv")
+    w.baseNode(ECHO_NODE, namespace="robot5", params={"prefix": "S"})
+    w.reuse.service("check", type=SetBool)
+    w.create()
+    answer = caller("/robot5/check", SetBool, SetBool.Request(data=True))
+    assert answer.success is True and answer.message == "S checked", "the basenode answers through the wrapper"
+    w.new.service("check", SetBool, handler=lambda request: SetBool.Response(success=False, message="mine"))
+    assert caller("/robot5/check", SetBool, SetBool.Request(data=True)).message == "mine"
+    w.remove(service="check")
+    w.reuse.service("check", type=SetBool)  # given back to the basenode
+    assert caller("/robot5/check", SetBool, SetBool.Request(data=True)).message == "S checked"
+
+
 def test_discovery_reads_the_basenode_from_the_ros2_graph(make_node):
     w = make_node("w2_discovered")
     w.baseNode(ECHO_NODE, namespace="robot3")
@@ -65,6 +81,7 @@ def test_discovery_reads_the_basenode_from_the_ros2_graph(make_node):
     assert ("/robot3/out", "std_msgs/String") in interface.publications
     assert ("/robot3/in", "std_msgs/String") in interface.subscriptions
     assert "/rosout (publishes)" in interface.left_out
+    assert ("/robot3/check", "std_srvs/SetBool") in interface.services
     assert [(t.name, t.direction, t.role) for t in w.model().topics] == [("out", "publish", "reuse"),
                                                                           ("in", "subscribe", "reuse")]
 

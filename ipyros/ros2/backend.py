@@ -37,9 +37,8 @@ class Ros2:
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
         return runtime.ServiceServer(self.process.host(host), name, cls, slot)
 
-    def service_relay(self, host: str, source: str, target: str, cls: type) -> Any:
-        raise DeclarationError(f"relaying the service {source} is not there on ROS 2 yet; serve {target} with "
-                               "new.service(..., handler=...) instead")
+    def service_relay(self, host: str, source: str, target: str, cls: type) -> runtime.ServiceRelay:
+        return runtime.ServiceRelay(self.process.host(host), source, target, cls)
 
     def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
                       alive: Optional[Callable[[], bool]] = None) -> Any:

@@ -230,6 +230,38 @@ class ServiceServer:
         self._node.destroy_service(self._service)
 
 
+class ServiceRelay:
+    """Serve ``target`` by calling ``source`` (a basenode's service) and answering with its response.
+
+    The call is made from inside the service's callback: both sit in a reentrant callback
+    group, so another executor thread takes the basenode's answer meanwhile.
+    """
+
+    TIMEOUT = 10.0  # seconds a basenode may take to answer
+
+    def __init__(self, node: Node, source: str, target: str, cls: type) -> None:
+        from rclpy.callback_groups import ReentrantCallbackGroup
+
+        self.source, self.target, self.cls = source, target, cls
+        self._node = node
+        group = ReentrantCallbackGroup()
+        self._client = node.create_client(cls, source, callback_group=group)
+        self._service = node.create_service(cls, target, self._serve, callback_group=group)
+
+    def _serve(self, request: Any, response: Any) -> Any:
+        answered = threading.Event()
+        future = self._client.call_async(request)
+        future.add_done_callback(lambda _: answered.set())
+        if not answered.wait(self.TIMEOUT) or future.result() is None:
+            self._client.remove_pending_request(future)
+            return response  # ROS 2 has no error reply: the caller gets the default response
+        return future.result()
+
+    def close(self) -> None:
+        self._node.destroy_service(self._service)
+        self._node.destroy_client(self._client)
+
+
 # -- the graph: a node's interface, as discovery sees it ---------------------------------------
 
 #: What every rclpy node has: not part of the interface a wrapper would reuse.

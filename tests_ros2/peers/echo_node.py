@@ -1,16 +1,19 @@
-"""Basenode for the ROS 2 wrapping tests: "in" → prefix + data → "out" (std_msgs/String), names relative.
+"""Basenode for the ROS 2 wrapping tests: "in" → prefix + data → "out" (std_msgs/String), names relative;
+service "check" (std_srvs/SetBool) answers success=data, message="<prefix> checked".
 
 Its parameter ``prefix`` (default "echo:") is what it puts in front. It spins until Ctrl-C.
 """
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from std_msgs.msg import String
+from std_srvs.srv import SetBool
 
 rclpy.init()
 node = rclpy.create_node("echo_node")
 prefix = node.declare_parameter("prefix", "echo:").value
 out = node.create_publisher(String, "out", 10)
 node.create_subscription(String, "in", lambda m: out.publish(String(data=prefix + m.data)), 10)
+node.create_service(SetBool, "check", lambda req, res: SetBool.Response(success=req.data, message=f"{prefix} checked"))
 print("echo_node ready", flush=True)
 try:
     rclpy.spin(node)
