@@ -57,6 +57,26 @@ def _zombie(pid: int) -> bool:
         return True
 
 
+def test_a_latched_output_stays_latched_through_the_wrapper(make_node):
+    """The basenode says "up" once, transient-local; a subscriber that comes later still gets it, from the relay."""
+    import time
+
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+
+    w = make_node("w2_latch")
+    w.baseNode(ECHO_NODE, namespace="robot6", params={"prefix": "L"})
+    w.reuse.publish("status", type=String)
+    w.create()
+    wait_for(lambda: w.sent() and w.sent()[0].messages >= 1, timeout=20, what="the relay to forward the status")
+    time.sleep(0.5)  # the subscriber below comes after the message went by: only latching brings it
+    late: list[str] = []
+    listener = make_node("w2_late_listener").create()
+    graph_node = listener.session.process.host(listener.fullname)
+    graph_node.create_subscription(String, "/robot6/status", lambda m: late.append(m.data),
+                                   QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    wait_for(lambda: late == ["L up"], timeout=10, what="the latched status for a late subscriber")
+
+
 def test_a_basenode_service_relayed_then_intercepted(make_node, caller):
     from std_srvs.srv import SetBool
 
@@ -82,8 +102,8 @@ def test_discovery_reads_the_basenode_from_the_ros2_graph(make_node):
     assert ("/robot3/in", "std_msgs/String") in interface.subscriptions
     assert "/rosout (publishes)" in interface.left_out
     assert ("/robot3/check", "std_srvs/SetBool") in interface.services
-    assert [(t.name, t.direction, t.role) for t in w.model().topics] == [("out", "publish", "reuse"),
-                                                                          ("in", "subscribe", "reuse")]
+    assert [(t.name, t.direction, t.role) for t in w.model().topics] == [
+        ("out", "publish", "reuse"), ("status", "publish", "reuse"), ("in", "subscribe", "reuse")]
 
 
 def test_a_basenode_by_package_is_found_in_the_ament_index(make_node, tmp_path, monkeypatch):

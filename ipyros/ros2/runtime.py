@@ -32,8 +32,10 @@ _DEPTH = 1000
 
 
 def _qos(latch: bool = False) -> QoSProfile:
-    durability = DurabilityPolicy.TRANSIENT_LOCAL if latch else DurabilityPolicy.VOLATILE
-    return QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.RELIABLE, durability=durability)
+    """Reliable; ``latch``: transient-local keeping the last message, as a ROS 1 latched topic."""
+    if latch:
+        return QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    return QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 
 
 class ProcessNode:
@@ -167,14 +169,39 @@ class Subscription:
 
 
 class Relay:
-    """Forward ``source`` to ``target`` as serialized bytes, never deserialised."""
+    """Forward ``source`` to ``target`` as serialized bytes, never deserialised.
+
+    A latched (transient-local) source stays latched through the relay. The basenode
+    starts after the relay, so its QoS is known only once its publisher shows up: the
+    relay watches for it, and if it is transient-local, subscribes and publishes
+    transient-local too (a transient-local subscription would not match a volatile
+    publisher, so that cannot be the default), and a late subscriber still gets the last
+    message, even one the basenode sent before the relay matched it.
+    """
 
     def __init__(self, node: Node, source: str, target: str, cls: type,
                  on_wrong_type: Optional[Callable[[str], None]] = None) -> None:
         self.source, self.target, self.cls, self.count = source, target, cls, 0
         self._node = node
+        self._lock = threading.Lock()  # the watch and close() may swap endpoints from two threads
         self._pub = node.create_publisher(cls, target, _qos())
         self._sub = node.create_subscription(cls, source, self._forward, _qos(), raw=True)
+        self._watch: Any = node.create_timer(0.1, self._copy_source_qos)
+
+    def _copy_source_qos(self) -> None:
+        with self._lock:
+            infos = self._node.get_publishers_info_by_topic(self.source) if self._watch is not None else []
+            if not infos:
+                return
+            self._node.destroy_timer(self._watch)
+            self._watch = None
+            if any(info.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for info in infos):
+                node, latched = self._node, _qos(latch=True)
+                old_pub, self._pub = self._pub, node.create_publisher(self.cls, self.target, latched)
+                old_sub, self._sub = self._sub, node.create_subscription(self.cls, self.source, self._forward,
+                                                                          latched, raw=True)
+                node.destroy_subscription(old_sub)
+                node.destroy_publisher(old_pub)
 
     def _forward(self, raw: bytes) -> None:
         self._pub.publish(raw)
@@ -184,8 +211,12 @@ class Relay:
         return SendFigures(self.target, "relay", self.count, self._pub.get_subscription_count(), 0, 0)
 
     def close(self) -> None:
-        self._node.destroy_subscription(self._sub)
-        self._node.destroy_publisher(self._pub)
+        with self._lock:
+            if self._watch is not None:
+                self._node.destroy_timer(self._watch)
+                self._watch = None
+            self._node.destroy_subscription(self._sub)
+            self._node.destroy_publisher(self._pub)
 
 
 class Timer:

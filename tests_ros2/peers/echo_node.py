@@ -1,10 +1,12 @@
 """Basenode for the ROS 2 wrapping tests: "in" → prefix + data → "out" (std_msgs/String), names relative;
-service "check" (std_srvs/SetBool) answers success=data, message="<prefix> checked".
+service "check" (std_srvs/SetBool) answers success=data, message="<prefix> checked"; "status" (transient-local,
+latched) says "<prefix> up" once, at start.
 
 Its parameter ``prefix`` (default "echo:") is what it puts in front. It spins until Ctrl-C.
 """
 import rclpy
 from rclpy.executors import ExternalShutdownException
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
@@ -14,6 +16,8 @@ prefix = node.declare_parameter("prefix", "echo:").value
 out = node.create_publisher(String, "out", 10)
 node.create_subscription(String, "in", lambda m: out.publish(String(data=prefix + m.data)), 10)
 node.create_service(SetBool, "check", lambda req, res: SetBool.Response(success=req.data, message=f"{prefix} checked"))
+latched = node.create_publisher(String, "status", QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+latched.publish(String(data=f"{prefix} up"))  # once, at start: only a latched topic keeps it for later subscribers
 print("echo_node ready", flush=True)
 try:
     rclpy.spin(node)
