@@ -140,3 +140,35 @@ def test_a_basenode_by_package_is_found_in_the_ament_index(make_node, tmp_path, 
              what="a message through the packaged basenode")
     w.shutdown()
     shutil.rmtree(prefix)
+
+
+def test_the_basenode_lifecycle_log_restart_crash_and_no_orphan(make_node, ros2_session):
+    told: list[str] = []
+    previous, ros2_session.notice = ros2_session.notice, told.append
+    try:
+        feeder = make_node("w2_life_feeder").new.publish("/robot7/in", msgType=String).create()
+        w = make_node("w2_life")
+        w.baseNode(ECHO_NODE, namespace="robot7")
+        w.reuse.subscribe("in", type=String)
+        w.create()
+        wait_for(lambda: any("echo_node ready" in line for line in w.base.tail()), what="the basenode's log")
+        first = w.base.pid
+        w.base.restart()
+        assert w.base.pid != first and _gone(first)
+        wait_for(lambda: w.base.running and any("echo_node ready" in line for line in w.base.tail()),
+                 what="the restarted basenode")
+        wait_for(lambda: feeder.write("/robot7/in", String(data="crash")) or told, timeout=20, interval=0.2,
+                 what="the crash to be reported")
+        assert "basenode /robot7/echo_node of w2_life exited with code 3; restart it with w2_life.base.restart()" \
+            in told[0] and "asked to crash" in told[0]
+        w.base.restart()  # and it runs again
+        wait_for(lambda: w.base.running, what="the basenode after the crash")
+        pid = w.base.pid
+        w.shutdown()
+        assert _gone(pid), "shutdown stops the basenode"
+    finally:
+        ros2_session.notice = previous
+
+
+def _gone(pid: int) -> bool:
+    return wait_for(lambda: not Path(f"/proc/{pid}").exists() or _zombie(pid), timeout=10, what=f"pid {pid} to end")

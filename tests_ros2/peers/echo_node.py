@@ -1,9 +1,12 @@
-"""Basenode for the ROS 2 wrapping tests: "in" → prefix + data → "out" (std_msgs/String), names relative;
+"""Basenode for the ROS 2 wrapping tests: "in" → prefix + data → "out" (std_msgs/String), names relative
+("crash" on "in" ends it with code 3);
 service "check" (std_srvs/SetBool) answers success=data, message="<prefix> checked"; "status" (transient-local,
 latched) says "<prefix> up" once, at start.
 
 Its parameter ``prefix`` (default "echo:") is what it puts in front. It spins until Ctrl-C.
 """
+import os
+
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.qos import DurabilityPolicy, QoSProfile
@@ -14,7 +17,16 @@ rclpy.init()
 node = rclpy.create_node("echo_node")
 prefix = node.declare_parameter("prefix", "echo:").value
 out = node.create_publisher(String, "out", 10)
-node.create_subscription(String, "in", lambda m: out.publish(String(data=prefix + m.data)), 10)
+
+
+def echo(msg: String) -> None:
+    if msg.data == "crash":
+        print("asked to crash", flush=True)
+        os._exit(3)  # a crash: no cleanup, as a segfaulting node would not
+    out.publish(String(data=prefix + msg.data))
+
+
+node.create_subscription(String, "in", echo, 10)
 node.create_service(SetBool, "check", lambda req, res: SetBool.Response(success=req.data, message=f"{prefix} checked"))
 latched = node.create_publisher(String, "status", QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
 latched.publish(String(data=f"{prefix} up"))  # once, at start: only a latched topic keeps it for later subscribers
