@@ -23,19 +23,20 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import os
 import threading
 from collections import deque
 from typing import Any, Optional
 
 from . import completion, plan as planning
-from .ros1 import master as master_mod
 from .dsl import rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache
 from .magics import DemoMagics, NodeMagics, RosMagics, TopicMagics, WrapMagics
 from .magics.output import Printer, StderrLogHandler, failure_report, note, note_line
 from .probe import PromptPublisher
-from .session import Session, configure, current
+from .ros1 import master as master_mod
+from .session import Session, configure, current, started as session_started
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +69,8 @@ class Extension:
     # -- load ------------------------------------------------------------------------------
     def load(self) -> None:
         shell = self.shell
+        if self.settings.ros and not session_started():  # before the session exists: it picks its ROS once
+            os.environ["IPYROS_ROS"] = str(self.settings.ros)
         self._saved["config"] = self.session.config
         line = self._configure_session()
         for magics in self.magics:

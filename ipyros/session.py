@@ -258,6 +258,11 @@ def current() -> Session:
         return _current
 
 
+def started() -> bool:
+    """Whether this interpreter's session exists (it picks its ROS when it is made)."""
+    return _current is not None and not _current.closed
+
+
 def configure(config: SessionConfig) -> Session:
     """Set how the session attaches, before anything has started."""
     session = current()

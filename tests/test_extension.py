@@ -142,9 +142,11 @@ def test_config_magic_lists_and_sets_the_settings(ip, capsys, caplog):
                "master_uri = 'localhost'": "master_uri 'localhost' is not a ROS master URI; write it like "
                                            "'http://localhost:11311/'",
                "master_uri = 'http://robot/'": "master_uri 'http://robot/' is not a ROS master URI",
-               "process_node_name = 'my node'": "process_node_name 'my node': invalid node name 'my node'"}
+               "process_node_name = 'my node'": "process_node_name 'my node': invalid node name 'my node'",
+               "ros = 3": "ros must be 1 (ROS 1), 2 (ROS 2) or 0 (found by itself), not 3"}
     before = {name: getattr(extension.settings, name) for name in ("graph_period", "hz_window", "echo_count",
-                                                                   "try_history", "master_uri", "process_node_name")}
+                                                                   "try_history", "master_uri", "process_node_name",
+                                                                   "ros")}
     for assignment, message in refused.items():
         caplog.clear()
         ok(ip, f"%config RosMagics.{assignment}")

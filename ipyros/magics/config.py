@@ -32,6 +32,12 @@ from ..errors import IpyrosError
 class RosMagics(Magics):
     """Settings of the ipyros extension (``%load_ext ipyros``)."""
 
+    ros = Int(
+        0,
+        help="Which ROS this session runs on: 1 (rospy) or 2 (rclpy); 0: IPYROS_ROS, else ROS_VERSION, else "
+             "what is importable. Read when the session starts (at %load_ext, or the first rosNode).",
+    ).tag(config=True)
+
     master_uri = Unicode(
         "",
         help="URI of the ROS master to use, e.g. http://localhost:11311/. Empty: ROS_MASTER_URI, "
@@ -111,6 +117,12 @@ class RosMagics(Magics):
         high = self._counts[proposal.trait.name]
         if not 0 <= proposal.value <= high:
             raise TraitError(f"{proposal.trait.name} must be from 0 to {high:,}, not {proposal.value}")
+        return proposal.value
+
+    @validate("ros")
+    def _ros(self, proposal):
+        if proposal.value not in (0, 1, 2):
+            raise TraitError(f"ros must be 1 (ROS 1), 2 (ROS 2) or 0 (found by itself), not {proposal.value}")
         return proposal.value
 
     @validate("master_uri")
