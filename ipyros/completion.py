@@ -110,14 +110,20 @@ def _sorted_once(source: Callable[[], Sequence[str]]) -> Callable[[], tuple[str,
 
 
 def default_catalog() -> Catalog:
-    """The catalog of this machine: Python message modules on sys.path, ROS packages as rosrun sees them."""
-    from . import base, msgtypes
+    """The catalog of this machine: Python message modules on sys.path, and the ROS packages as
+    the session's ROS runs them (``rosrun`` on ROS 1, ``ros2 run``'s ament index on ROS 2)."""
+    from . import msgtypes
+    from .session import current
 
+    if current().backend.has_master:
+        from . import base as lookup
+    else:
+        from .ros2 import packages as lookup  # type: ignore[no-redef]
     return Catalog(
         message_types=msgtypes.known_message_types,
         service_types=msgtypes.known_service_types,
-        packages=base.list_packages,
-        executables=base.list_executables,
+        packages=lookup.list_packages,
+        executables=lookup.list_executables,
     )
 
 

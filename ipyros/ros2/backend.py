@@ -128,4 +128,4 @@ def describe() -> str:
         "LOCALHOST" if os.environ.get("ROS_LOCALHOST_ONLY") == "1" else "SUBNET")
     return (f"ROS 2{f' {distro.capitalize()}' if distro else ''} (rclpy {release}), ROS_DOMAIN_ID "
             f"{os.environ.get('ROS_DOMAIN_ID') or 0}, {rclpy.get_rmw_implementation_identifier()}, discovery "
-            f"{reach.lower()}; so far the DSL runs here, not yet %topics, %wrap or live-name completion")
+            f"{reach.lower()}; so far the DSL and wrapping run here, not yet %topics, %echo, %pub or live-name completion")
