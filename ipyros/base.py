@@ -211,9 +211,17 @@ def list_executables(package: str) -> list[str]:
     return list(_executables(package, _env_key()))
 
 
-def _did_you_mean(word: str, candidates: Sequence[str]) -> str:
+def did_you_mean(word: str, candidates: Sequence[str]) -> str:
+    """``did you mean a or b?`` for the candidates close to ``word``, else ``""``."""
     close = difflib.get_close_matches(word, candidates, n=3, cutoff=0.6)
     return f"did you mean {' or '.join(close)}?" if close else ""
+
+
+def refuse_path_with_package(executable: str) -> None:
+    """With a package, the executable is a name in it: a path there is refused, saying how to run a file."""
+    if os.path.isabs(executable) or executable.startswith("~"):
+        raise BaseNodeError(f"with a package, the executable is a name in it (e.g. 'talker'), not the path "
+                            f"{executable!r}; to run a file by its path, give no package: baseNode({executable!r})")
 
 
 def find_executable(package: str, executable: str) -> Path:
@@ -227,9 +235,7 @@ def find_executable(package: str, executable: str) -> Path:
         raise BaseNodeError(
             "a basenode needs a package and an executable, e.g. basePackage('topic_tools') and baseNode('relay')"
         )
-    if os.path.isabs(executable) or executable.startswith("~"):
-        raise BaseNodeError(f"with a package, the executable is a name in it (e.g. 'talker'), not the path "
-                            f"{executable!r}; to run a file by its path, give no package: baseNode({executable!r})")
+    refuse_path_with_package(executable)
     for fresh in (False, True):  # the second try forgets the caches: something new may have appeared
         if fresh:
             refresh_packages()
@@ -267,13 +273,13 @@ def _pick(package: str, executable: str, candidates: tuple[Path, ...]) -> Path:
 
 def _lookup_error(package: str, executable: str) -> BaseNodeError:
     if not _search_dirs(package):
-        hint = _did_you_mean(package, list_packages())
+        hint = did_you_mean(package, list_packages())
         return BaseNodeError(
             f"unknown ROS package {package!r}: " + (hint or "check the name with `rospack list`")
             + " (packages are searched in ROS_PACKAGE_PATH, the catkin workspaces and ipyros_demo)"
         )
     names = list_executables(package)
-    hint = _did_you_mean(executable.rsplit("/", 1)[-1], names)
+    hint = did_you_mean(executable.rsplit("/", 1)[-1], names)
     listing = f"its executables: {', '.join(names)}" if names else "it has no executable files"
     return BaseNodeError(f"package {package!r} has no executable {executable!r}: {hint + ' ' if hint else ''}{listing}")
 

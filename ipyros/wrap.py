@@ -279,12 +279,18 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
             raise BaseNodeError("ended")
     except BaseNodeError:
         if not process.running:
-            raise BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(process.returncode or 0)} at start "
-                                f"(nothing of {node.called} was left running); last log lines: "
-                                f"{' | '.join(process.tail(5)) or 'none'}") from None
+            raise _ended_at_start(model, process, f" (nothing of {node.called} was left running)") from None
         raise
     check_base_types(model, interface)
-    report_unused_reuses(node, interface)
+    report_unused_reuses(node, model, interface)
+
+
+def _ended_at_start(model: NodeModel, process: Any, what_now: str = "") -> BaseNodeError:
+    """The one line for a basenode that ended before it settled: how, and its last log lines."""
+    from .base import exit_reason
+
+    return BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(process.returncode or 0)} at start{what_now}; "
+                         f"last log lines: {' | '.join(process.tail(5)) or 'none'}")
 
 
 def check_base_types(model: NodeModel, interface: "Interface") -> None:
@@ -331,7 +337,7 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
     The basenode runs briefly without remaps (it is stopped before the wrapping node
     starts it again, remapped). Returns the interface, which displays as a table.
     """
-    from .base import BaseProcess, exit_reason
+    from .base import BaseProcess
 
     model = node.model()
     check_wrapping(model)
@@ -351,8 +357,7 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
                                                   alive=lambda: probe.running)
     except BaseNodeError:
         if not probe.running:
-            raise BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(probe.returncode or 0)} at start; "
-                                f"last log lines: {' | '.join(probe.tail(5)) or 'none'}") from None
+            raise _ended_at_start(model, probe) from None
         raise
     finally:
         probe.stop()
@@ -376,9 +381,8 @@ def _uses(interface: "Interface", direction: str, name: str) -> bool:
     return any(entry == name for entry, _ in entries)
 
 
-def report_unused_reuses(node: "rosNode", interface: "Interface") -> None:
-    """Say, once per start, which ``reuse`` declarations the settled basenode does not use (yet)."""
-    model = node.model()
+def report_unused_reuses(node: "rosNode", model: NodeModel, interface: "Interface") -> None:
+    """Say, once per start, which ``reuse`` declarations of ``model`` the settled basenode does not use (yet)."""
     unused = [f"reuse.{t.direction}({t.name!r})" for t in model.topics
               if t.role == "reuse" and not _uses(interface, t.direction, internal_name(model, t.resolved))]
     if unused:

@@ -92,9 +92,7 @@ class ProcessNode:
         for name, type_name in publications:
             master.registerPublisher(caller, name, type_name, uri)
         for name, type_name in subscriptions:
-            code, _, publishers = master.registerSubscriber(caller, name, type_name, uri)
-            if code == 1 and manager is not None:
-                manager.publisher_update(name, publishers)
+            _subscribe_again(master, manager, name, type_name)
         served = services.get_services()
         for name, service_uri in served:
             master.registerService(caller, name, service_uri, uri)
@@ -117,6 +115,13 @@ def _registration_manager() -> Any:
 
     return next((listener for listener in get_registration_listeners().listeners
                  if isinstance(listener, RegManager)), None)
+
+
+def _subscribe_again(master: Any, manager: Any, topic: str, type_name: str) -> None:
+    """Register the subscription of ``topic`` with the master; rospy connects to the publishers it lacks."""
+    code, _, publishers = master.registerSubscriber(rospy.get_name(), topic, type_name, rospy.core.get_node_uri())
+    if code == 1 and manager is not None:
+        manager.publisher_update(topic, publishers)
 
 
 class _Reconnect:
@@ -167,13 +172,10 @@ class _Reconnect:
         if manager is None or rospy.core.is_shutdown():
             return
         try:
-            master = master_proxy(os.environ.get("ROS_MASTER_URI", ""), timeout=2.0)
-            code, _, publishers = master.registerSubscriber(rospy.get_name(), topic, type_name,
-                                                            rospy.core.get_node_uri())
+            _subscribe_again(master_proxy(os.environ.get("ROS_MASTER_URI", ""), timeout=2.0), manager, topic,
+                             type_name)
         except (OSError, xmlrpc.client.Error):
-            return  # no master now: when it is back, the master watch registers everything again
-        if code == 1:
-            manager.publisher_update(topic, publishers)
+            pass  # no master now: when it is back, the master watch registers everything again
 
 
 def refuse_taken_name(master_uri: str, name: str) -> None:

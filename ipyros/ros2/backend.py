@@ -100,7 +100,7 @@ class Ros2:
         namespace, base = name.rsplit("/", 1)
         if (base, namespace or "/") in self.process.graph().get_node_names_and_namespaces():
             raise NodeStateError(f"a node named {name} is already running in the ROS 2 graph (ROS_DOMAIN_ID "
-                                 f"{os.environ.get('ROS_DOMAIN_ID') or 0}); give this node another name")
+                                 f"{runtime.domain_id()}); give this node another name")
 
     def describe(self) -> str:
         """One line for ``%load_ext``: which ROS 2, which domain, which middleware, how far discovery reaches."""
@@ -114,7 +114,6 @@ _DISTROS = {3: "Humble", 7: "Jazzy", 9: "Kilted"}  # rclpy's major version in ea
 
 
 def describe() -> str:
-    import os
     from importlib.metadata import PackageNotFoundError, version
 
     import rclpy
@@ -127,5 +126,5 @@ def describe() -> str:
     reach = os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE") or (
         "LOCALHOST" if os.environ.get("ROS_LOCALHOST_ONLY") == "1" else "SUBNET")
     return (f"ROS 2{f' {distro.capitalize()}' if distro else ''} (rclpy {release}), ROS_DOMAIN_ID "
-            f"{os.environ.get('ROS_DOMAIN_ID') or 0}, {rclpy.get_rmw_implementation_identifier()}, discovery "
+            f"{runtime.domain_id()}, {rclpy.get_rmw_implementation_identifier()}, discovery "
             f"{reach.lower()}; so far the DSL and wrapping run here, not yet %topics, %echo, %pub or live-name completion")

@@ -8,11 +8,11 @@ executable files in ``<prefix>/lib/<package>/``. No ROS package is imported for 
 
 from __future__ import annotations
 
-import difflib
 import os
 import sys
 from pathlib import Path
 
+from ..base import did_you_mean, refuse_path_with_package
 from ..errors import BaseNodeError
 
 __all__ = ["find_executable", "list_executables", "list_packages", "prefixes"]
@@ -50,20 +50,16 @@ def list_executables(package: str) -> list[str]:
 
 def find_executable(package: str, executable: str) -> Path:
     """The file ``ros2 run package executable`` would run; one line naming close matches if there is none."""
-    if os.path.isabs(executable) or "/" in executable or executable.startswith("~"):
-        raise BaseNodeError(f"with a package, the executable is a name in it (e.g. 'talker'), not the path "
-                            f"{executable!r}; to run a file by its path, give no package: baseNode({executable!r})")
+    refuse_path_with_package(executable)
     packages = _packages()
     if package not in packages:
-        close = difflib.get_close_matches(package, list(packages), n=3)
-        hint = f"did you mean {' or '.join(close)}? " if close else ""
-        raise BaseNodeError(f"unknown ROS 2 package {package!r}: {hint}(the ament index at "
+        hint = did_you_mean(package, list(packages))
+        raise BaseNodeError(f"unknown ROS 2 package {package!r}: {hint + ' ' if hint else ''}(the ament index at "
                             f"{os.pathsep.join(map(str, prefixes()))} does not list it; set AMENT_PREFIX_PATH)")
     path = packages[package] / "lib" / package / executable
-    if path.is_file() and os.access(path, os.X_OK):
+    if "/" not in executable and path.is_file() and os.access(path, os.X_OK):
         return path
     have = list_executables(package)
-    close = difflib.get_close_matches(executable, have, n=3)
-    hint = f"did you mean {' or '.join(close)}? " if close else ""
-    raise BaseNodeError(f"package {package!r} has no executable {executable!r}; {hint}its executables: "
-                        f"{', '.join(have) or 'none'}")
+    hint = did_you_mean(executable, have)
+    raise BaseNodeError(f"package {package!r} has no executable {executable!r}; {hint + ' ' if hint else ''}"
+                        f"its executables: {', '.join(have) or 'none'}")

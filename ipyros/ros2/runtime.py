@@ -31,6 +31,11 @@ from ..slots import HandlerSlot, SendFigures
 _DEPTH = 1000
 
 
+def domain_id() -> str:
+    """The DDS domain this process talks in (what names a ROS 2 "graph")."""
+    return os.environ.get("ROS_DOMAIN_ID") or "0"
+
+
 def _qos(latch: bool = False) -> QoSProfile:
     """Reliable; ``latch``: transient-local keeping the last message, as a ROS 1 latched topic."""
     if latch:
@@ -363,7 +368,7 @@ def wait_for_node(graph: Node, fullname: str, timeout: float = 10.0, settle: flo
                 names = ", ".join(sorted(ns.rstrip("/") + "/" + n for n, ns in graph.get_node_names_and_namespaces()
                                          if not n.startswith("_"))) or "none"
                 raise BaseNodeError(f"node {fullname} did not appear in the ROS 2 graph (ROS_DOMAIN_ID "
-                                    f"{os.environ.get('ROS_DOMAIN_ID') or 0}) after {timeout:g}s: start it first "
+                                    f"{domain_id()}) after {timeout:g}s: start it first "
                                     f"(nodes seen: {names})")
             return current
         time.sleep(0.05)
