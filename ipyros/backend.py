@@ -12,11 +12,14 @@ the DSL asks           what the backend gives
 =====================  ===================================================================
 a node process         ``process``: started once, named, registered again after a master
                        restart, shut down (``ProcessNode`` on ROS 1); ``has_master``
-publish / write        ``publication(host, topic, cls, latch)``
-subscribe(h)           ``subscription(host, topic, cls, slot)``: the slot calls the handler
-reuse relay            ``relay(host, source, target, cls, on_wrong_type)``: bytes, not objects
+publish / write        ``publication(host, topic, cls, qos, complain)``
+subscribe(h)           ``subscription(host, topic, cls, slot, qos, complain)``: the slot calls
+                       the handler; ``complain(text)`` tells the session of a QoS mismatch
+reuse relay            ``relay(host, source, target, cls, on_wrong_type, complain)``: bytes, not
+                       objects, with the QoS of the source's publishers
 timer                  ``timer(host, period, slot, oneshot)``
-service / reuse        ``service(host, name, cls, slot)``, ``service_relay(host, source, target, cls)``
+service / reuse        ``service(host, name, cls, slot)``,
+                       ``service_relay(host, source, target, cls, complain)``
 a DSL node's life      ``open_host(host)`` at create(), ``close_host(host)`` at shutdown()
 params                 ``check_param``, ``get_param``, ``set_param``, ``has_param``,
                        ``delete_param`` (by global name)
@@ -32,7 +35,11 @@ import os
 from typing import Any, Callable, Optional, Protocol
 
 from .errors import IpyrosError
+from .qos import Qos
 from .slots import HandlerSlot
+
+#: Told, in one line, what went wrong with an endpoint after it opened (a QoS mismatch, ...).
+Complain = Callable[[str], None]
 
 __all__ = ["Backend", "choose"]
 
@@ -44,13 +51,14 @@ class Backend(Protocol):
     has_master: bool  # a ROS 1 master to find, start and watch; ROS 2 discovers peers itself
     process: Any
 
-    def publication(self, host: str, topic: str, cls: type, latch: bool) -> Any: ...
-    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot) -> Any: ...
+    def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain) -> Any: ...
+    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
+                     complain: Complain) -> Any: ...
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]]) -> Any: ...
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> Any: ...
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool) -> Any: ...
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> Any: ...
-    def service_relay(self, host: str, source: str, target: str, cls: type) -> Any: ...
+    def service_relay(self, host: str, source: str, target: str, cls: type, complain: Complain) -> Any: ...
     def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
                       alive: Optional[Callable[[], bool]] = None) -> Any: ...
     def open_host(self, host: str) -> None: ...

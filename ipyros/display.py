@@ -14,6 +14,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from .qos import from_model as qos_of
+
 
 if TYPE_CHECKING:
     from .dsl import rosNode
@@ -30,7 +32,8 @@ def node_table(node: "rosNode") -> Table:
     for column in ("kind", "name", "type", "role", "handler"):
         table.add_column(column)
     for t in model.topics:
-        table.add_row(t.direction + (" (latched)" if t.latch else ""), t.resolved, t.type, t.role, t.handler or "")
+        kind = t.direction + (" (latched)" if t.latch else "") + (f" ({qos_of(t.qos)})" if t.qos else "")
+        table.add_row(kind, t.resolved, t.type, t.role, t.handler or "")
     for s in model.services:
         table.add_row("service", s.resolved, s.type, s.role, s.handler or "")
     for timer in model.timers:

@@ -15,13 +15,14 @@ declaration raises a one-line error and changes nothing, neither model nor runni
 from __future__ import annotations
 
 import copy
+from dataclasses import replace
 import re
 import threading
 import time
 from collections.abc import MutableMapping
 from typing import Any, Callable, Iterator, Optional
 
-from . import msgtypes, names, plan as planning, versions as versions_mod
+from . import msgtypes, names, plan as planning, qos as qos_mod, versions as versions_mod
 from .errors import (DeclarationError, HandlerError, IpyrosError, MessageTypeError, NodeStateError,
                      NotDeclaredError, TopicTypeConflict)
 from .model import NodeModel, ServiceModel, TimerModel, TopicModel
@@ -495,15 +496,18 @@ class rosNode:  # noqa: N801 - the paper's name
     def _open_one(self, spec: Spec, handlers: dict[str, Callable[..., Any]], takes_arg: dict[str, bool]) -> Any:
         backend, host = self._session.backend, self.fullname
         if isinstance(spec, planning.PublishSpec):
-            return backend.publication(host, spec.topic, msgtypes.resolve_message(spec.type)[1], spec.latch)
+            qos = replace(spec.qos, durability="transient_local") if spec.latch else spec.qos
+            return backend.publication(host, spec.topic, msgtypes.resolve_message(spec.type)[1], qos, self._complain)
         if isinstance(spec, planning.RelaySpec):
             def wrong_type(got: str, spec: planning.RelaySpec = spec) -> None:
                 self._session.notify(f"ipyros: {spec.source} carries {got}, but {self.name} relays it as {spec.type}; "
                                      f"messages are dropped: declare type={got!r}")
 
-            return backend.relay(host, spec.source, spec.target, msgtypes.resolve_message(spec.type)[1], wrong_type)
+            return backend.relay(host, spec.source, spec.target, msgtypes.resolve_message(spec.type)[1], wrong_type,
+                                 self._complain)
         if isinstance(spec, planning.ServiceRelaySpec):
-            return backend.service_relay(host, spec.source, spec.target, msgtypes.resolve_service(spec.type)[1])
+            return backend.service_relay(host, spec.source, spec.target, msgtypes.resolve_service(spec.type)[1],
+                                         self._complain)
         slot = self._slots.get(spec.slot)
         if slot is None:
             label = f"{self.name} {spec.slot.split(' ', 1)[1]}"
@@ -511,10 +515,15 @@ class rosNode:  # noqa: N801 - the paper's name
                                keep=self._session.config.keep_recent)
             self._slots[spec.slot] = slot
         if isinstance(spec, planning.SubscribeSpec):
-            return backend.subscription(host, spec.topic, msgtypes.resolve_message(spec.type)[1], slot)
+            return backend.subscription(host, spec.topic, msgtypes.resolve_message(spec.type)[1], slot, spec.qos,
+                                        self._complain)
         if isinstance(spec, planning.TimerSpec):
             return backend.timer(host, spec.period, slot, spec.oneshot)
         return backend.service(host, spec.name, msgtypes.resolve_service(spec.type)[1], slot)
+
+    def _complain(self, text: str) -> None:
+        """What the backend finds wrong with a live endpoint of this node, told at the prompt."""
+        self._session.notify(f"ipyros: {self.name}: {text}")
 
     def _record(self, change: str) -> None:
         pending, self._new_version = self._new_version, None
@@ -673,11 +682,16 @@ class TopicHandler:
         self._node._record(f"{self._role}.{text}")
 
     def subscribe(self, topic: str, handler: Optional[Callable[..., Any]] = None, msgType: Any = _UNSET,
-                  type: Any = _UNSET) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
-        """Subscribe ``handler(msg)`` to ``topic``; declaring it again swaps the handler live."""
+                  type: Any = _UNSET, qos: Any = None) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
+        """Subscribe ``handler(msg)`` to ``topic``; declaring it again swaps the handler live.
+
+        ``qos``: a profile name (``"sensor_data"``, ``"best_effort"``, ``"transient_local"``, ...),
+        a depth, or a dict of depth, reliability, durability (see :mod:`ipyros.qos`).
+        """
         node, role = self._node, self._role
         resolved = node._resolve_as(role, topic, "topic")
         type_name, _ = msgtypes.resolve_message(_one_type(msgType, type, topic))
+        given = self._qos(qos, f"{role}.subscribe({topic!r})")
         if role == "reuse":
             check_reuse(node._model, resolved, "subscribe")
         label = f"{node.name} {resolved}"
@@ -690,23 +704,39 @@ class TopicHandler:
         elif handler is not None:
             raise HandlerError(f"reuse.subscribe({topic!r}) relays messages unchanged and takes no handler; "
                                "to handle them use new.subscribe(..., handler=...)")
-        entry = TopicModel(topic, resolved, "subscribe", type_name, role, _name_of(handler))
+        entry = TopicModel(topic, resolved, "subscribe", type_name, role, _name_of(handler), qos=given.to_model())
         node._change(_replace_topic(entry), handlers, check=(entry,))
         self._did(f"subscribe {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
         return self
 
     def publish(self, topic: str, msgType: Any = _UNSET, type: Any = _UNSET,
-                latch: bool = False) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
-        """Publish ``topic``; ``node.write(topic, msg)`` sends on it."""
+                latch: bool = False, qos: Any = None) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
+        """Publish ``topic``; ``node.write(topic, msg)`` sends on it.
+
+        ``latch``: a subscriber that connects later gets the last message (on ROS 2,
+        transient-local durability); ``qos`` as for :meth:`subscribe`.
+        """
         node = self._node
         resolved = node._resolve_as(self._role, topic, "topic")
         type_name, _ = msgtypes.resolve_message(_one_type(msgType, type, topic))
+        where = f"{self._role}.publish({topic!r})"
+        given = self._qos(qos, where)
+        if latch and given.durability == "volatile":
+            raise DeclarationError(f"{where}: latch=True and a volatile qos contradict each other; "
+                                   "drop one (latch=True is qos durability transient_local)")
         if self._role == "reuse":
             check_reuse(node._model, resolved, "publish")
-        entry = TopicModel(topic, resolved, "publish", type_name, self._role, None, bool(latch))
+        entry = TopicModel(topic, resolved, "publish", type_name, self._role, None, bool(latch), given.to_model())
         node._change(_replace_topic(entry), check=(entry,))
         self._did(f"publish {resolved} [{type_name}]")
         return self
+
+    def _qos(self, value: Any, where: str) -> qos_mod.Qos:
+        """``qos=`` checked; refused on reuse, whose relays take the QoS of what they relay."""
+        if value is not None and self._role == "reuse":
+            raise DeclarationError(f"{where}: a reuse relay takes the QoS of the publishers it relays and "
+                                   "takes no qos=; give qos= to new.subscribe or new.publish")
+        return qos_mod.parse(value, where)
 
     def create(self) -> rosNode:
         """Create the node, so a declaration chain can end with ``.create()``."""

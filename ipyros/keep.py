@@ -452,9 +452,9 @@ def _declare(node: "rosNode", model: NodeModel, functions: dict[str, Callable[..
     for t in model.topics:
         role = getattr(node, t.role)
         if t.direction == "publish":
-            role.publish(t.name, type=t.type, latch=t.latch)
+            role.publish(t.name, type=t.type, latch=t.latch, qos=t.qos)
         else:
-            role.subscribe(t.name, handler=functions.get(planning.topic_slot(t.resolved)), type=t.type)
+            role.subscribe(t.name, handler=functions.get(planning.topic_slot(t.resolved)), type=t.type, qos=t.qos)
     for s in model.services:
         getattr(node, s.role).service(s.name, type=s.type, handler=functions.get(planning.service_slot(s.resolved)))
     for timer in model.timers:

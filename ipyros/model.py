@@ -21,6 +21,7 @@ class TopicModel:
 
     ``name`` is the name as the user typed it; ``resolved`` is the global name ROS
     gives it (relative names resolve in the node's namespace, ``~`` under the node).
+    ``qos`` holds the QoS fields given (see :mod:`ipyros.qos`), None for the defaults.
     """
 
     name: str
@@ -30,6 +31,7 @@ class TopicModel:
     role: Role = "new"
     handler: Optional[str] = None
     latch: bool = False
+    qos: Optional[dict[str, Any]] = None
 
 
 @dataclass

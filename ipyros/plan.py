@@ -26,6 +26,7 @@ from typing import Union
 
 from . import names
 from .model import NodeModel
+from .qos import Qos, from_model as qos_of
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,7 @@ class PublishSpec:
     topic: str
     type: str
     latch: bool = False
+    qos: Qos = Qos()
 
 
 @dataclass(frozen=True)
@@ -40,6 +42,7 @@ class SubscribeSpec:
     topic: str
     type: str
     slot: str  # key of the handler slot that serves it
+    qos: Qos = Qos()
 
 
 @dataclass(frozen=True)
@@ -104,10 +107,10 @@ def plan(model: NodeModel) -> dict[Spec, None]:
 
     for t in model.topics:
         if t.role == "new" and t.direction == "publish":
-            specs[PublishSpec(t.resolved, t.type, t.latch)] = None
+            specs[PublishSpec(t.resolved, t.type, t.latch, qos_of(t.qos))] = None
         elif t.role == "new":  # subscribe
             source = internal_name(model, t.resolved) if t.resolved in reused_out else t.resolved
-            specs[SubscribeSpec(source, t.type, topic_slot(t.resolved))] = None
+            specs[SubscribeSpec(source, t.type, topic_slot(t.resolved), qos_of(t.qos))] = None
             if t.resolved in reused_in:  # the handler replaces the relay; write(T) feeds B
                 specs[PublishSpec(internal_name(model, t.resolved), t.type)] = None
         elif t.direction == "publish":  # reuse: B's output out to the world, unless intercepted
@@ -115,7 +118,7 @@ def plan(model: NodeModel) -> dict[Spec, None]:
                 specs[RelaySpec(internal_name(model, t.resolved), t.resolved, t.type)] = None
             elif model.topic(t.resolved, "publish", "new") is None:
                 # W takes T over: its handler writes what reaches T (write(T), as in the paper)
-                specs[PublishSpec(t.resolved, t.type, t.latch)] = None
+                specs[PublishSpec(t.resolved, t.type, t.latch, qos_of(t.qos))] = None
         elif t.resolved not in intercepted:  # reuse subscribe: the world into B
             specs[RelaySpec(t.resolved, internal_name(model, t.resolved), t.type)] = None
 

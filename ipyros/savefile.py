@@ -163,6 +163,8 @@ class _SavedFile:
             args.append(f"msgType={t.type!r}")
             if t.latch:
                 args.append("latch=True")
+            if t.qos:
+                args.append(f"qos={t.qos!r}")
             lines.append(f"{var}.{t.role}.{t.direction}({', '.join(args)})")
         for s in model.services:
             handler = f", handler={fn_of(planning.service_slot(s.resolved))}" if s.role == "new" else ""

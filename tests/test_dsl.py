@@ -228,7 +228,7 @@ def test_model_is_plain_data_and_round_trips(make_node):
     nd.params["gain"] = 2
     data = nd.model().to_dict()
     assert data["topics"][1] == {"name": "cmd_vel", "resolved": "/cmd_vel", "direction": "publish",
-                                 "type": "geometry_msgs/Twist", "role": "new", "handler": None, "latch": True}
+                                 "type": "geometry_msgs/Twist", "role": "new", "handler": None, "latch": True, "qos": None}
     assert NodeModel.from_dict(data) == nd.model()
 
 
@@ -262,3 +262,18 @@ def test_every_change_is_in_the_history(make_node):
         "new.subscribe /dsl_history/in [std_msgs/String] -> print", "timer tick every 0.5 s -> print",
         "params['gain'] = 2", "remove /dsl_history/in"]
     assert "history of /dsl_history" in render_text(nd.history())
+
+
+def test_qos_on_ros1_latches_when_transient_local_and_is_kept_for_ros2(make_node):
+    """TCPROS is reliable: of a QoS only durability means something on ROS 1 (a latched topic); the rest is
+    kept in the model, so that the node loads on ROS 2 as declared."""
+    talker = make_node("dsl_qos_talker").new.publish("/dsl_qos", msgType=String, qos="latched").create()
+    talker.new.subscribe("/dsl_qos_scan", print, msgType=String, qos="sensor_data")
+    talker.write("/dsl_qos", String("kept"))
+    late = []
+    make_node("dsl_qos_late").new.subscribe("/dsl_qos", handler=lambda m: late.append(m.data), msgType=String).create()
+    wait_for(lambda: late == ["kept"], what="the latched message for a subscriber that came later")
+    assert talker.model().topic("/dsl_qos_scan", "subscribe").qos == {"depth": 5, "reliability": "best_effort",
+                                                                      "durability": "volatile"}
+    with pytest.raises(errors.DeclarationError, match="qos='fast' is not a profile"):
+        talker.new.subscribe("/dsl_qos_scan", print, msgType=String, qos="fast")

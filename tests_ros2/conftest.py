@@ -60,6 +60,15 @@ def failures(ros2_session):
 
 
 @pytest.fixture
+def notices(ros2_session):
+    """What the session tells the user on its own (a QoS mismatch, a basenode that died, ...)."""
+    seen: list[str] = []
+    previous, ros2_session.notice = ros2_session.notice, seen.append
+    yield seen
+    ros2_session.notice = previous
+
+
+@pytest.fixture
 def make_node(ros2_session):
     """Build rosNodes that are shut down when the test ends."""
     yield from node_maker(ros2_session)

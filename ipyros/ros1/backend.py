@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Optional
 
+from ..qos import Qos
 from ..slots import HandlerSlot
 from . import runtime
 
@@ -23,14 +24,18 @@ class Ros1:
     def __init__(self) -> None:
         self.process = runtime.ProcessNode()
 
-    def publication(self, host: str, topic: str, cls: type, latch: bool) -> runtime.Publication:
-        return runtime.Publication(topic, cls, latch)
+    # TCPROS is reliable and rospy queues are ipyros's own: of a QoS only durability
+    # means something here (transient-local is latched); nothing can mismatch.
+    def publication(self, host: str, topic: str, cls: type, qos: Qos,
+                    complain: Callable[[str], None]) -> runtime.Publication:
+        return runtime.Publication(topic, cls, qos.latched)
 
-    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot) -> runtime.Subscription:
+    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
+                     complain: Callable[[str], None]) -> runtime.Subscription:
         return runtime.Subscription(topic, cls, slot)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]]) -> runtime.Relay:
+              on_wrong_type: Optional[Callable[[str], None]], complain: Callable[[str], None]) -> runtime.Relay:
         return runtime.Relay(source, target, cls, on_wrong_type)
 
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool) -> runtime.Timer:
@@ -39,8 +44,9 @@ class Ros1:
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
         return runtime.ServiceServer(name, cls, slot)
 
-    def service_relay(self, host: str, source: str, target: str, cls: type) -> runtime.ServiceRelay:
-        return runtime.ServiceRelay(source, target, cls)
+    def service_relay(self, host: str, source: str, target: str, cls: type,
+                      complain: Callable[[str], None]) -> runtime.ServiceRelay:
+        return runtime.ServiceRelay(source, target, cls)  # a basenode's failure reaches the caller as an error
 
     def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
                       alive: Optional[Callable[[], bool]] = None) -> Any:

@@ -6,8 +6,10 @@ import os
 from typing import Any, Callable, Optional
 
 from ..errors import DeclarationError, NodeStateError
+from ..qos import Qos
 from ..slots import HandlerSlot
 from . import runtime
+from .runtime import Complain
 
 __all__ = ["Ros2"]
 
@@ -21,15 +23,16 @@ class Ros2:
     def __init__(self) -> None:
         self.process = runtime.ProcessNode()
 
-    def publication(self, host: str, topic: str, cls: type, latch: bool) -> runtime.Publication:
-        return runtime.Publication(self.process.host(host), topic, cls, latch)
+    def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain) -> runtime.Publication:
+        return runtime.Publication(self.process.host(host), topic, cls, qos, complain)
 
-    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot) -> runtime.Subscription:
-        return runtime.Subscription(self.process.host(host), topic, cls, slot)
+    def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
+                     complain: Complain) -> runtime.Subscription:
+        return runtime.Subscription(self.process.host(host), topic, cls, slot, qos, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]]) -> runtime.Relay:
-        return runtime.Relay(self.process.host(host), source, target, cls, on_wrong_type)
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.Relay:
+        return runtime.Relay(self.process, self.process.host(host), source, target, cls, on_wrong_type, complain)
 
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool) -> runtime.Timer:
         return runtime.Timer(self.process.host(host), period, slot, oneshot)
@@ -37,8 +40,9 @@ class Ros2:
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
         return runtime.ServiceServer(self.process.host(host), name, cls, slot)
 
-    def service_relay(self, host: str, source: str, target: str, cls: type) -> runtime.ServiceRelay:
-        return runtime.ServiceRelay(self.process.host(host), source, target, cls)
+    def service_relay(self, host: str, source: str, target: str, cls: type,
+                      complain: Complain) -> runtime.ServiceRelay:
+        return runtime.ServiceRelay(self.process.host(host), source, target, cls, complain)
 
     def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
                       alive: Optional[Callable[[], bool]] = None) -> Any:

@@ -24,11 +24,14 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from ..errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
+from ..qos import Qos
 from ..slots import HandlerSlot, SendFigures
 
 #: Reliable, and deep enough that a burst is not cut short: what ROS 1's unbounded
-#: subscriber queue gave. Publishers of other QoS are the QoS issue's (issue 10) to match.
+#: subscriber queue gave. A declaration's ``qos=`` overrides any of it.
 _DEPTH = 1000
+
+Complain = Callable[[str], None]
 
 
 def domain_id() -> str:
@@ -36,11 +39,60 @@ def domain_id() -> str:
     return os.environ.get("ROS_DOMAIN_ID") or "0"
 
 
-def _qos(latch: bool = False) -> QoSProfile:
-    """Reliable; ``latch``: transient-local keeping the last message, as a ROS 1 latched topic."""
-    if latch:
-        return QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    return QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+def _profile(qos: Qos = Qos()) -> QoSProfile:
+    """rclpy's profile for ``qos``; what it leaves out is reliable, volatile, depth 1000
+    (depth 1 when transient-local: the last message, as a ROS 1 latched topic)."""
+    return QoSProfile(depth=qos.depth or (1 if qos.latched else _DEPTH),
+                      reliability=ReliabilityPolicy.BEST_EFFORT if qos.reliability == "best_effort"
+                      else ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if qos.latched else DurabilityPolicy.VOLATILE)
+
+
+def _qos_of(profile: Any) -> Qos:
+    """The :class:`Qos` a peer's profile (from the graph) amounts to."""
+    return Qos(profile.depth or None,
+               "best_effort" if profile.reliability == ReliabilityPolicy.BEST_EFFORT else "reliable",
+               "transient_local" if profile.durability == DurabilityPolicy.TRANSIENT_LOCAL else "volatile")
+
+
+_MATCH_ADVICE = {
+    "reliability": "a best-effort publisher reaches only best-effort subscriptions: subscribe with "
+                   "qos='best_effort' (or 'sensor_data'), or publish reliable",
+    "durability": "a transient-local subscription needs a transient-local publisher: subscribe volatile "
+                  "(the default), or publish with qos='transient_local' (or latch=True)",
+}
+
+
+def _mismatch_report(node: Node, topic: str, mine: Qos, what: str, complain: Optional[Complain]) -> Any:
+    """Event callbacks that say, in one line, which peer's QoS keeps it from connecting.
+
+    ROS 2 connects nothing between incompatible QoS and only logs a warning; this puts
+    the mismatch, the peer and the declaration that would match it in front of the user.
+    """
+    from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+    from rclpy.qos import qos_policy_name_from_kind
+
+    if complain is None:
+        return None
+    peers_of = node.get_subscriptions_info_by_topic if what == "publication" else node.get_publishers_info_by_topic
+    peer_kind = "subscription" if what == "publication" else "publisher"
+
+    here = _qos_of(_profile(mine))
+
+    def report(event: Any) -> None:
+        policy = qos_policy_name_from_kind(event.last_policy_kind).lower()
+        others = [f"{info.node_namespace.rstrip('/')}/{info.node_name} ({theirs.reliability.replace('_', '-')} "
+                  f"{theirs.durability.replace('_', '-')})"
+                  for info in peers_of(topic) for theirs in [_qos_of(info.qos_profile)]
+                  if (theirs.reliability, theirs.durability) != (here.reliability, here.durability)]
+        complain(f"{topic}: the {what} here ({here.reliability.replace('_', '-')} "
+                 f"{here.durability.replace('_', '-')}) and a {peer_kind} of "
+                 f"{', '.join(others) or 'another node'} have incompatible {policy}: nothing passes between them; "
+                 f"{_MATCH_ADVICE.get(policy, 'declare qos= to match')}")
+
+    if what == "publication":
+        return PublisherEventCallbacks(incompatible_qos=report)
+    return SubscriptionEventCallbacks(incompatible_qos=report)
 
 
 class ProcessNode:
@@ -54,6 +106,8 @@ class ProcessNode:
         self._spinner: Optional[threading.Thread] = None
         self._hosts: dict[str, Node] = {}
         self.hosted: set[str] = set()  # every name this process has had a node at (the graph lags behind)
+        self._watchers: list[Callable[[], None]] = []
+        self._watch_timer: Any = None
 
     @property
     def started(self) -> bool:
@@ -99,6 +153,31 @@ class ProcessNode:
         """A hidden node of ipyros's own that reads the ROS 2 graph (it hosts no endpoint of yours)."""
         return self.host(f"/_ipyros_graph_{os.getpid()}")
 
+    #: How often the graph watch looks (s): a basenode's publisher is followed within this.
+    WATCH_PERIOD = 0.1
+
+    def watch(self, follow: Callable[[], None]) -> None:
+        """Call ``follow()`` on every look of the one graph watch, until :meth:`unwatch`.
+
+        One timer on the graph node serves every relay, instead of one timer each.
+        """
+        graph = self.graph()
+        with self._lock:
+            self._watchers.append(follow)
+            if self._watch_timer is None:
+                self._watch_timer = graph.create_timer(self.WATCH_PERIOD, self._look)
+
+    def unwatch(self, follow: Callable[[], None]) -> None:
+        with self._lock:
+            if follow in self._watchers:
+                self._watchers.remove(follow)
+
+    def _look(self) -> None:
+        with self._lock:
+            watchers = list(self._watchers)
+        for follow in watchers:
+            follow()
+
     def hosts(self) -> list[str]:
         """The full names of the DSL nodes that have a ROS 2 node now."""
         with self._lock:
@@ -123,6 +202,8 @@ class ProcessNode:
                 self._executor.remove_node(node)
                 node.destroy_node()
             self._hosts.clear()
+            self._watchers.clear()
+            self._watch_timer = None
             self._executor.shutdown(timeout_sec=2.0)
             rclpy.try_shutdown(context=self._context)
             if self._spinner is not None:  # a spinning thread left at exit aborts the interpreter
@@ -133,10 +214,12 @@ class ProcessNode:
 class Publication:
     """A publisher; ``write`` checks the message, then publishes it."""
 
-    def __init__(self, node: Node, topic: str, cls: type, latch: bool = False) -> None:
+    def __init__(self, node: Node, topic: str, cls: type, qos: Qos = Qos(),
+                 complain: Optional[Complain] = None) -> None:
         self.topic, self.cls, self.count = topic, cls, 0
         self._node = node
-        self._pub = node.create_publisher(cls, topic, _qos(latch))
+        self._pub = node.create_publisher(cls, topic, _profile(qos),
+                                          event_callbacks=_mismatch_report(node, topic, qos, "publication", complain))
 
     def write(self, msg: Any) -> None:
         if isinstance(msg, type):
@@ -161,10 +244,13 @@ class Publication:
 class Subscription:
     """A subscription whose callback is a :class:`HandlerSlot`."""
 
-    def __init__(self, node: Node, topic: str, cls: type, slot: HandlerSlot) -> None:
+    def __init__(self, node: Node, topic: str, cls: type, slot: HandlerSlot, qos: Qos = Qos(),
+                 complain: Optional[Complain] = None) -> None:
         self.topic, self.cls, self.slot = topic, cls, slot
         self._node = node
-        self._sub = node.create_subscription(cls, topic, slot, _qos())
+        self._sub = node.create_subscription(
+            cls, topic, slot, _profile(qos),
+            event_callbacks=_mismatch_report(node, topic, qos, "subscription", complain))
 
     def connections(self) -> int:
         return self._sub.get_publisher_count()
@@ -176,52 +262,80 @@ class Subscription:
 class Relay:
     """Forward ``source`` to ``target`` as serialized bytes, never deserialised.
 
-    A latched (transient-local) source stays latched through the relay. The basenode
-    starts after the relay, so its QoS is known only once its publisher shows up: the
-    relay watches for it, and if it is transient-local, subscribes and publishes
-    transient-local too (a transient-local subscription would not match a volatile
-    publisher, so that cannot be the default), and a late subscriber still gets the last
-    message, even one the basenode sent before the relay matched it.
+    The relay takes the QoS of the publishers it relays, so that wrapping changes
+    nothing a subscriber can see: a transient-local (latched) source stays latched
+    through it, and a late subscriber still gets the last message, even one the basenode
+    sent before the relay matched it; a best-effort source is relayed best-effort (a
+    reliable subscription would get nothing from it). The basenode starts after the
+    relay, so its QoS is known only once its publisher shows up: the process's graph
+    watch tells the relay, which then opens endpoints with that QoS in place of its
+    default ones (reliable, volatile).
     """
 
-    def __init__(self, node: Node, source: str, target: str, cls: type,
-                 on_wrong_type: Optional[Callable[[str], None]] = None) -> None:
+    def __init__(self, process: ProcessNode, node: Node, source: str, target: str, cls: type,
+                 on_wrong_type: Optional[Callable[[str], None]] = None, complain: Optional[Complain] = None) -> None:
         self.source, self.target, self.cls, self.count = source, target, cls, 0
-        self._node = node
+        self._process, self._node, self._complain = process, node, complain
         self._lock = threading.Lock()  # the watch and close() may swap endpoints from two threads
-        self._pub = node.create_publisher(cls, target, _qos())
-        self._sub = node.create_subscription(cls, source, self._forward, _qos(), raw=True)
-        self._watch: Any = node.create_timer(0.1, self._copy_source_qos)
+        self.qos = Qos(None, "reliable", "volatile")  # rclpy's, until the source's publishers show up
+        self._last: Optional[bytes] = None
+        self._skip: Optional[bytes] = None
+        self._pub, self._sub = self._endpoints(self.qos)
+        process.watch(self._follow_source)
 
-    def _copy_source_qos(self) -> None:
+    def _endpoints(self, qos: Qos) -> tuple[Any, Any]:
+        node = self._node
+        pub = node.create_publisher(self.cls, self.target, _profile(qos),
+                                    event_callbacks=_mismatch_report(node, self.target, qos, "publication",
+                                                                     self._complain))
+        # Until the source's publishers show up, a mismatch with them is expected, and
+        # mended by _follow_source: no warning for it.
+        from rclpy.event_handler import SubscriptionEventCallbacks
+
+        sub = node.create_subscription(self.cls, self.source, self._forward, _profile(qos), raw=True,
+                                       event_callbacks=SubscriptionEventCallbacks(incompatible_qos=lambda _: None))
+        return pub, sub
+
+    def _follow_source(self) -> None:
+        """Take the QoS of the source's publishers, if they have shown up and it differs."""
         with self._lock:
-            infos = self._node.get_publishers_info_by_topic(self.source) if self._watch is not None else []
-            if not infos:
+            if self._sub is None:
                 return
-            self._node.destroy_timer(self._watch)
-            self._watch = None
-            if any(info.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for info in infos):
-                node, latched = self._node, _qos(latch=True)
-                old_pub, self._pub = self._pub, node.create_publisher(self.cls, self.target, latched)
-                old_sub, self._sub = self._sub, node.create_subscription(self.cls, self.source, self._forward,
-                                                                          latched, raw=True)
-                node.destroy_subscription(old_sub)
-                node.destroy_publisher(old_pub)
+            found = [_qos_of(info.qos_profile) for info in self._node.get_publishers_info_by_topic(self.source)]
+            if not found:
+                return  # none yet, or the basenode is restarting: keep what matched it last
+            latched = all(q.latched for q in found)
+            wanted = Qos(max(q.depth or 1 for q in found) if latched else None,
+                         "best_effort" if any(q.reliability == "best_effort" for q in found) else "reliable",
+                         "transient_local" if latched else "volatile")
+            if wanted == self.qos:
+                return
+            old = self._pub, self._sub
+            self.qos = wanted
+            self._skip = self._last  # a transient-local source sends its last message again
+            self._pub, self._sub = self._endpoints(wanted)
+            self._node.destroy_subscription(old[1])
+            self._node.destroy_publisher(old[0])
 
     def _forward(self, raw: bytes) -> None:
+        if self._skip is not None:
+            skip, self._skip = self._skip, None
+            if raw == skip:
+                return
         self._pub.publish(raw)
+        self._last = raw
         self.count += 1
 
     def figures(self) -> SendFigures:
         return SendFigures(self.target, "relay", self.count, self._pub.get_subscription_count(), 0, 0)
 
     def close(self) -> None:
+        self._process.unwatch(self._follow_source)
         with self._lock:
-            if self._watch is not None:
-                self._node.destroy_timer(self._watch)
-                self._watch = None
-            self._node.destroy_subscription(self._sub)
-            self._node.destroy_publisher(self._pub)
+            if self._sub is not None:
+                self._node.destroy_subscription(self._sub)
+                self._node.destroy_publisher(self._pub)
+                self._sub = None
 
 
 class Timer:
@@ -275,11 +389,12 @@ class ServiceRelay:
 
     TIMEOUT = 10.0  # seconds a basenode may take to answer
 
-    def __init__(self, node: Node, source: str, target: str, cls: type) -> None:
+    def __init__(self, node: Node, source: str, target: str, cls: type,
+                 complain: Optional[Complain] = None) -> None:
         from rclpy.callback_groups import ReentrantCallbackGroup
 
         self.source, self.target, self.cls = source, target, cls
-        self._node = node
+        self._node, self._complain = node, complain
         group = ReentrantCallbackGroup()
         self._client = node.create_client(cls, source, callback_group=group)
         self._service = node.create_service(cls, target, self._serve, callback_group=group)
@@ -290,6 +405,9 @@ class ServiceRelay:
         future.add_done_callback(lambda _: answered.set())
         if not answered.wait(self.TIMEOUT) or future.result() is None:
             self._client.remove_pending_request(future)
+            if self._complain is not None:
+                self._complain(f"{self.target}: the basenode's service did not answer within {self.TIMEOUT:g} s; "
+                               "the caller got an empty response (see its log: nd.base.tail())")
             return response  # ROS 2 has no error reply: the caller gets the default response
         return future.result()
 

@@ -3,20 +3,22 @@
 service "check" (std_srvs/SetBool) answers success=data, message="<prefix> checked"; "status" (transient-local,
 latched) says "<prefix> up" once, at start.
 
-Its parameter ``prefix`` (default "echo:") is what it puts in front. It spins until Ctrl-C.
+Its parameter ``prefix`` (default "echo:") is what it puts in front; ``sensor`` (default False)
+publishes "out" best-effort, as sensor drivers do (rclpy's sensor_data profile). It spins until Ctrl-C.
 """
 import os
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
-from rclpy.qos import DurabilityPolicy, QoSProfile
+from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
 rclpy.init()
 node = rclpy.create_node("echo_node")
 prefix = node.declare_parameter("prefix", "echo:").value
-out = node.create_publisher(String, "out", 10)
+sensor = node.declare_parameter("sensor", False).value
+out = node.create_publisher(String, "out", qos_profile_sensor_data if sensor else 10)
 
 
 def echo(msg: String) -> None:
