@@ -172,3 +172,41 @@ def test_the_basenode_lifecycle_log_restart_crash_and_no_orphan(make_node, ros2_
 
 def _gone(pid: int) -> bool:
     return wait_for(lambda: not Path(f"/proc/{pid}").exists() or _zombie(pid), timeout=10, what=f"pid {pid} to end")
+
+
+_INTERPRETER = """
+import sys
+from ipyros import rosNode
+from std_msgs.msg import String
+w = rosNode("orphan_wrapper")
+w.baseNode(sys.argv[2], namespace="orphans")
+w.reuse.publish("out", type=String)
+w.create()
+print("BASE", w.base.pid, flush=True)
+if sys.argv[1] == "wait":
+    sys.stdin.read()
+"""
+
+
+@pytest.mark.parametrize("ending", ["exit", "SIGKILL"])
+def test_no_orphan_basenode_when_the_interpreter_exits_or_is_killed(ending):
+    """The basenode dies with the interpreter that wrapped it, even one killed without a chance to clean up."""
+    import signal
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-c", _INTERPRETER, "exit" if ending == "exit" else "wait", ECHO_NODE],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("BASE"), line
+        base_pid = int(line.split()[1])
+        if ending == "SIGKILL":
+            assert not _zombie(base_pid)
+            proc.send_signal(signal.SIGKILL)
+        assert proc.wait(30) in (0, -signal.SIGKILL)
+        _gone(base_pid)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
