@@ -7,7 +7,7 @@
 #   bash run.sh test      install what is missing, then run the whole test suite (ROS 1, then ROS 2
 #                         in a venv of its own, rclpy from PyPI)
 #   bash run.sh test-ros2 the ROS 2 suite alone
-#   bash run.sh bench     install what is missing, then run the benchmarks
+#   bash run.sh bench     install what is missing, then run the benchmarks (ROS 1, then ROS 2's relay bench)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 venv="$here/.venv"
@@ -97,6 +97,10 @@ case "$cmd" in
             cd "$here" && "$venv/bin/python" -m pytest "$@"
             if (($# == 0)); then ros2_venv && exec "$venv2/bin/python" -m pytest tests_ros2; fi ;;
   test-ros2) cd "$here" && ros2_venv && exec "$venv2/bin/python" -m pytest tests_ros2 "$@" ;;
-  bench)    cd "$here" && exec "$venv/bin/python" -m bench "$@" ;;
+  bench)    # ROS 1's benchmarks, then ROS 2's relay bench in its venv (side by side in one run)
+            cd "$here" && status=0
+            "$venv/bin/python" -m bench "$@" || status=$?
+            ros2_venv && "$venv2/bin/python" -m bench.relay_ros2 "$@" || status=$?
+            exit "$status" ;;
   *) echo "usage: bash run.sh [demo|ipython|notebook|test|test-ros2|bench] [args...]" >&2; exit 2 ;;
 esac

@@ -2,9 +2,15 @@
 
 Unlike rospy, rclpy lets a process hold many nodes: each DSL node is a ROS 2 node of its
 own (``ros2 node list`` shows each by its name), all in one context, their callbacks
-run by one multi-threaded executor on a thread of its own, so that the prompt stays
-free and a handler that blocks does not stop the others. Signals stay IPython's: Ctrl-C
-interrupts the prompt, not the nodes.
+run by one executor on a thread of its own, so that the prompt stays free. Signals stay
+IPython's: Ctrl-C interrupts the prompt, not the nodes.
+
+The executor is rclpy's single-threaded one, as ``rclpy.spin`` uses: its multi-threaded
+executor, which would let one blocking handler leave the others running, cannot keep up
+with a 1 kHz topic on two cores (one second behind and losing messages in
+``bench/relay_ros2.py``), and the C++ events executor cannot take a node added while it
+spins, which a prompt does all the time. So, as in any rclpy node, a handler that blocks
+holds up the session's other callbacks: keep handlers short (a timer, not a sleep).
 
 Endpoints mirror :mod:`ipyros.ros1.runtime`: each has ``close()``; handlers go through
 a :class:`~ipyros.slots.HandlerSlot`; relays forward serialized bytes (``raw=True``),
@@ -13,13 +19,15 @@ never deserialising.
 
 from __future__ import annotations
 
+import logging
 import os
 import threading
 import time
 from typing import Any, Callable, Optional
 
 import rclpy
-from rclpy.executors import MultiThreadedExecutor
+from rclpy._rclpy_pybind11 import RCLError
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -108,6 +116,7 @@ class ProcessNode:
         self.hosted: set[str] = set()  # every name this process has had a node at (the graph lags behind)
         self._watchers: list[Callable[[], None]] = []
         self._watch_timer: Any = None
+        self._caller: Optional[tuple[Node, Any, threading.Thread]] = None
 
     @property
     def started(self) -> bool:
@@ -122,7 +131,7 @@ class ProcessNode:
 
             context = rclpy.Context()
             rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
-            executor = MultiThreadedExecutor(num_threads=4, context=context)
+            executor = SingleThreadedExecutor(context=context)  # why: the module's docstring
             self._spinner = threading.Thread(target=self._spin, args=(executor,), name="ipyros-rclpy", daemon=True)
             self._spinner.start()
             self._context, self._executor, self.name = context, executor, name
@@ -130,28 +139,65 @@ class ProcessNode:
 
     @staticmethod
     def _spin(executor: Any) -> None:
-        try:
-            executor.spin()
-        except Exception:  # the context shut down under it: the session is closing
-            pass
+        """Spin until the context shuts down; a callback that raised does not stop the others.
 
-    def host(self, fullname: str) -> Node:
-        """The ROS 2 node of the DSL node ``fullname`` (``/ns/name``), made on first use."""
+        rclpy's executor lets a callback's exception out of ``spin()``; handlers are guarded
+        by their slots, but an error of rclpy's own (a publish the middleware refused) must
+        not end every node of the session.
+        """
+        from rclpy.executors import ExternalShutdownException
+
+        while executor.context.ok():
+            try:
+                executor.spin()
+            except ExternalShutdownException:
+                return
+            except Exception:  # noqa: BLE001 - logged; the nodes go on
+                if not executor.context.ok():
+                    return
+                logging.getLogger("ipyros").exception("ipyros: a ROS 2 callback failed; the nodes go on")
+
+    def host(self, fullname: str, parameters: bool = True) -> Node:
+        """The ROS 2 node of the DSL node ``fullname`` (``/ns/name``), made on first use.
+
+        ``parameters=False``: without the parameter services (six entities fewer for the
+        executor to wait on, for a node that has no parameters).
+        """
         with self._lock:
             if self.name is None:
                 raise NodeStateError("the ROS 2 nodes are not running; call create() on a node first")
             node = self._hosts.get(fullname)
             if node is None:
                 namespace, base = fullname.rsplit("/", 1)
-                node = Node(base, namespace=namespace or "/", context=self._context)
+                node = Node(base, namespace=namespace or "/", context=self._context,
+                            start_parameter_services=parameters)
                 self._executor.add_node(node)
                 self._hosts[fullname] = node
                 self.hosted.add(fullname)
             return node
 
+    def caller(self) -> Node:
+        """A hidden node, spun by an executor of its own, for what must not run on the main one.
+
+        A callback that waits for a service's answer on the one executor thread would wait
+        forever (the answer is a callback too): service relays make their calls from here.
+        The graph watch of the relays runs here too.
+        """
+        with self._lock:
+            if self.name is None:
+                raise NodeStateError("the ROS 2 nodes are not running; call create() on a node first")
+            if self._caller is None:
+                node = Node(f"_ipyros_caller_{os.getpid()}", context=self._context, start_parameter_services=False)
+                executor = SingleThreadedExecutor(context=self._context)
+                executor.add_node(node)
+                spinner = threading.Thread(target=self._spin, args=(executor,), name="ipyros-rclpy-calls", daemon=True)
+                spinner.start()
+                self._caller = (node, executor, spinner)
+            return self._caller[0]
+
     def graph(self) -> Node:
         """A hidden node of ipyros's own that reads the ROS 2 graph (it hosts no endpoint of yours)."""
-        return self.host(f"/_ipyros_graph_{os.getpid()}")
+        return self.host(f"/_ipyros_graph_{os.getpid()}", parameters=False)
 
     #: How often the graph watch looks (s): a basenode's publisher is followed within this.
     WATCH_PERIOD = 0.1
@@ -159,13 +205,15 @@ class ProcessNode:
     def watch(self, follow: Callable[[], None]) -> None:
         """Call ``follow()`` on every look of the one graph watch, until :meth:`unwatch`.
 
-        One timer on the graph node serves every relay, instead of one timer each.
+        One timer serves every relay, instead of one timer each; it runs on the caller
+        node's executor, so that looking at the graph never delays a message on the
+        executor that carries them.
         """
-        graph = self.graph()
+        caller = self.caller()
         with self._lock:
             self._watchers.append(follow)
             if self._watch_timer is None:
-                self._watch_timer = graph.create_timer(self.WATCH_PERIOD, self._look)
+                self._watch_timer = caller.create_timer(self.WATCH_PERIOD, self._look)
 
     def unwatch(self, follow: Callable[[], None]) -> None:
         with self._lock:
@@ -204,10 +252,19 @@ class ProcessNode:
             self._hosts.clear()
             self._watchers.clear()
             self._watch_timer = None
+            spinners = [self._spinner]
+            if self._caller is not None:
+                node, executor, spinner = self._caller
+                executor.remove_node(node)
+                node.destroy_node()
+                executor.shutdown(timeout_sec=2.0)
+                spinners.append(spinner)
+                self._caller = None
             self._executor.shutdown(timeout_sec=2.0)
             rclpy.try_shutdown(context=self._context)
-            if self._spinner is not None:  # a spinning thread left at exit aborts the interpreter
-                self._spinner.join(timeout=5.0)
+            for spinner in spinners:  # a spinning thread left at exit aborts the interpreter
+                if spinner is not None:
+                    spinner.join(timeout=5.0)
             self.name = None
 
 
@@ -229,6 +286,9 @@ class Publication:
             self._pub.publish(msg)
         except (TypeError, ValueError, AssertionError) as error:
             raise MessageTypeError(f"{self.topic}: the message cannot be sent ({error}); nothing was sent") from None
+        except RCLError as error:  # the middleware's refusal, e.g. a reliable reader too far behind
+            raise NodeStateError(f"{self.topic}: ROS 2 refused the message ({str(error).split(',')[0]}); nothing "
+                                 "was sent: a reliable subscriber is behind; send it again") from None
         self.count += 1
 
     def connections(self) -> int:
@@ -274,7 +334,7 @@ class Relay:
 
     def __init__(self, process: ProcessNode, node: Node, source: str, target: str, cls: type,
                  on_wrong_type: Optional[Callable[[str], None]] = None, complain: Optional[Complain] = None) -> None:
-        self.source, self.target, self.cls, self.count = source, target, cls, 0
+        self.source, self.target, self.cls, self.count, self.dropped = source, target, cls, 0, 0
         self._process, self._node, self._complain = process, node, complain
         self._lock = threading.Lock()  # the watch and close() may swap endpoints from two threads
         self.qos = Qos(None, "reliable", "volatile")  # rclpy's, until the source's publishers show up
@@ -322,12 +382,19 @@ class Relay:
             skip, self._skip = self._skip, None
             if raw == skip:
                 return
-        self._pub.publish(raw)
+        try:
+            self._pub.publish(raw)
+        except Exception as error:  # noqa: BLE001 - the middleware refused it (a reliable peer too slow, ...)
+            self.dropped += 1
+            if self.dropped == 1 and self._complain is not None:
+                self._complain(f"{self.target}: the relay could not forward a message ({error}); such drops are "
+                               "counted in %status")
+            return
         self._last = raw
         self.count += 1
 
     def figures(self) -> SendFigures:
-        return SendFigures(self.target, "relay", self.count, self._pub.get_subscription_count(), 0, 0)
+        return SendFigures(self.target, "relay", self.count, self._pub.get_subscription_count(), 0, self.dropped)
 
     def close(self) -> None:
         self._process.unwatch(self._follow_source)
@@ -383,37 +450,35 @@ class ServiceServer:
 class ServiceRelay:
     """Serve ``target`` by calling ``source`` (a basenode's service) and answering with its response.
 
-    The call is made from inside the service's callback: both sit in a reentrant callback
-    group, so another executor thread takes the basenode's answer meanwhile.
+    The call goes out from the process's caller node (:meth:`ProcessNode.caller`), whose
+    executor takes the answer while this callback waits for it.
     """
 
     TIMEOUT = 10.0  # seconds a basenode may take to answer
 
-    def __init__(self, node: Node, source: str, target: str, cls: type,
+    def __init__(self, process: ProcessNode, node: Node, source: str, target: str, cls: type,
                  complain: Optional[Complain] = None) -> None:
-        from rclpy.callback_groups import ReentrantCallbackGroup
-
         self.source, self.target, self.cls = source, target, cls
-        self._node, self._complain = node, complain
-        group = ReentrantCallbackGroup()
-        self._client = node.create_client(cls, source, callback_group=group)
-        self._service = node.create_service(cls, target, self._serve, callback_group=group)
+        self._node, self._caller, self._complain = node, process.caller(), complain
+        self._client = self._caller.create_client(cls, source)
+        self._service = node.create_service(cls, target, self._serve)
 
     def _serve(self, request: Any, response: Any) -> Any:
         answered = threading.Event()
         future = self._client.call_async(request)
         future.add_done_callback(lambda _: answered.set())
-        if not answered.wait(self.TIMEOUT) or future.result() is None:
+        answer = future.result() if answered.wait(self.TIMEOUT) else None
+        if answer is None:
             self._client.remove_pending_request(future)
             if self._complain is not None:
                 self._complain(f"{self.target}: the basenode's service did not answer within {self.TIMEOUT:g} s; "
                                "the caller got an empty response (see its log: nd.base.tail())")
             return response  # ROS 2 has no error reply: the caller gets the default response
-        return future.result()
+        return answer
 
     def close(self) -> None:
         self._node.destroy_service(self._service)
-        self._node.destroy_client(self._client)
+        self._caller.destroy_client(self._client)
 
 
 # -- the graph: a node's interface, as discovery sees it ---------------------------------------

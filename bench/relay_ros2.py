@@ -1,0 +1,245 @@
+"""Relay benchmark on ROS 2: what a relay in between costs a topic, four paths side by side.
+
+    python -m bench.relay_ros2            # full run (about 3 minutes on 2 cores)
+    python -m bench.relay_ros2 --quick    # one repeat, shorter streams
+
+Run it with the ROS 2 venv (``bash run.sh bench`` does). Publisher, relay and subscriber
+are separate rclpy processes (bench/ros2/), in a DDS domain of the bench's own with
+discovery kept to this machine, one scenario at a time. Paths:
+
+(a) no relay: publisher → subscriber;
+(b) a plain rclpy relay with typed messages, as users write one by hand (topic_tools for
+    ROS 2 is a C++ node, not on PyPI), spun by rclpy's single-threaded executor;
+(c) an ipyros wrapping node's ``reuse`` relay (serialized bytes, never deserialised);
+(d) an ipyros handler that changes one field and ``write``s the message on.
+
+Every endpoint is reliable, volatile, 1000 deep (ipyros's default). Measured as in the
+ROS 1 bench (bench/relay.py): one-way latency p50/p99 of a paced stream (1 kHz small
+messages, 50 Hz 1 MiB images; warm-up cut), messages lost in the first second of a stream
+that starts as soon as the publisher matches, flat-out messages/s with loss, and the
+relay process's peak memory. Medians over the repeats (start loss: the worst).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from importlib.metadata import version
+from pathlib import Path
+from typing import Optional
+
+from bench.relay import BenchError, Child, wait_until
+
+HERE = Path(__file__).resolve().parent
+NODES = HERE / "ros2"
+RESULTS = HERE / "results"
+TOPIC_IN, TOPIC_OUT = "/bench/in", "/bench/out"
+
+
+@dataclass(frozen=True)
+class Load:
+    kind: str
+    label: str
+    rate_hz: float
+    paced: int
+    flat: int
+
+
+@dataclass(frozen=True)
+class Path_:
+    key: str
+    label: str
+    argv: Optional[list[str]]  # the relay process, {kind} to fill; None: no relay
+
+
+PATHS = [
+    Path_("a", "no relay", None),
+    Path_("b", "plain rclpy relay, typed", [sys.executable, str(NODES / "typed_relay.py"), TOPIC_IN, TOPIC_OUT, "{kind}"]),
+    Path_("c", "ipyros wrapping node, reuse",
+          [sys.executable, str(NODES / "ipyros_node.py"), "reuse", TOPIC_IN, TOPIC_OUT, "{kind}"]),
+    Path_("d", "ipyros node, handler",
+          [sys.executable, str(NODES / "ipyros_node.py"), "handler", TOPIC_IN, TOPIC_OUT, "{kind}"]),
+]
+
+
+@dataclass
+class Run:
+    p50: float
+    p99: float
+    start_lost: int
+    window: int
+    paced_lost: int
+    flat_per_s: float
+    flat_lost: int
+    flat: int
+    relay_peak_mib: Optional[float]
+    handled: bool
+
+
+def environment() -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
+    env.update(ROS_DOMAIN_ID=str(101 + os.getpid() % 100), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+               AMENT_PREFIX_PATH=os.environ.get("AMENT_PREFIX_PATH", sys.prefix), PYTHONDONTWRITEBYTECODE="1",
+               PYTHONPATH=os.pathsep.join(p for p in (str(NODES), os.environ.get("PYTHONPATH")) if p))
+    return env
+
+
+def peak_mib(pid: int) -> Optional[float]:
+    """The process's peak resident memory (VmHWM), MiB."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return None
+
+
+def run_once(path: Path_, load: Load, env: dict[str, str], logdir: Path) -> Run:
+    procs: list[Child] = []
+
+    def start(name: str, argv: list[str]) -> Child:
+        procs.append(Child(name, argv, env, logdir))
+        return procs[-1]
+
+    try:
+        sub = start("sub", [sys.executable, str(NODES / "sub.py"), TOPIC_OUT, load.kind])
+        sub.expect("ready", 30)
+        relay = None
+        source = TOPIC_OUT
+        if path.argv is not None:
+            relay = start("relay", [a.replace("{kind}", load.kind) for a in path.argv])
+            source = relay.expect("ready", 60)
+            # the relay's output matched downstream before the stream starts, as on ROS 1
+            wait_until(lambda: int(sub.ask("publishers")) >= 1, 30, "the subscriber to match the relay", 0.05)
+        pub = start("pub", [sys.executable, str(NODES / "pub.py"), source, load.kind])
+        pub.expect("ready", 30)
+        pub.send(f"go {load.rate_hz} {load.paced} {load.flat}")
+        pub.expect("paced", load.paced / load.rate_hz + 60)
+        pub.expect("flat", 300)
+        expected = load.paced + load.flat
+        last, since = -1, time.monotonic()
+        while True:  # until everything arrived or nothing more arrives for 2 s
+            count = int(sub.ask("count"))
+            if count >= expected or (count == last and time.monotonic() - since > 2.0):
+                break
+            if count != last:
+                last, since = count, time.monotonic()
+            time.sleep(0.05)
+        window = min(load.paced, int(load.rate_hz))
+        record = json.loads(sub.ask(f"report {load.paced} {load.paced // 10} {window}", 60))
+        latency = sorted(record["latency_ms"])
+        if not latency:
+            raise BenchError(f"{path.label}: no paced message arrived; see {sub.tail()}")
+        return Run(p50=statistics.median(latency), p99=latency[min(len(latency) - 1, int(len(latency) * 0.99))],
+                   start_lost=record["start_lost"], window=window, paced_lost=load.paced - record["paced_received"],
+                   flat_per_s=record["flat_per_s"], flat_lost=load.flat - record["flat_received"], flat=load.flat,
+                   relay_peak_mib=peak_mib(relay.proc.pid) if relay else None, handled=record["handled"])
+    finally:
+        for proc in reversed(procs):
+            proc.stop()
+
+
+def median_run(runs: list[Run]) -> Run:
+    med = lambda values: statistics.median(values)  # noqa: E731
+    peaks = [r.relay_peak_mib for r in runs if r.relay_peak_mib is not None]
+    return Run(p50=med([r.p50 for r in runs]), p99=med([r.p99 for r in runs]),
+               start_lost=max(r.start_lost for r in runs), window=runs[0].window,
+               paced_lost=max(r.paced_lost for r in runs), flat_per_s=med([r.flat_per_s for r in runs]),
+               flat_lost=int(med([r.flat_lost for r in runs])), flat=runs[0].flat,
+               relay_peak_mib=max(peaks) if peaks else None, handled=all(r.handled for r in runs))
+
+
+def table(results: dict[tuple[str, str], Run], loads: list[Load], repeats: int) -> str:
+    import rclpy
+
+    lines = [f"Machine: {_cpu()}, {os.cpu_count()} cores, Linux {platform.release()}, rclpy {version('rclpy')} "
+             f"({rclpy.get_rmw_implementation_identifier()}), Python {platform.python_version()}; "
+             f"medians of {repeats} run(s), start loss the worst.", "",
+             "| message | path | p50 ms | p99 ms | lost at start | paced lost | flat-out msg/s | flat-out lost "
+             "| relay peak MiB | handled |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---|"]
+    for load in loads:
+        for path in PATHS:
+            r = results.get((load.kind, path.key))
+            if r is None:
+                continue
+            peak = "-" if r.relay_peak_mib is None else f"{r.relay_peak_mib:.0f}"
+            handled = ("yes" if r.handled else "NO") if path.key == "d" else "-"
+            lines.append(f"| {load.label} | ({path.key}) {path.label} | {r.p50:.3f} | {r.p99:.3f} | "
+                         f"{r.start_lost} / {r.window} | {r.paced_lost} | {r.flat_per_s:,.0f} | "
+                         f"{r.flat_lost} / {r.flat} | {peak} | {handled} |")
+    return "\n".join(lines)
+
+
+def targets(results: dict[tuple[str, str], Run], loads: list[Load]) -> list[tuple[bool, str]]:
+    """Issue 10's: (c) beats (b) on every figure, loses nothing at start, 1 MiB p50 at most 1.5x direct."""
+    out = []
+    for load in loads:
+        a, b, c = (results.get((load.kind, k)) for k in "abc")
+        if b is None or c is None:
+            continue
+        out += [(c.p50 <= b.p50, f"{load.kind}: reuse p50 <= plain relay: {c.p50:.3f} vs {b.p50:.3f} ms"),
+                (c.p99 <= b.p99, f"{load.kind}: reuse p99 <= plain relay: {c.p99:.3f} vs {b.p99:.3f} ms"),
+                (c.flat_per_s >= b.flat_per_s,
+                 f"{load.kind}: reuse msg/s >= plain relay: {c.flat_per_s:,.0f} vs {b.flat_per_s:,.0f}"),
+                (c.flat_lost <= b.flat_lost, f"{load.kind}: reuse flat-out lost <= plain relay: "
+                                             f"{c.flat_lost} vs {b.flat_lost}"),
+                (c.start_lost == 0, f"{load.kind}: no start loss through (c): {c.start_lost} lost")]
+        if load.kind == "image" and a is not None:
+            out.append((c.p50 <= 1.5 * a.p50, f"image: reuse p50 <= 1.5x direct: {c.p50 / a.p50:.2f}x"))
+    return out
+
+
+def _cpu() -> str:
+    for line in Path("/proc/cpuinfo").read_text().splitlines():
+        if line.startswith("model name"):
+            return line.split(":", 1)[1].strip()
+    return platform.machine()
+
+
+def main(argv: Optional[list[str]] = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.relay_ros2", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="one repeat, shorter streams")
+    parser.add_argument("--repeats", type=int, default=None)
+    args, _ = parser.parse_known_args(argv)  # `bash run.sh bench` passes ROS 1's options too
+    repeats = args.repeats or (1 if args.quick else 3)
+    seconds = 2 if args.quick else 4
+    loads = [Load("twist", "TwistStamped (small)", 1000.0, 1000 * seconds, 5000 if args.quick else 20000),
+             Load("image", "Image 1 MiB", 50.0, 50 * seconds, 100 if args.quick else 200)]
+    env = environment()
+    results: dict[tuple[str, str], Run] = {}
+    status = 0
+    with tempfile.TemporaryDirectory(prefix="ipyros-bench-ros2-") as workdir:
+        env.update(ROS_HOME=workdir, ROS_LOG_DIR=str(Path(workdir) / "log"))
+        for load in loads:
+            for path in PATHS:
+                runs = []
+                for _ in range(repeats):
+                    try:
+                        runs.append(run_once(path, load, env, Path(workdir)))
+                    except BenchError as error:
+                        print(f"bench: {error}", file=sys.stderr, flush=True)
+                        status = 1
+                if runs:
+                    results[(load.kind, path.key)] = median_run(runs)
+                    r = results[(load.kind, path.key)]
+                    print(f"  {load.kind:5} ({path.key}) p50 {r.p50:.3f} ms, {r.flat_per_s:,.0f} msg/s", flush=True)
+    text = table(results, loads, repeats)
+    checks = targets(results, loads)
+    text += "\n\nTargets:\n\n" + "\n".join(f"- {'PASS' if ok else 'FAIL'} {what}" for ok, what in checks)
+    print(text)
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "relay_ros2.md").write_text(text + "\n")
+    return status or int(not all(ok for ok, _ in checks))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
