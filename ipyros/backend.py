@@ -25,6 +25,8 @@ params                 ``check_param``, ``get_param``, ``set_param``, ``has_para
                        ``delete_param`` (by global name)
 a free node name       ``refuse_taken_name(uri, name)``
 a basenode's interface ``wait_for_node(master_uri, name, timeout, alive)``: an Interface once settled
+the graph (no master)  ``graph_snapshot()``, ``graph_where()``: ROS 2 only; ROS 1's graph is read
+                       from the master by :mod:`ipyros.graph` itself
 =====================  ===================================================================
 """
 

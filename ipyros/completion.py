@@ -543,8 +543,16 @@ def _relative_or_global(sorted_names: Sequence[str], fragment: str, namespace: s
     return [(n[len(ns):], n) for n in names_with_prefix(sorted_names, ns + fragment)]
 
 
+_LONG_TYPE = re.compile(r"(\w+)/(msg|srv)/(.*)")
+
+
 def _types(known: Sequence[str], fragment: str) -> list[str]:
-    """``geometry_msgs/Tw`` by prefix; a bare ``Tw`` also finds ``geometry_msgs/Twist``."""
+    """``geometry_msgs/Tw`` by prefix; a bare ``Tw`` also finds ``geometry_msgs/Twist``; ROS 2's
+    long form ``geometry_msgs/msg/Tw`` is answered in that form (``known`` has the short one)."""
+    long_form = _LONG_TYPE.match(fragment)
+    if long_form:
+        package, kind, rest = long_form.groups()
+        return [t.replace("/", f"/{kind}/", 1) for t in names_with_prefix(known, f"{package}/{rest}")]
     found = names_with_prefix(known, fragment)
     if "/" not in fragment and fragment:
         found += [t for t in known if t.partition("/")[2].startswith(fragment)]

@@ -90,8 +90,9 @@ class Extension:
         self._start_logging()
         shell.events.register("post_run_cell", self._after_cell)
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
-        if self.session.backend.has_master:  # the graph view reads a ROS 1 master (ROS 2's is issue 11)
-            self.graph.start()
+        if not self.session.backend.has_master:  # ROS 2: the graph is what discovery found
+            self.graph.use(self.session.backend.graph_snapshot, self.session.backend.graph_where())
+        self.graph.start()
         self._completion = completion.install(shell, self.graph)
         self._stop_nodes_before_namespace_goes()
         print(f"ipyros: {line or self._attach()}")

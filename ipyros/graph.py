@@ -31,7 +31,7 @@ import time
 import xmlrpc.client
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Iterable, Mapping, Optional, Sequence
+from typing import Callable, Iterable, Mapping, Optional, Sequence
 from xml.parsers.expat import ExpatError
 
 from .ros1.master import master_proxy
@@ -43,7 +43,7 @@ CALLER_ID = "/ipyros_graph"
 _NETWORK_ERRORS = (OSError, xmlrpc.client.Error, http.client.HTTPException, ExpatError, ValueError, TypeError)
 
 
-def _frozen(mapping: dict) -> Mapping:
+def frozen(mapping: dict) -> Mapping:
     """A read-only view of ``mapping`` with its keys in sorted order."""
     return MappingProxyType({k: mapping[k] for k in sorted(mapping)})
 
@@ -115,7 +115,10 @@ def _matches(name: str, pattern: str) -> bool:
 
 
 def _matches_exactly(name: str, pattern: str) -> bool:
-    return fnmatch.fnmatchcase(name, pattern) if _is_glob(pattern) else name == pattern
+    """A type matches its name or glob; a ROS 2 type (``pkg/msg/Type``) matches ``pkg/Type`` too."""
+    if _is_glob(pattern):
+        return fnmatch.fnmatchcase(name, pattern) or fnmatch.fnmatchcase(name.replace("/msg/", "/"), pattern)
+    return name == pattern or name.replace("/msg/", "/") == pattern.replace("/msg/", "/")
 
 
 EMPTY = GraphSnapshot()
@@ -151,10 +154,10 @@ def _build(state: list, types: dict[str, str]) -> GraphSnapshot:
     topics = {name: types.get(name, "") for name in (*pubs, *subs)}
     nodes = {n for part in (pubs, subs, srvs) for ns in part.values() for n in ns}
     return GraphSnapshot(
-        topics=_frozen(topics),
-        publishers=_frozen(pubs),
-        subscribers=_frozen(subs),
-        services=_frozen(srvs),
+        topics=frozen(topics),
+        publishers=frozen(pubs),
+        subscribers=frozen(subs),
+        services=frozen(srvs),
         nodes=tuple(sorted(nodes)),
         taken_at=time.time(),
         master_up=True,
@@ -169,10 +172,15 @@ class GraphCache:
     Usable as a context manager (``with GraphCache(uri) as graph: ...``).
     """
 
-    def __init__(self, master_uri: str, period: float = 1.0, timeout: float = 1.0):
+    def __init__(self, master_uri: str, period: float = 1.0, timeout: float = 1.0,
+                 source: Optional[Callable[[], GraphSnapshot]] = None, where: str = ""):
         self.master_uri = master_uri
         self.period = period
         self.timeout = timeout
+        #: Where the snapshots come from when not from a ROS 1 master: ROS 2's discovery
+        #: (:func:`ipyros.ros2.graph.snapshot`); ``where`` names it in titles.
+        self.source = source
+        self._where = where
         self._snapshot: GraphSnapshot = EMPTY
         self._lock = threading.Lock()  # orders snapshot swaps, never held by readers
         self._stop = threading.Event()
@@ -180,6 +188,18 @@ class GraphCache:
         self._thread: Optional[threading.Thread] = None
 
     # -- reading ---------------------------------------------------------------
+    @property
+    def where(self) -> str:
+        """Which graph this is, for titles: the master's URI, or ROS 2's domain."""
+        return self._where or self.master_uri
+
+    def use(self, source: Callable[[], GraphSnapshot], where: str) -> None:
+        """Read snapshots from ``source`` from now on (ROS 2), not from a master."""
+        self.source, self._where = source, where
+
+    def _fetch(self, timeout: float) -> GraphSnapshot:
+        return self.source() if self.source is not None else fetch_snapshot(self.master_uri, timeout)
+
     @property
     def snapshot(self) -> GraphSnapshot:
         """The latest snapshot (empty before the first refresh); never touches the network."""
@@ -195,7 +215,7 @@ class GraphCache:
 
         For magics that must show the graph as it is now rather than up to ``period`` old.
         """
-        return self._publish(fetch_snapshot(self.master_uri, self.timeout if timeout is None else timeout))
+        return self._publish(self._fetch(self.timeout if timeout is None else timeout))
 
     def _publish(self, snap: GraphSnapshot) -> GraphSnapshot:
         with self._lock:
@@ -231,7 +251,7 @@ class GraphCache:
 
     def _loop(self) -> None:
         while not self._stop.is_set():
-            self._publish(fetch_snapshot(self.master_uri, self.timeout))
+            self._publish(self._fetch(self.timeout))
             self._stop.wait(self.period)
 
     def __enter__(self) -> "GraphCache":
@@ -243,4 +263,4 @@ class GraphCache:
     def __repr__(self) -> str:
         snap = self._snapshot
         state = "up" if snap.master_up else "down"
-        return f"<GraphCache {self.master_uri} master {state}, {len(snap.topics)} topics, {'running' if self.running else 'stopped'}>"
+        return f"<GraphCache {self.where} master {state}, {len(snap.topics)} topics, {'running' if self.running else 'stopped'}>"

@@ -27,7 +27,7 @@ import yaml
 
 try:
     import genpy
-except ImportError:  # ROS 2: its message classes are built another way (issue 11); see _need_genpy
+except ImportError:  # ROS 2: no genpy; its classes say their fields (get_fields_and_field_types)
     genpy = None
 
 from . import msgtypes
@@ -66,7 +66,7 @@ def parse_data(text: str) -> Any:
                                "give a dict like {'data': 'hi'} or YAML like 'data: hi'") from None
 
 
-def build_message(msg_type: Any, data: Any = None, *, nonfinite: bool = False) -> genpy.Message:
+def build_message(msg_type: Any, data: Any = None, *, nonfinite: bool = False) -> Any:
     """A message of ``msg_type`` (class or ``"pkg/Type"``) filled from ``data``.
 
     ``data`` is None (all defaults), a dict of fields (nested dicts for nested messages),
@@ -75,7 +75,6 @@ def build_message(msg_type: Any, data: Any = None, *, nonfinite: bool = False) -
     ``nonfinite``: typed by mistake they would reach a controller as a command.
     """
     type_name, cls = msgtypes.resolve_message(msg_type)
-    _need_genpy("%pub")
     try:
         return _Builder(nonfinite).message(cls, data, "")
     except _FieldError as error:
@@ -89,27 +88,41 @@ def template(msg_type: Any) -> str:
     and send (``%pub`` reads it back as it is).
     """
     _, cls = msgtypes.resolve_message(msg_type)
-    _need_genpy("a message template")
     return yaml.safe_dump(_as_data(cls()), default_flow_style=True, width=1 << 20, sort_keys=False).strip()
+
+
+def to_yaml(msg: Any) -> str:
+    """A message as the block YAML ``rostopic echo`` and ``ros2 topic echo`` print (``%pub`` reads it back)."""
+    if not _is_message(msg) or genpy is not None and isinstance(msg, genpy.Message):
+        return str(msg)  # a field's value; or genpy's own YAML, as rostopic prints it
+    return yaml.safe_dump(_as_data(msg), default_flow_style=False, width=1 << 20, sort_keys=False).strip()
+
+
+def fields_of(msg: Any) -> list[str]:
+    """A message's (or message class's) field names, in order, on either ROS."""
+    cls = msg if isinstance(msg, type) else type(msg)
+    ros2_fields = getattr(cls, "get_fields_and_field_types", None)
+    return list(ros2_fields()) if ros2_fields is not None else list(getattr(cls, "__slots__", ()))
+
+
+def _is_message(value: Any) -> bool:
+    return hasattr(type(value), "get_fields_and_field_types") or (
+        genpy is not None and isinstance(value, genpy.Message))
 
 
 def _as_data(value: Any) -> Any:
     """A message as plain data: dicts of fields, times as {secs, nsecs}, byte arrays as lists."""
-    if isinstance(value, genpy.Message):
-        return {name: _as_data(getattr(value, name)) for name in value.__slots__}
-    if isinstance(value, (genpy.Time, genpy.Duration)):
+    if _is_message(value):
+        return {name: _as_data(getattr(value, name)) for name in fields_of(value)}
+    if genpy is not None and isinstance(value, (genpy.Time, genpy.Duration)):
         return {"secs": value.secs, "nsecs": value.nsecs}
     if isinstance(value, (bytes, bytearray)):
         return list(value)
     if isinstance(value, (list, tuple)):
         return [_as_data(item) for item in value]
+    if hasattr(value, "tolist"):  # ROS 2 arrays: array.array, numpy (a float64 scalar too)
+        return _as_data(value.tolist())
     return value
-
-
-def _need_genpy(what: str) -> None:
-    if genpy is None:
-        raise MessageTypeError(f"{what} builds ROS 1 messages only so far; on ROS 2 build the message in Python "
-                               "(String(data='hi')) and write it from a node: nd.write(topic, msg)")
 
 
 class _FieldError(Exception):
@@ -125,12 +138,13 @@ class _Builder:
     def __init__(self, nonfinite: bool) -> None:
         self.nonfinite = nonfinite
 
-    def message(self, cls: type, data: Any, path: str) -> genpy.Message:
+    def message(self, cls: type, data: Any, path: str) -> Any:
         if isinstance(data, cls):
             return data
-        if isinstance(data, genpy.Message):
-            raise _FieldError(path, f"expected a {cls._type}, got a {data._type}")
-        fields, types = list(cls.__slots__), list(cls._slot_types)
+        name = msgtypes.type_name(cls)
+        if _is_message(data):
+            raise _FieldError(path, f"expected a {name}, got a {msgtypes.type_name(type(data))}")
+        fields, types = _field_types(cls)
         if data is None:
             return cls()
         if isinstance(data, dict):
@@ -138,17 +152,17 @@ class _Builder:
             for key, value in data.items():
                 if key not in fields:
                     where = _join(path, str(key))
-                    raise _FieldError(where, f"no such field ({cls._type} has {', '.join(fields) or 'no fields'})")
+                    raise _FieldError(where, f"no such field ({name} has {', '.join(fields) or 'no fields'})")
                 values[key] = self.value(types[fields.index(key)], value, _join(path, key))
             return cls(**values)
         if isinstance(data, (list, tuple)):
             if len(data) != len(fields):
-                raise _FieldError(path, f"{len(data)} values for {cls._type}, which has {len(fields)} fields "
+                raise _FieldError(path, f"{len(data)} values for {name}, which has {len(fields)} fields "
                                         f"({', '.join(fields)}); give all of them in order, or a dict")
             return cls(**{f: self.value(t, v, _join(path, f)) for f, t, v in zip(fields, types, data)})
         if len(fields) == 1:  # "hello" for std_msgs/String, 3 for std_msgs/Int32
             return cls(**{fields[0]: self.value(types[0], data, _join(path, fields[0]))})
-        raise _FieldError(path, f"expected a dict of fields for {cls._type} ({', '.join(fields)}), "
+        raise _FieldError(path, f"expected a dict of fields for {name} ({', '.join(fields)}), "
                                 f"got {_describe(data)}")
 
     def value(self, field_type: str, value: Any, path: str) -> Any:
@@ -195,6 +209,33 @@ class _Builder:
         if size is not None and len(items) != size:
             raise _FieldError(path, f"expected exactly {size} values ({base}[{size}]), got {len(items)}")
         return items
+
+
+#: ROS 2's names of the primitive types (its IDL's), as the builder knows them (ROS 1's).
+_ROS2_PRIMITIVES = {"double": "float64", "float": "float32", "boolean": "bool", "octet": "uint8",
+                    "wstring": "string", "long double": "float64"}
+_ROS2_SEQUENCE = re.compile(r"^sequence<(?P<base>[^,>]+)(?:, *\d+)?>$")
+
+
+def _field_types(cls: type) -> tuple[list[str], list[str]]:
+    """A message class's field names and their types, in ROS 1's spelling on either ROS
+    (``sequence<double>`` is ``float64[]``, ``string<=10`` is ``string``, ...)."""
+    ros2_fields = getattr(cls, "get_fields_and_field_types", None)
+    if ros2_fields is None:
+        return list(cls.__slots__), list(cls._slot_types)  # type: ignore[attr-defined]
+    return list(ros2_fields()), [_ros1_spelling(t) for t in ros2_fields().values()]
+
+
+def _ros1_spelling(field_type: str) -> str:
+    sequence = _ROS2_SEQUENCE.match(field_type)
+    if sequence:
+        return _ros1_spelling(sequence["base"].strip()) + "[]"
+    array = _ARRAY.match(field_type)
+    if array:
+        return _ros1_spelling(array["base"]) + f"[{array['size']}]"
+    if field_type.startswith(("string<=", "wstring<=")):
+        return "string"
+    return _ROS2_PRIMITIVES.get(field_type, field_type)
 
 
 def _integer(field_type: str, value: Any, path: str) -> int:

@@ -27,7 +27,7 @@ def test_load_line_names_ros2_and_the_dsl_works_at_the_prompt(ip, capsys):
     line = capsys.readouterr().out.strip()
     assert line.startswith("ipyros: ROS 2 Kilted (rclpy 9."), line
     assert f"ROS_DOMAIN_ID {os.environ['ROS_DOMAIN_ID']}, rmw_fastrtps_cpp, discovery localhost" in line
-    assert "the DSL and wrapping run here" in line
+    assert "the DSL, wrapping, %topics, %echo, %pub and completion run here" in line
     result = ip.run_cell("from std_msgs.msg import String\n"
                          "nd = rosNode('prompt_node', namespace='/r2').new.publish('out', msgType=String).create()\n"
                          "nd.write('out', String(data='a'))")
@@ -70,3 +70,66 @@ def test_wrap_magic_and_its_completion_from_the_ament_index(ip, capsys, tmp_path
     assert "/robot8/check" in out and "/robot8/out" in out
     ip.run_cell("ew.shutdown()")
     shutil.rmtree(prefix)
+
+
+def _completions(ip, line: str) -> list[str]:
+    from IPython.core.completer import provisionalcompleter
+
+    with provisionalcompleter():
+        return [c.text for c in ip.Completer.completions(line, len(line))]
+
+
+def test_topics_echo_and_live_completion_read_the_ros2_graph(ip, capsys):
+    """%topics, %echo and TAB on live names, from what ROS 2 discovery found (a peer process in the graph)."""
+    from conftest import Peer, wait_for
+
+    ip.run_line_magic("load_ext", "ipyros")
+    capsys.readouterr()
+    with Peer("echo.py", "/g2/chatter") as peer:  # a subscriber of /g2/chatter in another process
+        peer.wait_line("ready")
+        # fresh within a second or so: the peer's topic is offered by TAB without anything else done
+        wait_for(lambda: _completions(ip, "%echo /g2/ch") == ["/g2/chatter"], timeout=5, interval=0.1,
+                 what="the peer's topic in completion")
+        assert "/g2/chatter" in _completions(ip, "nd = rosNode('x'); nd.new.subscribe('/g2/")
+        # types in both spellings, from the installed message packages
+        assert "geometry_msgs/msg/Twist" in _completions(ip, "%topics --type geometry_msgs/msg/Tw")
+        assert "geometry_msgs/Twist" in _completions(ip, "nd.new.publish('/x', 'geometry_msgs/Tw")
+        result = ip.run_cell("from std_msgs.msg import String\n"
+                             "talker = rosNode('g2_talker', namespace='/g2').new.publish('chatter', type=String).create()\n"
+                             "talker.timer(0.05, lambda: talker.write('chatter', String(data='tick')))")
+        assert result.success, result.error_in_exec
+        wait_for(lambda: any("heard: tick" in x for x in peer.lines), timeout=10, what="the peer to hear the ticks")
+        capsys.readouterr()
+        ip.run_line_magic("topics", "/g2 --type std_msgs/String")
+        out = capsys.readouterr().out
+        assert f"1 live topic at ROS_DOMAIN_ID {os.environ['ROS_DOMAIN_ID']}" in out, out
+        assert "/g2/chatter" in out and "std_msgs/msg/String" in out and "/g2/g2_talker" in out and "/echo_peer" in out
+        assert "_ipyros_" not in out, "ipyros's hidden nodes stay hidden"
+        msgs = ip.run_line_magic("echo", "/g2/chatter -n 2")
+        out = capsys.readouterr().out
+        assert [m.data for m in msgs] == ["tick", "tick"] and out.count("data: tick") == 2, out
+        ip.run_line_magic("echo", "/g2/chatter -n 1 --field data")
+        assert "data: tick" in capsys.readouterr().out
+        ip.run_cell("talker.shutdown()")
+    # %pub: a message built field by field, checked, sent; the echo's YAML goes back into %pub
+    ip.run_cell("from geometry_msgs.msg import Twist\nheard = []\n"
+                "ear = rosNode('g2_ear').new.subscribe('/g2/cmd', lambda m: heard.append(m), type=Twist).create()")
+    line = "%pub /g2/cmd geometry_msgs/msg/Twist "
+    template = _completions(ip, line)
+    assert template == ["{linear: {x: 0.0, y: 0.0, z: 0.0}, angular: {x: 0.0, y: 0.0, z: 0.0}}"], template
+    assert ip.run_cell(line + "{linear: {x: 0.5}, angular: {z: 1.0}}").success
+    wait_for(lambda: ip.user_ns["heard"], timeout=10, what="the message %pub sent")
+    assert (ip.user_ns["heard"][0].linear.x, ip.user_ns["heard"][0].angular.z) == (0.5, 1.0)
+    assert "published a geometry_msgs/" in capsys.readouterr().out
+    from ipyros.msgbuild import to_yaml
+    ip.user_ns["echoed"] = to_yaml(ip.user_ns["heard"][0])
+    assert ip.run_cell("%%pub /g2/cmd geometry_msgs/Twist\n" + ip.user_ns["echoed"]).success
+    wait_for(lambda: len(ip.user_ns["heard"]) >= 2, timeout=10, what="the echoed message sent back")
+    assert ip.user_ns["heard"][1] == ip.user_ns["heard"][0]
+    result = ip.run_cell("%pub /g2/cmd geometry_msgs/Twist {linear: {q: 1}}")
+    shown = capsys.readouterr()
+    assert not result.success and "linear.q: no such field (geometry_msgs/Vector3 has x, y, z)" in shown.out + shown.err
+    ip.run_cell("ear.shutdown()")
+    # gone within a second or so of the peer's clean exit (a killed one lingers for DDS's lease time)
+    wait_for(lambda: "/g2/chatter" not in _completions(ip, "%echo /g2/ch"), timeout=5, interval=0.1,
+             what="the topic to leave completion when no node has it")

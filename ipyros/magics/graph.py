@@ -21,7 +21,7 @@ from rich.table import Table
 from .. import msgtypes
 from ..errors import MasterError
 from ..graph import GraphSnapshot
-from ..msgbuild import build_message, parse_data
+from ..msgbuild import build_message, fields_of, parse_data, to_yaml
 from ..probe import Echo, Rate, measure_rates
 from .common import ExtensionMagics, global_topic, split_head
 
@@ -63,12 +63,12 @@ def _fields_yaml(msg: Any, fields: list[str], type_name: str) -> str:
     for path in fields:
         value = msg
         for part in path.split("."):
-            if part not in getattr(value, "__slots__", ()):
-                have = ", ".join(getattr(value, "__slots__", ())) or "no fields"
+            if part not in fields_of(value):
+                have = ", ".join(fields_of(value)) or "no fields"
                 raise UsageError(f"--field {path}: no field {part!r} in {getattr(value, '_type', type_name)} "
                                  f"(it has {have})")
             value = getattr(value, part)
-        text = str(value)
+        text = to_yaml(value)
         lines.append(f"{path}: {text}" if "\n" not in text else f"{path}:\n  " + text.replace("\n", "\n  "))
     return "\n".join(lines)
 
@@ -107,7 +107,7 @@ class TopicMagics(ExtensionMagics):
             print(f"no live topics {what}".rstrip() + (" (the master knows none)" if not snap.topics else ""))
             return
         rates = measure_rates({t: snap.topics[t] for t in found}, self.ext.settings.hz_window) if args.hz else None
-        self.ext.printer.show(_topics_table(snap, found, rates, self.ext.graph.master_uri))
+        self.ext.printer.show(_topics_table(snap, found, rates, self.ext.graph.where))
 
     # -- %echo ---------------------------------------------------------------------------
     @magic_arguments()
@@ -145,7 +145,7 @@ class TopicMagics(ExtensionMagics):
                     # (no `continue` here: CPython 3.11 can raise Ctrl-C at that jump, outside this try)
                     if msg is not None and (keep is None or keep(msg, len(seen) + 1)):
                         seen.append(msg)
-                        text = _fields_yaml(msg, fields, type_name) if fields else str(msg)
+                        text = _fields_yaml(msg, fields, type_name) if fields else to_yaml(msg)
                         printer.show(Syntax(text, "yaml", background_color="default"), "---")
             except KeyboardInterrupt:
                 print(f"stopped listening to {topic} after {len(seen)} message{'s' * (len(seen) != 1)}")
@@ -235,8 +235,8 @@ class TopicMagics(ExtensionMagics):
 
 
 def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
-                  uri: str) -> Table:
-    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {uri}", title_justify="left")
+                  where: str) -> Table:
+    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}", title_justify="left")
     # Names stay whole (they are what you copy); the node lists give way when space runs out.
     table.add_column("topic", overflow="fold", style="bold", min_width=min(60, max(map(len, found), default=5)))
     table.add_column("type", overflow="fold", min_width=min(40, max((len(snap.topics[t] or "?") for t in found),

@@ -42,7 +42,7 @@ class Ros2:
 
     def service_relay(self, host: str, source: str, target: str, cls: type,
                       complain: Complain) -> runtime.ServiceRelay:
-        return runtime.ServiceRelay(self.process.host(host), source, target, cls, complain)
+        return runtime.ServiceRelay(self.process, self.process.host(host), source, target, cls, complain)
 
     def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
                       alive: Optional[Callable[[], bool]] = None) -> Any:
@@ -106,6 +106,18 @@ class Ros2:
             raise NodeStateError(f"a node named {name} is already running in the ROS 2 graph (ROS_DOMAIN_ID "
                                  f"{runtime.domain_id()}); give this node another name")
 
+    # -- the graph, for %topics and completion ----------------------------------------------
+    def graph_snapshot(self) -> Any:
+        """What discovery has found so far (:func:`.graph.snapshot`); starts rclpy if need be."""
+        from .graph import snapshot
+
+        if not self.process.started:
+            self.process.start(f"/_ipyros_graph_{os.getpid()}")
+        return snapshot(self.process.graph())
+
+    def graph_where(self) -> str:
+        return f"ROS_DOMAIN_ID {runtime.domain_id()}"
+
     def describe(self) -> str:
         """One line for ``%load_ext``: which ROS 2, which domain, which middleware, how far discovery reaches."""
         return describe()
@@ -131,4 +143,4 @@ def describe() -> str:
         "LOCALHOST" if os.environ.get("ROS_LOCALHOST_ONLY") == "1" else "SUBNET")
     return (f"ROS 2{f' {distro.capitalize()}' if distro else ''} (rclpy {release}), ROS_DOMAIN_ID "
             f"{runtime.domain_id()}, {rclpy.get_rmw_implementation_identifier()}, discovery "
-            f"{reach.lower()}; so far the DSL and wrapping run here, not yet %topics, %echo, %pub or live-name completion")
+            f"{reach.lower()}; the DSL, wrapping, %topics, %echo, %pub and completion run here; %demo not yet")

@@ -3,6 +3,7 @@ import sys
 import threading
 
 import rclpy
+import rclpy.executors
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
@@ -21,11 +22,17 @@ rclpy.init()
 node = rclpy.create_node("echo_peer")
 node.create_subscription(String, topic, lambda m: say(f"heard: {m.data}"),
                          QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
-threading.Thread(target=rclpy.spin, args=(node,), daemon=True).start()
+executor = rclpy.executors.SingleThreadedExecutor()
+executor.add_node(node)
+spinner = threading.Thread(target=executor.spin, daemon=True)
+spinner.start()
 say("ready")
 for line in sys.stdin:
     if line.strip() == "nodes":
         names = sorted(ns.rstrip("/") + "/" + name for name, ns in node.get_node_names_and_namespaces())
         say("nodes: " + " ".join(names))
+# A clean goodbye: the graph forgets this node at once (a killed one lingers for DDS's lease time).
+executor.shutdown()
+spinner.join(5)
 node.destroy_node()
 rclpy.try_shutdown()
