@@ -7,45 +7,55 @@
 #   bash run.sh test      install what is missing, then run the whole test suite (ROS 1, then ROS 2
 #                         in a venv of its own, rclpy from PyPI)
 #   bash run.sh test-ros2 the ROS 2 suite alone
+#   bash run.sh ros2      IPython with ipyros on ROS 2 (rclpy from PyPI, no ROS from apt), in the
+#                         DDS domain of ROS_DOMAIN_ID (0 if unset)
 #   bash run.sh bench     install what is missing, then run the benchmarks (ROS 1, then ROS 2's relay bench)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 venv="$here/.venv"
 
-apt_packages=(
-  python3-venv python3-pip
-  python3-rospy python3-rostopic python3-rosgraph python3-rosnode python3-rosmaster
-  python3-roslaunch python3-rosservice python3-rosparam rosout rosbash topic-tools
-  python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-std-srvs
-  python3-rosgraph-msgs tmux
-)
+# ROS 1 from Debian, and the venv that sees it.
+ros1_setup() {
+  local apt_packages=(
+    python3-venv python3-pip
+    python3-rospy python3-rostopic python3-rosgraph python3-rosnode python3-rosmaster
+    python3-roslaunch python3-rosservice python3-rosparam rosout rosbash topic-tools
+    python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-std-srvs
+    python3-rosgraph-msgs tmux
+  )
 
-missing=()
-for p in "${apt_packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
-done
-if ((${#missing[@]})); then
-  echo "run.sh: installing Debian packages: ${missing[*]}" >&2
-  export DEBIAN_FRONTEND=noninteractive
-  apt-get update -q >&2
-  apt-get install -y -q --no-install-recommends "${missing[@]}" >&2
-fi
+  local missing=() p stamp
+  for p in "${apt_packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
+  done
+  if ((${#missing[@]})); then
+    echo "run.sh: installing Debian packages: ${missing[*]}" >&2
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -q >&2
+    apt-get install -y -q --no-install-recommends "${missing[@]}" >&2
+  fi
 
-# rospy lives in Debian's dist-packages: the venv must come from /usr/bin/python3.
-if [[ ! -x "$venv/bin/python" ]]; then
-  /usr/bin/python3 -m venv --system-site-packages "$venv"
-fi
-stamp="$venv/.ipyros-installed"
-if [[ ! -f "$stamp" || "$here/pyproject.toml" -nt "$stamp" ]]; then
-  "$venv/bin/pip" install -q --disable-pip-version-check -e "$here[test]" >&2
-  touch "$stamp"
-fi
+  # rospy lives in Debian's dist-packages: the venv must come from /usr/bin/python3.
+  if [[ ! -x "$venv/bin/python" ]]; then
+    /usr/bin/python3 -m venv --system-site-packages "$venv"
+  fi
+  stamp="$venv/.ipyros-installed"
+  if [[ ! -f "$stamp" || "$here/pyproject.toml" -nt "$stamp" ]]; then
+    "$venv/bin/pip" install -q --disable-pip-version-check -e "$here[test]" >&2
+    touch "$stamp"
+  fi
+}
 
 # ROS 2 from PyPI, in a venv of its own: it must not see the system's site-packages, where
 # Debian's ROS 1 message packages (std_msgs, ...) would shadow the ROS 2 ones.
 venv2="$here/.venv-ros2"
 ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs ros-rcl-interfaces)
 ros2_venv() {
+  if ! /usr/bin/python3 -c "import ensurepip" 2>/dev/null; then  # Debian splits venv support out
+    echo "run.sh: installing python3-venv" >&2
+    DEBIAN_FRONTEND=noninteractive apt-get update -q >&2
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends python3-venv >&2
+  fi
   if [[ ! -x "$venv2/bin/python" ]]; then
     /usr/bin/python3 -m venv "$venv2"
   fi
@@ -89,7 +99,9 @@ handle.stop()' &
 
 cmd="${1:-demo}"
 shift || true
+[[ "$cmd" == ros2 || "$cmd" == test-ros2 ]] || ros1_setup
 case "$cmd" in
+  ros2)     ros2_venv && AMENT_PREFIX_PATH="${AMENT_PREFIX_PATH:-$venv2}" IPYROS_ROS=2 exec "$venv2/bin/ipython" --ext ipyros "$@" ;;
   demo)     exec "$venv/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   ipython)  exec "$venv/bin/ipython" --ext ipyros "$@" ;;
   notebook) notebook "$@" ;;
@@ -102,5 +114,5 @@ case "$cmd" in
             "$venv/bin/python" -m bench "$@" || status=$?
             ros2_venv && "$venv2/bin/python" -m bench.relay_ros2 "$@" || status=$?
             exit "$status" ;;
-  *) echo "usage: bash run.sh [demo|ipython|notebook|test|test-ros2|bench] [args...]" >&2; exit 2 ;;
+  *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|test-ros2|bench] [args...]" >&2; exit 2 ;;
 esac
