@@ -7,8 +7,8 @@
 #   bash run.sh test      install what is missing, then run the whole test suite (ROS 1, then ROS 2
 #                         in a venv of its own, rclpy from PyPI)
 #   bash run.sh test-ros2 the ROS 2 suite alone
-#   bash run.sh ros2      IPython with ipyros on ROS 2 (rclpy from PyPI, no ROS from apt), in the
-#                         DDS domain of ROS_DOMAIN_ID (0 if unset)
+#   bash run.sh ros2      the same as bash run.sh, on ROS 2 (rclpy from PyPI, no ROS from apt), in
+#                         the DDS domain of ROS_DOMAIN_ID (0 if unset)
 #   bash run.sh bench     install what is missing, then run the benchmarks (ROS 1, then ROS 2's relay bench)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -62,7 +62,7 @@ ros2_venv() {
   local stamp2="$venv2/.ipyros-installed"
   if [[ ! -f "$stamp2" || "$here/pyproject.toml" -nt "$stamp2" ]]; then
     echo "run.sh: installing ROS 2 (rclpy, from PyPI) into $venv2" >&2
-    "$venv2/bin/pip" install -q --disable-pip-version-check "${ros2_packages[@]}" pytest pytest-timeout -e "$here" >&2
+    "$venv2/bin/pip" install -q --disable-pip-version-check "${ros2_packages[@]}" -e "$here[test]" >&2
     touch "$stamp2"
   fi
 }
@@ -101,7 +101,8 @@ cmd="${1:-demo}"
 shift || true
 [[ "$cmd" == ros2 || "$cmd" == test-ros2 ]] || ros1_setup
 case "$cmd" in
-  ros2)     ros2_venv && AMENT_PREFIX_PATH="${AMENT_PREFIX_PATH:-$venv2}" IPYROS_ROS=2 exec "$venv2/bin/ipython" --ext ipyros "$@" ;;
+  ros2)     ros2_venv && AMENT_PREFIX_PATH="${AMENT_PREFIX_PATH:-$venv2}" IPYROS_ROS=2 \
+              exec "$venv2/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   demo)     exec "$venv/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   ipython)  exec "$venv/bin/ipython" --ext ipyros "$@" ;;
   notebook) notebook "$@" ;;

@@ -262,6 +262,9 @@ def _pick(package: str, executable: str, candidates: tuple[Path, ...]) -> Path:
     """One of several same-named files: rosrun prefers a catkin libexec one over a share/source one."""
     if len(candidates) == 1:
         return candidates[0]
+    # links to one file are that file (ipyros_demo lists its scripts again in its ament prefix, demo/ament)
+    if len({os.path.realpath(p) for p in candidates}) == 1:
+        return next((p for p in candidates if not p.is_symlink()), candidates[0])
     libexec = [p for p in candidates if any(p.is_relative_to(ws / "lib" / package) for ws in _workspaces())]
     if len(libexec) == 1:
         return libexec[0]
@@ -282,6 +285,23 @@ def _lookup_error(package: str, executable: str) -> BaseNodeError:
     hint = did_you_mean(executable.rsplit("/", 1)[-1], names)
     listing = f"its executables: {', '.join(names)}" if names else "it has no executable files"
     return BaseNodeError(f"package {package!r} has no executable {executable!r}: {hint + ' ' if hint else ''}{listing}")
+
+
+def python_command(path: Path, args: Sequence[str] = ()) -> tuple[Path, list[str]]:
+    """How to run an executable: a Python script with this interpreter, anything else as it is.
+
+    This interpreter imports ROS (ipyros does), whatever the script's ``#!`` line names:
+    so a node written for Debian's python3 runs in a venv (ROS 2 from PyPI) or a conda
+    (RoboStack) environment as well.
+    """
+    try:
+        with open(path, "rb") as f:
+            first = f.readline(200)
+    except OSError:
+        first = b""
+    if first.startswith(b"#!") and b"python" in first:
+        return Path(sys.executable), [str(path), *args]
+    return path, list(args)
 
 
 def script_command(executable: str, args: Sequence[str] = ()) -> tuple[Path, list[str]]:
@@ -442,7 +462,7 @@ class BaseProcess:
         if base.package and ros2:
             from .ros2.packages import find_executable as find_in_ament
 
-            path = find_in_ament(base.package, base.executable)
+            path, args = python_command(find_in_ament(base.package, base.executable), args)
         elif base.package:
             path = find_executable(base.package, base.executable)
         else:

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import atexit
 import difflib
+import re
 import shlex
 import sys
 import threading
@@ -36,9 +37,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Optional
 
+import yaml
 from rich.table import Table
 
-from .base import DEMO_DIR, BaseProcess, exit_reason, find_executable
+from .base import DEMO_DIR, BaseProcess, exit_reason, find_executable, python_command
 from .display import Shown
 from .errors import BaseNodeError, IpyrosError
 from .ros1.launchfile import fullname, one_line
@@ -132,18 +134,19 @@ def read_launch(path: Path, args: Optional[dict[str, Any]] = None) -> tuple[list
     Read by roslaunch's own XML loader: ``$(arg)``, ``if=``/``unless=``, ``<remap>`` and
     ``<param>`` work as in roslaunch. Unknown argument names are refused, naming the known ones.
     """
-    from roslaunch.config import ROSLaunchConfig
-    from roslaunch.core import RLException
-    from roslaunch.xmlloader import XmlLoader
-
     known = {a.name for a in launch_args(path)}
-    words = []
-    for name, value in (args or {}).items():
+    for name in args or {}:
         if name not in known:
             close = difflib.get_close_matches(name, sorted(known), n=1)
             hint = f"did you mean {close[0]}? " if close else ""
             raise DemoRobotError(f"{path.name} has no argument {name!r}; {hint}its arguments: {', '.join(sorted(known))}")
-        words.append(f"{name}:={_launch_value(value)}")
+    if not current().backend.has_master:
+        return _read_launch_alone(path, args or {})
+    from roslaunch.config import ROSLaunchConfig
+    from roslaunch.core import RLException
+    from roslaunch.xmlloader import XmlLoader
+
+    words = [f"{name}:={_launch_value(value)}" for name, value in (args or {}).items()]
     config = ROSLaunchConfig()
     try:
         XmlLoader().load(str(path), config, argv=words, verbose=False)
@@ -154,6 +157,44 @@ def read_launch(path: Path, args: Optional[dict[str, Any]] = None) -> tuple[list
                         args=tuple(shlex.split(n.args or "")), remaps=dict(n.remap_args))
              for n in config.nodes]
     return nodes, {name: param.value for name, param in config.params.items()}
+
+
+_ARG = re.compile(r"\$\(arg ([\w-]+)\)")
+
+
+def _read_launch_alone(path: Path, args: dict[str, Any]) -> tuple[list[LaunchNode], dict[str, Any]]:
+    """:func:`read_launch` where roslaunch is not installed (ROS 2): the demo's launch files use
+    ``<arg>``, ``$(arg)``, ``if=``/``unless=``, ``<node>``, ``<remap>`` and ``<param>`` only,
+    and those are read here as roslaunch reads them."""
+    root = ET.parse(path).getroot()
+    values = {a.get("name", ""): a.get("value", a.get("default", "")) for a in root.findall("arg")}
+    values.update({k: _launch_value(v) for k, v in args.items()})
+
+    def text(element: ET.Element, attribute: str) -> str:
+        return _ARG.sub(lambda m: values[m[1]], element.get(attribute) or "")
+
+    def wanted(element: ET.Element) -> bool:
+        return ((element.get("if") is None or text(element, "if") in ("true", "1"))
+                and (element.get("unless") is None or text(element, "unless") not in ("true", "1")))
+
+    nodes, params = [], {}
+    for element in filter(wanted, root.findall("node")):
+        name = "/" + text(element, "name")
+        nodes.append(LaunchNode(package=text(element, "pkg"), executable=text(element, "type"), name=name,
+                                namespace="/", args=tuple(shlex.split(text(element, "args"))),
+                                remaps={text(r, "from"): text(r, "to") for r in element.findall("remap") if wanted(r)}))
+        # typed as roslaunch types them: 5.0 a float, true a bool, the rest a string
+        params.update({f"{name}/{text(p, 'name')}": _typed(text(p, "value"))
+                       for p in element.findall("param") if wanted(p)})
+    return nodes, params
+
+
+def _typed(text: str) -> Any:
+    try:
+        value = yaml.safe_load(text)
+    except yaml.YAMLError:
+        return text
+    return value if isinstance(value, (bool, int, float)) else text
 
 
 def _launch_value(value: Any) -> str:
@@ -197,22 +238,39 @@ class DemoRobot(Shown):
         with self._lock:
             if self.processes:
                 return self
-            uri = self.master_uri = self.session.attach_master().uri
-            commands = {node.name: _command(find_executable(node.package, node.executable)) for node in self.nodes}
+            backend = self.session.backend
+            ros2 = not backend.has_master  # no master: parameters go to each node, as --ros-args -p
+            uri = None if ros2 else self.session.attach_master().uri
+            self.master_uri = uri
+            if ros2:
+                from .ros2.packages import find_executable as find_in_ament
+            commands = {node.name: python_command((find_in_ament if ros2 else find_executable)(node.package,
+                                                                                                node.executable))
+                        for node in self.nodes}
             for node in self.nodes:
-                _refuse_live_node(uri, node.name, self.kind)
-            master = master_proxy(uri)
-            for name, value in self.params.items():
-                master.setParam("/ipyros", name, value)
+                if ros2:
+                    backend.refuse_taken_name(None, node.name)
+                else:
+                    _refuse_live_node(uri, node.name, self.kind)
+            if uri is not None:
+                master = master_proxy(uri)
+                for name, value in self.params.items():
+                    master.setParam("/ipyros", name, value)
             try:
                 for node in self.nodes:
-                    executable, *first = commands[node.name]
+                    executable, first = commands[node.name]
+                    own = {k[len(node.name) + 1:]: v for k, v in self.params.items()
+                           if k.startswith(node.name + "/")} if ros2 else {}
                     process = BaseProcess(executable, [*first, *node.args], node_name=node.name.rsplit("/", 1)[1],
                                           namespace=node.namespace if node.namespace != "/" else None,
-                                          remaps=node.remaps, master_uri=uri, on_exit=self._died)
+                                          remaps=node.remaps, params=own, master_uri=uri, on_exit=self._died,
+                                          ros2=ros2)
                     self.processes[node.name] = process.start()
                 for node in self.nodes:
-                    wait_for_node(uri, node.name, timeout=timeout, settle=0.1)
+                    if ros2:
+                        backend.wait_for_node(None, node.name, timeout=timeout)
+                    else:
+                        wait_for_node(uri or "", node.name, timeout=timeout, settle=0.1)
             except BaseException:
                 self.stop()
                 raise
@@ -268,20 +326,6 @@ class DemoRobot(Shown):
         return table
 
 
-def _command(path: Path) -> list[str]:
-    """How to run an executable: a Python script with this interpreter, anything else as it is.
-
-    This interpreter imports rospy (ipyros does), whatever the script's ``#!`` line names:
-    so the demo runs in a conda (RoboStack) environment as well as with Debian's python3.
-    """
-    try:
-        with open(path, "rb") as f:
-            first = f.readline(200)
-    except OSError:
-        first = b""
-    return [sys.executable, str(path)] if first.startswith(b"#!") and b"python" in first else [str(path)]
-
-
 def robot_kind(kind: str) -> RobotKind:
     """The demo robot called ``kind``; a one-line error naming the known ones otherwise."""
     spec = ROBOTS.get(kind)
@@ -324,7 +368,8 @@ def demo_robot(kind: str = "turtle", *, session: Optional[Session] = None, **arg
     # The master first: extension loading may be starting it on a thread of its own right now.
     # Reading the launch file imports roslaunch, and a first import while that thread forks can
     # deadlock (the fork's at-fork hooks against the import lock), so the import waits until it is done.
-    session.attach_master()
+    if session.backend.has_master:
+        session.attach_master()
     robot = DemoRobot(kind, args, session=session)
     with _running_lock:
         previous = _running

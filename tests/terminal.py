@@ -22,6 +22,7 @@ program itself: a test can check that it, and whatever it started, have ended.
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -197,3 +198,30 @@ def _gone(pid: int, started: Optional[str], timeout: float) -> bool:
             return False
         time.sleep(0.05)
     return True
+
+
+# -- an IPython prompt in the terminal ----------------------------------------------------
+
+PROMPT = re.compile(r"^In \[(\d+)\]: ?(.*)$")
+
+
+def prompt(rows: list[str]):
+    """The prompt line (number, input) if the last non-blank row of the screen is a prompt."""
+    last = next((row for row in reversed(rows) if row.strip()), "")
+    match = PROMPT.match(last)
+    return (int(match[1]), match[2]) if match else None
+
+
+def prompt_reads(term: Terminal, text: str, timeout: float = 20.0) -> int:
+    """Wait until the prompt at the bottom holds exactly ``text``; its number."""
+    number, _ = term.wait_for(lambda rows: (p := prompt(rows)) and p[1] == text and p,
+                              timeout=timeout, what=f"the prompt to read {text!r}")
+    return number
+
+
+def run(term: Terminal, line: str, timeout: float = 20.0) -> None:
+    """Type ``line`` at the prompt, run it, and wait for the next prompt."""
+    number = prompt_reads(term, "", timeout)
+    term.line(line)
+    term.wait_for(lambda rows: (p := prompt(rows)) and p[0] > number, timeout=timeout,
+                  what=f"the prompt after {line!r}")

@@ -11,30 +11,14 @@ exits: the master, rosout and the turtle must all be gone.
 from __future__ import annotations
 
 import os
-import re
-from pathlib import Path
 
 import pytest
 from conftest import free_port, wait_for
 from helpers import pid_alive
-from terminal import Terminal, descendants
-from test_terminal import prompt, run
+from readme import ROOT, readme_lines, watch_the_turtle_go_round
+from terminal import Terminal, descendants, prompt, run
 
 from ipyros.robot import TURTLE_CIRCLE
-
-ROOT = Path(__file__).resolve().parents[1]
-#: The comment above the README's five lines; the ```python block after it holds them.
-MARKER = "<!-- the five lines"
-
-
-def readme_lines() -> list[str]:
-    """The five lines the README tells a new user to type, as they stand in it."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    after = text[text.index(MARKER):]
-    block = re.search(r"```python\n(.*?)```", after, re.S)
-    assert block, f"no ```python block after {MARKER!r} in README.md"
-    return block.group(1).rstrip("\n").split("\n")
-
 
 def test_the_readme_shows_the_lines_the_demo_suggests():
     assert readme_lines() == list(TURTLE_CIRCLE) and len(TURTLE_CIRCLE) == 5
@@ -67,20 +51,8 @@ def test_the_readme_first_command_and_five_lines_move_the_turtle(readme_terminal
         run(term, line)
     assert "rosNode /turtle_control_node (running)" in "\n".join(term.screen(history=True))
 
-    # "poses[-1].position, typed again and again": it changes, away from the origin where the turtle starts.
-    seen: list[tuple[float, float]] = []
-
-    def moved(rows):
-        term.press("C-l")
-        run(term, 'print("AT", poses[-1].position.x, poses[-1].position.y)')
-        found = re.findall(r"^AT (\S+) (\S+)$", "\n".join(term.screen()), re.M)
-        if found:
-            seen.append((float(found[-1][0]), float(found[-1][1])))
-        return len({p for p in seen if p != (0.0, 0.0)}) >= 2
-
-    term.wait_for(moved, timeout=30, what="the turtle to move (two different poses)", interval=0.3)
-    assert all(x * x + (y - 1.111) ** 2 == pytest.approx(1.111 ** 2, rel=0.1) for x, y in seen if (x, y) != (0, 0)), \
-        f"the poses {seen} are not on the circle of radius v/ω around (0, v/ω)"
+    # "poses[-1].position, typed again and again": it changes, away from the origin, on the circle.
+    watch_the_turtle_go_round(term)
 
     # exit: the session stops the turtle, rosout and the master it started.
     family = descendants(term.pid)

@@ -21,11 +21,10 @@ import pytest
 from conftest import master_state, wait_for
 from helpers import pid_alive
 from peer import Peer
-from terminal import Terminal, descendants
+from terminal import PROMPT, Terminal, descendants, prompt, prompt_reads, run
 
 TOPIC = "/e2e_turtle/ticks"  # std_msgs/UInt32 0, 1, 2, ... from peers/ticker.py
 RATE_HZ = 10
-PROMPT = re.compile(r"^In \[(\d+)\]: ?(.*)$")
 OLD_DEF = 'def on_tick(msg): print("OLD", msg.data)'
 
 
@@ -54,28 +53,6 @@ def ipython(ros_master, tmp_path):
     with Terminal("ipyros_e2e", argv, env) as term:
         term.wait_for(lambda rows: prompt(rows), timeout=30, what="the first prompt")
         yield term
-
-
-def prompt(rows: list[str]):
-    """The prompt line (number, input) if the last non-blank row of the screen is a prompt."""
-    last = next((row for row in reversed(rows) if row.strip()), "")
-    match = PROMPT.match(last)
-    return (int(match[1]), match[2]) if match else None
-
-
-def prompt_reads(term: Terminal, text: str, timeout: float = 20.0) -> int:
-    """Wait until the prompt at the bottom holds exactly ``text``; its number."""
-    number, _ = term.wait_for(lambda rows: (p := prompt(rows)) and p[1] == text and p,
-                              timeout=timeout, what=f"the prompt to read {text!r}")
-    return number
-
-
-def run(term: Terminal, line: str, timeout: float = 20.0) -> None:
-    """Type ``line`` at the prompt, run it, and wait for the next prompt."""
-    number = prompt_reads(term, "", timeout)
-    term.line(line)
-    term.wait_for(lambda rows: (p := prompt(rows)) and p[0] > number, timeout=timeout,
-                  what=f"the prompt after {line!r}")
 
 
 def numbers(rows: list[str], word: str) -> list[int]:

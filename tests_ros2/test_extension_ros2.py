@@ -27,7 +27,7 @@ def test_load_line_names_ros2_and_the_dsl_works_at_the_prompt(ip, capsys):
     line = capsys.readouterr().out.strip()
     assert line.startswith("ipyros: ROS 2 Kilted (rclpy 9."), line
     assert f"ROS_DOMAIN_ID {os.environ['ROS_DOMAIN_ID']}, rmw_fastrtps_cpp, discovery localhost" in line
-    assert "the DSL, wrapping, %topics, %echo, %pub and completion run here" in line
+    assert "the DSL, wrapping, %topics, %echo, %pub, %demo and completion run here" in line
     result = ip.run_cell("from std_msgs.msg import String\n"
                          "nd = rosNode('prompt_node', namespace='/r2').new.publish('out', msgType=String).create()\n"
                          "nd.write('out', String(data='a'))")

@@ -15,20 +15,24 @@ ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
 
 
 def test_a_subscription_that_cannot_match_is_told_and_qos_makes_it_match(make_node, notices):
-    """A best-effort publisher and a reliable subscription connect nothing in ROS 2, silently; ipyros says so."""
+    """A best-effort publisher and a reliable subscription connect nothing in ROS 2, silently; ipyros says so.
+    A subscription declared without qos= takes the publishers' and hears them."""
     sensor = make_node("q_sensor").new.publish("/q/scan", type=String, qos="sensor_data").create()
-    strict, loose = [], []
-    make_node("q_strict").new.subscribe("/q/scan", lambda m: strict.append(m.data), type=String).create()
+    strict, loose, plain = [], [], []
+    make_node("q_strict").new.subscribe("/q/scan", lambda m: strict.append(m.data), type=String,
+                                        qos="reliable").create()
     make_node("q_loose").new.subscribe("/q/scan", lambda m: loose.append(m.data), type=String,
                                        qos={"reliability": "best_effort", "depth": 20}).create()
+    make_node("q_plain").new.subscribe("/q/scan", lambda m: plain.append(m.data), type=String).create()
     wait_for(lambda: any("/q/scan" in n and "incompatible reliability" in n for n in notices), timeout=10,
              what="the mismatch to be told")
     told = next(n for n in notices if "incompatible reliability" in n)
     assert told.startswith("ipyros: q_") and ("/q_sensor (best-effort volatile)" in told or "/q_strict" in told), told
     assert "subscribe with qos='best_effort'" in told and "\n" not in told
-    wait_for(lambda: sensor.write("/q/scan", String(data="ping")) or loose, timeout=10, interval=0.1,
-             what="the best-effort subscription to get the best-effort publisher's messages")
+    wait_for(lambda: sensor.write("/q/scan", String(data="ping")) or (loose and plain), timeout=10, interval=0.1,
+             what="the best-effort and the undeclared subscriptions to get the best-effort publisher's messages")
     assert strict == []
+    assert not [n for n in notices if "q_plain" in n], notices
 
 
 def test_qos_is_in_the_model_the_table_and_refused_when_it_makes_no_sense(make_node):

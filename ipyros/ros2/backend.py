@@ -28,7 +28,7 @@ class Ros2:
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Complain) -> runtime.Subscription:
-        return runtime.Subscription(self.process.host(host), topic, cls, slot, qos, complain)
+        return runtime.Subscription(self.process, self.process.host(host), topic, cls, slot, qos, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
               on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.Relay:
@@ -47,7 +47,7 @@ class Ros2:
     def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
                       alive: Optional[Callable[[], bool]] = None) -> Any:
         """The interface of the running node ``name`` once it has settled (``master_uri`` is ROS 1's)."""
-        return runtime.wait_for_node(self.process.graph(), name, timeout, alive=alive)
+        return runtime.wait_for_node(self._graph(), name, timeout, alive=alive)
 
     def open_host(self, host: str) -> None:
         if host not in self.process.hosted:  # a name of ours lingers in the graph for a while after shutdown
@@ -102,18 +102,22 @@ class Ros2:
         has not discovered yet (a node started this very moment) cannot be seen.
         """
         namespace, base = name.rsplit("/", 1)
-        if (base, namespace or "/") in self.process.graph().get_node_names_and_namespaces():
+        if (base, namespace or "/") in self._graph().get_node_names_and_namespaces():
             raise NodeStateError(f"a node named {name} is already running in the ROS 2 graph (ROS_DOMAIN_ID "
                                  f"{runtime.domain_id()}); give this node another name")
 
     # -- the graph, for %topics and completion ----------------------------------------------
     def graph_snapshot(self) -> Any:
-        """What discovery has found so far (:func:`.graph.snapshot`); starts rclpy if need be."""
+        """What discovery has found so far (:func:`.graph.snapshot`)."""
         from .graph import snapshot
 
+        return snapshot(self._graph())
+
+    def _graph(self) -> Any:
+        """The hidden node that reads the graph; rclpy is started for it if no node has started it yet."""
         if not self.process.started:
             self.process.start(f"/_ipyros_graph_{os.getpid()}")
-        return snapshot(self.process.graph())
+        return self.process.graph()
 
     def graph_where(self) -> str:
         return f"ROS_DOMAIN_ID {runtime.domain_id()}"
@@ -143,4 +147,4 @@ def describe() -> str:
         "LOCALHOST" if os.environ.get("ROS_LOCALHOST_ONLY") == "1" else "SUBNET")
     return (f"ROS 2{f' {distro.capitalize()}' if distro else ''} (rclpy {release}), ROS_DOMAIN_ID "
             f"{runtime.domain_id()}, {rclpy.get_rmw_implementation_identifier()}, discovery "
-            f"{reach.lower()}; the DSL, wrapping, %topics, %echo, %pub and completion run here; %demo not yet")
+            f"{reach.lower()}; the DSL, wrapping, %topics, %echo, %pub, %demo and completion run here")

@@ -12,16 +12,21 @@ import os
 import sys
 from pathlib import Path
 
-from ..base import did_you_mean, refuse_path_with_package
+from ..base import DEMO_DIR, did_you_mean, refuse_path_with_package
 from ..errors import BaseNodeError
 
 __all__ = ["find_executable", "list_executables", "list_packages", "prefixes"]
 
 
+#: The demo robot's package, ``ipyros_demo``, as an ament prefix of its own (its executables
+#: are the ROS 1 ones: they run on either ROS, see ipyros/demo/demonode.py).
+DEMO_PREFIX = DEMO_DIR / "ament"
+
+
 def prefixes() -> list[Path]:
-    """The ament prefixes, first wins: ``AMENT_PREFIX_PATH``, else this Python's prefix."""
+    """The ament prefixes, first wins: ``AMENT_PREFIX_PATH``, else this Python's prefix; then the demo's."""
     value = os.environ.get("AMENT_PREFIX_PATH") or sys.prefix
-    return [Path(p) for p in value.split(os.pathsep) if p]
+    return [*(Path(p) for p in value.split(os.pathsep) if p), DEMO_PREFIX]
 
 
 def _packages() -> dict[str, Path]:

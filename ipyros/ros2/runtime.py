@@ -301,22 +301,73 @@ class Publication:
         self._node.destroy_publisher(self._pub)
 
 
-class Subscription:
-    """A subscription whose callback is a :class:`HandlerSlot`."""
+def _publishers_qos(node: Node, topic: str) -> Optional[Qos]:
+    """The QoS that matches every publisher of ``topic`` now and gets the most from them; None if none.
 
-    def __init__(self, node: Node, topic: str, cls: type, slot: HandlerSlot, qos: Qos = Qos(),
-                 complain: Optional[Complain] = None) -> None:
+    Transient-local only if they all are (a transient-local reader matches no volatile
+    writer), best-effort if any is (a reliable reader matches no best-effort writer);
+    what ``ros2 topic echo`` chooses too.
+    """
+    found = [_qos_of(info.qos_profile) for info in node.get_publishers_info_by_topic(topic)]
+    if not found:
+        return None
+    latched = all(q.latched for q in found)
+    return Qos(max(q.depth or 1 for q in found) if latched else None,
+               "best_effort" if any(q.reliability == "best_effort" for q in found) else "reliable",
+               "transient_local" if latched else "volatile")
+
+
+class Subscription:
+    """A subscription whose callback is a :class:`HandlerSlot`.
+
+    Declared without reliability and durability (``qos=`` left out, or a depth only), it
+    takes them from the topic's publishers, now and as they show up (the process's graph
+    watch): so a latched topic's last message reaches a subscription made later, as on
+    ROS 1, and a best-effort sensor is heard at all. What the declaration gives is kept.
+    """
+
+    def __init__(self, process: ProcessNode, node: Node, topic: str, cls: type, slot: HandlerSlot,
+                 qos: Qos = Qos(), complain: Optional[Complain] = None) -> None:
         self.topic, self.cls, self.slot = topic, cls, slot
-        self._node = node
-        self._sub = node.create_subscription(
-            cls, topic, slot, _profile(qos),
-            event_callbacks=_mismatch_report(node, topic, qos, "subscription", complain))
+        self._process, self._node, self._declared, self._complain = process, node, qos, complain
+        self._lock = threading.Lock()
+        self.qos = self._wanted() or Qos(qos.depth, qos.reliability or "reliable", qos.durability or "volatile")
+        self._sub = self._open(self.qos)
+        self._follows = qos.reliability is None and qos.durability is None
+        if self._follows:
+            process.watch(self._follow_publishers)
+
+    def _wanted(self) -> Optional[Qos]:
+        if self._declared.reliability is not None or self._declared.durability is not None:
+            return None
+        found = _publishers_qos(self._node, self.topic)
+        return None if found is None else Qos(self._declared.depth or found.depth, found.reliability,
+                                              found.durability)
+
+    def _open(self, qos: Qos) -> Any:
+        return self._node.create_subscription(
+            self.cls, self.topic, self.slot, _profile(qos),
+            event_callbacks=_mismatch_report(self._node, self.topic, qos, "subscription", self._complain))
+
+    def _follow_publishers(self) -> None:
+        with self._lock:
+            wanted = self._wanted() if self._sub is not None else None
+            if wanted is None or wanted == self.qos:  # no publisher yet, or nothing to change
+                return
+            old, self.qos = self._sub, wanted
+            self._sub = self._open(wanted)
+            self._node.destroy_subscription(old)
 
     def connections(self) -> int:
         return self._sub.get_publisher_count()
 
     def close(self) -> None:
-        self._node.destroy_subscription(self._sub)
+        if self._follows:
+            self._process.unwatch(self._follow_publishers)
+        with self._lock:
+            if self._sub is not None:
+                self._node.destroy_subscription(self._sub)
+                self._sub = None
 
 
 class Relay:
@@ -361,14 +412,8 @@ class Relay:
         with self._lock:
             if self._sub is None:
                 return
-            found = [_qos_of(info.qos_profile) for info in self._node.get_publishers_info_by_topic(self.source)]
-            if not found:
-                return  # none yet, or the basenode is restarting: keep what matched it last
-            latched = all(q.latched for q in found)
-            wanted = Qos(max(q.depth or 1 for q in found) if latched else None,
-                         "best_effort" if any(q.reliability == "best_effort" for q in found) else "reliable",
-                         "transient_local" if latched else "volatile")
-            if wanted == self.qos:
+            wanted = _publishers_qos(self._node, self.source)
+            if wanted is None or wanted == self.qos:  # none yet, or a basenode restarting: keep what matched last
                 return
             old = self._pub, self._sub
             self.qos = wanted

@@ -1,0 +1,39 @@
+"""The README's promise on ROS 2, in a real terminal: ``bash run.sh ros2``, the five lines, and the turtle goes round.
+
+As the ROS 1 test (tests/test_readme_terminal.py) does: run under tmux as typed, with a
+home of its own, in this run's DDS domain; the five lines are read from the README itself.
+On exit, IPython and the turtle must be gone.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from conftest import wait_for
+from readme import ROOT, readme_lines, watch_the_turtle_go_round
+from terminal import Terminal, descendants, prompt, run
+
+
+def test_bash_run_sh_ros2_and_the_five_lines_drive_the_turtle_round(tmp_path):
+    home = tmp_path / "home"
+    home.mkdir()
+    env = {**os.environ, "HOME": str(home), "IPYTHONDIR": str(home / ".ipython"), "ROS_HOME": str(tmp_path / "ros"),
+           "ROS_LOG_DIR": str(tmp_path / "ros" / "log"), "IPYROS_HISTORY_DIR": str(tmp_path / "history")}
+    for name in ("PYTHONSTARTUP", "COLUMNS", "LINES", "VIRTUAL_ENV", "IPYROS_ROS", "AMENT_PREFIX_PATH"):
+        env.pop(name, None)
+    with Terminal("ipyros_readme_ros2", ["bash", str(ROOT / "run.sh"), "ros2"], env, width=160, height=50) as term:
+        term.wait_for(lambda rows: prompt(rows) == (1, "") and rows, timeout=180, what="the first prompt")
+        screen = "\n".join(term.screen(history=True))
+        assert "ipyros: ROS 2" in screen and f"ROS_DOMAIN_ID {os.environ['ROS_DOMAIN_ID']}" in screen
+        assert "demo robot turtle (running)" in screen and "Drive it in a circle" in screen
+        for line in readme_lines():
+            run(term, line)
+        watch_the_turtle_go_round(term, poses=3)
+        family = descendants(term.pid)
+        assert family, "the turtle runs below IPython"
+        term.line("exit")
+        term.wait_for(lambda rows: not term.alive() or None, timeout=30, what="IPython to exit")
+        wait_for(lambda: not [pid for pid in {term.pid, *family} if Path(f"/proc/{pid}").exists()
+                              and Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"],
+                 timeout=15, what="IPython's processes to end")
