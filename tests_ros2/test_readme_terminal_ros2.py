@@ -12,7 +12,7 @@ from pathlib import Path
 
 from conftest import wait_for
 from readme import ROOT, readme_lines, watch_the_turtle_go_round
-from terminal import Terminal, descendants, prompt, run
+from terminal import Terminal, descendants, prompt, prompt_reads, run
 
 
 def test_bash_run_sh_ros2_and_the_five_lines_drive_the_turtle_round(tmp_path):
@@ -30,6 +30,19 @@ def test_bash_run_sh_ros2_and_the_five_lines_drive_the_turtle_round(tmp_path):
         for line in readme_lines():
             run(term, line)
         watch_the_turtle_go_round(term, poses=3)
+
+        # TAB in the terminal: a live topic from the ROS 2 graph, then a message template after %pub TOPIC TYPE
+        term.type("%echo /turtle1/po")
+        term.wait_for(lambda rows: (p := prompt(rows)) and p[1] == "%echo /turtle1/pose" or term.press("Tab"),
+                      timeout=20, what="TAB to complete /turtle1/pose", interval=0.5)
+        term.type(" -n 1")
+        term.press("Enter")
+        term.wait_for(lambda rows: any(row.startswith("orientation:") for row in rows), what="the pose as YAML")
+        term.type("%pub /ipyros_tab std_msgs/msg/ColorRGBA ")
+        term.press("Tab")
+        prompt_reads(term, "%pub /ipyros_tab std_msgs/msg/ColorRGBA {r: 0.0, g: 0.0, b: 0.0, a: 0.0}")
+        term.press("Enter")
+        term.wait_for("published a std_msgs/ColorRGBA on /ipyros_tab")
         family = descendants(term.pid)
         assert family, "the turtle runs below IPython"
         term.line("exit")
