@@ -19,6 +19,7 @@ import json
 import os
 import re
 import shlex
+import sys
 import types
 import warnings
 import xml.etree.ElementTree as ET
@@ -104,11 +105,15 @@ class _Script:
     the script of that package, whose launch file starts the basenode (the script does not).
     """
 
+    #: The client library the script imports, and the names it defines itself.
+    LIBRARY = "rospy"
+    SCRIPT_NAMES = _SCRIPT_NAMES
+
     def __init__(self, node: "rosNode", path: "str | os.PathLike[str]", namespace: Optional[dict],
                  package: Optional[str] = None) -> None:
         self.node, self.model, self.path, self.package = node, node.model(), path, package
         # The handlers' sources go in with their globals: a global named like a handler is that handler.
-        self.bindings = Bindings(imports={"rospy": ("rospy", None)})
+        self.bindings = Bindings(imports={self.LIBRARY: (self.LIBRARY, None)})
         self.imports = self.bindings.imports  # message classes join the handlers' imports
         self.names: dict[str, str] = {}  # slot → the handler's name in the script
         self.unset: dict[str, str] = {}  # global name → its "set me" line
@@ -139,7 +144,7 @@ class _Script:
         """Globals the script binds itself: the node the handlers write with; refuse one it needs for itself."""
         if name in self.writers:
             return True
-        if name in _SCRIPT_NAMES and import_of(value, fn.__module__) != (name, None):
+        if name in self.SCRIPT_NAMES and import_of(value, fn.__module__) != (name, None):
             raise IpyrosError(f"handler {fn.__name__} uses the global {name}, a name the exported script "
                               "needs for itself; rename it")
         return False
@@ -249,11 +254,165 @@ def _placed_base(model: NodeModel) -> BaseModel:
                                remaps=basenode_remaps(model))
 
 
-def _base_argv(model: NodeModel) -> list[str]:
+def _base_argv(model: NodeModel, ros2: bool = False) -> list[str]:
     """The basenode's command line as ipyros launches it (its executable found now)."""
     from .base import BaseProcess
 
-    return BaseProcess.from_model(_placed_base(model), log_path=os.devnull).argv
+    return BaseProcess.from_model(_placed_base(model), log_path=os.devnull, ros2=ros2).argv
+
+
+# -- the script on ROS 2 ----------------------------------------------------------------------
+
+_HANDLE_ROS2 = '''
+class NodeHandle:
+    """Stands in for the ipyros node the handlers were written for: write(topic, msg) publishes."""
+
+    def __init__(self):
+        self.node = None  # the rclpy node, made by main()
+        self.publishers = {}  # resolved topic name -> rclpy publisher, filled in by main()
+
+    def write(self, topic, msg):
+        self.publishers[self.node.resolve_topic_name(topic)].publish(msg)
+
+    @property
+    def params(self):
+        """The node's parameters by name, as nd.params gave them (read-only here)."""
+        return {name: p.value for name, p in self.node.get_parameters_by_prefix("").items()}
+'''
+
+_RELAY_ROS2 = '''
+def relay(node, source, target, msg_class):
+    """Forward source to target unchanged: serialized bytes, never parsed (reliable, volatile)."""
+    pub = node.create_publisher(msg_class, target, qos())  # made now: nothing lost at start
+    return node.create_subscription(msg_class, source, pub.publish, qos(), raw=True)
+'''
+
+_SERVICE_RELAY_ROS2 = '''
+def service_relay(node, caller, source, target, srv_class):
+    """Serve target by calling source, from the caller node (spun on a thread of its own, so the
+    answer is taken while this callback waits for it); a caller gets the empty response after 10 s."""
+    client = caller.create_client(srv_class, source)
+
+    def answer(request, response):
+        done = threading.Event()
+        future = client.call_async(request)
+        future.add_done_callback(lambda _: done.set())
+        return future.result() if done.wait(10.0) and future.result() is not None else response
+
+    return node.create_service(srv_class, target, answer)
+'''
+
+_QOS_ROS2 = '''
+def qos(depth=1000, best_effort=False, transient_local=False):
+    """As ipyros declares endpoints: reliable, volatile, 1000 deep, unless the node said otherwise."""
+    return QoSProfile(depth=depth,
+                      reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if transient_local else DurabilityPolicy.VOLATILE)
+'''
+
+
+class _Ros2Script(_Script):
+    """The one-file export on ROS 2: an rclpy node (``#!`` this Python), the basenode started with ``--ros-args``."""
+
+    LIBRARY = "rclpy"
+    SCRIPT_NAMES = {"rclpy", "os", "signal", "subprocess", "sys", "threading", "NodeHandle", "relay", "qos",
+                    "service_relay", "main", "BASENODE", "BASENODE_ENV", "start_basenode", "stop_basenode",
+                    "QoSProfile", "ReliabilityPolicy", "DurabilityPolicy", "SingleThreadedExecutor"}
+
+    def main(self) -> list[str]:
+        model, handle = self.model, self.writers[0]
+        specs = sorted(planning.plan(model), key=lambda s: not isinstance(s, planning.PublishSpec))
+        relays_services = any(isinstance(s, planning.ServiceRelaySpec) for s in specs)
+        lines = ["rclpy.init(args=sys.argv)  # --ros-args: remaps, -p key:=value",
+                 f"node = {handle}.node = rclpy.create_node({model.name!r}, namespace={model.namespace.rstrip('/') or '/'!r})"]
+        lines += [f"node.declare_parameter({key!r}, {value!r})  # -p {key}:=... on the command line wins"
+                  for key, value in model.params.items()]
+        writes_to = {planning.write_target(model, t.resolved): t.resolved for t in model.topics}
+        if relays_services:
+            lines += ["caller = rclpy.create_node(f'_{node.get_name()}_caller', namespace=node.get_namespace())",
+                      "calls = SingleThreadedExecutor()", "calls.add_node(caller)",
+                      "threading.Thread(target=calls.spin, daemon=True).start()"]
+        for spec in specs:
+            if isinstance(spec, planning.PublishSpec):
+                lines.append(f"{handle}.publishers[node.resolve_topic_name({writes_to[spec.topic]!r})] = "
+                             f"node.create_publisher({self.cls(spec.type)}, {spec.topic!r}, {_qos_call(spec.qos, spec.latch)})")
+            elif isinstance(spec, planning.SubscribeSpec):
+                lines.append(f"node.create_subscription({self.cls(spec.type)}, {spec.topic!r}, "
+                             f"{self.names[spec.slot]}, {_qos_call(spec.qos)})")
+            elif isinstance(spec, planning.RelaySpec):
+                lines.append(f"relay(node, {spec.source!r}, {spec.target!r}, {self.cls(spec.type)})")
+            elif isinstance(spec, planning.TimerSpec):
+                fn, name = self.node.handlers()[spec.slot], self.names[spec.slot]
+                call = f"lambda: {name}(None)" if call_arity(fn, "timer", name) else name
+                if spec.oneshot:
+                    lines += [f"once = node.create_timer({spec.period!r}, lambda: (once.cancel(), ({call})()))"]
+                else:
+                    lines.append(f"node.create_timer({spec.period!r}, {call})")
+            elif isinstance(spec, planning.ServiceSpec):
+                lines.append(f"node.create_service({self.cls(spec.type, 'srv')}, {spec.name!r}, "
+                             f"lambda request, response: {self.names[spec.slot]}(request))")
+            else:  # ServiceRelaySpec
+                lines.append(f"service_relay(node, caller, {spec.source!r}, {spec.target!r}, "
+                             f"{self.cls(spec.type, 'srv')})")
+        lines += ["executor = SingleThreadedExecutor()", "executor.add_node(node)"]
+        if self.starts_base:
+            lines.append("basenode = start_basenode()")
+        lines += ["try:", "    executor.spin()", "except (KeyboardInterrupt, ExternalShutdownException):",
+                  "    pass", "finally:"]
+        if self.starts_base:
+            lines.append("    stop_basenode(basenode)")
+        return lines + ["    rclpy.try_shutdown()"]
+
+    def _docstring(self) -> list[str]:
+        model = self.model
+        lines = [f"#!{sys.executable}\n\"\"\"{model.name}: an rclpy node exported by ipyros from the DSL node "
+                 f"{planning.node_fullname(model)}.\n\nIt needs no ipyros: ./{Path(self.path).name} "
+                 "[--ros-args -r from:=to -p param:=value ...]"]
+        if model.base is not None:
+            lines.append(f"It runs its basenode {model.base.package or model.base.executable} itself, remapped as "
+                         "ipyros ran it, and stops it on exit.")
+        return [*lines, '"""']
+
+    def render(self) -> str:
+        model = self.model
+        main = self.main()
+        base = _base_argv(model, ros2=True) if self.starts_base else None
+        stdlib = ["os", "signal", "subprocess", "sys", "threading"] if base else ["sys", "threading"]
+        head = [*self._docstring(), *(f"import {m}" for m in stdlib), "",
+                *self.bindings.import_lines(skip=stdlib),
+                "from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor",
+                "from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy"]
+        values = [*self.bindings.values.values(), *self.unset.values()]
+        if values:
+            head += ["", "# Globals the handlers read, as they were at export.", *values]
+        parts = ["\n".join(head), _QOS_ROS2.strip("\n"), _HANDLE_ROS2.strip("\n"),
+                 f"{' = '.join(self.writers)} = NodeHandle()"]
+        if base is not None:
+            parts.append("# The basenode, remapped so that it talks only to this node on the topics it wraps.\n"
+                         "BASENODE = [\n" + "".join(f"    {arg!r},\n" for arg in base) + "]\n"
+                         f"BASENODE_ENV = {model.base.env!r}")
+            parts.append(_BASE.strip("\n"))
+        plan = planning.plan(model)
+        if any(isinstance(s, planning.RelaySpec) for s in plan):
+            parts.append(_RELAY_ROS2.strip("\n"))
+        if any(isinstance(s, planning.ServiceRelaySpec) for s in plan):
+            parts.append(_SERVICE_RELAY_ROS2.strip("\n"))
+        parts += [src.rstrip("\n") for src in self.bindings.functions.values()]
+        parts.append("def main():\n" + "".join(f"    {line}\n" for line in main).rstrip("\n"))
+        parts.append('if __name__ == "__main__":\n    main()')
+        return "\n\n\n".join(parts) + "\n"
+
+
+def _qos_call(qos: Any, latch: bool = False) -> str:
+    """The script's ``qos(...)`` call for a declaration's QoS (see :mod:`ipyros.qos`)."""
+    words = []
+    if qos.depth is not None or latch or qos.latched:
+        words.append(f"depth={qos.depth or (1 if latch or qos.latched else 1000)}")
+    if qos.reliability == "best_effort":
+        words.append("best_effort=True")
+    if latch or qos.latched:
+        words.append("transient_local=True")
+    return f"qos({', '.join(words)})"
 
 
 # -- the package ----------------------------------------------------------------------------------
@@ -488,9 +647,13 @@ def export(node: "rosNode", path: "str | os.PathLike[str]", namespace: Optional[
     assignments, the user's helper functions are copied; anything else becomes
     ``NAME = None  # set me`` and an :class:`ExportWarning` lists them.
     """
+    ros2 = not node.session.backend.has_master
     if Path(path).suffix != ".py":
+        if ros2:
+            raise IpyrosError(f"on ROS 2 a node exports to one script: give a path ending in .py, not {path!r} "
+                              "(a ROS 2 package is not made yet)")
         return export_package(node, path, namespace)
-    script = _Script(node, path, namespace)
+    script = (_Ros2Script if ros2 else _Script)(node, path, namespace)
     text = script.render()
     compile(text, str(path), "exec")  # a generated script that does not compile is ipyros's bug: fail here
     written = _write_atomic(path, text, mode=0o755)

@@ -305,7 +305,7 @@ def save(node: "rosNode", path: "str | os.PathLike[str]") -> Path:
         if imports:
             entry["imports"] = imports
         entries.append({**entry, "source": source})
-    data = {FORMAT_KEY: FORMAT, "node": model.to_dict(), "handlers": entries}
+    data = {FORMAT_KEY: FORMAT, "ros": node.session.backend.name, "node": model.to_dict(), "handlers": entries}
     if str(path).lower().endswith(".json"):
         return _write_atomic(path, json.dumps(data, indent=2, ensure_ascii=False) + "\n")
     return _write_atomic(path, yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100))
@@ -345,6 +345,7 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
     functions = {entry["slot"]: _define(path, entry, namespace) for entry in data["handlers"]}
     functions.update(_by_name(path, model, functions, namespace))
     node = rosNode(model.name, namespace=model.namespace, session=session)
+    _across_ros(path, data.get("ros"), model, node)
     try:
         _declare(node, model, functions)
     except IpyrosError as error:
@@ -353,6 +354,26 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
         for name in _WRITER.findall(entry["source"]):
             namespace.setdefault(name, node)
     return node
+
+
+def _across_ros(path: Path, made_on: Optional[str], model: NodeModel, node: "rosNode") -> None:
+    """A model made on the other ROS: refuse what cannot run here, in one line; say what runs differently.
+
+    The model itself is the same on both (names, types as ``pkg/Type``, QoS as data); what
+    can differ is what it names: message packages and basenodes must be installed here
+    (their lookups say so, in one line, if they are not), and a launch-file basenode needs
+    roslaunch, which is ROS 1's.
+    """
+    here = node.session.backend.name
+    if made_on in (None, here):
+        return
+    if model.base is not None and model.base.launch and not node.session.backend.has_master:
+        raise IpyrosError(f"{path} was made on {made_on} and wraps a node of the launch file {model.base.launch}: "
+                          f"{here} has no roslaunch; declare the basenode with baseNode(...) instead")
+    notes = [f"{path} was made on {made_on}; loading it on {here}"]
+    if node.session.backend.has_master and any(t.qos and set(t.qos) - {"durability"} for t in model.topics):
+        notes.append("its QoS depth and reliability mean nothing on ROS 1 (TCP is reliable) and are kept")
+    node.session.notify("ipyros: " + "; ".join(notes))
 
 
 def _by_name(path: Path, model: NodeModel, functions: dict[str, Any], namespace: dict) -> dict[str, Any]:

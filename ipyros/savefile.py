@@ -127,7 +127,10 @@ class _SavedFile:
     # -- the text ----------------------------------------------------------------------------
     def render(self, stem: str) -> str:
         names = ", ".join(n.fullname for n in self.nodes)
+        made_on = self.nodes[0].session.backend.name if self.nodes else "ROS"
         parts = [f'"""Nodes saved by ipyros on {time.strftime("%Y-%m-%d %H:%M:%S")}: {names}.\n\n'
+                 f"Made on {made_on}. The DSL is the same on ROS 1 and ROS 2: it runs on either where the\n"
+                 f"message packages and basenodes it names are installed.\n\n"
                  f"Bring them back, running: python3 {stem} (Ctrl-C stops them), %run {stem} in IPython,\n"
                  f"or rosNode.load(path). It is plain Python with the ipyros DSL: edit it, commit it, share it.\n"
                  f'"""\n{MARKER}\n' + "\n".join(["from ipyros import restoring, rosNode, spin",
