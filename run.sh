@@ -114,6 +114,7 @@ case "$cmd" in
             cd "$here" && status=0
             "$venv/bin/python" -m bench "$@" || status=$?
             ros2_venv && "$venv2/bin/python" -m bench.relay_ros2 "$@" || status=$?
+            "$venv2/bin/python" -m bench.completion "$@" || status=$?
             exit "$status" ;;
   *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|test-ros2|bench] [args...]" >&2; exit 2 ;;
 esac

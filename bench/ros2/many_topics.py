@@ -1,0 +1,25 @@
+"""The completion bench's ROS 2 peer: one node that publishes N topics, PREFIX0000 ... (std_msgs/String).
+
+    many_topics.py N PREFIX
+
+Says ``ready`` once every publisher is made, and spins until its input closes.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import rclpy
+from std_msgs.msg import String
+
+import common
+
+count, prefix = int(sys.argv[1]), sys.argv[2]
+rclpy.init()
+node = rclpy.create_node("bench_topics")
+publishers = [node.create_publisher(String, f"{prefix}{i:04d}", 1) for i in range(count)]
+common.spin_in_background(node)
+common.say("ready")
+common.serve()
+node.destroy_node()
+rclpy.try_shutdown()
