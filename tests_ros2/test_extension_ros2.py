@@ -133,3 +133,52 @@ def test_topics_echo_and_live_completion_read_the_ros2_graph(ip, capsys):
     # gone within a second or so of the peer's clean exit (a killed one lingers for DDS's lease time)
     wait_for(lambda: "/g2/chatter" not in _completions(ip, "%echo /g2/ch"), timeout=5, interval=0.1,
              what="the topic to leave completion when no node has it")
+
+
+def _ok(ip, code: str):
+    result = ip.run_cell(code)
+    assert result.success, result.error_before_exec or result.error_in_exec
+    return result.result
+
+
+def test_handler_try_versions_revert_and_qos_by_endpoint_at_the_ros2_prompt(ip, capsys):
+    """The live-editing magics on ROS 2: %handler, %try, %versions, %revert, %status, %topics -v and --hz."""
+    from conftest import wait_for
+
+    ip.run_line_magic("load_ext", "ipyros")
+    _ok(ip, "from std_msgs.msg import String, UInt32\nheard = []\n"
+            "def on_number(msg):\n    heard.append(('old', msg.data))\n"
+            "nd = rosNode('m2_node', namespace='/m2')\n"
+            "nd.new.subscribe('numbers', on_number, msgType=UInt32).publish('latched', String, qos='latched')\n"
+            "nd.create()\n"
+            "feeder = rosNode('m2_feeder', namespace='/m2').new.publish('numbers', msgType=UInt32).create()\n"
+            "count = [0]\n"
+            "def feed():\n    count[0] += 1\n    feeder.write('numbers', UInt32(data=count[0]))\n"
+            "feeder.timer(0.05, feed)")
+    wait_for(lambda: len(ip.user_ns["heard"]) >= 3, timeout=10, what="messages for the old handler")
+    capsys.readouterr()
+    _ok(ip, "%handler nd /m2/numbers")
+    assert ip.rl_next_input == "def on_number(msg):\n    heard.append(('old', msg.data))"
+    _ok(ip, ip.rl_next_input.replace("'old'", "'new'"))
+    assert "ipyros: m2_node numbers is now handled by the new on_number" in capsys.readouterr().out
+    wait_for(lambda: ip.user_ns["heard"][-1][0] == "new", timeout=10, what="the new handler")
+    _ok(ip, "%try nd /m2/numbers lambda m: heard.append(('new', m.data))")
+    assert "same results on all" in capsys.readouterr().out
+    _ok(ip, "%versions nd /m2/numbers")
+    out = capsys.readouterr().out
+    assert "on_number" in out and "(now)" in out
+    _ok(ip, "%revert nd /m2/numbers 1")
+    assert "ipyros: m2_node /m2/numbers is handled by version 1 (on_number) again" in capsys.readouterr().out
+    wait_for(lambda: ip.user_ns["heard"][-1][0] == "old", timeout=10, what="version 1 again")
+    _ok(ip, "%status nd")
+    assert "topic" in capsys.readouterr().out
+    _ok(ip, "%topics /m2/ -v")
+    out = capsys.readouterr().out
+    assert "/m2/latched" in out and "reliable transient-local" in out and "/m2/m2_node" in out, out
+    assert "/m2/m2_feeder" in out and "publisher" in out and "subscription" in out
+    _ok(ip, "%config RosMagics.hz_window = 1.0")
+    _ok(ip, "%topics /m2/numbers --hz")
+    rate = [row for row in capsys.readouterr().out.splitlines() if "/m2/numbers" in row]
+    assert rate and any(17.0 <= float(cell) <= 23.0 for cell in rate[0].replace("│", " ").split()
+                        if cell.replace(".", "", 1).isdigit() and "." in cell), rate
+    _ok(ip, "feeder.shutdown(); nd.shutdown()")

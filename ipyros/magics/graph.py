@@ -89,6 +89,8 @@ class TopicMagics(ExtensionMagics):
     @argument("-n", "--node", help="only topics this node publishes or subscribes to")
     @argument("--hz", action="store_true",
               help="also measure each topic's message rate, listening for c.RosMagics.hz_window seconds")
+    @argument("-v", "--verbose", action="store_true",
+              help="one row per publisher and subscription, with the QoS each offers or asks for (ROS 2)")
     @line_magic
     def topics(self, line: str) -> None:
         """List the live topics: name, type, publishers and subscribers."""
@@ -106,6 +108,13 @@ class TopicMagics(ExtensionMagics):
                 f"of node {node}" if node else ""]))
             print(f"no live topics {what}".rstrip() + (" (the master knows none)" if not snap.topics else ""))
             return
+        if args.verbose:
+            endpoints = getattr(self.ext.session.backend, "topic_endpoints", None)
+            if endpoints is not None:
+                self.ext.printer.show(_endpoints_table(snap, found, endpoints, self.ext.graph.where))
+                return
+            print("ipyros: -v shows the QoS of each endpoint, which ROS 2 has; on ROS 1 every connection is "
+                  "reliable TCP")
         rates = measure_rates({t: snap.topics[t] for t in found}, self.ext.settings.hz_window) if args.hz else None
         self.ext.printer.show(_topics_table(snap, found, rates, self.ext.graph.where))
 
@@ -251,6 +260,19 @@ def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[st
         if rates is not None:
             row.append(_rate(rates.get(topic)))
         table.add_row(*row)
+    return table
+
+
+def _endpoints_table(snap: GraphSnapshot, found: list[str], endpoints: Any, where: str) -> Table:
+    """``%topics -v``: a row per publisher and subscription of each topic, with its QoS."""
+    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}, by endpoint",
+                  title_justify="left")
+    for column in ("topic", "type", "node", "endpoint", "QoS"):  # names and QoS whole; the type gives way
+        table.add_column(column, overflow="fold", no_wrap=column != "type", style="bold" if column == "topic" else None)
+    for topic in found:
+        rows = endpoints(topic) or [("", "", "")]
+        for i, (node, kind, qos) in enumerate(rows):
+            table.add_row(topic if i == 0 else "", (snap.topics[topic] or "?") if i == 0 else "", node, kind, qos)
     return table
 
 

@@ -119,6 +119,19 @@ class Ros2:
             self.process.start(f"/_ipyros_graph_{os.getpid()}")
         return self.process.graph()
 
+    def topic_endpoints(self, topic: str) -> list[tuple[str, str, str]]:
+        """Who publishes and subscribes to ``topic``, with the QoS each offers or asks for:
+        ``(node, "publisher" | "subscription", "reliable transient-local depth 1")``."""
+        graph = self._graph()
+        found = []
+        for kind, infos in (("publisher", graph.get_publishers_info_by_topic(topic)),
+                            ("subscription", graph.get_subscriptions_info_by_topic(topic))):
+            for info in infos:
+                if not info.node_name.startswith("_"):
+                    found.append((f"{info.node_namespace.rstrip('/')}/{info.node_name}", kind,
+                                  str(runtime.qos_of(info.qos_profile))))
+        return sorted(found)
+
     def graph_where(self) -> str:
         return f"ROS_DOMAIN_ID {runtime.domain_id()}"
 

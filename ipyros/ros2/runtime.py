@@ -56,7 +56,7 @@ def _profile(qos: Qos = Qos()) -> QoSProfile:
                       durability=DurabilityPolicy.TRANSIENT_LOCAL if qos.latched else DurabilityPolicy.VOLATILE)
 
 
-def _qos_of(profile: Any) -> Qos:
+def qos_of(profile: Any) -> Qos:
     """The :class:`Qos` a peer's profile (from the graph) amounts to."""
     return Qos(profile.depth or None,
                "best_effort" if profile.reliability == ReliabilityPolicy.BEST_EFFORT else "reliable",
@@ -85,13 +85,13 @@ def _mismatch_report(node: Node, topic: str, mine: Qos, what: str, complain: Opt
     peers_of = node.get_subscriptions_info_by_topic if what == "publication" else node.get_publishers_info_by_topic
     peer_kind = "subscription" if what == "publication" else "publisher"
 
-    here = _qos_of(_profile(mine))
+    here = qos_of(_profile(mine))
 
     def report(event: Any) -> None:
         policy = qos_policy_name_from_kind(event.last_policy_kind).lower()
         others = [f"{info.node_namespace.rstrip('/')}/{info.node_name} ({theirs.reliability.replace('_', '-')} "
                   f"{theirs.durability.replace('_', '-')})"
-                  for info in peers_of(topic) for theirs in [_qos_of(info.qos_profile)]
+                  for info in peers_of(topic) for theirs in [qos_of(info.qos_profile)]
                   if (theirs.reliability, theirs.durability) != (here.reliability, here.durability)]
         complain(f"{topic}: the {what} here ({here.reliability.replace('_', '-')} "
                  f"{here.durability.replace('_', '-')}) and a {peer_kind} of "
@@ -308,7 +308,7 @@ def _publishers_qos(node: Node, topic: str) -> Optional[Qos]:
     writer), best-effort if any is (a reliable reader matches no best-effort writer);
     what ``ros2 topic echo`` chooses too.
     """
-    found = [_qos_of(info.qos_profile) for info in node.get_publishers_info_by_topic(topic)]
+    found = [qos_of(info.qos_profile) for info in node.get_publishers_info_by_topic(topic)]
     if not found:
         return None
     latched = all(q.latched for q in found)
