@@ -98,6 +98,22 @@ def to_yaml(msg: Any) -> str:
     return yaml.safe_dump(_as_data(msg), default_flow_style=False, width=1 << 20, sort_keys=False).strip()
 
 
+def flat_fields(msg: Any) -> dict[str, Any]:
+    """A message's leaf fields by dotted path (``linear.x``), in order: one row of a CSV or a table.
+    Arrays stay whole (a list), so that a row keeps one column per field."""
+    flat: dict[str, Any] = {}
+
+    def walk(value: Any, path: str) -> None:
+        if isinstance(value, dict):
+            for key, item in value.items():
+                walk(item, f"{path}.{key}" if path else key)
+        else:
+            flat[path] = value
+
+    walk(_as_data(msg), "")
+    return flat
+
+
 def fields_of(msg: Any) -> list[str]:
     """A message's (or message class's) field names, in order, on either ROS."""
     cls = msg if isinstance(msg, type) else type(msg)

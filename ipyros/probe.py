@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import os
 import queue
+import statistics
 import time
 from dataclasses import dataclass
 from typing import Any, Mapping, Optional
@@ -72,6 +73,9 @@ class Rate:
 
     count: int
     hz: Optional[float]  # None with fewer than two messages: no interval to measure
+    min_s: float = 0.0  # the shortest, the longest interval between two messages, and their spread
+    max_s: float = 0.0
+    std_s: float = 0.0
 
 
 class _Stamps:
@@ -87,7 +91,9 @@ class _Stamps:
         times = list(self.times)
         if len(times) < 2 or times[-1] <= times[0]:
             return Rate(len(times), None)
-        return Rate(len(times), (len(times) - 1) / (times[-1] - times[0]))
+        gaps = [b - a for a, b in zip(times, times[1:])]
+        return Rate(len(times), (len(times) - 1) / (times[-1] - times[0]), min(gaps), max(gaps),
+                    statistics.pstdev(gaps))
 
 
 def measure_rates(topics: Mapping[str, str], window: float) -> dict[str, Optional[Rate]]:

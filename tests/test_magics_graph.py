@@ -212,3 +212,30 @@ def test_echo_output_is_yaml_that_pub_takes_back(ip, capsys):
         listener.wait_line("x: 1.5")
         listener.wait_line("z: -0.25")
         ok(ip, "stop.set(); feeder.join(5); src.shutdown()")
+
+
+def test_echo_as_csv_and_as_a_table_and_hz_of_two_topics_at_once(ip, capsys, rate_peer):
+    with Peer("publish_rate.py", "/mg/slow", 10) as slow:
+        slow.wait_line("ready")
+        wait_listed(ip, "/mg/rate")
+        wait_listed(ip, "/mg/slow")
+        capsys.readouterr()
+        ok(ip, "%echo /mg/rate -n 3 --csv")
+        lines = [line for line in capsys.readouterr().out.splitlines() if line and not line.startswith("Out[")]
+        assert lines[0] == "data" and len(lines) == 4, lines
+        values = [int(v) for v in lines[1:]]
+        assert values == sorted(values) and len(set(values)) == 3
+        ok(ip, "%echo /mg/rate -n 2 --table --field data")
+        out = capsys.readouterr().out
+        assert "2 messages from /mg/rate" in out and "data" in out
+        assert isinstance(error_of(ip, "%echo /mg/rate -n 1 --csv --table"), UsageError)
+        assert "--field dta: no field 'dta'" in str(error_of(ip, "%echo /mg/rate -n 1 --csv --field dta"))
+
+        ok(ip, "%hz /mg/rate /mg/slow -w 1.5")
+        rows = {line.split()[1]: line.replace("│", " ").split() for line in capsys.readouterr().out.splitlines()
+                if line.startswith("│") and "/mg/" in line}
+        assert set(rows) == {"/mg/rate", "/mg/slow"}, rows
+        assert 40 < float(rows["/mg/rate"][3]) < 60 and 7 < float(rows["/mg/slow"][3]) < 13, rows
+        assert 0.015 < float(rows["/mg/rate"][4]) <= float(rows["/mg/rate"][5]) < 0.2, "min and max intervals"
+        assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "the listener is gone"
+        assert "no live topic /mg/nothing" in str(error_of(ip, "%hz /mg/rate /mg/nothing"))

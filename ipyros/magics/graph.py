@@ -21,7 +21,7 @@ from rich.table import Table
 from .. import msgtypes
 from ..errors import MasterError
 from ..graph import GraphSnapshot
-from ..msgbuild import build_message, fields_of, parse_data, to_yaml
+from ..msgbuild import build_message, fields_of, flat_fields, parse_data, to_yaml
 from ..probe import Echo, Rate, measure_rates
 from .common import ExtensionMagics, global_topic, split_head
 
@@ -128,6 +128,8 @@ class TopicMagics(ExtensionMagics):
     @argument("--filter", metavar="EXPR",
               help="only messages for which this Python expression over m is true, e.g. 'm.linear.x > 0'; "
                    "it sees your namespace")
+    @argument("--csv", action="store_true", help="one line per message, comma-separated, a header line first")
+    @argument("--table", action="store_true", help="a table of the messages when the listening ends")
     @no_var_expand
     @line_magic
     def echo(self, line: str) -> "Messages":
@@ -145,8 +147,11 @@ class TopicMagics(ExtensionMagics):
         keep = _compile_filter(args.filter, self.shell.user_ns) if args.filter else None
         type_name = self._live_type(topic)
         fields = [f.strip("'\"") for f in args.field or []]
+        if args.csv and args.table:
+            raise UsageError("give --csv or --table, not both (without either: YAML, which %pub takes back)")
         printer = self.ext.printer
         seen = Messages(topic)
+        rows = _Rows(fields, type_name, csv=args.csv) if args.csv or args.table else None
         with Echo(topic, type_name) as echo:
             try:
                 while not count or len(seen) < count:
@@ -154,11 +159,43 @@ class TopicMagics(ExtensionMagics):
                     # (no `continue` here: CPython 3.11 can raise Ctrl-C at that jump, outside this try)
                     if msg is not None and (keep is None or keep(msg, len(seen) + 1)):
                         seen.append(msg)
-                        text = _fields_yaml(msg, fields, type_name) if fields else to_yaml(msg)
-                        printer.show(Syntax(text, "yaml", background_color="default"), "---")
+                        if rows is not None:
+                            rows.add(msg)
+                        else:
+                            text = _fields_yaml(msg, fields, type_name) if fields else to_yaml(msg)
+                            printer.show(Syntax(text, "yaml", background_color="default"), "---")
             except KeyboardInterrupt:
                 print(f"stopped listening to {topic} after {len(seen)} message{'s' * (len(seen) != 1)}")
+        if rows is not None and args.table:
+            printer.show(rows.table(f"{len(seen)} message{'s' * (len(seen) != 1)} from {topic}"))
         return seen
+
+    # -- %hz -------------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("topic", nargs="+", help="the live topics to measure, at once")
+    @argument("-w", "--window", type=float, default=None,
+              help="listen this many seconds (default c.RosMagics.hz_window)")
+    @line_magic
+    def hz(self, line: str) -> None:
+        """The message rate of each TOPIC, measured together over one window, as rostopic hz does:
+        the mean rate, and the shortest, longest and spread of the intervals between messages."""
+        args = parse_argstring(self.hz, line)
+        window = self.ext.settings.hz_window if args.window is None else args.window
+        if not 0.05 <= window <= 600:
+            raise UsageError(f"-w must be between 0.05 and 600 seconds, not {window}")
+        topics = {}
+        for name in args.topic:
+            topic = global_topic(name)
+            topics[topic] = self._live_type(topic)
+        rates = measure_rates(topics, window)
+        table = Table(title=f"rates over {window:g} s at {self.ext.graph.where}", title_justify="left")
+        for column in ("topic", "type", "messages", "rate Hz", "min s", "max s", "std dev s"):
+            table.add_column(column, justify="left" if column in ("topic", "type") else "right")
+        for topic, rate in rates.items():
+            spread = ("", "", "") if rate is None or rate.hz is None else (
+                f"{rate.min_s:.4f}", f"{rate.max_s:.4f}", f"{rate.std_s:.4f}")
+            table.add_row(topic, topics[topic], str(rate.count if rate else 0), _rate(rate), *spread)
+        self.ext.printer.show(table)
 
     # -- %pub / %%pub ----------------------------------------------------------------------
     @magic_arguments()
@@ -261,6 +298,46 @@ def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[st
             row.append(_rate(rates.get(topic)))
         table.add_row(*row)
     return table
+
+
+class _Rows:
+    """``%echo --csv`` (a line per message, as it arrives) and ``--table`` (a table when done)."""
+
+    def __init__(self, fields: list[str], type_name: str, csv: bool) -> None:
+        self.fields, self.type_name, self.csv = fields, type_name, csv
+        self.columns: Optional[list[str]] = None
+        self.rows: list[list[str]] = []
+
+    def add(self, msg: Any) -> None:
+        flat = flat_fields(msg)
+        if self.columns is None:
+            for path in self.fields:  # a wrong field: the same one-line error as --field's
+                _fields_yaml(msg, [path], self.type_name)
+            self.columns = [c for c in flat if not self.fields or any(
+                c == f or c.startswith(f + ".") for f in self.fields)]
+            if self.csv:
+                print(",".join(self.columns), flush=True)
+        row = [_cell(flat.get(c)) for c in self.columns]
+        if self.csv:
+            print(",".join(_csv_quoted(v) for v in row), flush=True)
+        else:
+            self.rows.append(row)
+
+    def table(self, title: str) -> Table:
+        table = Table(title=title, title_justify="left")
+        for column in self.columns or []:
+            table.add_column(column, justify="right")
+        for row in self.rows:
+            table.add_row(*row)
+        return table
+
+
+def _cell(value: Any) -> str:
+    return " ".join(map(str, value)) if isinstance(value, list) else "" if value is None else str(value)
+
+
+def _csv_quoted(text: str) -> str:
+    return '"' + text.replace('"', '""') + '"' if any(c in text for c in ',"\n') else text
 
 
 def _endpoints_table(snap: GraphSnapshot, found: list[str], endpoints: Any, where: str) -> Table:
