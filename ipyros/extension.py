@@ -32,7 +32,7 @@ from . import completion, plan as planning
 from .dsl import rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache
-from .magics import DemoMagics, NodeMagics, RosMagics, TopicMagics, WrapMagics
+from .magics import DemoMagics, NodeMagics, PlotMagics, RosMagics, TopicMagics, WrapMagics
 from .magics.output import Printer, StderrLogHandler, failure_report, note, note_line
 from .probe import PromptPublisher
 from .ros1 import master as master_mod
@@ -55,8 +55,10 @@ class Extension:
         self.graph = GraphCache(_slashed(self.settings.master_uri or master_mod.configured_uri()),
                                 period=self.settings.graph_period)
         self.node_magics = NodeMagics(shell, self)
-        self.magics = [self.settings, TopicMagics(shell, self), self.node_magics, WrapMagics(shell, self),
-                       DemoMagics(shell, self)]
+        self.topic_magics = TopicMagics(shell, self)  # %plot asks it for a live topic's type
+        self.plot_magics = PlotMagics(shell, self)
+        self.magics = [self.settings, self.topic_magics, self.node_magics, WrapMagics(shell, self),
+                       self.plot_magics, DemoMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
         self._log_handler = StderrLogHandler()
         self._report = failure_report(lambda: self.settings.handler_tracebacks)
@@ -207,6 +209,7 @@ class Extension:
             completion.uninstall(shell, self._completion)
             self._completion = None
         self.graph.stop()
+        self.plot_magics.stop_live()
         self.settings.unobserve(self._setting_changed, names=_LIVE_SETTINGS)
         shell.events.unregister("post_run_cell", self._after_cell)
         logger = logging.getLogger("ipyros")

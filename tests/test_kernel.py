@@ -118,3 +118,19 @@ def wait_ticks(word: str, count: int) -> str:
             f"while sum(w == {word!r} for w, _ in ticks) < {count} and time.monotonic() < deadline:\n"
             f"    time.sleep(0.02)\n"
             f"assert sum(w == {word!r} for w, _ in ticks) >= {count}, 'too few messages'")
+
+
+def test_plot_in_a_kernel_is_a_figure_redrawn_below_the_cell_and_its_data_stays(kernel, ticks):
+    import base64
+
+    kernel.ok("%load_ext ipyros")
+    wait_for(lambda: kernel.complete("%topics /e2e_k") == [TOPIC], timeout=20, what=f"{TOPIC} in the graph")
+    cell = kernel.ok(f"p = %plot {TOPIC} data --duration 2")
+    images = [out["data"]["image/png"] for out in cell.outputs("display_data") if "image/png" in out["data"]]
+    assert images and base64.b64decode(images[0])[:8] == b"\x89PNG\r\n\x1a\n", "a figure below the cell"
+    assert cell.outputs("display_data")[0].get("transient", {}).get("display_id"), "redrawn in place, by its id"
+    # the prompt is free while it records; after the duration it stops by itself, and the data stays
+    cell = kernel.ok("import time\nwhile p.running: time.sleep(0.1)\n"
+                     "print('DATA', len(p.data['t']), list(p.data['data']) == sorted(p.data['data']))")
+    found = re.search(r"DATA (\d+) (True|False)", cell.stdout())
+    assert found and int(found[1]) >= 20 and found[2] == "True", cell.stdout()

@@ -239,3 +239,31 @@ def test_echo_as_csv_and_as_a_table_and_hz_of_two_topics_at_once(ip, capsys, rat
         assert 0.015 < float(rows["/mg/rate"][4]) <= float(rows["/mg/rate"][5]) < 0.2, "min and max intervals"
         assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "the listener is gone"
         assert "no live topic /mg/nothing" in str(error_of(ip, "%hz /mg/rate /mg/nothing"))
+
+
+def test_plot_in_the_terminal_until_ctrl_c_and_to_a_png(ip, capsys, rate_peer, tmp_path):
+    import matplotlib.image
+
+    from shell import ctrl_c_after
+
+    wait_listed(ip, "/mg/rate")
+    capsys.readouterr()
+    p = ok(ip, "%plot /mg/rate data --duration 1.5").result
+    out = capsys.readouterr().out
+    assert "/mg/rate: * data" in out and "┌" in out and "time (s)" in out, out  # the chart of characters
+    values = p.data["data"]
+    assert len(values) > 30 and list(values) == sorted(values) and len(p.data["t"]) == len(values)
+    assert not p.running and "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+
+    with ctrl_c_after(1.0):  # no --duration: until Ctrl-C
+        p = ok(ip, "%plot /mg/rate data").result
+    assert "ipyros: plotted" in capsys.readouterr().out and len(p.data["t"]) > 20 and not p.running
+
+    png = tmp_path / "rate.png"
+    ok(ip, f"%plot /mg/rate data --png {png} --duration 1")
+    assert "plotted to" in capsys.readouterr().out
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and matplotlib.image.imread(png).shape[:2] == (350, 700)
+
+    assert "give two fields" in str(error_of(ip, "%plot /mg/rate data --xy"))
+    assert "no field 'dta'" in str(error_of(ip, "%plot /mg/rate dta --duration 1"))
+    assert "no live topic /mg/none" in str(error_of(ip, "%plot /mg/none data"))

@@ -103,7 +103,9 @@ def check_kobuki(nb: nbformat.NotebookNode, text: str) -> None:
     assert top_commanded == 6.0
     assert top_driven == pytest.approx(5.0, abs=0.25), "the base did not hold the robot to its 5 m/s limit"
     assert "speed 6.00 m/s exceeds max_speed 5.00 m/s" in text  # the monitor's own log line
-    assert images(nb) == 1, "the speed plot is missing"
+    recorded, top = number(r"the live plot recorded (\d+) commands, up to ([\d.]+) m/s", text)
+    assert recorded >= 20 and top == 6.0, "the live plot did not follow the commands"
+    assert images(nb) == 2, "the live plot or the speed plot is missing"
     assert "demo robot kobuki stopped" in text
 
 

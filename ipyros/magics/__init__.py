@@ -4,7 +4,8 @@
 * :class:`TopicMagics` (``graph.py``): ``%topics``, ``%echo``, ``%pub``;
 * :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
 * :class:`WrapMagics` (``wrap.py``): ``%wrap``;
-* :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot.
+* :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
+* :class:`PlotMagics` (``plot.py``): ``%plot``, topic fields drawn live.
 
 :mod:`ipyros.extension` creates and registers them; ``%magic?`` shows each one's help.
 """
@@ -13,6 +14,7 @@ from .config import RosMagics
 from .demo import DemoMagics
 from .graph import TopicMagics
 from .nodes import NodeMagics
+from .plot import PlotMagics
 from .wrap import WrapMagics
 
-__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics"]
+__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics"]

@@ -145,7 +145,7 @@ class TopicMagics(ExtensionMagics):
             raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {count}")
         topic = global_topic(args.topic)
         keep = _compile_filter(args.filter, self.shell.user_ns) if args.filter else None
-        type_name = self._live_type(topic)
+        type_name = self.live_type(topic)
         fields = [f.strip("'\"") for f in args.field or []]
         if args.csv and args.table:
             raise UsageError("give --csv or --table, not both (without either: YAML, which %pub takes back)")
@@ -186,7 +186,7 @@ class TopicMagics(ExtensionMagics):
         topics = {}
         for name in args.topic:
             topic = global_topic(name)
-            topics[topic] = self._live_type(topic)
+            topics[topic] = self.live_type(topic)
         rates = measure_rates(topics, window)
         table = Table(title=f"rates over {window:g} s at {self.ext.graph.where}", title_justify="left")
         for column in ("topic", "type", "messages", "rate Hz", "min s", "max s", "std dev s"):
@@ -239,7 +239,7 @@ class TopicMagics(ExtensionMagics):
             raise UsageError(f"--rate must be a positive number of messages per second, not {args.rate}")
         topic = global_topic(args.topic)
         given = args.type or args.type_option
-        type_name = msgtypes.resolve_message(given)[0] if given else self._live_type(topic, for_pub=True)
+        type_name = msgtypes.resolve_message(given)[0] if given else self.live_type(topic, for_pub=True)
         msg = build_message(type_name, parse_data(data), nonfinite=args.nonfinite)
         if args.rate is None:
             sender = self.ext.publisher.publish(topic, type_name, msg)
@@ -269,7 +269,8 @@ class TopicMagics(ExtensionMagics):
                               "or check ROS_MASTER_URI (c.RosMagics.master_uri)")
         return snap
 
-    def _live_type(self, topic: str, for_pub: bool = False) -> str:
+    def live_type(self, topic: str, for_pub: bool = False) -> str:
+        """The type of the live ``topic`` from the graph read afresh; a one-line error if there is none."""
         snap = self._snapshot()
         if topic not in snap.topics:
             fix = f"; give its type: %pub {topic} pkg/Type ..." if for_pub else "; %topics lists them"
