@@ -38,11 +38,23 @@ def test_bash_run_sh_ros2_and_the_five_lines_drive_the_turtle_round(tmp_path):
         term.type(" -n 1")
         term.press("Enter")
         term.wait_for(lambda rows: any(row.startswith("orientation:") for row in rows), what="the pose as YAML")
+        prompt_reads(term, "")  # the echo is done: the next prompt is up
         term.type("%pub /ipyros_tab std_msgs/msg/ColorRGBA ")
         term.press("Tab")
         prompt_reads(term, "%pub /ipyros_tab std_msgs/msg/ColorRGBA {r: 0.0, g: 0.0, b: 0.0, a: 0.0}")
         term.press("Enter")
         term.wait_for("published a std_msgs/ColorRGBA on /ipyros_tab")
+
+        # %plot in the terminal: the turtle's track as a chart of characters, redrawn until Ctrl-C
+        prompt_reads(term, "")
+        term.type("p = %plot /turtle1/pose position.x position.y --xy")
+        term.press("Enter")
+        term.wait_for(lambda rows: any("/turtle1/pose: position.y vs position.x" in row for row in rows)
+                      and any("┌" in row for row in rows), timeout=20, what="the chart")
+        term.press("C-c")
+        term.wait_for(lambda rows: any("ipyros: plotted" in row for row in rows), timeout=10, what="Ctrl-C to stop it")
+        run(term, 'print("POINTS", len(p.data["t"]) > 10, p.running)')
+        term.wait_for("POINTS True False")
         family = descendants(term.pid)
         assert family, "the turtle runs below IPython"
         term.line("exit")
