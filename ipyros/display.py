@@ -100,6 +100,7 @@ class NodeStatus(Shown):
     node: str
     running: bool
     rows: tuple[StatusRow, ...]
+    params: tuple[tuple[str, str], ...] = ()  # the node's own parameters as they are now (set from outside too)
 
     @classmethod
     def of(cls, node: "rosNode") -> "NodeStatus":
@@ -112,7 +113,8 @@ class NodeStatus(Shown):
         for sent in node.sent():
             rows.append(StatusRow(sent.kind, sent.topic, "", sent.messages, connections=sent.connections,
                                   waiting=sent.waiting, dropped=sent.dropped))
-        return cls(node.fullname, node.created, tuple(rows))
+        params = tuple((f"~{key}", repr(value)) for key, value in node.params.items()) if node.created else ()
+        return cls(node.fullname, node.created, tuple(rows), params)
 
     def row(self, name: str) -> StatusRow:
         return next(r for r in self.rows if r.name == name)
@@ -133,6 +135,8 @@ class NodeStatus(Shown):
                 dropped = f"[red]{r.dropped}[/]{waiting}" if r.dropped else f"0{waiting}"
                 timing = ("", "", "", "", str(r.connections), dropped)
             table.add_row(r.kind, r.name, r.handler, str(r.calls), *timing)
+        for name, value in self.params:
+            table.add_row("param", name, value, *[""] * 7)
         return table
 
 

@@ -170,8 +170,10 @@ def test_handler_try_versions_revert_and_qos_by_endpoint_at_the_ros2_prompt(ip, 
     _ok(ip, "%revert nd /m2/numbers 1")
     assert "ipyros: m2_node /m2/numbers is handled by version 1 (on_number) again" in capsys.readouterr().out
     wait_for(lambda: ip.user_ns["heard"][-1][0] == "old", timeout=10, what="version 1 again")
+    _ok(ip, "nd.params['gain'] = 1.5")
     _ok(ip, "%status nd")
-    assert "topic" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "topic" in out and "~gain" in out and "1.5" in out, out
     _ok(ip, "%topics /m2/ -v")
     out = capsys.readouterr().out
     assert "/m2/latched" in out and "reliable transient-local" in out and "/m2/m2_node" in out, out
