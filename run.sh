@@ -21,7 +21,7 @@ ros1_setup() {
     python3-rospy python3-rostopic python3-rosgraph python3-rosnode python3-rosmaster
     python3-roslaunch python3-rosservice python3-rosparam rosout rosbash topic-tools
     python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-std-srvs
-    python3-rosgraph-msgs tmux
+    python3-rosgraph-msgs python3-rosbag tmux
   )
 
   local missing=() p stamp

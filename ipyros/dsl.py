@@ -169,6 +169,38 @@ class rosNode:  # noqa: N801 - the paper's name
                                    f"node itself: {self.called}.baseNode('/path/to/node', namespace=..., params=...)")
         return set_launch_base(self, launch, node, {**(args or {}), **arg_values})
 
+    def baseBag(self, path: Any, rate: float = 1.0, loop: bool = False, topics: Optional[list[str]] = None,
+                delay: float = 1.0) -> "rosNode":  # noqa: N802 - named like baseNode
+        """Wrap a recorded bag as the basenode: a bag player (like ``rosbag play``) publishes its
+        topics, remapped like any basenode's, so that ``reuse`` and ``new.subscribe`` work on
+        recorded data as on a live node, and ``nd.base.restart()`` plays it again (after a
+        handler change: the same messages, new behaviour).
+
+        ``rate`` scales the playing speed, ``loop`` plays it again and again, ``topics`` plays
+        only these; ``delay`` seconds after advertising let the wrapping node connect first.
+        """
+        from pathlib import Path
+
+        from .wrap import set_base
+
+        if not self._session.backend.has_master:
+            raise DeclarationError("baseBag plays ROS 1 bags so far; on ROS 2 it is not there yet")
+        from .ros1 import bagfile
+
+        bag = Path(path).expanduser().absolute()
+        if not bag.is_file():
+            raise DeclarationError(f"baseBag({str(path)!r}): no such file; record one with %record FILE TOPIC ...")
+        recorded = bagfile.bag_topics(bag)
+        missing = sorted(set(topics or ()) - set(recorded))
+        if missing:
+            raise DeclarationError(f"the bag {bag.name} has no topic {', '.join(missing)}; it has "
+                                   f"{', '.join(sorted(recorded)) or 'none'}")
+        if not (isinstance(rate, (int, float)) and 0 < rate <= 1000 and 0 <= delay <= 60):
+            raise DeclarationError(f"baseBag(rate={rate!r}, delay={delay!r}): rate a speed factor above 0 "
+                                   "(1.0 as recorded), delay seconds from 0 to 60")
+        return set_base(self, executable=str(bagfile.PLAYER), name="bag_player",
+                        args=bagfile.player_args(bag, float(rate), bool(loop), topics, float(delay)))
+
     def discover(self, timeout: float = 10.0) -> Any:
         """Run the basenode once, read its topics and services from the master, reuse them all.
 

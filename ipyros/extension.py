@@ -32,7 +32,7 @@ from . import completion, plan as planning
 from .dsl import rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache
-from .magics import DemoMagics, NodeMagics, PlotMagics, RosMagics, TopicMagics, WrapMagics
+from .magics import DemoMagics, NodeMagics, PlotMagics, RecordMagics, RosMagics, TopicMagics, WrapMagics
 from .magics.output import Printer, StderrLogHandler, failure_report, note, note_line
 from .probe import PromptPublisher
 from .ros1 import master as master_mod
@@ -57,8 +57,9 @@ class Extension:
         self.node_magics = NodeMagics(shell, self)
         self.topic_magics = TopicMagics(shell, self)  # %plot asks it for a live topic's type
         self.plot_magics = PlotMagics(shell, self)
+        self.record_magics = RecordMagics(shell, self)
         self.magics = [self.settings, self.topic_magics, self.node_magics, WrapMagics(shell, self),
-                       self.plot_magics, DemoMagics(shell, self)]
+                       self.plot_magics, self.record_magics, DemoMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
         self._log_handler = StderrLogHandler()
         self._report = failure_report(lambda: self.settings.handler_tracebacks)
@@ -210,6 +211,7 @@ class Extension:
             self._completion = None
         self.graph.stop()
         self.plot_magics.stop_live()
+        self.record_magics.stop()
         self.settings.unobserve(self._setting_changed, names=_LIVE_SETTINGS)
         shell.events.unregister("post_run_cell", self._after_cell)
         logger = logging.getLogger("ipyros")

@@ -267,3 +267,41 @@ def test_plot_in_the_terminal_until_ctrl_c_and_to_a_png(ip, capsys, rate_peer, t
     assert "give two fields" in str(error_of(ip, "%plot /mg/rate data --xy"))
     assert "no field 'dta'" in str(error_of(ip, "%plot /mg/rate dta --duration 1"))
     assert "no live topic /mg/none" in str(error_of(ip, "%plot /mg/none data"))
+
+
+def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, capsys, rate_peer, tmp_path):
+    """%record a live topic; wrap the bag with baseBag; intercept the topic with a handler; replay the bag
+    after swapping the handler: the two versions' outputs, message for message, on the same recorded data."""
+    wait_listed(ip, "/mg/rate")
+    bag = tmp_path / "rate.bag"
+    capsys.readouterr()
+    ok(ip, f"rec = %record {bag} /mg/rate --duration 1")
+    assert f"ipyros: recording /mg/rate to {bag} for 1 s" in capsys.readouterr().out
+    wait_for(lambda: not ip.user_ns["rec"].running, timeout=10, what="the recording to end by itself")
+    assert ip.user_ns["rec"].count >= 30 and "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+    assert "exists; give a new file name" in str(error_of(ip, f"%record {bag} /mg/rate"))
+
+    ok(ip, "from std_msgs.msg import UInt32\nouts = []\n"
+           "def double(msg):\n    w.write('/mg/out', UInt32(data=msg.data * 2))\n"
+           "listener = rosNode('mg_bag_listener')\n"
+           "listener.new.subscribe('/mg/out', lambda m: outs.append(m.data), msgType=UInt32).create()\n"
+           "w = rosNode('mg_bag_wrapper')\n"
+           f"w.baseBag({str(bag)!r}, rate=2.0, delay=1.0)\n"
+           "w.reuse.publish('/mg/rate', type=UInt32)  # the bag's topic: the wrapper sits on it\n"
+           "w.new.subscribe('/mg/rate', double, msgType=UInt32).publish('/mg/out', msgType=UInt32)\n"
+           "w.create()")
+    recorded = ip.user_ns["rec"].count
+    outs = ip.user_ns["outs"]
+    wait_for(lambda: len(outs) >= recorded, timeout=20, what="the whole bag through the handler")
+    first = list(outs)
+    assert len(first) == recorded and all(x % 2 == 0 for x in first), (recorded, first[:5])
+    inputs = [x // 2 for x in first]
+    assert inputs == sorted(inputs) and inputs == list(range(inputs[0], inputs[0] + recorded)), "in order, none lost"
+
+    ok(ip, "def triple(msg):\n    w.write('/mg/out', UInt32(data=msg.data * 3))\n"
+           "w.new.subscribe('/mg/rate', triple, msgType=UInt32)\nouts.clear()\nw.base.restart()")
+    wait_for(lambda: len(outs) >= recorded, timeout=20, what="the bag again, through the new handler")
+    assert list(outs) == [3 * x for x in inputs], "the same messages, the new behaviour, one for one"
+    ok(ip, "w.shutdown(); listener.shutdown()")
+    assert "no such file" in str(error_of(ip, "rosNode('mg_b2').baseBag('/nonexistent.bag')"))
+    assert "has no topic /nope" in str(error_of(ip, f"rosNode('mg_b3').baseBag({str(bag)!r}, topics=['/nope'])"))

@@ -5,7 +5,8 @@
 * :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
 * :class:`WrapMagics` (``wrap.py``): ``%wrap``;
 * :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
-* :class:`PlotMagics` (``plot.py``): ``%plot``, topic fields drawn live.
+* :class:`PlotMagics` (``plot.py``): ``%plot``, topic fields drawn live;
+* :class:`RecordMagics` (``record.py``): ``%record``, topics written to a bag.
 
 :mod:`ipyros.extension` creates and registers them; ``%magic?`` shows each one's help.
 """
@@ -15,6 +16,7 @@ from .demo import DemoMagics
 from .graph import TopicMagics
 from .nodes import NodeMagics
 from .plot import PlotMagics
+from .record import RecordMagics
 from .wrap import WrapMagics
 
-__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics"]
+__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics"]

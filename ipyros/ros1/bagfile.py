@@ -1,0 +1,76 @@
+"""ROS 1 bag files, through Debian's ``python3-rosbag``: what a bag holds, writing one, playing one.
+
+Playing is ``bag_player.py`` (next to this file: rospy and python3-rosbag, like ``rosbag
+play`` but under the node name it is given), run as a basenode: remapped like any other,
+so that a wrapping node sits on the topics it plays.
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+from ..errors import DeclarationError
+
+__all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
+
+#: The player run as ``baseBag``'s basenode (a .py file: ipyros runs it with its own Python).
+PLAYER = Path(__file__).resolve().parent / "bag_player.py"
+
+
+def _rosbag() -> Any:
+    try:
+        import rosbag
+    except ImportError:
+        raise DeclarationError("ROS 1 bags need Debian's python3-rosbag: apt-get install python3-rosbag "
+                               "(bash run.sh installs it)") from None
+    return rosbag
+
+
+def bag_topics(path: Path) -> dict[str, str]:
+    """The topics recorded in the bag at ``path``, with their types; a one-line error if it is no bag."""
+    rosbag = _rosbag()
+    try:
+        with rosbag.Bag(str(path)) as bag:
+            return {topic: info.msg_type for topic, info in bag.get_type_and_topic_info().topics.items()}
+    except (OSError, rosbag.ROSBagException) as error:
+        raise DeclarationError(f"cannot read the bag {path}: {error}") from None
+
+
+def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[str]], delay: float) -> list[str]:
+    """The player's arguments: ``--delay`` lets the wrapping node's subscribers connect after each
+    advertise, so that the first messages are not lost."""
+    args = [str(path), "--rate", f"{rate:g}", "--delay", f"{delay:g}"]
+    if loop:
+        args.append("--loop")
+    if topics:
+        args += ["--topics", *topics]  # last: rosbag takes every word after it as a topic
+    return args
+
+
+class BagWriter:
+    """Messages written to a new bag, from any thread, stamped with the wall clock on arrival."""
+
+    def __init__(self, path: Path) -> None:
+        rosbag = _rosbag()
+        try:
+            self._bag = rosbag.Bag(str(path), "w")
+        except (OSError, rosbag.ROSBagException) as error:
+            raise DeclarationError(f"cannot write the bag {path}: {error}") from None
+        self._lock = threading.Lock()
+        self.count = 0
+
+    def write(self, topic: str, msg: Any) -> None:
+        import rospy
+
+        with self._lock:
+            if self._bag is not None:
+                self._bag.write(topic, msg, rospy.Time.now())
+                self.count += 1
+
+    def close(self) -> None:
+        with self._lock:
+            bag, self._bag = self._bag, None
+        if bag is not None:
+            bag.close()
