@@ -49,7 +49,8 @@ ros1_setup() {
 # ROS 2 from PyPI, in a venv of its own: it must not see the system's site-packages, where
 # Debian's ROS 1 message packages (std_msgs, ...) would shadow the ROS 2 ones.
 venv2="$here/.venv-ros2"
-ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs ros-rcl-interfaces)
+ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs ros-rcl-interfaces
+               rosbags)  # rosbags: ROS 2 bags (%record, baseBag); rosbag2 is not on PyPI
 ros2_venv() {
   if ! /usr/bin/python3 -c "import ensurepip" 2>/dev/null; then  # Debian splits venv support out
     echo "run.sh: installing python3-venv" >&2

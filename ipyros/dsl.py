@@ -170,25 +170,24 @@ class rosNode:  # noqa: N801 - the paper's name
         return set_launch_base(self, launch, node, {**(args or {}), **arg_values})
 
     def baseBag(self, path: Any, rate: float = 1.0, loop: bool = False, topics: Optional[list[str]] = None,
-                delay: float = 1.0) -> "rosNode":  # noqa: N802 - named like baseNode
+                delay: float = 5.0) -> "rosNode":  # noqa: N802 - named like baseNode
         """Wrap a recorded bag as the basenode: a bag player (like ``rosbag play``) publishes its
         topics, remapped like any basenode's, so that ``reuse`` and ``new.subscribe`` work on
         recorded data as on a live node, and ``nd.base.restart()`` plays it again (after a
         handler change: the same messages, new behaviour).
 
         ``rate`` scales the playing speed, ``loop`` plays it again and again, ``topics`` plays
-        only these; ``delay`` seconds after advertising let the wrapping node connect first.
+        only these; the player waits until each topic has a subscriber, ``delay`` seconds at most.
         """
         from pathlib import Path
 
         from .wrap import set_base
 
-        if not self._session.backend.has_master:
-            raise DeclarationError("baseBag plays ROS 1 bags so far; on ROS 2 it is not there yet")
-        from .ros1 import bagfile
+        from .record import bag_module
 
+        bagfile = bag_module()
         bag = Path(path).expanduser().absolute()
-        if not bag.is_file():
+        if not bag.exists():
             raise DeclarationError(f"baseBag({str(path)!r}): no such file; record one with %record FILE TOPIC ...")
         recorded = bagfile.bag_topics(bag)
         missing = sorted(set(topics or ()) - set(recorded))

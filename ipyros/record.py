@@ -2,35 +2,41 @@
 
 A :class:`Recording` subscribes to each topic through a small DSL node of its own (as
 ``%echo`` does) and writes every message as it arrives; it runs in the background until
-:meth:`Recording.stop` or its duration is up. ROS 1 bags, through Debian's python3-rosbag
-(:mod:`ipyros.ros1.bagfile`); on ROS 2 not yet.
+:meth:`Recording.stop` or its duration is up. ROS 1 bags through Debian's python3-rosbag
+(:mod:`ipyros.ros1.bagfile`), ROS 2 bags through rosbags (:mod:`ipyros.ros2.bagfile`).
 """
 
 from __future__ import annotations
 
 import threading
 from pathlib import Path
-from typing import Mapping, Optional
+from typing import Any, Mapping, Optional
 
 from .dsl import rosNode
-from .errors import DeclarationError
 from .probe import tool_name
 from .session import current
 
-__all__ = ["Recording"]
+__all__ = ["Recording", "bag_module"]
+
+
+def bag_module() -> Any:
+    """The session's ROS's bag files: ROS 1's (python3-rosbag) or ROS 2's (rosbags)."""
+    if current().backend.has_master:
+        from .ros1 import bagfile
+    else:
+        from .ros2 import bagfile  # type: ignore[no-redef]
+    return bagfile
 
 
 class Recording:
     """``topics`` ({name: type}) written to the bag ``path`` from now on, for ``duration`` seconds or until stopped."""
 
     def __init__(self, path: Path, topics: Mapping[str, str], duration: Optional[float] = None) -> None:
-        if not current().backend.has_master:
-            raise DeclarationError("%record writes ROS 1 bags so far; on ROS 2 it is not there yet")
-        from .ros1.bagfile import BagWriter
+        bagfile = bag_module()
 
         self.path, self.topics = Path(path), dict(topics)
         self._stopping = threading.Lock()
-        self._writer = BagWriter(self.path)
+        self._writer = bagfile.BagWriter(self.path)
         self._node: Optional[rosNode] = rosNode(tool_name("record"))
         for topic, type_name in self.topics.items():
             self._node.new.subscribe(topic, handler=lambda msg, topic=topic: self._writer.write(topic, msg),

@@ -286,7 +286,7 @@ def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, cap
            "listener = rosNode('mg_bag_listener')\n"
            "listener.new.subscribe('/mg/out', lambda m: outs.append(m.data), msgType=UInt32).create()\n"
            "w = rosNode('mg_bag_wrapper')\n"
-           f"w.baseBag({str(bag)!r}, rate=2.0, delay=1.0)\n"
+           f"w.baseBag({str(bag)!r}, rate=2.0)\n"
            "w.reuse.publish('/mg/rate', type=UInt32)  # the bag's topic: the wrapper sits on it\n"
            "w.new.subscribe('/mg/rate', double, msgType=UInt32).publish('/mg/out', msgType=UInt32)\n"
            "w.create()")

@@ -184,3 +184,41 @@ def test_handler_try_versions_revert_and_qos_by_endpoint_at_the_ros2_prompt(ip, 
     assert rate and any(17.0 <= float(cell) <= 23.0 for cell in rate[0].replace("│", " ").split()
                         if cell.replace(".", "", 1).isdigit() and "." in cell), rate
     _ok(ip, "feeder.shutdown(); nd.shutdown()")
+
+
+def test_record_on_ros2_then_replay_the_bag_through_two_handler_versions(ip, capsys, tmp_path):
+    """%record a live topic to a ROS 2 bag (rosbags); baseBag plays it as the basenode; a handler swap and
+    base.restart() give the new version's outputs on the same messages, one for one."""
+    from conftest import wait_for
+
+    ip.run_line_magic("load_ext", "ipyros")
+    bag = tmp_path / "counts_bag"
+    _ok(ip, "from std_msgs.msg import UInt32\ncount = [0]\n"
+            "src = rosNode('b2_source', namespace='/b2').new.publish('counts', msgType=UInt32).create()\n"
+            "def tick():\n    count[0] += 1\n    src.write('counts', UInt32(data=count[0]))\n"
+            "src.timer(0.02, tick)")
+    wait_for(lambda: "/b2/counts" in _completions(ip, "%topics /b2/c"), timeout=10, what="the topic in the graph")
+    capsys.readouterr()
+    _ok(ip, f"rec = %record {bag} /b2/counts --duration 1")
+    wait_for(lambda: not ip.user_ns["rec"].running, timeout=10, what="the recording to end")
+    _ok(ip, "src.shutdown()")
+    recorded = ip.user_ns["rec"].count
+    assert recorded >= 25 and (bag / "metadata.yaml").exists()
+
+    _ok(ip, "outs = []\n"
+            "def double(msg):\n    w.write('/b2/out', UInt32(data=msg.data * 2))\n"
+            "ear = rosNode('b2_ear').new.subscribe('/b2/out', lambda m: outs.append(m.data), msgType=UInt32).create()\n"
+            "w = rosNode('b2_wrapper')\n"
+            f"w.baseBag({str(bag)!r}, rate=2.0)\n"
+            "w.reuse.publish('/b2/counts', type=UInt32)\n"
+            "w.new.subscribe('/b2/counts', double, msgType=UInt32).publish('/b2/out', msgType=UInt32)\n"
+            "w.create()")
+    outs = ip.user_ns["outs"]
+    wait_for(lambda: len(outs) >= recorded, timeout=20, what="the whole bag through the handler")
+    inputs = [x // 2 for x in outs]
+    assert len(outs) == recorded and inputs == list(range(inputs[0], inputs[0] + recorded)), "in order, none lost"
+    _ok(ip, "def triple(msg):\n    w.write('/b2/out', UInt32(data=msg.data * 3))\n"
+            "w.new.subscribe('/b2/counts', triple, msgType=UInt32)\nouts.clear()\nw.base.restart()")
+    wait_for(lambda: len(outs) >= recorded, timeout=20, what="the bag again through the new handler")
+    assert list(outs) == [3 * x for x in inputs]
+    _ok(ip, "w.shutdown(); ear.shutdown()")

@@ -3,8 +3,8 @@
 ipyros runs it as the basenode of ``baseBag``. Unlike ``rosbag play``, whose node name is
 always made anonymous, it runs under the name it is given (``__name:=``), so the wrapping
 node finds it in the graph like any basenode; its topics are remapped the ROS 1 way
-(``from:=to``). It advertises every topic first, waits ``--delay`` seconds for
-subscribers to connect, then publishes the messages with their recorded spacing
+(``from:=to``). It advertises every topic first, waits until each has a subscriber (at
+most ``--delay`` seconds), then publishes the messages with their recorded spacing
 (divided by ``--rate``), and exits at the end unless ``--loop``. It needs only rospy and
 Debian's python3-rosbag, not ipyros.
 """
@@ -32,7 +32,11 @@ def main() -> None:
             first.setdefault(topic, type(msg))
         publishers = {topic: rospy.Publisher(topic, cls, queue_size=1000) for topic, cls in first.items()}
         print(f"bag_player: {len(publishers)} topics from {args.bag}", flush=True)
-        time.sleep(args.delay)
+        # Up to --delay seconds for the wrapping node to connect, then go.
+        deadline = time.monotonic() + args.delay
+        while time.monotonic() < deadline and not all(p.get_num_connections() for p in publishers.values()):
+            time.sleep(0.05)
+        time.sleep(0.2)  # the connection's header exchange done on the subscriber's side too
         try:
             while not rospy.is_shutdown():
                 start, recorded_start = time.monotonic(), None

@@ -1,0 +1,118 @@
+"""ROS 2 bags (a folder: sqlite3 storage, CDR messages), through rosbags, a pure-Python bag library.
+
+Recording writes the messages' CDR bytes; playing is ``bag_player.py`` (next to this file:
+rclpy and rosbags), run as a basenode and remapped with ``--ros-args`` like any other.
+rosbag2 itself is not on PyPI; rosbags reads and writes the same files.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+from ..errors import DeclarationError
+
+__all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
+
+#: The player run as ``baseBag``'s basenode on ROS 2 (ipyros runs it with its own Python).
+PLAYER = Path(__file__).resolve().parent / "bag_player.py"
+
+
+def _rosbags() -> Any:
+    try:
+        import rosbags.rosbag2
+    except ImportError:
+        raise DeclarationError("ROS 2 bags need rosbags: pip install rosbags (bash run.sh installs it)") from None
+    return rosbags.rosbag2
+
+
+def bag_topics(path: Path) -> dict[str, str]:
+    """The topics recorded in the bag folder ``path``, with their types; a one-line error if it is no bag."""
+    rosbag2 = _rosbags()
+    try:
+        reader = rosbag2.Reader(path)
+        reader.open()
+    except Exception as error:  # noqa: BLE001 - rosbags' errors of any kind: not a bag we can read
+        raise DeclarationError(f"cannot read the bag {path}: {error}") from None
+    try:
+        return {c.topic: c.msgtype for c in reader.connections}
+    finally:
+        reader.close()
+
+
+def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[str]], delay: float) -> list[str]:
+    """The player's arguments (as the ROS 1 one's: ``--delay`` lets the wrapping node connect first)."""
+    args = [str(path), "--rate", f"{rate:g}", "--delay", f"{delay:g}"]
+    if loop:
+        args.append("--loop")
+    if topics:
+        args += ["--topics", *topics]
+    return args
+
+
+class BagWriter:
+    """Messages written to a new bag folder, stamped with the wall clock on arrival.
+
+    rosbags' sqlite3 storage may only be used from the thread that opened it: one writer
+    thread of its own opens, writes and closes the bag; handlers only queue the bytes
+    (so recording never slows a node down either).
+    """
+
+    def __init__(self, path: Path) -> None:
+        _rosbags()
+        self.path = path
+        self.count = 0
+        self._queue: "queue.SimpleQueue[Optional[tuple[str, str, bytes, int]]]" = queue.SimpleQueue()
+        opened: "queue.SimpleQueue[Optional[BaseException]]" = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._write_all, args=(opened,), name="ipyros-bag", daemon=True)
+        self._thread.start()
+        problem = opened.get()
+        if problem is not None:
+            raise DeclarationError(f"cannot write the bag {path}: {problem}") from None
+        self._closed = False
+
+    def _write_all(self, opened: "queue.SimpleQueue[Optional[BaseException]]") -> None:
+        from rosbags.rosbag2 import Writer
+        from rosbags.typesys import Stores, get_typestore
+
+        typestore = get_typestore(Stores.ROS2_JAZZY)  # the common message types, for the bag's metadata
+        try:
+            bag = Writer(self.path, version=9)
+            bag.open()
+        except Exception as error:  # noqa: BLE001 - rosbags' errors: said by the constructor
+            opened.put(error)
+            return
+        opened.put(None)
+        connections: dict[str, Any] = {}
+        try:
+            while (item := self._queue.get()) is not None:
+                topic, msgtype, data, stamp = item
+                connection = connections.get(topic)
+                if connection is None:
+                    known = msgtype in typestore.types
+                    connection = connections[topic] = bag.add_connection(
+                        topic, msgtype, typestore=typestore if known else None,
+                        msgdef=None if known else "", rihs01=None if known else "RIHS01_" + "0" * 64)
+                bag.write(connection, stamp, data)
+        finally:
+            bag.close()
+
+    def write(self, topic: str, msg: Any) -> None:
+        from rclpy.serialization import serialize_message
+
+        from ..msgtypes import type_name
+
+        if self._closed:
+            return
+        package, name = (type_name(type(msg)) or "?/?").split("/")
+        self._queue.put((topic, f"{package}/msg/{name}", serialize_message(msg), time.time_ns()))
+        self.count += 1
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._queue.put(None)
+            self._thread.join(timeout=30)
