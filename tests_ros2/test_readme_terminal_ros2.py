@@ -53,7 +53,7 @@ def test_bash_run_sh_ros2_and_the_five_lines_drive_the_turtle_round(tmp_path):
                       and any("┌" in row for row in rows), timeout=20, what="the chart")
         term.press("C-c")
         term.wait_for(lambda rows: any("ipyros: plotted" in row for row in rows), timeout=10, what="Ctrl-C to stop it")
-        run(term, 'print("POINTS", len(p.data["t"]) > 10, p.running)')
+        run(term, 'print("POINTS", len(p.data["t"]) > 3, p.running)')
         term.wait_for("POINTS True False")
         family = descendants(term.pid)
         assert family, "the turtle runs below IPython"
