@@ -1,4 +1,4 @@
-"""ipyros: interactive, incremental programming of ROS 1 nodes from IPython.
+"""ipyros: interactive, incremental programming of ROS nodes (ROS 1 and ROS 2) from IPython.
 
 ``from ipyros import rosNode`` gives the DSL of Adam & Schultz; ``%load_ext ipyros``
 adds the magics and live tab completion on top of it.
