@@ -331,20 +331,11 @@ class rosNode:  # noqa: N801 - the paper's name
 
     # -- writing ----------------------------------------------------------------------
     def write(self, topic: str, msg: Any) -> None:
-        """Publish ``msg`` on ``topic``, which this node must publish.
-
-        ``msg`` is a message, or its fields as a dict, as ``%pub`` takes them
-        (``nd.write("cmd_vel", {"linear": {"x": 1.0}})``: the rest at their defaults, every
-        value checked against the declared type).
-        """
+        """Publish ``msg`` on ``topic``, which this node must publish."""
         writer = self._writers.get(topic)
         if writer is None:
             writer = self._writer(topic)
         publication, type_name = writer
-        if isinstance(msg, dict):
-            from .msgbuild import build_message
-
-            msg = build_message(type_name, msg)
         got = msgtypes.type_name(msg)  # a class of the right type is refused by the publication, in its words
         if got != type_name:
             got = got or type(msg).__name__

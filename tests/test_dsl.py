@@ -277,14 +277,3 @@ def test_qos_on_ros1_latches_when_transient_local_and_is_kept_for_ros2(make_node
                                                                       "durability": "volatile"}
     with pytest.raises(errors.DeclarationError, match="qos='fast' is not a profile"):
         talker.new.subscribe("/dsl_qos_scan", print, msgType=String, qos="fast")
-
-
-def test_write_takes_the_fields_as_a_dict_checked_like_pub(make_node):
-    seen = []
-    make_node("dsl_dict_listener").new.subscribe("/dsl_dict", handler=seen.append, msgType=Twist).create()
-    talker = make_node("dsl_dict_talker").new.publish("/dsl_dict", msgType=Twist).create()
-    wait_for(lambda: talker.write("/dsl_dict", {"linear": {"x": 1.5}, "angular": {"z": -0.5}}) or seen,
-             interval=0.1, what="the message built from a dict")
-    assert (seen[0].linear.x, seen[0].angular.z, seen[0].linear.y) == (1.5, -0.5, 0.0)
-    with pytest.raises(errors.MessageTypeError, match="linear.q: no such field"):
-        talker.write("/dsl_dict", {"linear": {"q": 1}})
