@@ -50,7 +50,8 @@ def test_bash_run_sh_ros2_and_the_five_lines_drive_the_turtle_round(tmp_path):
         term.type("p = %plot /turtle1/pose position.x position.y --xy")
         term.press("Enter")
         term.wait_for(lambda rows: any("/turtle1/pose: position.y vs position.x" in row for row in rows)
-                      and any("┌" in row for row in rows), timeout=20, what="the chart")
+                      and len([row for row in rows if "│" in row and "*" in row]) >= 3, timeout=20,
+                      what="the chart, redrawn with the track's points")
         term.press("C-c")
         term.wait_for(lambda rows: any("ipyros: plotted" in row for row in rows), timeout=10, what="Ctrl-C to stop it")
         run(term, 'print("POINTS", len(p.data["t"]) > 3, p.running)')
