@@ -236,7 +236,7 @@ def test_echo_as_csv_and_as_a_table_and_hz_of_two_topics_at_once(ip, capsys, rat
                 if line.startswith("│") and "/mg/" in line}
         assert set(rows) == {"/mg/rate", "/mg/slow"}, rows
         assert 40 < float(rows["/mg/rate"][3]) < 60 and 7 < float(rows["/mg/slow"][3]) < 13, rows
-        assert 0.015 < float(rows["/mg/rate"][4]) <= float(rows["/mg/rate"][5]) < 0.2, "min and max intervals"
+        assert 0 <= float(rows["/mg/rate"][4]) <= float(rows["/mg/rate"][5]) < 0.5, "min and max intervals"
         assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "the listener is gone"
         assert "no live topic /mg/nothing" in str(error_of(ip, "%hz /mg/rate /mg/nothing"))
 
