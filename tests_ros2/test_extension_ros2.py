@@ -222,3 +222,28 @@ def test_record_on_ros2_then_replay_the_bag_through_two_handler_versions(ip, cap
     wait_for(lambda: len(outs) >= recorded, timeout=20, what="the bag again through the new handler")
     assert list(outs) == [3 * x for x in inputs]
     _ok(ip, "w.shutdown(); ear.shutdown()")
+
+
+def test_a_ros1_bag_plays_on_ros2_through_a_handler(make_node, tmp_path):
+    """A bag recorded on ROS 1 (a .bag file) is played on ROS 2: its messages become ROS 2 messages."""
+    from conftest import wait_for
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+    from std_msgs.msg import UInt32
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    bag = tmp_path / "from_ros1.bag"
+    with Writer(bag) as writer:  # as rosbag record on ROS 1 writes it: ROS 1 serialization, its msgdef and md5
+        msgdef, md5 = store.generate_msgdef("std_msgs/msg/UInt32", ros_version=1)
+        connection = writer.add_connection("/r1/counts", "std_msgs/msg/UInt32", msgdef=msgdef, md5sum=md5)
+        Msg = store.types["std_msgs/msg/UInt32"]
+        for i in range(20):
+            writer.write(connection, 1_000_000_000 + i * 20_000_000, store.serialize_ros1(Msg(data=i), Msg.__msgtype__))
+    heard: list[int] = []
+    w = make_node("r1_replay")
+    w.baseBag(str(bag), rate=2.0)
+    w.reuse.publish("/r1/counts", type=UInt32)
+    w.new.subscribe("/r1/counts", lambda m: heard.append(m.data), type=UInt32)
+    w.create()
+    wait_for(lambda: len(heard) >= 20, timeout=20, what="the ROS 1 bag's messages through the handler")
+    assert heard == list(range(20))

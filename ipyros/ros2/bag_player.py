@@ -1,5 +1,6 @@
-"""A ROS 2 bag played as a node: ``python bag_player.py BAG [--rate R] [--loop] [--delay S] [--topics T ...]
-[--ros-args ...]``.
+"""A bag played as a ROS 2 node: ``python bag_player.py BAG [--rate R] [--loop] [--delay S] [--topics T ...]
+[--ros-args ...]``. BAG is a rosbag2 folder, or a ROS 1 ``.bag`` file (its messages turned into
+CDR as they are read, with the message definitions the bag carries).
 
 ipyros runs it as the basenode of ``baseBag`` on ROS 2, named and remapped with
 ``--ros-args`` like any basenode. It advertises every topic (reliable, volatile, 1000
@@ -19,6 +20,35 @@ from rclpy.utilities import remove_ros_args
 from rosbags.rosbag2 import Reader
 
 
+class Ros1Bag:
+    """A ROS 1 bag read as rosbag2's Reader reads a folder: connections, then (connection, stamp, CDR bytes)."""
+
+    def __init__(self, path: str) -> None:
+        from rosbags.rosbag1 import Reader as Ros1Reader
+        from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+
+        self._reader = Ros1Reader(path)
+        self._store = get_typestore(Stores.ROS2_JAZZY)
+        self._get_types = get_types_from_msg
+
+    def open(self) -> None:
+        self._reader.open()
+        for connection in self._reader.connections:  # types the store lacks: from the bag's own definitions
+            if connection.msgtype not in self._store.types:
+                self._store.register(self._get_types(connection.msgdef.data, connection.msgtype))
+
+    @property
+    def connections(self) -> list:
+        return list(self._reader.connections)
+
+    def messages(self, connections):
+        for connection, stamp, raw in self._reader.messages(connections=connections):
+            yield connection, stamp, self._store.ros1_to_cdr(raw, connection.msgtype)
+
+    def close(self) -> None:
+        self._reader.close()
+
+
 def message_class(msgtype: str) -> type:
     package, kind, name = msgtype.split("/")
     return getattr(importlib.import_module(f"{package}.{kind}"), name)
@@ -34,7 +64,7 @@ def main() -> None:
     args = parser.parse_args(remove_ros_args(sys.argv)[1:])
     rclpy.init(args=sys.argv)
     node = rclpy.create_node("bag_player")
-    reader = Reader(args.bag)
+    reader = Ros1Bag(args.bag) if args.bag.endswith(".bag") else Reader(args.bag)
     reader.open()
     connections = [c for c in reader.connections if not args.topics or c.topic in args.topics]
     qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)

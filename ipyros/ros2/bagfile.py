@@ -30,10 +30,16 @@ def _rosbags() -> Any:
 
 
 def bag_topics(path: Path) -> dict[str, str]:
-    """The topics recorded in the bag folder ``path``, with their types; a one-line error if it is no bag."""
+    """The topics recorded in the bag ``path`` (a rosbag2 folder, or a ROS 1 ``.bag`` file, which the
+    player turns into ROS 2 messages), with their types; a one-line error if it is no bag."""
     rosbag2 = _rosbags()
     try:
-        reader = rosbag2.Reader(path)
+        if path.suffix == ".bag":
+            from rosbags.rosbag1 import Reader as Ros1Reader
+
+            reader = Ros1Reader(path)
+        else:
+            reader = rosbag2.Reader(path)
         reader.open()
     except Exception as error:  # noqa: BLE001 - rosbags' errors of any kind: not a bag we can read
         raise DeclarationError(f"cannot read the bag {path}: {error}") from None
