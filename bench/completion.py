@@ -33,15 +33,16 @@ import sys
 import tempfile
 import time
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 from IPython.core.completer import CompletionContext, provisionalcompleter
 from IPython.core.interactiveshell import InteractiveShell
 from traitlets.config import Config
 
-from bench.relay import BenchError, Child, Master, wait_until
+from bench.relay import BenchError, Child, Master, stop_cleanly_on_sigterm, wait_until
 from ipyros.completion import RosMatcher, default_catalog, install, uninstall
 from ipyros.graph import GraphCache
 from ipyros.model import NodeModel, TopicModel
@@ -140,15 +141,33 @@ def table(rows: list[Row]) -> str:
     return "\n".join(lines)
 
 
+@contextmanager
+def completing_shell(graph: GraphCache) -> Iterator[tuple[InteractiveShell, RosMatcher]]:
+    """An IPython shell with ipyros's completer on ``graph`` (and a DSL node ``nd``), and the matcher
+    itself; taken away again after."""
+    config = Config()
+    config.HistoryManager.hist_file = ":memory:"
+    shell = InteractiveShell.instance(config=config)
+    shell.user_ns["nd"] = DslNode()
+    catalog = default_catalog()
+    catalog.warm()  # done before install(), whose background warm-up then finds it cached
+    handle = install(shell, graph, catalog)
+    try:
+        with provisionalcompleter(), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            yield shell, RosMatcher(shell, graph, catalog)
+    finally:
+        uninstall(shell, handle)
+        InteractiveShell.clear_instance()
+
+
 def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]:
     rows: list[Row] = []
     notes: list[str] = []
-    config = Config()
-    config.HistoryManager.hist_file = ":memory:"
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-completion-") as tmp:
         workdir = Path(tmp)
         master = Master(workdir)
-        publisher = graph = shell = handle = None
+        publisher = graph = None
         try:
             say(f"master at {master.uri}; advertising {TOPICS} topics ...")
             started = time.monotonic()
@@ -164,14 +183,7 @@ def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]
             notes.append(f"one graph refresh (getSystemState + getTopicTypes) with master up: "
                          f"{(time.perf_counter() - started) * 1000:.1f} ms")
 
-            shell = InteractiveShell.instance(config=config)
-            shell.user_ns["nd"] = DslNode()
-            catalog = default_catalog()
-            catalog.warm()  # done before install(), whose background warm-up then finds it cached
-            handle = install(shell, graph, catalog)
-            matcher = RosMatcher(shell, graph, catalog)
-            with provisionalcompleter(), warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+            with completing_shell(graph) as (shell, matcher):
                 say("timing with the master up ...")
                 rows += measure("up", shell, matcher, repeats)
                 say("stopping the master ...")
@@ -184,10 +196,6 @@ def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]
                 say("timing with the master down ...")
                 rows += measure("down", shell, matcher, repeats)
         finally:
-            if handle is not None:
-                uninstall(shell, handle)
-            if shell is not None:
-                InteractiveShell.clear_instance()
             if graph is not None:
                 graph.stop()
             if publisher is not None:
@@ -209,21 +217,12 @@ def run_ros2(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[
 
     rows: list[Row] = []
     notes: list[str] = []
-    config = Config()
-    config.HistoryManager.hist_file = ":memory:"
     backend = current().backend
     graph = GraphCache("", period=1.0, source=backend.graph_snapshot, where=backend.graph_where()).start()
-    shell = handle = publisher = None
+    publisher = None
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-completion-") as tmp:
         try:
-            shell = InteractiveShell.instance(config=config)
-            shell.user_ns["nd"] = DslNode()
-            catalog = default_catalog()
-            catalog.warm()
-            handle = install(shell, graph, catalog)
-            matcher = RosMatcher(shell, graph, catalog)
-            with provisionalcompleter(), warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+            with completing_shell(graph) as (shell, matcher):
                 say(f"starting a peer with {TOPICS} topics in ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']} ...")
                 started = time.monotonic()
                 publisher = Child("many_topics", [sys.executable, str(NODES / "many_topics.py"), str(TOPICS),
@@ -248,10 +247,6 @@ def run_ros2(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[
                 say("timing with the peer gone ...")
                 rows += measure("gone", shell, matcher, repeats)
         finally:
-            if handle is not None:
-                uninstall(shell, handle)
-            if shell is not None:
-                InteractiveShell.clear_instance()
             graph.stop()
             if publisher is not None:
                 publisher.stop()
@@ -260,6 +255,7 @@ def run_ros2(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[
 
 
 def main(argv=None) -> int:
+    stop_cleanly_on_sigterm()
     parser = argparse.ArgumentParser(prog="python -m bench.completion", description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
     parser.add_argument("--repeats", type=int, help="warm calls per case through the matcher (default 200, quick 40)")

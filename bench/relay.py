@@ -297,6 +297,15 @@ class ForeignLoad:
         return max(0.0, foreign / 1e9 / elapsed) if elapsed > 0 else 0.0
 
 
+def stop_cleanly_on_sigterm() -> None:
+    """SIGTERM ends a bench as Ctrl-C does: its ``finally`` blocks stop the processes it started and
+    remove its temporary folders (by default Python would just die, leaving them behind)."""
+    def stop(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
+
+
 class BenchError(RuntimeError):
     """A scenario could not run; the message names the process and its log's last lines."""
 
@@ -668,6 +677,7 @@ def parse(argv=None) -> argparse.Namespace:
 
 
 def main(argv=None) -> int:
+    stop_cleanly_on_sigterm()
     opts = parse(argv)
     quick = opts.quick
     repeats = opts.repeats or (1 if quick else 3)

@@ -35,7 +35,7 @@ from importlib.metadata import version
 from pathlib import Path
 from typing import Optional
 
-from bench.relay import BenchError, Child, wait_until
+from bench.relay import BenchError, Child, stop_cleanly_on_sigterm, wait_until
 
 HERE = Path(__file__).resolve().parent
 NODES = HERE / "ros2"
@@ -206,6 +206,7 @@ def _cpu() -> str:
 
 
 def main(argv: Optional[list[str]] = None) -> int:
+    stop_cleanly_on_sigterm()
     parser = argparse.ArgumentParser(prog="python -m bench.relay_ros2", description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="one repeat, shorter streams")
     parser.add_argument("--repeats", type=int, default=None)

@@ -287,6 +287,15 @@ def _lookup_error(package: str, executable: str) -> BaseNodeError:
     return BaseNodeError(f"package {package!r} has no executable {executable!r}: {hint + ' ' if hint else ''}{listing}")
 
 
+def package_executable(package: str, executable: str, ros2: bool) -> Path:
+    """The file ``rosrun`` (ROS 1) or ``ros2 run`` (ROS 2, the ament index) would run."""
+    if ros2:
+        from .ros2.packages import find_executable as find_in_ament
+
+        return find_in_ament(package, executable)
+    return find_executable(package, executable)
+
+
 def python_command(path: Path, args: Sequence[str] = ()) -> tuple[Path, list[str]]:
     """How to run an executable: a Python script with this interpreter, anything else as it is.
 
@@ -460,9 +469,7 @@ class BaseProcess:
             )
         args = list(base.args)
         if base.package and ros2:
-            from .ros2.packages import find_executable as find_in_ament
-
-            path, args = python_command(find_in_ament(base.package, base.executable), args)
+            path, args = python_command(package_executable(base.package, base.executable, ros2=True), args)
         elif base.package:
             path = find_executable(base.package, base.executable)
         else:

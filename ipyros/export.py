@@ -214,34 +214,44 @@ class _Script:
         return [*lines, '"""']
 
     def render(self) -> str:
-        model = self.model
         main = self.main()  # first: it adds the message imports
-        base = _base_argv(model) if self.starts_base else None
-        head = self._docstring()
-        stdlib = ["os", "signal", "subprocess"] if base else ["os"] if model.namespace != "/" else []
-        head += [f"import {m}" for m in stdlib]
+        base = _base_argv(self.model, ros2=self.LIBRARY == "rclpy") if self.starts_base else None
+        head = self._head(base is not None)
+        values = [*self.bindings.values.values(), *self.unset.values()]
+        if values:
+            head += ["", "# Globals the handlers read, as they were at export.", *values]
+        parts = ["\n".join(head), *self._handle(), f"{' = '.join(self.writers)} = NodeHandle()"]
+        if base is not None:
+            parts.append("# The basenode, remapped so that it talks only to this node on the topics it wraps.\n"
+                         "BASENODE = [\n" + "".join(f"    {arg!r},\n" for arg in base) + "]\n"
+                         f"BASENODE_ENV = {self.model.base.env!r}  # its launch file's <env> tags, if any")
+            parts.append(_BASE.strip("\n"))
+        parts += self._relays(planning.plan(self.model))
+        parts += [src.rstrip("\n") for src in self.bindings.functions.values()]
+        parts.append("def main():\n" + "".join(f"    {line}\n" for line in main).rstrip("\n"))
+        parts.append('if __name__ == "__main__":\n    main()')
+        return "\n\n\n".join(parts) + "\n"
+
+    def _head(self, starts_base: bool) -> list[str]:
+        """The docstring and the imports (and, on ROS 1, the namespace rospy reads at import)."""
+        model = self.model
+        stdlib = ["os", "signal", "subprocess"] if starts_base else ["os"] if model.namespace != "/" else []
+        head = [*self._docstring(), *(f"import {m}" for m in stdlib)]
         if model.namespace != "/" and self.package is None:
             head += ["", "# Before rospy is imported: it reads its namespace then. The names below are resolved in it.",
                      f"os.environ[\"ROS_NAMESPACE\"] = {model.namespace!r}"]
         elif model.namespace != "/":  # roslaunch's ns= sets ROS_NAMESPACE; rosrun's __ns:= wins over it
             head += ["", "# Before rospy is imported: it reads its namespace then. The names below are global.",
                      f"os.environ.setdefault(\"ROS_NAMESPACE\", {model.namespace!r})"]
-        head += ["", *self.bindings.import_lines(skip=stdlib)]
-        values = [*self.bindings.values.values(), *self.unset.values()]
-        if values:
-            head += ["", "# Globals the handlers read, as they were at export.", *values]
-        parts = ["\n".join(head), _HANDLE.strip("\n"), f"{' = '.join(self.writers)} = NodeHandle()"]
-        if base is not None:
-            parts.append("# The basenode, remapped so that it talks only to this node on the topics it wraps.\n"
-                         "BASENODE = [\n" + "".join(f"    {arg!r},\n" for arg in base) + "]\n"
-                         f"BASENODE_ENV = {self.model.base.env!r}  # its launch file's <env> tags, if any")
-            parts.append(_BASE.strip("\n"))
-        if any(isinstance(s, planning.RelaySpec) for s in planning.plan(model)):
-            parts.append(_RELAY.strip("\n"))
-        parts += [src.rstrip("\n") for src in self.bindings.functions.values()]
-        parts.append("def main():\n" + "".join(f"    {line}\n" for line in main).rstrip("\n"))
-        parts.append('if __name__ == "__main__":\n    main()')
-        return "\n\n\n".join(parts) + "\n"
+        return head + ["", *self.bindings.import_lines(skip=stdlib)]
+
+    def _handle(self) -> list[str]:
+        """What the handlers' ``nd.write`` stands on."""
+        return [_HANDLE.strip("\n")]
+
+    def _relays(self, plan: Any) -> list[str]:
+        """The helpers the plan's relays need."""
+        return [_RELAY.strip("\n")] if any(isinstance(s, planning.RelaySpec) for s in plan) else []
 
 
 def _placed_base(model: NodeModel) -> BaseModel:
@@ -373,34 +383,20 @@ class _Ros2Script(_Script):
                          "ipyros ran it, and stops it on exit.")
         return [*lines, '"""']
 
-    def render(self) -> str:
-        model = self.model
-        main = self.main()
-        base = _base_argv(model, ros2=True) if self.starts_base else None
-        stdlib = ["os", "signal", "subprocess", "sys", "threading"] if base else ["sys", "threading"]
-        head = [*self._docstring(), *(f"import {m}" for m in stdlib), "",
-                *self.bindings.import_lines(skip=stdlib),
+    def _head(self, starts_base: bool) -> list[str]:
+        stdlib = ["os", "signal", "subprocess", "sys", "threading"] if starts_base else ["sys", "threading"]
+        return [*self._docstring(), *(f"import {m}" for m in stdlib), "", *self.bindings.import_lines(skip=stdlib),
                 "from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor",
                 "from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy"]
-        values = [*self.bindings.values.values(), *self.unset.values()]
-        if values:
-            head += ["", "# Globals the handlers read, as they were at export.", *values]
-        parts = ["\n".join(head), _QOS_ROS2.strip("\n"), _HANDLE_ROS2.strip("\n"),
-                 f"{' = '.join(self.writers)} = NodeHandle()"]
-        if base is not None:
-            parts.append("# The basenode, remapped so that it talks only to this node on the topics it wraps.\n"
-                         "BASENODE = [\n" + "".join(f"    {arg!r},\n" for arg in base) + "]\n"
-                         f"BASENODE_ENV = {model.base.env!r}")
-            parts.append(_BASE.strip("\n"))
-        plan = planning.plan(model)
-        if any(isinstance(s, planning.RelaySpec) for s in plan):
-            parts.append(_RELAY_ROS2.strip("\n"))
+
+    def _handle(self) -> list[str]:
+        return [_QOS_ROS2.strip("\n"), _HANDLE_ROS2.strip("\n")]
+
+    def _relays(self, plan: Any) -> list[str]:
+        helpers = [_RELAY_ROS2] if any(isinstance(s, planning.RelaySpec) for s in plan) else []
         if any(isinstance(s, planning.ServiceRelaySpec) for s in plan):
-            parts.append(_SERVICE_RELAY_ROS2.strip("\n"))
-        parts += [src.rstrip("\n") for src in self.bindings.functions.values()]
-        parts.append("def main():\n" + "".join(f"    {line}\n" for line in main).rstrip("\n"))
-        parts.append('if __name__ == "__main__":\n    main()')
-        return "\n\n\n".join(parts) + "\n"
+            helpers.append(_SERVICE_RELAY_ROS2)
+        return [h.strip("\n") for h in helpers]
 
 
 def _qos_call(qos: Any, latch: bool = False) -> str:

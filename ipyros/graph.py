@@ -26,6 +26,7 @@ from __future__ import annotations
 import bisect
 import fnmatch
 import http.client
+import logging
 import threading
 import time
 import xmlrpc.client
@@ -35,6 +36,8 @@ from typing import Callable, Iterable, Mapping, Optional, Sequence
 from xml.parsers.expat import ExpatError
 
 from .ros1.master import master_proxy
+
+log = logging.getLogger(__name__)
 
 #: The caller id the master sees in its logs for our read-only queries.
 CALLER_ID = "/ipyros_graph"
@@ -198,7 +201,13 @@ class GraphCache:
         self.source, self._where = source, where
 
     def _fetch(self, timeout: float) -> GraphSnapshot:
-        return self.source() if self.source is not None else fetch_snapshot(self.master_uri, timeout)
+        if self.source is None:
+            return fetch_snapshot(self.master_uri, timeout)  # never raises: a master down is a snapshot too
+        try:
+            return self.source()
+        except Exception:  # noqa: BLE001 - the refresh thread must outlive any one bad read
+            log.debug("reading the graph failed; keeping the last snapshot", exc_info=True)
+            return self._snapshot
 
     @property
     def snapshot(self) -> GraphSnapshot:

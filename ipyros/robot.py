@@ -40,7 +40,7 @@ from typing import Any, Optional
 import yaml
 from rich.table import Table
 
-from .base import DEMO_DIR, BaseProcess, exit_reason, find_executable, python_command
+from .base import DEMO_DIR, BaseProcess, exit_reason, package_executable, python_command
 from .display import Shown
 from .errors import BaseNodeError, IpyrosError
 from .ros1.launchfile import fullname, one_line
@@ -242,10 +242,7 @@ class DemoRobot(Shown):
             ros2 = not backend.has_master  # no master: parameters go to each node, as --ros-args -p
             uri = None if ros2 else self.session.attach_master().uri
             self.master_uri = uri
-            if ros2:
-                from .ros2.packages import find_executable as find_in_ament
-            commands = {node.name: python_command((find_in_ament if ros2 else find_executable)(node.package,
-                                                                                                node.executable))
+            commands = {node.name: python_command(package_executable(node.package, node.executable, ros2))
                         for node in self.nodes}
             for node in self.nodes:
                 if ros2:

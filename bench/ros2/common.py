@@ -21,6 +21,16 @@ def say(*words: object) -> None:
     sys.stdout.flush()
 
 
+def stop(node: Any, executor: Any) -> None:
+    """End a node spun by :func:`spin_in_background`: the executor first (destroying a node it is
+    spinning aborts the process), then the node, then rclpy."""
+    import rclpy
+
+    executor.shutdown()
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
 def spin_in_background(node: Any, executor: Optional[Any] = None) -> Any:
     from rclpy.executors import SingleThreadedExecutor
 

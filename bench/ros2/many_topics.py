@@ -18,8 +18,7 @@ count, prefix = int(sys.argv[1]), sys.argv[2]
 rclpy.init()
 node = rclpy.create_node("bench_topics")
 publishers = [node.create_publisher(String, f"{prefix}{i:04d}", 1) for i in range(count)]
-common.spin_in_background(node)
+executor = common.spin_in_background(node)
 common.say("ready")
 common.serve()
-node.destroy_node()
-rclpy.try_shutdown()
+common.stop(node, executor)

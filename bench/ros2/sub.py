@@ -34,7 +34,7 @@ def on_message(raw: bytes) -> None:
 
 
 sub = node.create_subscription(wire2.message_class(kind), topic, on_message, common.QOS, raw=True)
-common.spin_in_background(node)
+executor = common.spin_in_background(node)
 
 
 def report(args: list[str]) -> str:
@@ -54,5 +54,4 @@ def report(args: list[str]) -> str:
 
 common.say("ready")
 common.serve({"publishers": lambda _: sub.get_publisher_count(), "count": lambda _: len(arrived), "report": report})
-node.destroy_node()
-rclpy.try_shutdown()
+common.stop(node, executor)

@@ -51,7 +51,7 @@ class RecordMagics(ExtensionMagics):
         path = Path(args.file).expanduser()
         if path.exists():
             raise UsageError(f"{path} exists; give a new file name (a recording never overwrites one)")
-        topics = {global_topic(t): self.ext.topic_magics.live_type(global_topic(t)) for t in args.topics}
+        topics = {topic: self.ext.topic_magics.live_type(topic) for topic in map(global_topic, args.topics)}
         self.stop()
         self.recording = Recording(path, topics, args.duration)
         until = f"for {args.duration:g} s" if args.duration else "until %record --stop"

@@ -331,16 +331,15 @@ class Subscription:
         self.topic, self.cls, self.slot = topic, cls, slot
         self._process, self._node, self._declared, self._complain = process, node, qos, complain
         self._lock = threading.Lock()
+        self._follows = qos.reliability is None and qos.durability is None
         self.qos = self._wanted() or Qos(qos.depth, qos.reliability or "reliable", qos.durability or "volatile")
         self._sub = self._open(self.qos)
-        self._follows = qos.reliability is None and qos.durability is None
         if self._follows:
             process.watch(self._follow_publishers)
 
     def _wanted(self) -> Optional[Qos]:
-        if self._declared.reliability is not None or self._declared.durability is not None:
-            return None
-        found = _publishers_qos(self._node, self.topic)
+        """The publishers' QoS with the declared depth, if this subscription follows them and they are there."""
+        found = _publishers_qos(self._node, self.topic) if self._follows else None
         return None if found is None else Qos(self._declared.depth or found.depth, found.reliability,
                                               found.durability)
 
