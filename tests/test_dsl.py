@@ -277,3 +277,14 @@ def test_qos_on_ros1_latches_when_transient_local_and_is_kept_for_ros2(make_node
                                                                       "durability": "volatile"}
     with pytest.raises(errors.DeclarationError, match="qos='fast' is not a profile"):
         talker.new.subscribe("/dsl_qos_scan", print, msgType=String, qos="fast")
+
+
+def test_a_topic_read_as_two_types_in_one_session_is_refused(make_node):
+    """rospy reads a topic once per process: a second reader of another type is told, in one line."""
+    make_node("dsl_two_types_a").new.subscribe("/dsl_two_types", handler=print, msgType=String).create()
+    b = make_node("dsl_two_types_b")
+    b.new.subscribe("/dsl_two_types", handler=print, msgType=UInt32)
+    with pytest.raises(errors.DeclarationError, match="^/dsl_two_types already carries std_msgs/String, "
+                                                      "not std_msgs/UInt32; declare msgType='std_msgs/String'"):
+        b.create()
+    assert not b.created

@@ -272,3 +272,35 @@ def test_a_reuse_relay_keeps_latching(make_node):
     late = listen(make_node, "latch_late", "/latch/turtle1/speed_exceeded", Bool)
     wait_for(lambda: late, timeout=20, what="the latched message for a late subscriber")
     assert late[0].data is False and late[0]._connection_header["latching"] == "1"
+
+
+@pytest.mark.parametrize("typed_first", [True, False], ids=["typed-then-relay", "relay-then-typed"])
+def test_a_relay_and_a_typed_subscriber_on_one_topic_each_get_what_they_asked_for(make_node, failures,
+                                                                                   typed_first):
+    """rospy keeps one subscription per topic in a process: a reuse relay (bytes) and a handler
+    (a message) on the same topic, in either order, with %echo as a third party, each get theirs."""
+    from ipyros.probe import Echo
+
+    topic = f"/share_{int(typed_first)}/in"
+    feeder = make_node(f"share_feeder_{int(typed_first)}").new.publish(topic, msgType=String).create()
+    relayed = listen(make_node, f"share_out_{int(typed_first)}", f"/share_{int(typed_first)}/out", String)
+
+    def wrap():
+        w = make_node(f"share_wrapper_{int(typed_first)}")
+        w.baseNode("relay", args=[topic, f"/share_{int(typed_first)}/out"]).basePackage("topic_tools")
+        w.reuse.subscribe(topic, type=String)
+        w.create()
+
+    typed: list = []
+    if not typed_first:
+        wrap()
+    make_node(f"share_typed_{int(typed_first)}").new.subscribe(
+        topic, handler=lambda m: typed.append(m.data), msgType=String).create()
+    if typed_first:
+        wrap()
+    with Echo(topic, "std_msgs/String") as echo:
+        wait_for(lambda: feeder.write(topic, String("x")) or (relayed and len(typed) > 1),
+                 timeout=20, interval=0.2, what="the message to reach both the relay and the handler")
+        echoed = echo.get(timeout=10)
+    assert set(typed) == {"x"} and {m.data for m in relayed} == {"x"} and echoed.data == "x"
+    assert not failures

@@ -210,3 +210,33 @@ def test_no_orphan_basenode_when_the_interpreter_exits_or_is_killed(ending):
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+@pytest.mark.parametrize("typed_first", [True, False], ids=["typed-then-relay", "relay-then-typed"])
+def test_a_relay_and_a_typed_subscriber_on_one_topic_each_get_what_they_asked_for(make_node, failures,
+                                                                                   typed_first):
+    """A reuse relay (bytes) and a handler (a message) on one topic, in either order, with %echo as a
+    third party: each gets what it asked for (as on ROS 1, where rospy has one subscription per topic)."""
+    from ipyros.probe import Echo
+
+    n = int(typed_first)
+    feeder = make_node(f"w2_share_feeder_{n}").new.publish(f"/share{n}/in", msgType=String).create()
+    relayed = listen(make_node, f"w2_share_out_{n}", f"/share{n}/out")
+
+    def wrap():
+        w = make_node(f"w2_share_{n}")
+        w.baseNode(ECHO_NODE, namespace=f"share{n}", params={"prefix": ""})
+        w.reuse.subscribe("in", type=String)
+        w.create()
+
+    if not typed_first:
+        wrap()
+    typed = listen(make_node, f"w2_share_typed_{n}", f"/share{n}/in")
+    if typed_first:
+        wrap()
+    with Echo(f"/share{n}/in", "std_msgs/String") as echo:
+        wait_for(lambda: feeder.write(f"/share{n}/in", String(data="x")) or (relayed and len(typed) > 1),
+                 timeout=20, interval=0.2, what="the message to reach both the relay and the handler")
+        echoed = echo.get(timeout=10)
+    assert set(typed) == {"x"} and set(relayed) == {"x"} and echoed.data == "x"
+    assert failures == []

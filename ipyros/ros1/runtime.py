@@ -12,12 +12,13 @@ Performance choices (measured in bench/relay.py):
 - relays subscribe with :class:`rospy.AnyMsg` and write the received bytes as they are,
   through a publisher advertised up front with the concrete class, so the type, md5 and
   message definition are right from the first message and none is lost at start;
-- subscribers have an unbounded queue: rospy's ``queue_size=N`` drops bursts.
+- subscribers have an unbounded queue: rospy's ``queue_size=N`` drops bursts;
+- every subscription reads bytes (rospy has one per topic per process, so a relay and a
+  handler on one topic must agree); a handler's message is deserialised for it alone.
 """
 
 from __future__ import annotations
 
-import copy
 import io
 import os
 import threading
@@ -266,38 +267,50 @@ def _first_line(error: BaseException) -> str:
     return text[0] if text else type(error).__name__
 
 
+def _subscribe_bytes(topic: str, cls: type, callback: Callable[[Any], None]) -> rospy.Subscriber:
+    """A rospy subscriber that hands ``callback`` the message's bytes (a :func:`raw_class` of ``cls``).
+
+    rospy keeps one subscription per topic in a process, with the message class of whoever
+    subscribed first, and hands every callback of the topic that class. So every reader in
+    this session subscribes the same way, as bytes: a relay forwards them, a typed
+    :class:`Subscription` deserialises its own message from them. A relay and a handler (and
+    ``%echo``) on one topic then each get what they asked for, in either order. A topic
+    already read here as another type is refused: its bytes would not parse.
+    """
+    existing = rospy.topics.get_topic_manager().get_subscriber_impl(topic)
+    if existing is not None and existing.data_class._type != cls._type:
+        raise DeclarationError(f"{topic} is already read in this session as {existing.data_class._type}, "
+                               f"so it cannot be read as {cls._type} too: use {existing.data_class._type}")
+    sub = rospy.Subscriber(topic, raw_class(cls), callback, queue_size=None, buff_size=_BUFF_SIZE,
+                           tcp_nodelay=True)
+    _Reconnect.guard(sub)
+    return sub
+
+
 class Subscription:
     """A typed subscriber whose callback is a :class:`HandlerSlot`.
 
-    rospy deserialises a message once per process and hands the same object to every
-    callback of the topic. Nodes in separate processes each get their own copy, and
-    handlers are written for that (the paper's ``controlVelocity`` edits ``data`` in
-    place and publishes it): so while several subscriptions of this session share a
-    topic, each gets a copy of its own. Alone on it, a handler gets the message itself.
+    Each subscription deserialises the message itself, from the bytes the topic's one rospy
+    subscription received (see :func:`_subscribe_bytes`), so each handler has a message of
+    its own, as nodes in separate processes would: the paper's ``controlVelocity`` edits
+    ``data`` in place and publishes it, and another node of the session still sees the
+    original. (Deserialising is also quicker than rospy's shared message plus a deepcopy.)
     """
-
-    _sharing: dict[str, int] = {}  # topic → subscriptions of this process on it
-    _sharing_lock = threading.Lock()
 
     def __init__(self, topic: str, cls: type, slot: HandlerSlot) -> None:
         self.topic, self.cls, self.slot = topic, cls, slot
-        self._sub = rospy.Subscriber(topic, cls, self._deliver, queue_size=None, buff_size=_BUFF_SIZE,
-                                     tcp_nodelay=True)
-        _Reconnect.guard(self._sub)
-        with self._sharing_lock:
-            self._sharing[topic] = self._sharing.get(topic, 0) + 1
+        self._sub = _subscribe_bytes(topic, cls, self._deliver)
 
-    def _deliver(self, msg: Any) -> None:
-        self.slot(copy.deepcopy(msg) if self._sharing.get(self.topic, 0) > 1 else msg)
+    def _deliver(self, raw: rospy.AnyMsg) -> None:
+        msg = self.cls()
+        msg.deserialize(raw._buff)
+        msg._connection_header = raw._connection_header  # who sent it, latched or not: as rospy gives it
+        self.slot(msg)
 
     def connections(self) -> int:
         return self._sub.get_num_connections()
 
     def close(self) -> None:
-        with self._sharing_lock:
-            self._sharing[self.topic] -= 1
-            if not self._sharing[self.topic]:
-                del self._sharing[self.topic]
         self._sub.unregister()
 
 
@@ -339,9 +352,11 @@ class Relay:
         self._header_seen: Optional[dict] = None
         self._pub = _publisher(target, cls)
         self._impl = self._pub.impl
-        self._sub = rospy.Subscriber(source, raw_class(cls), self._forward,
-                                     queue_size=None, buff_size=_BUFF_SIZE, tcp_nodelay=True)
-        _Reconnect.guard(self._sub)
+        try:
+            self._sub = _subscribe_bytes(source, cls, self._forward)
+        except DeclarationError:
+            self._pub.unregister()
+            raise
 
     def _forward(self, raw: rospy.AnyMsg) -> None:
         header = raw._connection_header
