@@ -57,6 +57,20 @@ class SendFigures:
     dropped: int  # messages dropped for them so far
 
 
+class Pristine:
+    """A message kept as it arrived, made again on each request.
+
+    A handler may change the message it was given in place (the paper's ``controlVelocity``
+    does), so a slot keeping recent messages for ``%try`` keeps how to make them again,
+    e.g. from their bytes, instead of the object the live handler got.
+    """
+
+    __slots__ = ("make",)
+
+    def __init__(self, make: Callable[[], Any]) -> None:
+        self.make = make
+
+
 class HandlerSlot:
     """Calls the current handler; counts calls, time and exceptions.
 
@@ -104,11 +118,14 @@ class HandlerSlot:
     def __call__(self, arg: Any = None) -> Any:
         return self.run(arg)[1]
 
-    def run(self, arg: Any = None) -> tuple[bool, Any]:
-        """Call the handler: ``(True, what it returned)``, or ``(False, None)`` once its exception is reported."""
+    def run(self, arg: Any = None, pristine: Pristine | None = None) -> tuple[bool, Any]:
+        """Call the handler: ``(True, what it returned)``, or ``(False, None)`` once its exception is reported.
+
+        ``pristine`` makes ``arg`` again as it arrived; without it ``arg`` itself is kept.
+        """
         handler, pass_argument = self._current
         if arg is not None:
-            self.recent.append(arg)
+            self.recent.append(arg if pristine is None else pristine)
         start = time.perf_counter()
         try:
             return True, (handler(arg) if pass_argument else handler())
@@ -122,6 +139,10 @@ class HandlerSlot:
                 self._total_s += elapsed
                 self._max_s = max(self._max_s, elapsed)
                 self._stamps.append(start)
+
+    def recent_messages(self) -> list[Any]:
+        """The last messages the slot got, oldest first, as they arrived (made again where it can)."""
+        return [kept.make() if isinstance(kept, Pristine) else kept for kept in list(self.recent)]
 
     def fail(self, error: Exception) -> None:
         """Count and report a failure found after the handler returned (e.g. a wrong response)."""

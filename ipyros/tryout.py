@@ -141,7 +141,7 @@ def try_candidate(node: rosNode, topic: str, candidate: Callable[..., Any],
     if live is None or node.model().topic(resolved, "subscribe", "new") is None:
         raise NotDeclaredError(f"{node.name} has no handler for {resolved}; %try compares subscription handlers")
     call_arity(candidate, "subscribe", f"{node.name} {resolved}")
-    messages = list(slot.recent) if slot is not None else []
+    messages = slot.recent_messages() if slot is not None else []
     if last is not None:
         messages = messages[-last:] if last > 0 else []
     if not messages:

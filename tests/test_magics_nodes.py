@@ -175,6 +175,21 @@ def test_try_compares_and_reports_exceptions(node_ip, capsys):
     assert "! ZeroDivisionError: division by zero" in out and "1 of 2 messages give different results" in out
 
 
+def test_try_runs_on_messages_as_they_arrived_not_as_the_live_handler_left_them(node_ip, capsys):
+    """The paper's controlVelocity changes its message in place: %try must not see the changed one."""
+    ip = node_ip
+    ok(ip, "def on_number(msg):\n    msg.data += 1000\n    heard.append(('edited', msg.data))\n"
+           "nd.new.subscribe('/mn/numbers', on_number, msgType=UInt32)")
+    feed(3)
+    wait_for(lambda: len([h for h in ip.user_ns["heard"] if h[0] == "edited"]) == 3, what="the live handler")
+    capsys.readouterr()
+    ok(ip, "%try nd /mn/numbers lambda m: print('saw', m.data)")
+    out = capsys.readouterr().out
+    assert "saw 0" in out and "saw 2" in out and "saw 1002" not in out
+    ok(ip, "%try nd /mn/numbers lambda m: print('saw', m.data)")  # and again: the live run changed nothing kept
+    assert "saw 1" in capsys.readouterr().out
+
+
 def test_try_errors(node_ip):
     ip = node_ip
     error = error_of(ip, "%try nd /mn/numbers on_number")
@@ -219,5 +234,5 @@ def test_try_history_setting_resizes_what_subscriptions_keep(node_ip):
     ok(ip, "%config RosMagics.try_history = 3")
     assert slot.recent.maxlen == 3
     feed(5)
-    wait_for(lambda: len(slot.recent) == 3 and slot.recent[-1].data == 4, what="the last 3 messages")
-    assert [m.data for m in slot.recent] == [2, 3, 4]
+    wait_for(lambda: len(slot.recent) == 3 and slot.recent_messages()[-1].data == 4, what="the last 3 messages")
+    assert [m.data for m in slot.recent_messages()] == [2, 3, 4]

@@ -19,6 +19,7 @@ Performance choices (measured in bench/relay.py):
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 import threading
@@ -34,7 +35,7 @@ from rospy.msg import serialize_message
 from . import sending
 from ..errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
 from .master import master_proxy
-from ..slots import HandlerSlot, SendFigures
+from ..slots import HandlerSlot, Pristine, SendFigures
 
 def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
     """A synchronous publisher (``queue_size=None`` on purpose; see the module docstring)."""
@@ -287,6 +288,13 @@ def _subscribe_bytes(topic: str, cls: type, callback: Callable[[Any], None]) -> 
     return sub
 
 
+def _message(cls: type, buff: bytes, header: dict) -> Any:
+    msg = cls()
+    msg.deserialize(buff)
+    msg._connection_header = header  # who sent it, latched or not: as rospy gives it
+    return msg
+
+
 class Subscription:
     """A typed subscriber whose callback is a :class:`HandlerSlot`.
 
@@ -302,10 +310,8 @@ class Subscription:
         self._sub = _subscribe_bytes(topic, cls, self._deliver)
 
     def _deliver(self, raw: rospy.AnyMsg) -> None:
-        msg = self.cls()
-        msg.deserialize(raw._buff)
-        msg._connection_header = raw._connection_header  # who sent it, latched or not: as rospy gives it
-        self.slot(msg)
+        self.slot.run(_message(self.cls, raw._buff, raw._connection_header),
+                      Pristine(functools.partial(_message, self.cls, raw._buff, raw._connection_header)))
 
     def connections(self) -> int:
         return self._sub.get_num_connections()

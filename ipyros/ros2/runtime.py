@@ -19,6 +19,7 @@ never deserialising.
 
 from __future__ import annotations
 
+import functools
 import logging
 import os
 import threading
@@ -30,10 +31,11 @@ from rclpy._rclpy_pybind11 import RCLError
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 
 from ..errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
 from ..qos import Qos
-from ..slots import HandlerSlot, SendFigures
+from ..slots import HandlerSlot, Pristine, SendFigures
 
 #: Reliable, and deep enough that a burst is not cut short: what ROS 1's unbounded
 #: subscriber queue gave. A declaration's ``qos=`` overrides any of it.
@@ -324,6 +326,9 @@ class Subscription:
     takes them from the topic's publishers, now and as they show up (the process's graph
     watch): so a latched topic's last message reaches a subscription made later, as on
     ROS 1, and a best-effort sensor is heard at all. What the declaration gives is kept.
+
+    It takes the message's bytes and deserialises them itself (what rclpy would do), so the
+    slot can keep the bytes for ``%try``: the handler may change its message in place.
     """
 
     def __init__(self, process: ProcessNode, node: Node, topic: str, cls: type, slot: HandlerSlot,
@@ -345,8 +350,11 @@ class Subscription:
 
     def _open(self, qos: Qos) -> Any:
         return self._node.create_subscription(
-            self.cls, self.topic, self.slot, _profile(qos),
+            self.cls, self.topic, self._deliver, _profile(qos), raw=True,
             event_callbacks=_mismatch_report(self._node, self.topic, qos, "subscription", self._complain))
+
+    def _deliver(self, data: bytes) -> None:
+        self.slot.run(deserialize_message(data, self.cls), Pristine(functools.partial(deserialize_message, data, self.cls)))
 
     def _follow_publishers(self) -> None:
         with self._lock:
