@@ -6,13 +6,16 @@ so they look the same in a terminal, in a notebook (as HTML) and in plain text.
 
 from __future__ import annotations
 
+import html
 import io
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 from rich.markup import escape
+from rich.protocol import rich_cast
 from rich.table import Table
+from rich.text import Text
 
 from .qos import from_model as qos_of
 
@@ -48,6 +51,12 @@ def node_table(node: "rosNode") -> Table:
 
 class Shown:
     """Shows itself as its rich rendering: in a terminal as text, in Jupyter as HTML."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        # IPython's pretty printer takes the first class of the MRO that has _repr_pretty_ or
+        # __repr__ of its own; a dataclass has its own __repr__, so it gets _repr_pretty_ too.
+        cls._repr_pretty_ = Shown._repr_pretty_  # type: ignore[method-assign]
 
     def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
         printer.text(render_text(self))
@@ -173,10 +182,51 @@ def render_text(renderable: Any, width: int = 100) -> str:
 
 
 def render_html(renderable: Any) -> str:
-    """Render as an HTML fragment for Jupyter."""
+    """Render as an HTML fragment for Jupyter: a table as an HTML table, anything else as coloured text."""
+    table = rich_cast(renderable)
+    if isinstance(table, Table):
+        return table_html(table)
     console = Console(record=True, file=io.StringIO(), width=120, force_jupyter=False)
     console.print(renderable)
     return console.export_html(inline_styles=True, code_format="<pre style=\"font-family:monospace\">{code}</pre>")
+
+
+def table_html(table: Table) -> str:
+    """A rich :class:`Table` as an HTML ``<table>``, its markup (colours, bold) as inline styles.
+
+    rich's own Jupyter output is the terminal drawing in a ``<pre>``: box characters that
+    wrap on a narrow page and copy badly. A notebook styles a real table as its own.
+    """
+    console = Console(file=io.StringIO(), color_system="truecolor", force_jupyter=False, width=10_000)
+
+    def cell(value: Any) -> str:
+        if isinstance(value, str):
+            value = Text.from_markup(value)
+        if not isinstance(value, Text):  # another renderable: its text, as the terminal would show it
+            value = Text("\n".join(line.rstrip() for line in render_plain(value).splitlines()))
+        parts = []
+        for segment in value.render(console):
+            text = html.escape(segment.text).replace("\n", "<br>")
+            css = segment.style.get_html_style() if segment.style else ""
+            parts.append(f'<span style="{css}">{text}</span>' if css else text)
+        return "".join(parts)
+
+    def align(column: Any) -> str:
+        return f' style="text-align:{column.justify}"' if column.justify in ("right", "center") else ""
+
+    head = "".join(f"<th{align(c)}>{cell(c.header)}</th>" for c in table.columns)
+    columns = [list(c.cells) for c in table.columns]
+    body = "".join("<tr>" + "".join(f"<td{align(c)}>{cell(cells[row])}</td>" for c, cells in zip(table.columns, columns))
+                   + "</tr>" for row in range(table.row_count))
+    caption = f'<caption style="text-align:left">{cell(table.title)}</caption>' if table.title else ""
+    return f'<table class="ipyros">{caption}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
+
+
+def render_plain(renderable: Any) -> str:
+    """``renderable`` as plain text, without colour or width limit (e.g. inside a one-line message)."""
+    buffer = io.StringIO()
+    Console(file=buffer, color_system=None, force_jupyter=False, width=10_000).print(renderable)
+    return buffer.getvalue().rstrip("\n")
 
 
 def _width(default: int) -> int:
@@ -208,4 +258,5 @@ class Versions(Rows):
         return table
 
 
-__all__ = ["History", "Versions", "NodeStatus", "StatusRow", "node_table", "render_text", "render_html"]
+__all__ = ["History", "Versions", "NodeStatus", "StatusRow", "node_table", "render_text", "render_html",
+           "render_plain", "table_html"]

@@ -28,7 +28,7 @@ from .errors import (DeclarationError, HandlerError, IpyrosError, MessageTypeErr
 from .model import NodeModel, ServiceModel, TimerModel, TopicModel
 from .plan import Spec
 from .session import Session, current
-from .slots import HandlerSlot, call_arity
+from .slots import HandlerSlot, OutputScope, call_arity
 from .versions import HandlerVersion
 from .wrap import check_reuse, check_wrapping
 
@@ -52,6 +52,7 @@ class rosNode:  # noqa: N801 - the paper's name
         self._handlers: dict[str, Callable[..., Any]] = {}  # slot key → the user's function
         self._takes_argument: dict[str, bool] = {}  # slot key → call the handler with the message/event?
         self._slots: dict[str, HandlerSlot] = {}
+        self._output: Optional[OutputScope] = None  # where its handlers print (the creating cell, in Jupyter)
         self._live: dict[Spec, Any] = {}  # spec → runtime endpoint
         self._writers: dict[str, tuple[Any, str]] = {}  # topic as typed → (publication, type)
         self._versions: dict[str, list[HandlerVersion]] = {}  # slot key → every function it was given
@@ -254,6 +255,7 @@ class rosNode:  # noqa: N801 - the paper's name
                 self._session.require_master(f"{self.called}.create()")
                 self._check_live_types(self._model.topics)
                 self._set_params(self._model.params)
+                self._output = self._session.output_scope(self)
                 self._open(planning.plan(self._model))
                 self.created = True
                 start_base(self)
@@ -543,7 +545,7 @@ class rosNode:  # noqa: N801 - the paper's name
         if slot is None:
             label = f"{self.name} {spec.slot.split(' ', 1)[1]}"
             slot = HandlerSlot(label, handlers[spec.slot], self._report, pass_argument=takes_arg.get(spec.slot, True),
-                               keep=self._session.config.keep_recent)
+                               keep=self._session.config.keep_recent, output=self._output)
             self._slots[spec.slot] = slot
         if isinstance(spec, planning.SubscribeSpec):
             return backend.subscription(host, spec.topic, msgtypes.resolve_message(spec.type)[1], slot, spec.qos,

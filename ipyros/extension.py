@@ -33,8 +33,9 @@ from .dsl import rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache
 from .magics import DemoMagics, NodeMagics, PlotMagics, RecordMagics, RosMagics, TopicMagics, WrapMagics
+from .magics import cell_output
 from .magics.output import Printer, StderrLogHandler, failure_report, note, note_line
-from .probe import PromptPublisher
+from .probe import PromptPublisher, is_tool
 from .ros1 import master as master_mod
 from .session import Session, configure, current, started as session_started
 
@@ -90,6 +91,10 @@ class Extension:
         self.session.notice = note_line
         self._saved["call_name"] = self.session.call_name
         self.session.call_name = self._variable_of
+        if in_kernel(shell):
+            cell_output.route()
+            self._saved["output_scope"] = self.session.output_scope
+            self.session.output_scope = _output_below_the_cell
         self._start_logging()
         shell.events.register("post_run_cell", self._after_cell)
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
@@ -225,6 +230,9 @@ class Extension:
             session.notice = self._saved["notice"]
         if session.call_name == self._variable_of:
             session.call_name = self._saved["call_name"]
+        if "output_scope" in self._saved:
+            session.output_scope = self._saved["output_scope"]
+            cell_output.unroute()
         saved = self._saved["config"]
         if session.master is None or saved.master_uri in (None, session.master.uri):
             session.config = saved  # the master settings as they were before loading
@@ -237,6 +245,18 @@ class Extension:
         for magics in self.magics:
             _unregister(shell, magics)
         self.publisher.close()
+
+
+def in_kernel(shell: Any) -> bool:
+    """Whether ``shell`` is a Jupyter kernel's (its output goes to cells, not to a terminal)."""
+    return getattr(shell, "kernel", None) is not None
+
+
+def _output_below_the_cell(node: rosNode) -> Optional[cell_output.NodeOutput]:
+    """A node created from a cell prints below that cell; ipyros's own tool nodes print nowhere of their own."""
+    if is_tool(node.name) or threading.current_thread() is not threading.main_thread():
+        return None
+    return cell_output.NodeOutput(cell_output.OutputArea())
 
 
 def _global(name: str) -> Optional[str]:

@@ -20,6 +20,7 @@ first node created, that ROS node takes its name (see :mod:`ipyros.session`).
 from __future__ import annotations
 
 import os
+import re
 import queue
 import statistics
 import time
@@ -35,6 +36,11 @@ from .session import current
 def tool_name(purpose: str) -> str:
     """The DSL node name of a probe: unique on the master, recognisable in ``rosnode list``."""
     return f"ipyros_{purpose}_{os.getpid()}"
+
+
+def is_tool(name: str) -> bool:
+    """Whether ``name`` is a probe's (of any ipyros session): not a node the user made."""
+    return re.fullmatch(r"ipyros_[a-z]+_\d+", name.rsplit("/", 1)[-1]) is not None
 
 
 class Echo:

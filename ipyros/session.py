@@ -89,6 +89,8 @@ class Session:
         self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
         #: How advice names a node (``nd.base.restart()``): the extension finds the user's variable.
         self.call_name: Callable[["rosNode"], str] = lambda node: node.name
+        #: Where a node created now has its handlers print (the extension gives Jupyter cells an area).
+        self.output_scope: Callable[["rosNode"], Optional[OutputScope]] = lambda node: None
         self._lock = threading.RLock()
         self.watch: Optional[MasterWatch] = None
         self.closed = False

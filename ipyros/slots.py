@@ -16,7 +16,7 @@ import time
 import traceback
 from collections import deque
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Optional, Protocol
 
 from .errors import HandlerError
 
@@ -57,6 +57,18 @@ class SendFigures:
     dropped: int  # messages dropped for them so far
 
 
+class OutputScope(Protocol):
+    """Where a handler's prints go while it runs (a Jupyter cell's output area, say).
+
+    ``enter`` is called before each handler call on the calling thread, ``leave`` after
+    it with what ``enter`` returned.
+    """
+
+    def enter(self) -> Any: ...
+
+    def leave(self, previous: Any) -> None: ...
+
+
 class Pristine:
     """A message kept as it arrived, made again on each request.
 
@@ -87,8 +99,10 @@ class HandlerSlot:
         pass_argument: bool = True,
         keep: int = 20,
         report_interval: float = 5.0,
+        output: Optional[OutputScope] = None,
     ) -> None:
         self.label = label
+        self.output = output
         self._current = (handler, pass_argument)
         self.recent: deque[Any] = deque(maxlen=keep)
         self._report = report
@@ -126,6 +140,8 @@ class HandlerSlot:
         handler, pass_argument = self._current
         if arg is not None:
             self.recent.append(arg if pristine is None else pristine)
+        output = self.output
+        previous = output.enter() if output is not None else None
         start = time.perf_counter()
         try:
             return True, (handler(arg) if pass_argument else handler())
@@ -139,6 +155,8 @@ class HandlerSlot:
                 self._total_s += elapsed
                 self._max_s = max(self._max_s, elapsed)
                 self._stamps.append(start)
+            if output is not None:
+                output.leave(previous)
 
     def recent_messages(self) -> list[Any]:
         """The last messages the slot got, oldest first, as they arrived (made again where it can)."""

@@ -56,6 +56,12 @@ class Cell:
         texts = [c["data"].get(mime, "") for c in self.outputs("display_data", "execute_result")]
         return re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(texts))
 
+    def updated(self, display_id: str) -> str:
+        """The last text this cell's run put in the display ``display_id`` (of this cell or an earlier one)."""
+        texts = [c["data"].get("text/plain", "") for c in self.outputs("update_display_data")
+                 if c.get("transient", {}).get("display_id") == display_id]
+        return texts[-1] if texts else ""
+
     def payload(self, source: str) -> dict[str, Any]:
         return next(p for p in self.reply.get("payload", []) if p["source"] == source)
 

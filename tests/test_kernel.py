@@ -52,13 +52,15 @@ def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
     kernel.ok(HANDLER + "from std_msgs.msg import UInt32\nnd = rosNode('e2e_kernel_node')")
     assert TOPIC in kernel.complete('nd.new.subscribe(topic="/e2e_k')
     assert "std_msgs/UInt32" in kernel.complete(f'nd.new.subscribe(topic="{TOPIC}", msgType="std_msgs/UInt')
-    kernel.ok(f'nd.new.subscribe(topic="{TOPIC}", handler=on_tick, msgType=UInt32)\nnd.create()')
+    cell = kernel.ok(f'nd.new.subscribe(topic="{TOPIC}", handler=on_tick, msgType=UInt32)\nnd.create()')
+    (area,) = cell.outputs("display_data")  # where the node's handlers print: below the cell that created it
+    area = area["transient"]["display_id"]
     cell = kernel.ok("nd")
     assert "/e2e_kernel_node" in cell.shown("text/html") and "on_tick" in cell.shown("text/html")
 
-    # Handler prints from ROS threads reach the cell that runs.
-    cell = kernel.ok(wait_ticks("OLD", 5))
-    assert re.search(r"^OLD \d+$", cell.stdout(), re.MULTILINE), cell.stdout()
+    # Handler prints from ROS threads stay below the creating cell, whichever cell runs now.
+    cell = kernel.ok(wait_ticks("OLD", 10))
+    assert re.search(r"^OLD \d+$", cell.updated(area), re.MULTILINE) and "OLD" not in cell.stdout(), cell.messages
 
     # %handler puts the source into the next cell; running the edited source swaps it in.
     cell = kernel.ok(f"%handler nd {TOPIC}")
@@ -67,10 +69,9 @@ def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
     assert source == HANDLER.split("\n", 1)[1].rstrip("\n")
     cell = kernel.ok(source.replace("OLD", "NEW"))
     assert cell.said() == [f"ipyros: e2e_kernel_node {TOPIC} is now handled by the new on_tick"]
-    cell = kernel.ok(wait_ticks("NEW", 5))
-    # Which cell a print from a ROS thread lands in depends on when ipykernel flushes it;
-    # what the handlers saw is exact: OLD up to the swap, NEW after, no message lost.
-    assert re.search(r"^NEW \d+$", cell.stdout(), re.MULTILINE), cell.stdout()
+    cell = kernel.ok(wait_ticks("NEW", 10))
+    assert re.search(r"^NEW \d+$", cell.updated(area), re.MULTILINE), cell.messages
+    # What the handlers saw: OLD up to the swap, NEW after, no message lost.
     seen = kernel.value("[tuple(tick) for tick in ticks]")
     words = [word for word, _ in seen]
     assert words == sorted(words, key=["OLD", "NEW"].index), f"OLD after NEW: {seen}"
@@ -113,11 +114,12 @@ def registered(master_uri: str, node: str) -> list[str]:
 
 
 def wait_ticks(word: str, count: int) -> str:
-    """A cell that waits (20 s at most) until the handler has seen ``count`` messages marked ``word``."""
-    return (f"import time\ndeadline = time.monotonic() + 20\n"
-            f"while sum(w == {word!r} for w, _ in ticks) < {count} and time.monotonic() < deadline:\n"
+    """A cell that waits (20 s at most) until the handler has seen ``count`` more messages marked ``word``
+    (at 20 Hz: long enough for the node's output area to be redrawn while the cell runs)."""
+    return (f"import time\ndeadline = time.monotonic() + 20\nstart = sum(w == {word!r} for w, _ in ticks)\n"
+            f"while sum(w == {word!r} for w, _ in ticks) < start + {count} and time.monotonic() < deadline:\n"
             f"    time.sleep(0.02)\n"
-            f"assert sum(w == {word!r} for w, _ in ticks) >= {count}, 'too few messages'")
+            f"assert sum(w == {word!r} for w, _ in ticks) >= start + {count}, 'too few messages'")
 
 
 def test_plot_in_a_kernel_is_a_figure_redrawn_below_the_cell_and_its_data_stays(kernel, ticks):

@@ -50,6 +50,21 @@ def text_of(nb: nbformat.NotebookNode) -> str:
     return re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(parts))  # rich colours text/plain in a kernel
 
 
+def cell_with(nb: nbformat.NotebookNode, source: str) -> nbformat.NotebookNode:
+    """The first code cell whose source contains ``source``."""
+    return next(c for c in nb.cells if c.cell_type == "code" and source in c.source)
+
+
+def text_of_cell(cell: nbformat.NotebookNode) -> str:
+    """What one cell printed or displayed as text."""
+    return text_of(nbformat.v4.new_notebook(cells=[cell]))
+
+
+def html_of(cell: nbformat.NotebookNode) -> str:
+    """The HTML one cell displayed."""
+    return "\n".join(out.get("data", {}).get("text/html", "") for out in cell.get("outputs", []))
+
+
 def images(nb: nbformat.NotebookNode) -> int:
     """How many PNG images the notebook shows (its plots)."""
     return sum("image/png" in out.get("data", {}) for cell in nb.cells if cell.cell_type == "code"
@@ -71,6 +86,11 @@ def check_tour(nb: nbformat.NotebookNode, text: str) -> None:
     assert "the turtle is at x=" in text and "x=0.00, y=0.00" not in text
     assert "/turtle1/pose" in text and "geometry_msgs/Pose" in text
     assert "status of /turtle_control_node" in text
+    # In Jupyter a status is an HTML table, and what a handler prints stays below the cell that made its node.
+    assert '<caption style="text-align:left">status of /turtle_control_node</caption>' in html_of(cell_with(nb, "%status nd"))
+    created, swapped = cell_with(nb, 'nd = rosNode("turtle_control_node")'), cell_with(nb, "if len(poses) % 20 == 0")
+    assert re.search(r"^x=-?\d", text_of_cell(created), re.M), "the handler's prints are not below the creating cell"
+    assert "x=" not in text_of_cell(swapped), "the handler's prints landed in the cell that ran when they came"
     assert "versions of the handler of turtle_control_node /turtle1/pose" in text
     assert "live handler: showPose version 1" in text
     assert "ipyros: saved /turtle_control_node to" in text and "with restoring():" in text

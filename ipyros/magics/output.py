@@ -14,12 +14,15 @@ text to a pipe, and in Jupyter emits the table as HTML.
 
 from __future__ import annotations
 
-import io
 import logging
 import sys
 from typing import Any, Callable
 
 from rich.console import Console
+from rich.protocol import rich_cast
+from rich.table import Table
+
+from ..display import render_plain, table_html
 
 from ..slots import HandlerFailure
 
@@ -36,16 +39,20 @@ class Printer:
         return Console(file=sys.stdout, color_system=None, force_jupyter=False, highlight=False, emoji=False)
 
     def show(self, *renderables: Any) -> None:
-        """Print tables, rich markup strings or anything rich can render."""
+        """Print tables, rich markup strings or anything rich can render; in Jupyter a table as HTML."""
         console = self.console()
         for renderable in renderables:
-            console.print(renderable)
+            table = rich_cast(renderable)
+            if console.is_jupyter and isinstance(table, Table):
+                from IPython.display import display
+
+                display({"text/plain": render_plain(table), "text/html": table_html(table)}, raw=True)
+            else:
+                console.print(renderable)
 
     def text(self, renderable: Any) -> str:
         """``renderable`` as plain text (no colour), e.g. to put inside a one-line message."""
-        buffer = io.StringIO()
-        Console(file=buffer, color_system=None, force_jupyter=False, width=10_000).print(renderable)
-        return buffer.getvalue().rstrip("\n")
+        return render_plain(renderable)
 
 
 def note(text: str) -> None:
