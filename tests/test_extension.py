@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import logging
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -286,3 +287,22 @@ def rate_topic():
     with Peer("publish_rate.py", "/ext_rate", 10) as peer:
         peer.wait_line("ready")
         yield "/ext_rate"
+
+
+def test_every_magic_has_a_help_text_that_reads_right(ip, capsys):
+    """%name? shows each magic's docstring and usage: under its own name, with no argparse leftovers."""
+    from ipyros.extension import _loaded as loaded
+
+    extension = loaded[id(ip)]
+    names = sorted({name for magics in extension.magics for kind in ("line", "cell")
+                    for name in magics.magics[kind]})
+    assert {"topics", "echo", "hz", "pub", "wrap", "handler", "try", "status", "save_nodes", "load_nodes"} <= set(names)
+    for name in names:
+        capsys.readouterr()
+        ip.run_line_magic("pinfo", f"%{name}")
+        text = capsys.readouterr().out
+        assert "Docstring:" in text and len(text.split("Docstring:", 1)[1].strip()) > 40, f"%{name} has no help"
+        garbled = re.search(r"option_strings|%\(|%[sd]\b|'dest': ", text)
+        assert garbled is None, f"%{name}? shows {garbled and garbled.group()!r}:\n{text}"
+        usage = re.search(r"::\s+(%\S+)", text)
+        assert usage is None or usage.group(1) == f"%{name}", f"%{name}? shows its usage under another name:\n{text}"

@@ -82,7 +82,7 @@ class NodeMagics(ExtensionMagics):
         print(f"ipyros: {node.name} {target.label} is now handled by the new {name}")
 
     # -- %try ------------------------------------------------------------------------------
-    @magic_arguments()
+    @magic_arguments(name="try")
     @argument("node", help="the variable holding the rosNode")
     @argument("topic", help="the subscribed topic")
     @argument("candidate", nargs="*", help="the candidate handler: a function's name, or any expression "
@@ -156,7 +156,7 @@ class NodeMagics(ExtensionMagics):
         print(f"ipyros: saved {', '.join(n.fullname for n in nodes)} to {written}")
 
     @magic_arguments()
-    @argument("path", help="a file written by %save_nodes or nd.save()")
+    @argument("path", help="a file written by %%save_nodes or nd.save()")
     @argument("--trust", action="store_true",
               help="run the code a model file (.yaml/.json) carries: its imports and handler sources")
     @line_magic
