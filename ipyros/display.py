@@ -219,7 +219,8 @@ def table_html(table: Table) -> str:
     body = "".join("<tr>" + "".join(f"<td{align(c)}>{cell(cells[row])}</td>" for c, cells in zip(table.columns, columns))
                    + "</tr>" for row in range(table.row_count))
     caption = f'<caption style="text-align:left">{cell(table.title)}</caption>' if table.title else ""
-    return f'<table class="ipyros">{caption}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
+    note = f'<p style="text-align:left">{cell(table.caption)}</p>' if table.caption else ""
+    return f'<table class="ipyros">{caption}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>{note}'
 
 
 def render_plain(renderable: Any) -> str:

@@ -31,6 +31,7 @@ from . import msgtypes
 from .dsl import rosNode
 from .errors import MessageTypeError
 from .session import current
+from .slots import arrival
 
 
 def tool_name(purpose: str) -> str:
@@ -75,58 +76,119 @@ class Echo:
 
 @dataclass(frozen=True)
 class Rate:
-    """What arrived on one topic during a measurement."""
+    """What arrived on one topic while listening, as ``rostopic hz``, ``bw`` and ``delay`` measure it.
 
-    count: int
-    hz: Optional[float]  # None with fewer than two messages: no interval to measure
-    min_s: float = 0.0  # the shortest, the longest interval between two messages, and their spread
+    A latched message that a new subscriber is sent again (``replayed``) was not published
+    while listening, so it counts for nothing but itself: two latched publishers answering
+    together are not a 2 kHz topic. The rate is each publisher's, measured between its
+    first and last message, summed over the publishers.
+    """
+
+    count: int  # messages published while listening (replays not counted)
+    replayed: int = 0
+    hz: Optional[float] = None  # None until one publisher has sent two messages
+    min_s: float = 0.0  # the shortest, the longest interval between two messages of a publisher, and their spread
     max_s: float = 0.0
     std_s: float = 0.0
+    bytes_per_s: Optional[float] = None
+    sizes: tuple[int, int, float] = (0, 0, 0.0)  # min, max, mean bytes of a message
+    delays: tuple[float, ...] = ()  # mean, min, max, std dev of now - header.stamp, s; () without stamps
+
+    def describe(self, window: float) -> str:
+        """The rate as a person should read it: a number, or why there is none."""
+        if self.hz is not None:
+            return f"{self.hz:.1f}"
+        if self.count:  # one message from each publisher: the interval is longer than we listened
+            return f"< {2 / window:.2g}"
+        return "latched" if self.replayed else "none"
 
 
-class _Stamps:
-    """A handler that notes when each message arrives."""
+def _stamp(msg: Any) -> Optional[float]:
+    """``msg.header.stamp`` in seconds (rospy's Time or ROS 2's), or None without one (or a zero one)."""
+    stamp = getattr(getattr(msg, "header", None), "stamp", None)
+    if stamp is None:
+        return None
+    seconds = stamp.to_sec() if hasattr(stamp, "to_sec") else stamp.sec + stamp.nanosec * 1e-9
+    return seconds or None
+
+
+class _Arrivals:
+    """A handler that notes when each message arrives, from whom, how big, how late."""
 
     def __init__(self) -> None:
-        self.times: list[float] = []
+        self.by_sender: dict[str, list[tuple[float, int]]] = {}
+        self.replayed = 0
+        self.delays: list[float] = []
 
     def __call__(self, msg: Any) -> None:
-        self.times.append(time.monotonic())
+        now, came = time.monotonic(), arrival()
+        if came is not None and came.replayed:
+            self.replayed += 1
+            return
+        self.by_sender.setdefault(came.sender if came else "?", []).append((now, came.size if came else 0))
+        stamp = _stamp(msg)
+        if stamp is not None:
+            self.delays.append(time.time() - stamp)
 
     def rate(self) -> Rate:
-        times = list(self.times)
-        if len(times) < 2 or times[-1] <= times[0]:
-            return Rate(len(times), None)
-        gaps = [b - a for a, b in zip(times, times[1:])]
-        return Rate(len(times), (len(times) - 1) / (times[-1] - times[0]), min(gaps), max(gaps),
-                    statistics.pstdev(gaps))
+        senders = [list(arrivals) for arrivals in list(self.by_sender.values())]
+        count = sum(map(len, senders))
+        hz, gaps = 0.0, []
+        for arrivals in senders:
+            times = [t for t, _ in arrivals]
+            if len(times) > 1 and times[-1] > times[0]:
+                hz += (len(times) - 1) / (times[-1] - times[0])
+                gaps += [b - a for a, b in zip(times, times[1:])]
+        every = sorted(a for arrivals in senders for a in arrivals)
+        sizes = [size for _, size in every]
+        span = every[-1][0] - every[0][0] if len(every) > 1 else 0.0
+        delays = list(self.delays)
+        return Rate(count, self.replayed, hz if gaps else None,
+                    min(gaps, default=0.0), max(gaps, default=0.0), statistics.pstdev(gaps) if gaps else 0.0,
+                    sum(sizes[1:]) / span if span > 0 else None,
+                    (min(sizes), max(sizes), sum(sizes) / len(sizes)) if sizes else (0, 0, 0.0),
+                    (statistics.fmean(delays), min(delays), max(delays), statistics.pstdev(delays)) if delays else ())
+
+
+class RateMeter:
+    """Listen to ``topics`` ({name: type}) while in a ``with`` block; :meth:`rates` says what arrived so far.
+
+    A topic whose message class is not installed here cannot be listened to: its rate is
+    None. The listening node is shut down when the block ends, Ctrl-C or not.
+    """
+
+    def __init__(self, topics: Mapping[str, str]) -> None:
+        self.topics = dict(topics)
+        self.node = rosNode(tool_name("hz"))
+        self._arrivals: dict[str, _Arrivals] = {}
+        for topic, type_name in self.topics.items():
+            try:
+                msgtypes.resolve_message(type_name)
+            except MessageTypeError:
+                continue
+            self._arrivals[topic] = _Arrivals()
+            self.node.new.subscribe(topic, handler=self._arrivals[topic], msgType=type_name)
+
+    def rates(self) -> dict[str, Optional[Rate]]:
+        return {t: self._arrivals[t].rate() if t in self._arrivals else None for t in self.topics}
+
+    def __enter__(self) -> "RateMeter":
+        if self._arrivals:
+            self.node.create()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.node.shutdown()
 
 
 def measure_rates(topics: Mapping[str, str], window: float) -> dict[str, Optional[Rate]]:
-    """Listen to ``topics`` ({name: type}) for ``window`` seconds; what arrived on each.
+    """Listen to ``topics`` ({name: type}) for ``window`` seconds; what arrived on each (see :class:`Rate`).
 
-    The rate is measured between the first and the last message, so the time it takes
-    to connect does not count. A topic whose message class is not installed here cannot
-    be listened to: None. Ctrl-C stops the measurement (KeyboardInterrupt propagates);
-    the node is shut down either way.
+    Ctrl-C stops the measurement (KeyboardInterrupt propagates); the node is shut down either way.
     """
-    node = rosNode(tool_name("hz"))
-    stamps: dict[str, _Stamps] = {}
-    for topic, type_name in topics.items():
-        try:
-            msgtypes.resolve_message(type_name)
-        except MessageTypeError:
-            continue
-        stamps[topic] = _Stamps()
-        node.new.subscribe(topic, handler=stamps[topic], msgType=type_name)
-    if not stamps:
-        return {topic: None for topic in topics}
-    try:
-        node.create()
+    with RateMeter(topics) as meter:
         time.sleep(window)  # the measurement itself: note what arrives in the window
-    finally:
-        node.shutdown()
-    return {t: stamps[t].rate() if t in stamps else None for t in topics}
+        return meter.rates()
 
 
 class PromptPublisher:

@@ -16,7 +16,7 @@ import time
 import traceback
 from collections import deque
 from dataclasses import dataclass
-from typing import Any, Callable, Optional, Protocol
+from typing import Any, Callable, NamedTuple, Optional, Protocol
 
 from .errors import HandlerError
 
@@ -67,6 +67,26 @@ class OutputScope(Protocol):
     def enter(self) -> Any: ...
 
     def leave(self, previous: Any) -> None: ...
+
+
+class Arrival(NamedTuple):
+    """What the ROS layer knows of the message a handler is handling, beyond the message itself.
+
+    Tools that measure a topic (``%hz``, ``%bw``) need it: a latched message that a new
+    subscriber is sent again was not published now, and two publishers make one topic.
+    """
+
+    sender: str  # the publishing node (ROS 1) or publisher (ROS 2)
+    size: int  # bytes on the wire
+    replayed: bool  # a latched (transient-local) message sent again on connecting, not published now
+
+
+_handling = threading.local()
+
+
+def arrival() -> Optional[Arrival]:
+    """The :class:`Arrival` of the message the calling thread's handler is handling (None outside one)."""
+    return getattr(_handling, "arrival", None)
 
 
 class Pristine:
@@ -132,14 +152,17 @@ class HandlerSlot:
     def __call__(self, arg: Any = None) -> Any:
         return self.run(arg)[1]
 
-    def run(self, arg: Any = None, pristine: Pristine | None = None) -> tuple[bool, Any]:
+    def run(self, arg: Any = None, pristine: Pristine | None = None,
+            came: Optional[Arrival] = None) -> tuple[bool, Any]:
         """Call the handler: ``(True, what it returned)``, or ``(False, None)`` once its exception is reported.
 
         ``pristine`` makes ``arg`` again as it arrived; without it ``arg`` itself is kept.
+        ``came`` is what :func:`arrival` tells the handler.
         """
         handler, pass_argument = self._current
         if arg is not None:
             self.recent.append(arg if pristine is None else pristine)
+        _handling.arrival = came
         output = self.output
         previous = output.enter() if output is not None else None
         start = time.perf_counter()

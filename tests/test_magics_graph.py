@@ -57,6 +57,57 @@ def test_topics_hz_measures_the_rate(ip, capsys, rate_peer):
     assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "the listener is gone"
 
 
+def _rows(out: str, prefix: str = "/mg/") -> dict[str, list[str]]:
+    """The rows of the tables in ``out`` by topic, split at the column bars."""
+    return {cells[0]: cells for line in out.splitlines() if line.startswith("│") and prefix in line
+            for cells in [[c.strip() for c in line.strip("│").split("│")]]}
+
+
+def test_rates_are_honest_about_latched_and_slow_topics(ip, capsys, rate_peer):
+    """Two latched publishers answering a new listener together are not a 2 kHz topic; one message is no rate."""
+    with Peer("publish_type.py", "/mg/latched", "std_msgs/String") as first, \
+            Peer("publish_type.py", "/mg/latched", "std_msgs/String") as second:
+        first.wait_line("ready")
+        second.wait_line("ready")
+        wait_for(lambda: len(_loaded[id(ip)].graph.refresh_now().publishers.get("/mg/latched", ())) == 2,
+                 what="both latched publishers on the master")
+        with Peer("publish_seq.py", "/mg/once", 1, 10) as once:
+            wait_listed(ip, "/mg/once")
+            ok(ip, "%config RosMagics.hz_window = 1.0")
+            capsys.readouterr()
+            ok(ip, "%topics /mg/ --hz")
+            out = capsys.readouterr().out
+            rows = _rows(out)
+            assert rows["/mg/latched"][-1] == "latched", out
+            assert rows["/mg/once"][-1] == "< 2", out
+            assert 40 < float(rows["/mg/rate"][-1]) < 60, out
+            assert "< N: one message per publisher in 1 s; %hz TOPIC listens longer" in out
+            assert once.wait_line("done")
+        # %hz keeps listening and reports again (-n of them): the latched messages counted apart.
+        ok(ip, "%hz /mg/latched /mg/rate -w 0.6 -n 2")
+        rows = _rows(capsys.readouterr().out)
+        assert rows["/mg/latched"][1:3] == ["0 (+2 latched)", "latched"], rows
+        assert 40 < float(rows["/mg/rate"][2]) < 60, rows
+    # %bw: bytes per second and sizes; %delay: now - header.stamp of stamped messages.
+    ok(ip, "%bw /mg/rate -w 1 -n 1")
+    rows = _rows(capsys.readouterr().out)
+    assert rows["/mg/rate"][2].endswith(" B/s") and 150 < float(rows["/mg/rate"][2].split()[0]) < 250, rows
+    assert rows["/mg/rate"][3] == "4 B", rows  # a UInt32
+    ok(ip, "import rospy, time\nfrom geometry_msgs.msg import PoseStamped\n"
+           "stamped = rosNode('mg_stamped')\nstamped.new.publish('/mg/stamped', msgType=PoseStamped)\n"
+           "def late():\n    msg = PoseStamped()\n    msg.header.stamp = rospy.Time.from_sec(time.time() - 0.25)\n"
+           "    stamped.write('/mg/stamped', msg)\n"
+           "stamped.timer(0.05, late)\nstamped.create()")
+    try:
+        wait_listed(ip, "/mg/stamped")
+        ok(ip, "%delay /mg/stamped /mg/rate -w 1 -n 1")
+        rows = _rows(capsys.readouterr().out)
+        assert 0.2 < float(rows["/mg/stamped"][2]) < 0.5, rows
+        assert rows["/mg/rate"][2] == "no header.stamp", rows
+    finally:
+        ok(ip, "stamped.shutdown()")
+
+
 def test_topics_errors_and_empty_results(ip, capsys):
     assert "no node /mg_nobody" in str(error_of(ip, "%topics --node mg_nobody"))
     error = error_of(ip, "%topics --type geometry_msgs/Twst")
@@ -231,12 +282,12 @@ def test_echo_as_csv_and_as_a_table_and_hz_of_two_topics_at_once(ip, capsys, rat
         assert isinstance(error_of(ip, "%echo /mg/rate -n 1 --csv --table"), UsageError)
         assert "--field dta: no field 'dta'" in str(error_of(ip, "%echo /mg/rate -n 1 --csv --field dta"))
 
-        ok(ip, "%hz /mg/rate /mg/slow -w 1.5")
+        ok(ip, "%hz /mg/rate /mg/slow -w 1.5 -n 1")
         rows = {line.split()[1]: line.replace("│", " ").split() for line in capsys.readouterr().out.splitlines()
                 if line.startswith("│") and "/mg/" in line}
         assert set(rows) == {"/mg/rate", "/mg/slow"}, rows
-        assert 40 < float(rows["/mg/rate"][3]) < 60 and 7 < float(rows["/mg/slow"][3]) < 13, rows
-        assert 0 <= float(rows["/mg/rate"][4]) <= float(rows["/mg/rate"][5]) < 0.5, "min and max intervals"
+        assert 40 < float(rows["/mg/rate"][2]) < 60 and 7 < float(rows["/mg/slow"][2]) < 13, rows
+        assert 0 <= float(rows["/mg/rate"][3]) <= float(rows["/mg/rate"][4]) < 0.5, "min and max intervals"
         assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "the listener is gone"
         assert "no live topic /mg/nothing" in str(error_of(ip, "%hz /mg/rate /mg/nothing"))
 

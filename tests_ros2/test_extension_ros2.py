@@ -183,6 +183,14 @@ def test_handler_try_versions_revert_and_qos_by_endpoint_at_the_ros2_prompt(ip, 
     rate = [row for row in capsys.readouterr().out.splitlines() if "/m2/numbers" in row]
     assert rate and any(17.0 <= float(cell) <= 23.0 for cell in rate[0].replace("│", " ").split()
                         if cell.replace(".", "", 1).isdigit() and "." in cell), rate
+    # A transient-local message sent again to the new listener is not a publication: said "latched".
+    _ok(ip, "nd.write('latched', String(data='once'))")
+    _ok(ip, "%hz /m2/latched /m2/numbers -w 0.6 -n 2")
+    out = capsys.readouterr().out
+    rows = {cells[0]: cells for line in out.splitlines() if line.startswith("│")
+            for cells in [[c.strip() for c in line.strip("│").split("│")]]}
+    assert rows.get("/m2/latched", [])[1:3] == ["0 (+1 latched)", "latched"], (out, rows)
+    assert 17.0 <= float(rows["/m2/numbers"][2]) <= 23.0, rows
     _ok(ip, "feeder.shutdown(); nd.shutdown()")
 
 

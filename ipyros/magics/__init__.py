@@ -2,6 +2,7 @@
 
 * :class:`RosMagics` (``config.py``): the settings, ``%config RosMagics``;
 * :class:`TopicMagics` (``graph.py``): ``%topics``, ``%echo``, ``%pub``;
+* :class:`RateMagics` (``rates.py``): ``%hz``, ``%bw``, ``%delay``, measured until Ctrl-C;
 * :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
 * :class:`WrapMagics` (``wrap.py``): ``%wrap``;
 * :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
@@ -16,7 +17,9 @@ from .demo import DemoMagics
 from .graph import TopicMagics
 from .nodes import NodeMagics
 from .plot import PlotMagics
+from .rates import RateMagics
 from .record import RecordMagics
 from .wrap import WrapMagics
 
-__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics"]
+__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics",
+           "RateMagics"]

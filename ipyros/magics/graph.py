@@ -1,4 +1,4 @@
-"""``%topics``, ``%echo``, ``%pub``: what ``rostopic list/hz/echo/pub`` do, at the prompt.
+"""``%topics``, ``%echo``, ``%pub``: what ``rostopic list/echo/pub`` do, at the prompt.
 
 They read the graph from the master afresh (:meth:`GraphCache.refresh_now`, bounded by a
 short timeout), listen and publish through the small DSL nodes of :mod:`ipyros.probe`,
@@ -115,8 +115,9 @@ class TopicMagics(ExtensionMagics):
                 return
             print("ipyros: -v shows the QoS of each endpoint, which ROS 2 has; on ROS 1 every connection is "
                   "reliable TCP")
-        rates = measure_rates({t: snap.topics[t] for t in found}, self.ext.settings.hz_window) if args.hz else None
-        self.ext.printer.show(_topics_table(snap, found, rates, self.ext.graph.where))
+        window = self.ext.settings.hz_window
+        rates = measure_rates({t: snap.topics[t] for t in found}, window) if args.hz else None
+        self.ext.printer.show(_topics_table(snap, found, rates, window, self.ext.graph.where))
 
     # -- %echo ---------------------------------------------------------------------------
     @magic_arguments()
@@ -169,33 +170,6 @@ class TopicMagics(ExtensionMagics):
         if rows is not None and args.table:
             printer.show(rows.table(f"{len(seen)} message{'s' * (len(seen) != 1)} from {topic}"))
         return seen
-
-    # -- %hz -------------------------------------------------------------------------------
-    @magic_arguments()
-    @argument("topic", nargs="+", help="the live topics to measure, at once")
-    @argument("-w", "--window", type=float, default=None,
-              help="listen this many seconds (default c.RosMagics.hz_window)")
-    @line_magic
-    def hz(self, line: str) -> None:
-        """The message rate of each TOPIC, measured together over one window, as rostopic hz does:
-        the mean rate, and the shortest, longest and spread of the intervals between messages."""
-        args = parse_argstring(self.hz, line)
-        window = self.ext.settings.hz_window if args.window is None else args.window
-        if not 0.05 <= window <= 600:
-            raise UsageError(f"-w must be between 0.05 and 600 seconds, not {window}")
-        topics = {}
-        for name in args.topic:
-            topic = global_topic(name)
-            topics[topic] = self.live_type(topic)
-        rates = measure_rates(topics, window)
-        table = Table(title=f"rates over {window:g} s at {self.ext.graph.where}", title_justify="left")
-        for column in ("topic", "type", "messages", "rate Hz", "min s", "max s", "std dev s"):
-            table.add_column(column, justify="left" if column in ("topic", "type") else "right")
-        for topic, rate in rates.items():
-            spread = ("", "", "") if rate is None or rate.hz is None else (
-                f"{rate.min_s:.4f}", f"{rate.max_s:.4f}", f"{rate.std_s:.4f}")
-            table.add_row(topic, topics[topic], str(rate.count if rate else 0), _rate(rate), *spread)
-        self.ext.printer.show(table)
 
     # -- %pub / %%pub ----------------------------------------------------------------------
     @magic_arguments()
@@ -282,7 +256,7 @@ class TopicMagics(ExtensionMagics):
 
 
 def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
-                  where: str) -> Table:
+                  window: float, where: str) -> Table:
     table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}", title_justify="left")
     # Names stay whole (they are what you copy); the node lists give way when space runs out.
     table.add_column("topic", overflow="fold", style="bold", min_width=min(60, max(map(len, found), default=5)))
@@ -296,8 +270,12 @@ def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[st
         row = [topic, snap.topics[topic] or "?", _nodes(snap.publishers.get(topic, ())),
                _nodes(snap.subscribers.get(topic, ()))]
         if rates is not None:
-            row.append(_rate(rates.get(topic)))
+            rate = rates.get(topic)
+            row.append(rate.describe(window) if rate is not None else "? (type not installed)")
         table.add_row(*row)
+    if rates is not None and any(r is not None and r.hz is None and r.count for r in rates.values()):
+        table.caption = f"< N: one message per publisher in {window:g} s; %hz TOPIC listens longer"
+        table.caption_justify = "left"
     return table
 
 
@@ -357,14 +335,6 @@ def _endpoints_table(snap: GraphSnapshot, found: list[str], endpoints: Any, wher
 def _nodes(nodes: tuple[str, ...], most: int = 3) -> str:
     shown = ", ".join(nodes[:most])
     return shown + (f" +{len(nodes) - most} more" if len(nodes) > most else "")
-
-
-def _rate(rate: Optional[Rate]) -> str:
-    if rate is None:
-        return "? (type not installed)"
-    if rate.hz is None:
-        return f"{rate.count} msg" if rate.count else "none"
-    return f"{rate.hz:.1f}"
 
 
 def _node_name(name: str) -> str:

@@ -14,8 +14,11 @@ text to a pipe, and in Jupyter emits the table as HTML.
 
 from __future__ import annotations
 
+import itertools
+from html import escape
 import logging
 import sys
+import time
 from typing import Any, Callable
 
 from rich.console import Console
@@ -49,6 +52,50 @@ class Printer:
                 display({"text/plain": render_plain(table), "text/html": table_html(table)}, raw=True)
             else:
                 console.print(renderable)
+
+    def repeat(self, render: Callable[[float], Any], period: float, times: int = 0) -> None:
+        """Show ``render(seconds so far)`` every ``period`` seconds, ``times`` times (0: until Ctrl-C).
+
+        Redrawn in place where the front end can: a terminal (rich's Live), Jupyter (a display
+        updated by its id). Anywhere else (a pipe) only the last one is printed, when it stops.
+        """
+        console = self.console()
+        start = time.monotonic()
+        live: Any = None
+        if console.is_terminal:
+            from rich.live import Live
+
+            live = Live(console=console, auto_refresh=False)
+            live.start()
+        elif console.is_jupyter:
+            from IPython.display import display
+
+            live = display({"text/plain": ""}, raw=True, display_id=True)
+        shown = None
+        try:
+            for done in itertools.count(1):
+                time.sleep(max(0.0, start + done * period - time.monotonic()))
+                shown = render(time.monotonic() - start)
+                if live is not None:
+                    self._redraw(live, shown)
+                if times and done >= times:
+                    break
+        except KeyboardInterrupt:
+            pass
+        finally:
+            if live is not None and hasattr(live, "stop"):
+                live.stop()
+        if live is None and shown is not None:
+            self.show(shown)
+
+    @staticmethod
+    def _redraw(live: Any, renderable: Any) -> None:
+        if hasattr(live, "stop"):  # rich's Live
+            live.update(renderable, refresh=True)
+            return
+        table = rich_cast(renderable)
+        html = table_html(table) if isinstance(table, Table) else f"<pre>{escape(render_plain(renderable))}</pre>"
+        live.update({"text/plain": render_plain(renderable), "text/html": html}, raw=True)
 
     def text(self, renderable: Any) -> str:
         """``renderable`` as plain text (no colour), e.g. to put inside a one-line message."""

@@ -35,7 +35,7 @@ from rospy.msg import serialize_message
 from . import sending
 from ..errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
 from .master import master_proxy
-from ..slots import HandlerSlot, Pristine, SendFigures
+from ..slots import Arrival, HandlerSlot, Pristine, SendFigures
 
 def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
     """A synchronous publisher (``queue_size=None`` on purpose; see the module docstring)."""
@@ -307,11 +307,17 @@ class Subscription:
 
     def __init__(self, topic: str, cls: type, slot: HandlerSlot) -> None:
         self.topic, self.cls, self.slot = topic, cls, slot
+        self._connections: dict[int, dict] = {}  # the header of each connection a message came on
         self._sub = _subscribe_bytes(topic, cls, self._deliver)
 
     def _deliver(self, raw: rospy.AnyMsg) -> None:
-        self.slot.run(_message(self.cls, raw._buff, raw._connection_header),
-                      Pristine(functools.partial(_message, self.cls, raw._buff, raw._connection_header)))
+        header = raw._connection_header
+        first = id(header) not in self._connections  # a latched publisher sends its last message on connecting
+        if first:
+            self._connections[id(header)] = header  # (kept: its id stays unique while it is a key)
+        self.slot.run(_message(self.cls, raw._buff, header),
+                      Pristine(functools.partial(_message, self.cls, raw._buff, header)),
+                      Arrival(header.get("callerid", "?"), len(raw._buff), first and header.get("latching") == "1"))
 
     def connections(self) -> int:
         return self._sub.get_num_connections()

@@ -35,7 +35,7 @@ from rclpy.serialization import deserialize_message
 
 from ..errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
 from ..qos import Qos
-from ..slots import HandlerSlot, Pristine, SendFigures
+from ..slots import Arrival, HandlerSlot, Pristine, SendFigures
 
 #: Reliable, and deep enough that a burst is not cut short: what ROS 1's unbounded
 #: subscriber queue gave. A declaration's ``qos=`` overrides any of it.
@@ -349,12 +349,17 @@ class Subscription:
                                               found.durability)
 
     def _open(self, qos: Qos) -> Any:
+        self._since = time.time_ns()
         return self._node.create_subscription(
             self.cls, self.topic, self._deliver, _profile(qos), raw=True,
             event_callbacks=_mismatch_report(self._node, self.topic, qos, "subscription", self._complain))
 
-    def _deliver(self, data: bytes) -> None:
-        self.slot.run(deserialize_message(data, self.cls), Pristine(functools.partial(deserialize_message, data, self.cls)))
+    def _deliver(self, data: bytes, info: Any) -> None:
+        # A transient-local publisher sends its last messages again to a new subscription:
+        # they were published before it existed.
+        came = Arrival(str(info.get("publisher_gid") or "?"), len(data), info["source_timestamp"] < self._since)
+        self.slot.run(deserialize_message(data, self.cls),
+                      Pristine(functools.partial(deserialize_message, data, self.cls)), came)
 
     def _follow_publishers(self) -> None:
         with self._lock:
