@@ -60,6 +60,7 @@ PACKAGE = "package"
 EXECUTABLE = "executable"    # executables of the package named by the argument before
 DEMO_ROBOT = "demo robot"    # the robots %demo starts
 MSG_TEMPLATE = "template"    # a message of the type before it, every field at its default
+REQUEST_TEMPLATE = "request template"  # the request of the service type before it, at its defaults
 
 
 # -- the catalog of installed things ------------------------------------------------
@@ -77,19 +78,22 @@ class Catalog:
     packages: Callable[[], Sequence[str]]
     executables: Callable[[str], Sequence[str]]
     templates: Callable[[str], str] = field(default=lambda msg_type: _template(msg_type))
+    request_templates: Callable[[str], str] = field(default=lambda srv_type: _template(srv_type, request=True))
 
     def __post_init__(self) -> None:
-        self._sources = (self.message_types, self.service_types, self.packages, self.executables, self.templates)
+        self._sources = (self.message_types, self.service_types, self.packages, self.executables, self.templates,
+                         self.request_templates)
         self.refresh()
 
     def refresh(self) -> None:
         """Forget every cached scan; the next completion scans again."""
-        types, srvs, pkgs, exes, templates = self._sources
+        types, srvs, pkgs, exes, templates, requests = self._sources
         self.message_types = _sorted_once(types)
         self.service_types = _sorted_once(srvs)
         self.packages = _sorted_once(pkgs)
         self.executables = lru_cache(maxsize=512)(lambda package: tuple(sorted(exes(package))))
         self.templates = lru_cache(maxsize=256)(templates)
+        self.request_templates = lru_cache(maxsize=256)(requests)
 
     def warm(self) -> None:
         """Run the whole-catalog scans now, so the first TAB does not pay for them."""
@@ -99,10 +103,15 @@ class Catalog:
             log.debug("warming the completion catalog failed", exc_info=True)
 
 
-def _template(msg_type: str) -> str:
+def _template(type_name: str, request: bool = False) -> str:
+    """A message of ``type_name`` (or the request of the service ``type_name``) at its defaults, one line."""
+    from . import msgtypes
     from .msgbuild import template
 
-    return template(msg_type)
+    if not request:
+        return template(type_name)
+    _, cls = msgtypes.resolve_service(type_name)
+    return template(cls._request_class if hasattr(cls, "_request_class") else cls.Request)
 
 
 def _sorted_once(source: Callable[[], Sequence[str]]) -> Callable[[], tuple[str, ...]]:
@@ -176,6 +185,15 @@ MAGICS: dict[str, MagicSpec] = {
     "revert": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
     "save_nodes": MagicSpec((None, DSL_NODE, DSL_NODE, DSL_NODE)),
     "demo": MagicSpec((DEMO_ROBOT,)),
+    "hz": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
+    "bw": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
+    "delay": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
+    "services": MagicSpec((SERVICE,)),
+    "call": MagicSpec((SERVICE, SRV_TYPE, REQUEST_TEMPLATE), {"-t": None, "--timeout": None}),
+    "params": MagicSpec((NODE,)),
+    "param": MagicSpec((NODE,)),
+    "nodes": MagicSpec((NODE,)),
+    "node": MagicSpec((NODE,)),
     "wrap": MagicSpec((PACKAGE, EXECUTABLE), {"--as": None, "--name": None, "--namespace": None, "--ns": None},
                       other_options=TOPIC),
 }
@@ -478,6 +496,13 @@ class Answerer:
             try:
                 return [(self.catalog.templates(want.before[1]), f"{want.before[1]}, every field at its default")]
             except Exception:  # an unknown type: %pub itself will say so, in one line
+                return []
+        if kind == REQUEST_TEMPLATE:
+            if frag or len(want.before) < 2:
+                return []
+            try:
+                return [(self.catalog.request_templates(want.before[1]), f"{want.before[1]} request, at its defaults")]
+            except Exception:  # an unknown type: %call itself will say so, in one line
                 return []
         if kind == SRV_TYPE:
             return [(t, kind) for t in _types(self.catalog.service_types(), frag)]

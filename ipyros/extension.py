@@ -32,8 +32,8 @@ from . import completion, plan as planning
 from .dsl import rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache
-from .magics import (DemoMagics, NodeMagics, PlotMagics, RateMagics, RecordMagics, RosMagics, TopicMagics,
-                     WrapMagics, cell_output)
+from .magics import (DemoMagics, IntrospectMagics, NodeMagics, PlotMagics, RateMagics, RecordMagics, RosMagics,
+                     TopicMagics, WrapMagics, cell_output)
 from .magics.output import Printer, StderrLogHandler, failure_report, note, note_line
 from .probe import PromptPublisher, is_tool
 from .ros1 import master as master_mod
@@ -59,7 +59,8 @@ class Extension:
         self.topic_magics = TopicMagics(shell, self)  # %plot asks it for a live topic's type
         self.plot_magics = PlotMagics(shell, self)
         self.record_magics = RecordMagics(shell, self)
-        self.magics = [self.settings, self.topic_magics, RateMagics(shell, self), self.node_magics,
+        self.magics = [self.settings, self.topic_magics, RateMagics(shell, self), IntrospectMagics(shell, self),
+                       self.node_magics,
                        WrapMagics(shell, self), self.plot_magics, self.record_magics, DemoMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
         self._log_handler = StderrLogHandler()

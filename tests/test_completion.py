@@ -145,6 +145,15 @@ def test_pub_magic_topic_then_type(matcher):
         "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
 
 
+def test_the_rostopic_rosservice_rosnode_magics_complete_live_names_and_templates(matcher):
+    assert texts(matcher, "%hz /ct/turtle1/pose /ct/turtle2/") == ["/ct/turtle2/cmd_vel"]
+    assert texts(matcher, "%bw /ct/od") == ["/ct/odom"] and texts(matcher, "%delay /ct/od") == ["/ct/odom"]
+    assert texts(matcher, "%node compl_") == ["compl_sim"] and texts(matcher, "%nodes /compl") == ["/compl_sim"]
+    assert texts(matcher, "%params /compl") == ["/compl_sim"]
+    assert texts(matcher, "%call /x std_srvs/Set") == ["std_srvs/SetBool"]
+    assert texts(matcher, "%call /x std_srvs/SetBool ") == ["{data: false}"]  # the request, to edit and send
+
+
 def test_pub_magic_offers_the_live_type_then_a_template(matcher):
     # After the topic: the type it carries first, then the others.
     assert texts(matcher, "%pub /ct/turtle1/pose ")[:2] == ["geometry_msgs/Pose2D", "geometry_msgs/Pose"]
@@ -326,6 +335,9 @@ def test_through_the_shell(ip, graph):
             "geometry_msgs/Twist", "geometry_msgs/TwistStamped"]
         assert [c.text for c in complete(ip, "%wrap turtlesim turtle")] == ["turtle_teleop_key", "turtlesim_node"]
         assert [c.text for c in complete(ip, "%handler w")] == ["wnode"]
+        # After %pub TOPIC: the type the live topic carries first, as the terminal's menu gets them.
+        assert [c.text for c in complete(ip, "%pub /ct/turtle1/pose ")][:2] == ["geometry_msgs/Pose2D",
+                                                                                "geometry_msgs/Pose"]
         found = complete(ip, "%pub /ct/odom std_msgs/String ")  # a template, inserted at the cursor
         assert [(c.text, c.start) for c in found] == [("{data: ''}", len("%pub /ct/odom std_msgs/String "))]
         # Ours but nothing matches: no file names crowd in (the file matcher would list /ct...).

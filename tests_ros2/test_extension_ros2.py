@@ -255,3 +255,34 @@ def test_a_ros1_bag_plays_on_ros2_through_a_handler(make_node, tmp_path):
     w.create()
     wait_for(lambda: len(heard) >= 20, timeout=20, what="the ROS 1 bag's messages through the handler")
     assert heard == list(range(20))
+
+
+def test_services_call_params_and_nodes_at_the_ros2_prompt(ip, capsys):
+    """%services, %call, %params, %param, %nodes and %node on ROS 2: a python basenode's service and
+    parameters, read and set through its parameter services."""
+    from conftest import Peer, wait_for
+
+    ip.run_line_magic("load_ext", "ipyros")
+    with Peer("echo_node.py", "--ros-args", "-r", "__ns:=/mi2", "-p", "prefix:=P>") as peer:
+        peer.wait_line("echo_node ready")
+        graph = __import__("ipyros.extension", fromlist=["_loaded"])._loaded[id(ip)].graph
+        wait_for(lambda: "/mi2/check" in graph.refresh_now().services, what="/mi2/check discovered")
+        capsys.readouterr()
+        _ok(ip, "%services /mi2/")
+        out = capsys.readouterr().out
+        row = next(line for line in out.splitlines() if "/mi2/check" in line)
+        assert "std_srvs/srv/SetBool" in row and "/mi2/echo_node" in row, out
+        _ok(ip, "%call /mi2/check {data: true}")
+        out = capsys.readouterr().out
+        assert "success: true" in out and "P> checked" in out, out
+        _ok(ip, "%params /mi2")
+        out = capsys.readouterr().out
+        assert "/mi2/echo_node/prefix" in out and "P>" in out, out
+        _ok(ip, "%param /mi2/echo_node/prefix Q>")
+        _ok(ip, "%param /mi2/echo_node/prefix")
+        assert "/mi2/echo_node/prefix: Q>" in capsys.readouterr().out
+        _ok(ip, "%nodes /mi2")
+        assert "/mi2/echo_node" in capsys.readouterr().out
+        _ok(ip, "%node /mi2/echo_node")
+        out = capsys.readouterr().out
+        assert "/mi2/out" in out and "/mi2/in" in out and "/mi2/check" in out, out

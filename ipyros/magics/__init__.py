@@ -3,6 +3,8 @@
 * :class:`RosMagics` (``config.py``): the settings, ``%config RosMagics``;
 * :class:`TopicMagics` (``graph.py``): ``%topics``, ``%echo``, ``%pub``;
 * :class:`RateMagics` (``rates.py``): ``%hz``, ``%bw``, ``%delay``, measured until Ctrl-C;
+* :class:`IntrospectMagics` (``introspect.py``): ``%services``, ``%call``, ``%params``, ``%param``,
+  ``%nodes``, ``%node``;
 * :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
 * :class:`WrapMagics` (``wrap.py``): ``%wrap``;
 * :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
@@ -15,6 +17,7 @@
 from .config import RosMagics
 from .demo import DemoMagics
 from .graph import TopicMagics
+from .introspect import IntrospectMagics
 from .nodes import NodeMagics
 from .plot import PlotMagics
 from .rates import RateMagics
@@ -22,4 +25,4 @@ from .record import RecordMagics
 from .wrap import WrapMagics
 
 __all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics",
-           "RateMagics"]
+           "RateMagics", "IntrospectMagics"]

@@ -95,7 +95,7 @@ class TopicMagics(ExtensionMagics):
     def topics(self, line: str) -> None:
         """List the live topics: name, type, publishers and subscribers."""
         args = parse_argstring(self.topics, line)
-        snap = self._snapshot()
+        snap = self.live_graph()
         node = _node_name(args.node) if args.node else None
         if node and node not in snap.nodes:
             raise UsageError(f"no node {node} in the ROS graph{_close(node, snap.nodes)}")
@@ -233,7 +233,7 @@ class TopicMagics(ExtensionMagics):
             print(f"published {sent} {type_name} message{'s' * (sent != 1)} on {topic} at {rate:g} Hz")
 
     # -- shared ----------------------------------------------------------------------------
-    def _snapshot(self) -> GraphSnapshot:
+    def live_graph(self) -> GraphSnapshot:
         watch = self.ext.session.watch
         if watch is not None:
             watch.check_now()  # a master just restarted: the session registers again before it is read
@@ -245,7 +245,7 @@ class TopicMagics(ExtensionMagics):
 
     def live_type(self, topic: str, for_pub: bool = False) -> str:
         """The type of the live ``topic`` from the graph read afresh; a one-line error if there is none."""
-        snap = self._snapshot()
+        snap = self.live_graph()
         if topic not in snap.topics:
             fix = f"; give its type: %pub {topic} pkg/Type ..." if for_pub else "; %topics lists them"
             raise UsageError(f"no live topic {topic}{_close(topic, snap.topic_names)}{fix}")

@@ -6,7 +6,8 @@ from typing import Any, Callable, Optional
 
 from ..qos import Qos
 from ..slots import HandlerSlot
-from . import runtime
+from ..errors import MasterError
+from . import introspect, runtime
 
 __all__ = ["Ros1"]
 
@@ -68,6 +69,28 @@ class Ros1:
     has_param = staticmethod(runtime.has_param)
     delete_param = staticmethod(runtime.delete_param)
     refuse_taken_name = staticmethod(runtime.refuse_taken_name)
+
+    # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----
+    def service_type(self, name: str) -> str:
+        return introspect.service_type(self._master(), name)
+
+    def call(self, name: str, cls: type, request: Any, timeout: float) -> Any:
+        return introspect.call(name, cls, request, timeout)
+
+    def params_under(self, namespace: str) -> dict[str, Any]:
+        """Every parameter under ``namespace``, by global name."""
+        return introspect.params_under(self._master(), namespace)
+
+    read_param = staticmethod(runtime.get_param)
+    write_param = staticmethod(runtime.set_param)
+
+    def node_pid(self, node: str) -> Optional[int]:
+        return introspect.node_pid(self._master(), node)
+
+    def _master(self) -> str:
+        if self.process.master_uri is None:
+            raise MasterError("no ROS node of this session runs yet; create a node first")
+        return self.process.master_uri
 
     def __repr__(self) -> str:
         return f"<ipyros backend {self.name}: {self.process.name or 'no node yet'}>"

@@ -8,7 +8,7 @@ from typing import Any, Callable, Optional
 from ..errors import DeclarationError, NodeStateError
 from ..qos import Qos
 from ..slots import HandlerSlot
-from . import runtime
+from . import introspect, runtime
 from .runtime import Complain
 
 __all__ = ["Ros2"]
@@ -131,6 +131,54 @@ class Ros2:
                     found.append((f"{info.node_namespace.rstrip('/')}/{info.node_name}", kind,
                                   str(runtime.qos_of(info.qos_profile))))
         return sorted(found)
+
+    # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----
+    def service_type(self, name: str) -> str:
+        self._graph()
+        return introspect.service_type(self.process, name)
+
+    def call(self, name: str, cls: type, request: Any, timeout: float) -> Any:
+        self._graph()
+        return introspect.call(self.process, name, cls, request, timeout)
+
+    def params_under(self, namespace: str) -> dict[str, Any]:
+        """Every parameter of the live nodes under ``namespace``, by global name ``/ns/node/key``."""
+        prefix = namespace.rstrip("/") + "/"
+        found = {}
+        for node in self.graph_snapshot().nodes:
+            if node.startswith(prefix) or prefix.startswith(node + "/"):
+                for key, value in introspect.node_params(self.process, node).items():
+                    name = f"{node}/{key}"
+                    if name.startswith(prefix) or name == namespace.rstrip("/"):
+                        found[name] = value
+        return dict(sorted(found.items()))
+
+    def read_param(self, name: str) -> Any:
+        """The parameter ``/ns/node/key`` of any live node (``%param``)."""
+        node, key = self._live_owner(name)
+        values = introspect.node_params(self.process, node)
+        if key not in values:
+            raise DeclarationError(f"{node} has no parameter {key!r}; it has: {', '.join(values) or 'none'}")
+        return values[key]
+
+    def write_param(self, name: str, value: Any) -> None:
+        """Set the parameter ``/ns/node/key`` of any live node (``%param NAME VALUE``)."""
+        runtime.check_param(name, value)
+        node, key = self._live_owner(name)
+        if node in self.process.hosts():
+            self.set_param(name, value)
+        else:
+            introspect.set_node_param(self.process, node, key, value)
+
+    def _live_owner(self, name: str) -> tuple[str, str]:
+        for node in sorted(self.graph_snapshot().nodes, key=len, reverse=True):
+            if name.startswith(node + "/"):
+                return node, name[len(node) + 1:].replace("/", ".")
+        raise DeclarationError(f"parameter {name}: no live node owns it (on ROS 2 a parameter is /node/key); "
+                               "%nodes lists the nodes")
+
+    def node_pid(self, node: str) -> Optional[int]:
+        return None  # ROS 2 discovery does not say
 
     def graph_where(self) -> str:
         return f"ROS_DOMAIN_ID {runtime.domain_id()}"

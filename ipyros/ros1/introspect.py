@@ -1,0 +1,112 @@
+"""What ``rosservice``, ``rosparam`` and ``rosnode`` ask of ROS 1, for ``%services``, ``%call``, ``%params``
+and ``%node``: a service's type, a call, the parameter server, a node's pid.
+
+A service's type is not on the master: ``rosservice type`` asks the service itself, with a
+TCPROS *probe* header (the server answers with its header, type included, and closes).
+That is what :func:`service_type` does, with a timeout, so a hung server cannot hang the
+prompt.
+"""
+
+from __future__ import annotations
+
+import socket
+import struct
+from typing import Any, Optional
+from urllib.parse import urlparse
+
+import rospy
+
+from ..errors import IpyrosError
+from .master import master_proxy
+
+__all__ = ["call", "node_pid", "params_under", "service_type"]
+
+CALLER_ID = "/ipyros_introspect"
+
+
+def service_type(master_uri: str, name: str, timeout: float = 2.0) -> str:
+    """The type (``pkg/Service``) of the live service ``name``, asked of its server."""
+    code, message, uri = master_proxy(master_uri, timeout).lookupService(CALLER_ID, name)
+    if code != 1:
+        raise IpyrosError(f"no live service {name} ({message}); %services lists them")
+    where = urlparse(uri)  # rosrpc://host:port
+    fields = {"probe": "1", "md5sum": "*", "callerid": CALLER_ID, "service": name}
+    try:
+        with socket.create_connection((where.hostname, where.port), timeout=timeout) as sock:
+            sock.sendall(_header(fields))
+            header = _read_header(sock)
+    except OSError as error:
+        raise IpyrosError(f"the server of {name} at {uri} does not answer ({error}); is its node alive?") from None
+    if "type" not in header:
+        raise IpyrosError(f"the server of {name} did not say its type ({header.get('error', 'no error given')})")
+    return header["type"]
+
+
+def _header(fields: dict[str, str]) -> bytes:
+    body = b"".join(struct.pack("<I", len(item)) + item for item in (f"{k}={v}".encode() for k, v in fields.items()))
+    return struct.pack("<I", len(body)) + body
+
+
+def _read_header(sock: socket.socket) -> dict[str, str]:
+    (size,) = struct.unpack("<I", _read(sock, 4))
+    body, fields, at = _read(sock, size), {}, 0
+    while at < size:
+        (length,) = struct.unpack("<I", body[at:at + 4])
+        key, _, value = body[at + 4:at + 4 + length].decode(errors="replace").partition("=")
+        fields[key] = value
+        at += 4 + length
+    return fields
+
+
+def _read(sock: socket.socket, count: int) -> bytes:
+    data = b""
+    while len(data) < count:
+        chunk = sock.recv(count - len(data))
+        if not chunk:
+            raise OSError("the connection closed")
+        data += chunk
+    return data
+
+
+def call(name: str, cls: type, request: Any, timeout: float) -> Any:
+    """Call the service ``name`` with ``request``; its response. A one-line error if it fails."""
+    try:
+        rospy.wait_for_service(name, timeout)
+    except rospy.ROSException:
+        raise IpyrosError(f"service {name} did not come up within {timeout:g} s; %services lists the live ones") \
+            from None
+    proxy = rospy.ServiceProxy(name, cls)
+    try:
+        return proxy(request)
+    except rospy.ServiceException as error:
+        raise IpyrosError(f"{name} failed: {error}") from None
+    finally:
+        proxy.close()
+
+
+def params_under(master_uri: str, namespace: str, timeout: float = 2.0) -> dict[str, Any]:
+    """The parameter server's values under ``namespace`` (``/`` for all), by global name, sorted."""
+    master = master_proxy(master_uri, timeout)
+    code, message, names = master.getParamNames(CALLER_ID)
+    if code != 1:
+        raise IpyrosError(f"the master would not list its parameters: {message}")
+    prefix = namespace.rstrip("/") + "/"
+    wanted = sorted(n for n in names if n.startswith(prefix) or n == namespace.rstrip("/"))
+    values = {}
+    for name in wanted:
+        code, _, value = master.getParam(CALLER_ID, name)
+        if code == 1:  # else deleted meanwhile
+            values[name] = value
+    return values
+
+
+def node_pid(master_uri: str, node: str, timeout: float = 2.0) -> Optional[int]:
+    """The process id of the live node ``node`` (None if it does not answer)."""
+    try:
+        code, _, uri = master_proxy(master_uri, timeout).lookupNode(CALLER_ID, node)
+        if code != 1:
+            return None
+        code, _, pid = master_proxy(uri, timeout).getPid(CALLER_ID)
+        return int(pid) if code == 1 else None
+    except (OSError, ValueError):
+        return None

@@ -1,0 +1,86 @@
+"""What ``ros2 service`` and ``ros2 param`` ask of ROS 2, for ``%services``, ``%call``, ``%params`` and ``%param``.
+
+Everything goes out from the process's caller node (:meth:`ProcessNode.caller`), whose
+executor spins on a thread of its own, and the prompt waits on the answer with a timeout:
+a node that does not answer is said so in one line, never a hung prompt. A node's
+parameters are read and set through its parameter services, as ``ros2 param`` does; their
+global names here are ``/ns/node/key``, as ROS 1 spells a private parameter.
+"""
+
+from __future__ import annotations
+
+import re
+import threading
+from typing import Any
+
+from ..errors import IpyrosError
+from .runtime import ProcessNode
+
+__all__ = ["call", "node_params", "service_type", "set_node_param"]
+
+
+def _wait(future: Any, timeout: float, what: str) -> Any:
+    done = threading.Event()
+    future.add_done_callback(lambda _: done.set())
+    if not done.wait(timeout):
+        future.cancel()
+        raise IpyrosError(f"{what} did not answer within {timeout:g} s; is it alive? (%nodes lists the live ones)")
+    if future.exception() is not None:
+        raise IpyrosError(f"{what} failed: {future.exception()}")
+    return future.result()
+
+
+def service_type(process: ProcessNode, name: str) -> str:
+    """The type (``pkg/srv/Service``) of the live service ``name``, from discovery."""
+    for found, types in process.graph().get_service_names_and_types():
+        if found == name:
+            return types[0]
+    raise IpyrosError(f"no live service {name}; %services lists them")
+
+
+def call(process: ProcessNode, name: str, cls: type, request: Any, timeout: float) -> Any:
+    """Call the service ``name`` with ``request``; its response."""
+    caller = process.caller()
+    client = caller.create_client(cls, name)
+    try:
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise IpyrosError(f"service {name} did not come up within {timeout:g} s; %services lists the live ones")
+        return _wait(client.call_async(request), timeout, f"service {name}")
+    finally:
+        caller.destroy_client(client)
+
+
+def _request(process: ProcessNode, node: str, kind: str, timeout: float, **fields: Any) -> Any:
+    """One call to the parameter service ``kind`` (ListParameters, ...) of ``node``; its response."""
+    import rcl_interfaces.srv
+
+    cls = getattr(rcl_interfaces.srv, kind)
+    service = node.rstrip("/") + "/" + "_".join(w.lower() for w in re.findall("[A-Z][a-z]*", kind))
+    caller = process.caller()
+    client = caller.create_client(cls, service)
+    try:
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise IpyrosError(f"{node} has no parameter services answering; is it a ROS 2 node, and alive? "
+                              "(%nodes lists them)")
+        return _wait(client.call_async(cls.Request(**fields)), timeout, f"{node}'s parameter service")
+    finally:
+        caller.destroy_client(client)
+
+
+def node_params(process: ProcessNode, node: str, timeout: float = 3.0) -> dict[str, Any]:
+    """The parameters of the live node ``node`` (``/ns/name``) and their values, by key."""
+    from rclpy.parameter import parameter_value_to_python
+
+    names = list(_request(process, node, "ListParameters", timeout).result.names)
+    values = _request(process, node, "GetParameters", timeout, names=names).values if names else []
+    return {name: parameter_value_to_python(value) for name, value in zip(names, values)}
+
+
+def set_node_param(process: ProcessNode, node: str, key: str, value: Any, timeout: float = 3.0) -> None:
+    """Set ``key`` of the live node ``node`` to ``value``; its refusal as a one-line error."""
+    from rclpy.parameter import Parameter
+
+    parameter = Parameter(key, value=list(value) if isinstance(value, tuple) else value).to_parameter_msg()
+    (result,) = _request(process, node, "SetParameters", timeout, parameters=[parameter]).results
+    if not result.successful:
+        raise IpyrosError(f"{node} refused {key} = {value!r}: {result.reason or 'no reason given'}")
