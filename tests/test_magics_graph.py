@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import threading
+
 import pytest
 from conftest import master_state, wait_for
 from IPython.core.error import UsageError
@@ -143,9 +145,31 @@ def test_echo_stops_on_ctrl_c_without_killing_anything(ip, capsys, make_node):
         assert "/mg/latched" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
 
 
+def test_echo_waits_for_a_topic_not_published_yet_and_reads_field_paths(ip, capsys):
+    """As rostopic echo: a topic nobody publishes yet is waited for (said once); Ctrl-C ends the wait;
+    /topic/field.path prints that field."""
+    with ctrl_c_after(1.0):
+        ok(ip, "%echo /mg/not_there")
+    out = capsys.readouterr().out
+    assert "ipyros: /mg/not_there is not published yet; waiting for it (Ctrl-C stops)" in out
+    assert "stopped waiting for /mg/not_there" in out
+    peers: list = []
+    publisher = threading.Timer(1.0, lambda: peers.append(Peer("publish_rate.py", "/mg/later", 20)))
+    publisher.start()
+    try:
+        ok(ip, "%echo /mg/later -n 2")
+        out = capsys.readouterr().out
+        assert out.count("ipyros: /mg/later is not published yet") == 1 and out.count("data: ") == 2, out
+        ok(ip, "%echo /mg/later/data -n 1")  # a field path, as rostopic echo takes it
+        out = capsys.readouterr().out
+        assert out.startswith("data: ") and out.count("---") == 1, out
+    finally:
+        publisher.join()
+        for peer in peers:
+            peer.stop()
+
+
 def test_echo_errors(ip):
-    error = error_of(ip, "%echo /mg/not_there")
-    assert isinstance(error, UsageError) and "no live topic /mg/not_there; %topics lists them" in str(error)
     assert "-n must be 0" in str(error_of(ip, "%echo /x -n -2"))
     assert "invalid topic name 'bad-name'" in str(error_of(ip, "%echo bad-name"))
 

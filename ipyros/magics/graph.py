@@ -144,14 +144,16 @@ class TopicMagics(ExtensionMagics):
         count = self.ext.settings.echo_count if args.count is None else args.count
         if count < 0:
             raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {count}")
-        topic = global_topic(args.topic)
+        topic, field = self._topic_and_field(global_topic(args.topic))
         keep = _compile_filter(args.filter, self.shell.user_ns) if args.filter else None
-        type_name = self.live_type(topic)
-        fields = [f.strip("'\"") for f in args.field or []]
+        fields = [f.strip("'\"") for f in args.field or []] + ([field] if field else [])
+        seen = Messages(topic)
+        type_name = self._type_once_live(topic)
+        if type_name is None:  # Ctrl-C while waiting for it
+            return seen
         if args.csv and args.table:
             raise UsageError("give --csv or --table, not both (without either: YAML, which %pub takes back)")
         printer = self.ext.printer
-        seen = Messages(topic)
         rows = _Rows(fields, type_name, csv=args.csv) if args.csv or args.table else None
         with Echo(topic, type_name) as echo:
             try:
@@ -242,6 +244,37 @@ class TopicMagics(ExtensionMagics):
             raise MasterError(f"no ROS master answers at {self.ext.graph.master_uri}; start roscore, "
                               "or check ROS_MASTER_URI (c.RosMagics.master_uri)")
         return snap
+
+    def _topic_and_field(self, name: str) -> tuple[str, str]:
+        """``/turtle1/pose/position.x`` → ``("/turtle1/pose", "position.x")``, as rostopic echo reads a
+        field path; a name that is a live topic, or has no live topic in it, stays whole."""
+        snap = self.ext.graph.snapshot
+        if name in snap.topics:
+            return name, ""
+        parts = name.split("/")
+        for cut in range(len(parts) - 1, 1, -1):
+            topic = "/".join(parts[:cut])
+            if topic in snap.topics:
+                return topic, ".".join(parts[cut:])
+        return name, ""
+
+    def _type_once_live(self, topic: str, poll: float = 0.5) -> Optional[str]:
+        """The type of ``topic``, waiting (said once) while nobody publishes it, as rostopic echo
+        waits; None if Ctrl-C ends the wait."""
+        snap = self.live_graph()
+        if snap.topics.get(topic) not in (None, "", "*"):
+            return snap.topics[topic]
+        close = _close(topic, snap.topic_names)
+        print(f"ipyros: {topic} is not published yet{close}; waiting for it (Ctrl-C stops)", flush=True)
+        try:
+            while True:
+                time.sleep(poll)
+                found = self.ext.graph.refresh_now().topics.get(topic)
+                if found not in (None, "", "*"):
+                    return found
+        except KeyboardInterrupt:
+            print(f"stopped waiting for {topic}")
+            return None
 
     def live_type(self, topic: str, for_pub: bool = False) -> str:
         """The type of the live ``topic`` from the graph read afresh; a one-line error if there is none."""
