@@ -31,6 +31,7 @@ from __future__ import annotations
 import logging
 import re
 import threading
+import time
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, Callable, Mapping, Optional, Sequence
@@ -480,7 +481,7 @@ class Answerer:
             timers = want.model.timers if want.model else []
             return sorted((t.name, TIMER) for t in timers if t.name.startswith(frag))
         if kind == NODE:
-            return [(n, NODE) for n, _ in _relative_or_global(snap.nodes, frag, "/")]
+            return [(n, _stale(NODE, snap)) for n, _ in _relative_or_global(snap.nodes, frag, "/")]
         if kind == DSL_NODE:
             return sorted((k, type(v).__name__) for k, v in list(user_ns.items())
                           if k.startswith(frag) and not k.startswith("_") and is_dsl_node(v))
@@ -523,13 +524,21 @@ class Answerer:
         if want.kind == OWN_TOPIC and model is not None:
             return own
         live = _relative_or_global(snap.topic_names, frag, namespace)
-        return own + [(text, snap.topics[name] or TOPIC) for text, name in live]
+        return own + [(text, _stale(snap.topics[name] or TOPIC, snap)) for text, name in live]
 
     def _services(self, want: Want, snap: GraphSnapshot) -> list[tuple[str, str]]:
         model, frag = want.model, want.fragment
         namespace = model.namespace if model is not None else default_namespace()
         own = _own(model.services if model else [], None, frag, namespace)
-        return own + [(text, SERVICE) for text, _ in _relative_or_global(tuple(snap.services), frag, namespace)]
+        return own + [(text, _stale(SERVICE, snap)) for text, _ in _relative_or_global(tuple(snap.services), frag,
+                                                                                        namespace)]
+
+
+def _stale(meta: str, snap: GraphSnapshot) -> str:
+    """A completion's description, saying so when it comes from the last graph of a master now down."""
+    if not snap.stale:
+        return meta
+    return f"{meta} (master down; as of {time.strftime('%H:%M:%S', time.localtime(snap.known_at))})"
 
 
 def _global(name: str) -> str:

@@ -24,6 +24,7 @@ forever; here every call has a short timeout through a custom transport.
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import fnmatch
 import http.client
 import logging
@@ -57,8 +58,8 @@ class GraphSnapshot:
 
     All mappings are read-only and sorted by key; node lists are sorted tuples.
     ``topics`` holds every topic somebody publishes or subscribes to, with its type
-    (``""`` when the master does not know it yet). With the master down everything
-    is empty and ``master_up`` is False.
+    (``""`` when the master does not know it yet). With the master down ``master_up`` is
+    False, and everything is empty unless :class:`GraphCache` kept the last graph (``stale``).
     """
 
     topics: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
@@ -68,6 +69,10 @@ class GraphSnapshot:
     nodes: tuple[str, ...] = ()
     taken_at: float = 0.0
     master_up: bool = False
+    #: The master is down and this is the last graph it described (``known_at``): still good to
+    #: complete names from, not to act on.
+    stale: bool = False
+    known_at: float = 0.0
     #: ``topics``' keys as a sorted tuple: prefix searches bisect it (1,000 topics or 100,000).
     topic_names: tuple[str, ...] = field(init=False, repr=False, compare=False)
 
@@ -230,6 +235,11 @@ class GraphCache:
         with self._lock:
             # A slow background fetch must not overwrite a newer refresh_now() result.
             if snap.taken_at >= self._snapshot.taken_at:
+                last = self._snapshot
+                if not snap.master_up and (last.master_up or last.stale):
+                    # The master went away: completion keeps offering the last graph, marked stale.
+                    snap = dataclasses.replace(last, taken_at=snap.taken_at, master_up=False, stale=True,
+                                               known_at=last.known_at if last.stale else last.taken_at)
                 self._snapshot = snap
             self._first.set()
             return self._snapshot

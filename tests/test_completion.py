@@ -289,6 +289,42 @@ def test_master_down_answers_instantly_from_local_data(ip):
         dead.stop()
 
 
+def test_master_gone_completion_offers_the_last_graph_marked_stale(ip, ros_home):
+    """A master that goes away mid-session: TAB still offers what it last knew, saying so."""
+    import subprocess
+
+    from topic_nodes import stop
+
+    uri = f"http://127.0.0.1:{free_port()}/"
+    master = subprocess.Popen(["rosmaster", "--core", "-p", uri.rsplit(":", 1)[1].strip("/"), "-w", "3"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    cache = GraphCache(uri, period=0.05, timeout=0.3)
+    try:
+        wait_for(lambda: _registered(uri), timeout=20, what="the master to answer")
+        cache.start()
+        wait_for(lambda: "/stale/topic" in cache.snapshot.topics, what="the topic in the graph")
+        stop(master)
+        wait_for(lambda: not cache.snapshot.master_up, what="the master seen down")
+        result = ask(RosMatcher(ip, cache, CATALOG), "%topics /stale/")
+        assert [c.text for c in result["completions"]] == ["/stale/topic"]
+        assert "std_msgs/String (master down; as of " in result["completions"][0].type
+        assert cache.snapshot.stale and not cache.snapshot.master_up
+    finally:
+        cache.stop()
+        stop(master)
+
+
+def _registered(uri: str) -> bool:
+    """Register a publisher of /stale/topic with the master at ``uri``; whether it answered."""
+    import xmlrpc.client
+
+    try:
+        return xmlrpc.client.ServerProxy(uri).registerPublisher(
+            "/stale_node", "/stale/topic", "std_msgs/String", "http://127.0.0.1:9/")[0] == 1
+    except OSError:
+        return False
+
+
 def test_string_argument_scanner():
     arg = string_argument('nd.new.subscribe(topic="/a", handler=f)\n  .publish(topic = "/tu')
     assert arg is not None and arg.fragment == "/tu" and arg.keyword == "topic" and arg.index == 0
