@@ -47,3 +47,27 @@ class BaseNodeError(IpyrosError, RuntimeError):
 
 class NodeStateError(IpyrosError, RuntimeError):
     """The node is not in a state where this operation makes sense (e.g. shut down)."""
+
+
+def warn_user(message: str, category: type[Warning]) -> None:
+    """``warnings.warn`` attributed to the user's own line: the first caller outside ipyros and IPython.
+
+    A fixed ``stacklevel`` is right for one path only: ``nd.save()`` typed at the prompt and
+    ``%save_nodes`` reach the same code through different depths, and the magic's warning
+    pointed into IPython's own file.
+    """
+    import sys
+    import warnings
+
+    frame, level = sys._getframe(1), 2  # stacklevel 2: the caller of warn_user
+    while frame is not None and _internal(frame.f_code.co_filename):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)
+
+
+def _internal(filename: str) -> bool:
+    import os
+
+    here = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    return (filename.startswith(here) or f"{os.sep}IPython{os.sep}" in filename
+            or filename.startswith("<decorator-gen"))

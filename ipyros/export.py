@@ -21,7 +21,6 @@ import re
 import shlex
 import sys
 import types
-import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Optional
@@ -30,7 +29,7 @@ from xml.sax.saxutils import escape
 import yaml
 
 from . import plan as planning
-from .errors import IpyrosError
+from .errors import IpyrosError, warn_user
 from .keep import _WRITER, Bindings, _write_atomic, handler_slots, handler_source, import_of
 from .model import BaseModel, NodeModel
 from .slots import call_arity
@@ -659,5 +658,5 @@ def export(node: "rosNode", path: "str | os.PathLike[str]", namespace: Optional[
 
 def _warn_unset(script: _Script, written: Path) -> None:
     if script.unset:
-        warnings.warn(f"ipyros: {written} needs values for {', '.join(script.unset)} (marked '# set me'): "
-                      "they are not plain literals or importable", ExportWarning, stacklevel=3)
+        warn_user(f"ipyros: {written} needs values for {', '.join(script.unset)} (marked '# set me'): "
+                  "they are not plain literals or importable", ExportWarning)

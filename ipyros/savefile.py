@@ -23,12 +23,11 @@ import re
 import sys
 import time
 import types
-import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Optional, Sequence
 
 from . import plan as planning
-from .errors import IpyrosError
+from .errors import IpyrosError, warn_user
 from .keep import _WRITER, Bindings, _write_atomic, handler_slots, handler_sources
 from .model import NodeModel
 
@@ -147,9 +146,9 @@ class _SavedFile:
                      + "\n".join(f"    {line}" if line else "" for line in body))
         parts.append('if __name__ == "__main__":  # run as a script: keep the nodes up until Ctrl-C\n    spin()')
         if b.unbound:
-            warnings.warn(f"ipyros: the saved file needs {', '.join(b.unbound)} defined before it runs "
-                          "(listed at its top): " + "; ".join(f"{k} is {v.split(', ', 1)[1]}" for k, v in
-                                                             b.unbound.items()), SaveWarning, stacklevel=4)
+            warn_user(f"ipyros: the saved file needs {', '.join(b.unbound)} defined before it runs "
+                      "(listed at its top): " + "; ".join(f"{k} is {v.split(', ', 1)[1]}" for k, v in
+                                                         b.unbound.items()), SaveWarning)
         return "\n\n\n".join(parts) + "\n"
 
     def _declarations(self, node: "rosNode") -> list[str]:

@@ -254,7 +254,9 @@ def test_demo_magic_starts_lists_and_stops(ip, capsys, robot_stopper):
 
     ok(ip, "%demo kobuki max_speed:=4.0")
     assert running_robot().kind == "kobuki" and running_robot().params["/speed_monitor/max_speed"] == 4.0
-    assert "%pub /move_base_simple/goal" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "%pub /move_base_simple/goal" in out
+    assert "ipyros: the demo robot turtle was stopped first: one demo robot runs at a time" in out, "said, not silent"
 
     ok(ip, "%demo --stop")
     assert "demo robot kobuki stopped" in capsys.readouterr().out

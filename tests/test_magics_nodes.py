@@ -219,9 +219,10 @@ def test_status_shows_the_figures_of_each_handler_and_the_nodes(node_ip, capsys)
     cells = [c.strip() for c in row if c.strip()]
     assert cells[:4] == ["topic", "/mn/numbers", "on_number", "3"] and cells[-1] == "1"
     assert any("on_tick" in line for line in out.splitlines())
+    ok(ip, "%pub /mn/out std_msgs/String hi")  # runs ipyros's own publisher node: not one of yours
     ok(ip, "%status")
     out = capsys.readouterr().out
-    assert "/mn_node" in out and " nd " in out.replace("│", " ")
+    assert "/mn_node" in out and " nd " in out.replace("│", " ") and "ipyros_pub_" not in out, out
     assert isinstance(error_of(ip, "%status nobody"), UsageError)
 
 

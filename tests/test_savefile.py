@@ -179,6 +179,12 @@ def test_save_lists_globals_it_cannot_hold(sf, tmp_path):
         ip.user_ns["nd"].save(target, ip.user_ns)
     assert any("lock" in str(w.message) for w in caught if issubclass(w.category, savefile.SaveWarning))
     assert "# Not saved: lock (used by guarded, a lock: not a literal, not importable)" in target.read_text()
+    # Through the magic the warning points at the user's line, not into IPython or ipyros.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ok(ip, f"%save_nodes {tmp_path / 'g2.py'} nd")
+    (warning,) = [w for w in caught if issubclass(w.category, savefile.SaveWarning)]
+    assert "IPython" not in warning.filename and "ipyros" not in warning.filename, warning.filename
 
 
 def test_bad_paths_and_files_say_what_is_wrong(sf, tmp_path):

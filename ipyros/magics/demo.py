@@ -17,7 +17,7 @@ from IPython.core.magic import line_magic, magics_class
 from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
 from rich.table import Table
 
-from ..robot import ROBOTS, demo_robot, launch_args, stop_demo_robot
+from ..robot import ROBOTS, demo_robot, launch_args, running_robot, stop_demo_robot
 from .common import ExtensionMagics
 
 
@@ -46,7 +46,11 @@ class DemoMagics(ExtensionMagics):
                 stopped = stop_demo_robot()
                 print(f"ipyros: demo robot {stopped.kind} stopped" if stopped else "ipyros: no demo robot is running")
             return
-        robot = demo_robot(args.robot, **launch_words(args.args))
+        wanted = launch_words(args.args)
+        before = running_robot()
+        robot = demo_robot(args.robot, **wanted)
+        if before is not None and before is not robot:
+            print(f"ipyros: the demo robot {before.kind} was stopped first: one demo robot runs at a time")
         self.ext.printer.show(robot)
         print(robot.hint())
 

@@ -19,6 +19,7 @@ from rich.table import Table
 from ..dsl import rosNode
 from ..editing import EditWatch, PendingEdit, current_handler, find_target, handler_source, new_functions, redeclare
 from ..errors import IpyrosError
+from ..probe import is_tool
 from ..savefile import restore, save_nodes
 from ..session import current
 from ..tryout import try_candidate
@@ -187,9 +188,10 @@ class NodeMagics(ExtensionMagics):
         if args.node:
             self.ext.printer.show(find_node(self.shell, args.node).status())
             return
-        nodes = list(current().nodes.values())
+        # ipyros's own tool nodes (the %pub publisher, %echo's listener) are not the user's.
+        nodes = [node for node in current().nodes.values() if not is_tool(node.name)]
         if not nodes:
-            print("no rosNode is running in this session")
+            print("no rosNode of yours is running in this session")
             return
         self.ext.printer.show(_nodes_table(nodes, self.shell.user_ns))
 
