@@ -24,7 +24,7 @@ from typing import Any, Callable, Iterator, Optional
 
 from . import msgtypes, names, plan as planning, qos as qos_mod, versions as versions_mod
 from .errors import (DeclarationError, HandlerError, IpyrosError, MessageTypeError, NodeStateError,
-                     NotDeclaredError, TopicTypeConflict)
+                     NotDeclaredError, TopicNameError, TopicTypeConflict)
 from .model import NodeModel, ServiceModel, TimerModel, TopicModel
 from .plan import Spec
 from .session import Session, current
@@ -87,8 +87,12 @@ class rosNode:  # noqa: N801 - the paper's name
 
     def handler(self, topic: str) -> Optional[Callable[..., Any]]:
         """The function now serving subscription ``topic`` (or service / timer name)."""
-        resolved = self._resolve(topic, "topic")
-        for key in (planning.topic_slot(resolved), planning.service_slot(resolved), planning.timer_slot(topic)):
+        try:
+            resolved: Optional[str] = self._resolve(topic, "topic")
+        except TopicNameError:  # not a graph name: only a timer can be called that ("<lambda>")
+            resolved = None
+        keys = (planning.topic_slot(resolved), planning.service_slot(resolved)) if resolved is not None else ()
+        for key in (*keys, planning.timer_slot(topic)):
             if key in self._handlers:
                 return self._handlers[key]
         return None

@@ -18,7 +18,9 @@ Nothing here knows about IPython: the magics in :mod:`ipyros.magics.nodes` drive
 
 from __future__ import annotations
 
+import ast
 import inspect
+import re
 import textwrap
 import types
 from dataclasses import dataclass, field
@@ -64,7 +66,13 @@ def find_target(node: "rosNode", name: str) -> HandlerTarget:
     handlers = [f"{t.resolved} ({t.handler})" for t in model.subscriptions() if t.role == "new"]
     handlers += [f"timer {t.name} ({t.handler})" for t in model.timers]
     handlers += [f"service {s.resolved} ({s.handler})" for s in model.services if s.role == "new"]
-    known = "; its handlers: " + ", ".join(handlers) if handlers else "; it has no handlers yet"
+    relayed = next((t for t in model.topics if t.resolved == resolved and t.role == "reuse"), None)
+    if relayed is not None:  # a wrapped topic passed on unchanged: a handler is declared with new
+        raise NotDeclaredError(
+            f"{node.name} relays {resolved} unchanged (reuse), with no handler to edit; to handle it, "
+            f"declare one: {node.name}.new.subscribe({relayed.name!r}, handler, msgType={relayed.type!r})")
+    known = "; its handlers: " + ", ".join(handlers) if handlers else (
+        f"; it has no handlers yet: declare one, e.g. {node.name}.new.subscribe(TOPIC, handler, msgType=...)")
     raise NotDeclaredError(f"{node.name} has no handler for {resolved or name}{known}")
 
 
@@ -95,6 +103,43 @@ def handler_source(handler: Any, node_name: str, target: HandlerTarget) -> str:
         where = handler.__code__.co_filename
         raise IpyrosError(f"cannot find the source of handler {name} (defined in {where}); {instead}") from None
     return textwrap.dedent(source)
+
+
+def lambda_as_def(handler: Any, name: str) -> Optional[str]:
+    """The lambda ``handler`` written as ``def name(...): return ...``, to edit at the prompt.
+
+    A lambda has no name to rebind, so ``%handler`` offers it as a def under a fresh name.
+    Its source is found as ``inspect`` finds any function's (the prompt's cells are in
+    ``linecache``); of the lambdas on its line, the one whose body starts where its code
+    does. None when the source cannot be had.
+    """
+    try:
+        lines, _ = inspect.findsource(handler)
+    except (OSError, TypeError):
+        return None
+    source = "".join(lines)
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return None
+    code = handler.__code__
+    starts = {(line, column) for line, _, column, _ in code.co_positions() if line is not None}
+    found = [n for n in ast.walk(tree) if isinstance(n, ast.Lambda) and n.lineno == code.co_firstlineno]
+    lam = next((n for n in found if (n.body.lineno, n.body.col_offset) in starts), found[0] if found else None)
+    body = ast.get_source_segment(source, lam.body) if lam is not None else None
+    if lam is None or body is None:
+        return None
+    return f"def {name}({ast.unparse(lam.args)}):\n    return {body}\n"
+
+
+def fresh_name(target: HandlerTarget, taken: Mapping[str, Any]) -> str:
+    """A name for the def a lambda handler of ``target`` becomes: on_<last part>, unused in ``taken``."""
+    last = target.name.rsplit("/", 1)[-1]
+    base = f"on_{target.kind}" if last == "<lambda>" else f"on_{re.sub(r'[^0-9A-Za-z_]', '_', last)}"
+    name, number = base, 2
+    while name in taken:
+        name, number = f"{base}_{number}", number + 1
+    return name
 
 
 def redeclare(node: "rosNode", target: HandlerTarget, handler: Callable[..., Any]) -> None:

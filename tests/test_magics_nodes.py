@@ -107,13 +107,27 @@ def test_cell_handler_errors_leave_the_live_handler(node_ip):
     assert ip.user_ns["nd"].handler("/mn/numbers") is live
 
 
+def test_handler_offers_a_lambda_as_a_def_and_running_it_swaps(node_ip, capsys):
+    """A lambda has no name to rebind: %handler offers it as a def of a fresh name (as %versions lists it)."""
+    ip = node_ip
+    ok(ip, "nd.new.subscribe('/mn/lambda', lambda m: heard.append(('lam', m.data)), msgType=UInt32)\n"
+           "nd.timer(0.5, lambda: None)")
+    ok(ip, "on_lambda = 'taken'")
+    capsys.readouterr()
+    ok(ip, "%handler nd /mn/lambda")
+    assert ip.rl_next_input == "def on_lambda_2(m):\n    return heard.append(('lam', m.data))"
+    assert "is a lambda, here as def on_lambda_2: edit it and run it" in capsys.readouterr().out
+    ok(ip, ip.rl_next_input.replace("'lam'", "'def'"))
+    assert ip.user_ns["nd"].handler("/mn/lambda") is ip.user_ns["on_lambda_2"]
+    feed(2, "/mn/lambda")
+    wait_for(lambda: [h for h in ip.user_ns["heard"] if h[0] == "def"] == [("def", 0), ("def", 1)], what="the def")
+    ok(ip, "%versions nd <lambda>")  # the timer, named after its lambda, is edited the same way
+    ok(ip, "%handler nd <lambda>")
+    assert ip.rl_next_input == "def on_timer():\n    return None"
+
+
 def test_handler_says_when_the_source_cannot_be_found(node_ip):
     ip = node_ip
-    ok(ip, "nd.new.subscribe('/mn/lambda', lambda m: None, msgType=UInt32)")
-    error = error_of(ip, "%handler nd /mn/lambda")
-    assert isinstance(error, IpyrosError) and str(error) == (
-        "the handler of /mn/lambda is a lambda, which cannot be edited in place; "
-        "write the new one in a cell: %%handler nd /mn/lambda")
     ok(ip, "exec('def hidden(msg): pass', globals())\nnd.new.subscribe('/mn/hidden', hidden, msgType=UInt32)")
     error = error_of(ip, "%handler nd /mn/hidden")
     assert "cannot find the source of handler hidden (defined in <string>)" in str(error)

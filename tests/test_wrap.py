@@ -104,6 +104,11 @@ def test_wrapping_debians_cpp_relay(make_node, ros_master):
     send = lambda text: feeder.write("/cpp/in", String(text))  # noqa: E731
     wait_for(lambda: send("plain") or out_seen, timeout=20, what="relay through the C++ basenode")
     assert {m.data for m in out_seen} == {"plain"}
+    # A relayed topic has no handler to edit (%handler, versions): said, with what to declare.
+    with pytest.raises(errors.NotDeclaredError, match=r"^cpp_wrapper relays /cpp/in unchanged \(reuse\), with no "
+                       r"handler to edit; to handle it, declare one: cpp_wrapper.new.subscribe\('/cpp/in', handler, "
+                       r"msgType='std_msgs/String'\)$"):
+        w.versions("/cpp/in")
 
     # Intercept the basenode's output with a handler that writes to a new topic; swap it while traffic flows.
     w.new.publish("/cpp/shouted", msgType=String)

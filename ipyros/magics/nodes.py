@@ -17,7 +17,8 @@ from IPython.core.magic_arguments import argument, magic_arguments, parse_argstr
 from rich.table import Table
 
 from ..dsl import rosNode
-from ..editing import EditWatch, PendingEdit, current_handler, find_target, handler_source, new_functions, redeclare
+from ..editing import (EditWatch, PendingEdit, current_handler, find_target, fresh_name, handler_source,
+                       lambda_as_def, new_functions, redeclare)
 from ..errors import IpyrosError
 from ..probe import is_tool
 from ..savefile import restore, save_nodes
@@ -50,7 +51,8 @@ class NodeMagics(ExtensionMagics):
         %handler NODE TOPIC puts the source of the function now handling TOPIC in the next
         input; edit it and run it, and the new function replaces the live one (no message
         is lost). This needs the source: it works for handlers typed at the prompt or
-        imported from a file, not for lambdas or functions made by exec.
+        imported from a file (a lambda comes as a def of a new name), not for functions made
+        by exec.
 
         %%handler NODE TOPIC runs the cell, which defines the new handler (a def), and swaps
         it in at once.
@@ -60,6 +62,14 @@ class NodeMagics(ExtensionMagics):
         target = find_target(node, args.topic)
         old = current_handler(node, target)
         if cell is None:
+            if getattr(old, "__name__", "") == "<lambda>" and (
+                    as_def := lambda_as_def(old, fresh_name(target, self.shell.user_ns))) is not None:
+                name = as_def.split("(", 1)[0][len("def "):]
+                self.edits.expect(PendingEdit(node, target, name, old))
+                self.shell.set_next_input(as_def.rstrip("\n"))
+                print(f"ipyros: the handler of {node.name} {target.label} is a lambda, here as def {name}: "
+                      "edit it and run it, and it replaces the lambda")
+                return
             source = handler_source(old, args.node, target)
             self.edits.expect(PendingEdit(node, target, old.__name__, old))
             self.shell.set_next_input(source.rstrip("\n"))
