@@ -32,6 +32,7 @@ import logging
 import re
 import threading
 import time
+import types
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, Callable, Mapping, Optional, Sequence
@@ -56,6 +57,7 @@ MSG_TYPE = "message type"
 SRV_TYPE = "service type"
 NODE = "node"                # live ROS node names
 DSL_NODE = "DSL node"        # variables in user_ns holding a DSL node
+FUNCTION = "function"        # the user's functions (a candidate handler for %try)
 TIMER = "timer"              # the node's timer names
 PACKAGE = "package"
 EXECUTABLE = "executable"    # executables of the package named by the argument before
@@ -180,7 +182,7 @@ MAGICS: dict[str, MagicSpec] = {
     "echo": MagicSpec((TOPIC,), {"-n": None, "--count": None}),
     "handler": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
     "pub": MagicSpec((TOPIC, MSG_TYPE, MSG_TEMPLATE), {**_TYPE_OPTIONS, "-r": None, "--rate": None}),
-    "try": MagicSpec((DSL_NODE, OWN_TOPIC), {"-n": None, "--last": None}, direction="subscribe"),
+    "try": MagicSpec((DSL_NODE, OWN_TOPIC, FUNCTION), {"-n": None, "--last": None}, direction="subscribe"),
     "status": MagicSpec((DSL_NODE,)),
     "versions": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
     "revert": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
@@ -485,6 +487,9 @@ class Answerer:
         if kind == DSL_NODE:
             return sorted((k, type(v).__name__) for k, v in list(user_ns.items())
                           if k.startswith(frag) and not k.startswith("_") and is_dsl_node(v))
+        if kind == FUNCTION:
+            return sorted((k, FUNCTION) for k, v in list(user_ns.items())
+                          if k.startswith(frag) and not k.startswith("_") and isinstance(v, types.FunctionType))
         if kind == MSG_TYPE:
             found = [(t, kind) for t in _types(self.catalog.message_types(), frag)]
             live = snap.topics.get(_global(want.before[0])) if want.before else None

@@ -374,6 +374,9 @@ def test_through_the_shell(ip, graph):
         # After %pub TOPIC: the type the live topic carries first, as the terminal's menu gets them.
         assert [c.text for c in complete(ip, "%pub /ct/turtle1/pose ")][:2] == ["geometry_msgs/Pose2D",
                                                                                 "geometry_msgs/Pose"]
+        # %try's candidate: the user's functions, not IPython's %clear.
+        ip.user_ns.update(clamp=lambda m: m, closer=lambda m: m, cl_not_a_function=3)
+        assert [c.text for c in complete(ip, "%try wnode /ct/cmd_vel cl")] == ["clamp", "closer"]
         found = complete(ip, "%pub /ct/odom std_msgs/String ")  # a template, inserted at the cursor
         assert [(c.text, c.start) for c in found] == [("{data: ''}", len("%pub /ct/odom std_msgs/String "))]
         # Ours but nothing matches: no file names crowd in (the file matcher would list /ct...).
