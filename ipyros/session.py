@@ -230,6 +230,8 @@ class Session:
             self.closed = True
             if self.watch is not None:
                 self.watch.stop()
+            if self.master is not None and self.process.started and not master_mod.answers(self.master.uri, 0.3):
+                self.process.master_gone()
             for stop in reversed(self._on_close):
                 try:
                     stop()

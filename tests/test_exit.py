@@ -83,3 +83,42 @@ def test_exit_stops_the_nodes_before_the_namespace_is_cleared(ros_master, tmp_pa
     assert "NameError" not in result.stdout + result.stderr, result.stderr
     assert result.returncode == 0, result.stderr
     wait_for(lambda: not registered(ros_master, "/exiting_terminal"), what="the node to unregister")
+
+
+def test_exit_after_the_master_died_is_quiet(tmp_path, ros_home):
+    """The master went away first: leaving must not print rospy's warning once per endpoint it cannot unregister."""
+    from conftest import free_port
+    from topic_nodes import stop
+
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}/"
+    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port), "-w", "3"], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
+    try:
+        wait_for(lambda: _answers(uri), timeout=20, what="the master to answer")
+        cells = textwrap.dedent("""\
+            from std_msgs.msg import String
+            nd = rosNode("orphaned")
+            for i in range(5): nd.new.publish(f"/orphan/t{i}", msgType=String)
+            nd.new.subscribe("/orphan/in", print, msgType=String)
+            nd.create(); print("CREATED")
+            import os, signal, time; os.kill(int(os.environ["MASTER_PID"]), signal.SIGTERM); time.sleep(1.5)
+            exit
+            """)
+        ipython = Path(sys.executable).with_name("ipython")
+        result = subprocess.run([str(ipython), "--simple-prompt", "--ext", "ipyros", "--no-banner",
+                                 "--HistoryManager.hist_file=:memory:"], input=cells, capture_output=True, text=True,
+                                timeout=60, env={**os.environ, "ROS_MASTER_URI": uri, "MASTER_PID": str(master.pid)},
+                                cwd=tmp_path)
+        said = result.stdout + result.stderr
+        assert "CREATED" in said and result.returncode == 0, said
+        assert "unable to communicate" not in said and "[WARN]" not in said, said
+    finally:
+        stop(master)
+
+
+def _answers(uri: str) -> bool:
+    try:
+        return xmlrpc.client.ServerProxy(uri).getPid("/pytest")[0] == 1
+    except OSError:
+        return False

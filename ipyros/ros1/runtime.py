@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 import io
+import logging
 import os
 import threading
 import warnings
@@ -103,6 +104,16 @@ class ProcessNode:
     def shutdown(self, reason: str = "ipyros exit") -> None:
         if self.name is not None and not rospy.core.is_shutdown():
             rospy.signal_shutdown(reason)
+
+    @staticmethod
+    def master_gone() -> None:
+        """The master is gone and the session is closing: rospy's warning that it could not
+        unregister, printed once per endpoint, tells nothing then (there is nothing to unregister from)."""
+        logging.getLogger("rosout").addFilter(_no_out_of_sync)
+
+
+def _no_out_of_sync(record: logging.LogRecord) -> bool:
+    return "registrations are now out of sync" not in record.getMessage()
 
     def require(self) -> None:
         if self.name is None:
