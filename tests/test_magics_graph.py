@@ -380,3 +380,18 @@ def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, cap
     ok(ip, "w.shutdown(); listener.shutdown()")
     assert "no such file" in str(error_of(ip, "rosNode('mg_b2').baseBag('/nonexistent.bag')"))
     assert "has no topic /nope" in str(error_of(ip, f"rosNode('mg_b3').baseBag({str(bag)!r}, topics=['/nope'])"))
+
+
+def test_topics_names_the_sessions_dsl_nodes_not_the_ros_node_they_share(ip, capsys):
+    """On ROS 1 the session's DSL nodes share one ROS node: %topics says which of them uses a topic."""
+    ok(ip, "owner = rosNode('mg_owner').new.publish('/mg/owned', msgType='std_msgs/String').create()")
+    wait_listed(ip, "/mg/owned")
+    capsys.readouterr()
+    ok(ip, "%topics /mg/owned")
+    row = next(line for line in capsys.readouterr().out.splitlines() if "/mg/owned" in line)
+    assert "/mg_owner" in row and "/ipyros_test" not in row, row
+    ok(ip, "owner.shutdown()")
+    ok(ip, "%pub /mg/owned std_msgs/String hi")  # now only ipyros's own publisher has it
+    ok(ip, "%topics /mg/owned")
+    row = next(line for line in capsys.readouterr().out.splitlines() if "/mg/owned" in line and "│" in line)
+    assert "/ipyros_pub_" in row and "/mg_owner" not in row and "/ipyros_test" not in row, row

@@ -7,6 +7,7 @@ and print with rich (tables in a terminal or a notebook, plain text in a pipe).
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import re
 import time
@@ -20,7 +21,8 @@ from rich.table import Table
 
 from .. import msgtypes
 from ..errors import MasterError
-from ..graph import GraphSnapshot
+from .. import plan as planning
+from ..graph import GraphSnapshot, frozen
 from ..msgbuild import build_message, fields_of, flat_fields, parse_data, to_yaml
 from ..probe import Echo, Rate, measure_rates
 from .common import ExtensionMagics, global_topic, split_head
@@ -117,7 +119,8 @@ class TopicMagics(ExtensionMagics):
                   "reliable TCP")
         window = self.ext.settings.hz_window
         rates = measure_rates({t: snap.topics[t] for t in found}, window) if args.hz else None
-        self.ext.printer.show(_topics_table(snap, found, rates, window, self.ext.graph.where))
+        self.ext.printer.show(_topics_table(_as_dsl_nodes(snap, self.ext.session), found, rates, window,
+                                            self.ext.graph.where))
 
     # -- %echo ---------------------------------------------------------------------------
     @magic_arguments()
@@ -286,6 +289,34 @@ class TopicMagics(ExtensionMagics):
         if not type_name or type_name == "*":
             raise UsageError(f"the master does not know the type of {topic} yet; try again in a moment")
         return type_name
+
+
+def _as_dsl_nodes(snap: GraphSnapshot, session: Any) -> GraphSnapshot:
+    """``snap`` with this session's ROS 1 node replaced, topic by topic, by its DSL nodes that use the topic.
+
+    On ROS 1 every DSL node of the session lives in one ROS node, named after the first
+    one created: after ``nd.shutdown()`` the master still lists that name as publishing
+    what the session's other nodes (a ``%pub``) publish. Naming the DSL nodes says who.
+    """
+    process = session.process.name if session.backend.has_master else None
+    if not process:
+        return snap
+    uses: dict[tuple[str, str], list[str]] = {}
+    for node in list(session.nodes.values()):
+        for spec in planning.plan(node.model()):
+            for topic, side in ((getattr(spec, "topic", None), "publish" if isinstance(spec, planning.PublishSpec)
+                                 else "subscribe"), (getattr(spec, "source", None), "subscribe"),
+                                (getattr(spec, "target", None), "publish")):
+                if topic and not isinstance(spec, (planning.ServiceSpec, planning.ServiceRelaySpec, planning.TimerSpec)):
+                    uses.setdefault((topic, side), []).append(node.fullname)
+
+    def named(mapping: Any, side: str) -> dict[str, tuple[str, ...]]:
+        return {topic: tuple(sorted({n for node in nodes for n in (uses.get((topic, side)) or [node]
+                                                                    if node == process else [node])}))
+                for topic, nodes in mapping.items()}
+
+    return dataclasses.replace(snap, publishers=frozen(named(snap.publishers, "publish")),
+                               subscribers=frozen(named(snap.subscribers, "subscribe")))
 
 
 def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
