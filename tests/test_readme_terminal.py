@@ -11,12 +11,13 @@ exits: the master, rosout and the turtle must all be gone.
 from __future__ import annotations
 
 import os
+import re
 
 import pytest
 from conftest import free_port, wait_for
 from helpers import pid_alive
 from readme import ROOT, readme_lines, watch_the_turtle_go_round
-from terminal import Terminal, descendants, prompt, run
+from terminal import Terminal, descendants, prompt, prompt_reads, run
 
 from ipyros.robot import TURTLE_CIRCLE
 
@@ -53,6 +54,48 @@ def test_the_readme_first_command_and_five_lines_move_the_turtle(readme_terminal
 
     # "poses[-1].position, typed again and again": it changes, away from the origin, on the circle.
     watch_the_turtle_go_round(term)
+
+    # The node's status, history and handler versions print as tables, not as dataclass text.
+    for call, title in (("nd.status()", "status of /turtle_control_node"),
+                        ("nd.history()", "history of /turtle_control_node"),
+                        ('nd.versions("/turtle1/pose")', "versions of the handler of turtle_control_node /turtle1/pose")):
+        term.press("C-l")
+        run(term, call)
+        screen = "\n".join(term.screen())
+        assert title in screen and "━━━" in screen, screen
+        assert not re.search(r"(NodeStatus|History|Versions)\(", screen), screen
+
+    # Wrapping move_base, whose reuse relay reads /turtle1/pose as bytes beside nd's typed handler:
+    # both go on getting theirs, and no traceback floods the prompt.
+    term.press("C-l")
+    run(term, "%wrap ipyros_demo move_base --as mb", timeout=60)
+    run(term, "before = len(poses)")
+
+    def both_served(rows):
+        term.press("C-l")
+        run(term, 'print("SERVED", len(poses) - before > 10, min(r.calls for r in mb.status().rows '
+                  'if r.kind == "relay" and r.name.endswith("turtle1/pose")) > 10)')
+        return any(row.strip() == "SERVED True True" for row in term.screen())
+
+    term.wait_for(both_served, timeout=30, what="poses for nd's handler and for move_base's relay", interval=0.5)
+    screen = "\n".join(term.screen(history=True))
+    assert "Traceback" not in screen and "_buff" not in screen, screen
+
+    # TAB after %pub TOPIC: the type the live topic carries comes first.
+    term.type("%pub /turtle1/cmd_vel ")
+    term.press("Tab")
+
+    def menu_first(rows):
+        at = next((i for i, row in enumerate(rows) if row.startswith("In [") and "%pub /turtle1/cmd_vel" in row), None)
+        return at is not None and at + 1 < len(rows) and rows[at + 1].split()[:1] == ["geometry_msgs/Twist"]
+
+    term.wait_for(menu_first, timeout=20, what="the menu, the live topic's type first")
+    term.press("Tab")  # selects the first: the type the topic carries
+    term.wait_for(lambda rows: any(row.rstrip().endswith("%pub /turtle1/cmd_vel geometry_msgs/Twist")
+                                   for row in rows), timeout=20, what="the live type inserted")
+    # Ctrl-C closes the menu, then clears the line.
+    term.wait_for(lambda rows: (p := prompt(rows)) and p[1] == "" or term.press("C-c"), timeout=20,
+                  what="Ctrl-C to clear the line", interval=0.5)
 
     # exit: the session stops the turtle, rosout and the master it started.
     family = descendants(term.pid)
