@@ -92,7 +92,7 @@ class Extension:
         self.session.notice = note_line
         self._saved["call_name"] = self.session.call_name
         self.session.call_name = self._variable_of
-        if in_kernel(shell):
+        if cell_output.in_kernel(shell):
             cell_output.route()
             self._saved["output_scope"] = self.session.output_scope
             self.session.output_scope = _output_below_the_cell
@@ -246,11 +246,6 @@ class Extension:
         for magics in self.magics:
             _unregister(shell, magics)
         self.publisher.close()
-
-
-def in_kernel(shell: Any) -> bool:
-    """Whether ``shell`` is a Jupyter kernel's (its output goes to cells, not to a terminal)."""
-    return getattr(shell, "kernel", None) is not None
 
 
 def _output_below_the_cell(node: rosNode) -> Optional[cell_output.NodeOutput]:

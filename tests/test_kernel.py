@@ -136,3 +136,21 @@ def test_plot_in_a_kernel_is_a_figure_redrawn_below_the_cell_and_its_data_stays(
                      "print('DATA', len(p.data['t']), list(p.data['data']) == sorted(p.data['data']))")
     found = re.search(r"DATA (\d+) (True|False)", cell.stdout())
     assert found and int(found[1]) >= 20 and found[2] == "True", cell.stdout()
+
+
+def test_echo_until_interrupted_in_a_kernel_is_one_rolling_view(kernel, ticks):
+    """%echo without -n in Jupyter: the messages in one area redrawn in place, not a print each (which would run
+    into the front end's output limit); interrupting the kernel stops it, as Ctrl-C does in a terminal."""
+    import threading
+
+    kernel.ok("%load_ext ipyros")
+    interrupt = threading.Timer(3.0, kernel.manager.interrupt_kernel)
+    interrupt.start()
+    try:
+        cell = kernel.run(f"%echo {TOPIC}")
+    finally:
+        interrupt.cancel()
+    (area,) = cell.outputs("display_data")
+    shown = cell.updated(area["transient"]["display_id"])
+    assert shown.count("data: ") >= 10 and shown.count("---") >= 10, shown
+    assert "stopped listening to" in cell.stdout() and "data: " not in cell.stdout(), cell.stdout()

@@ -106,6 +106,11 @@ class RoutedStream:
         return getattr(self.original, name)
 
 
+def in_kernel(shell: Any) -> bool:
+    """Whether ``shell`` is a Jupyter kernel's (its output goes to cells, not to a terminal)."""
+    return getattr(shell, "kernel", None) is not None
+
+
 def route() -> None:
     """Put a :class:`RoutedStream` in front of ``sys.stdout`` and ``sys.stderr`` (once)."""
     for name in ("stdout", "stderr"):
@@ -122,4 +127,4 @@ def unroute() -> None:
             setattr(sys, name, stream.original)
 
 
-__all__ = ["NodeOutput", "OutputArea", "RoutedStream", "route", "unroute"]
+__all__ = ["NodeOutput", "OutputArea", "RoutedStream", "in_kernel", "route", "unroute"]

@@ -25,6 +25,7 @@ from .. import plan as planning
 from ..graph import GraphSnapshot, frozen
 from ..msgbuild import build_message, fields_of, flat_fields, parse_data, to_yaml
 from ..probe import Echo, Rate, measure_rates
+from .cell_output import OutputArea, in_kernel
 from .common import ExtensionMagics, global_topic, split_head
 
 class Messages(list):
@@ -157,6 +158,9 @@ class TopicMagics(ExtensionMagics):
         if args.csv and args.table:
             raise UsageError("give --csv or --table, not both (without either: YAML, which %pub takes back)")
         printer = self.ext.printer
+        # In Jupyter, listening until interrupted would print past the front end's output limit:
+        # the last messages in one area redrawn in place instead.
+        rolling = OutputArea(lines=400) if not count and not (args.csv or args.table) and in_kernel(self.shell) else None
         rows = _Rows(fields, type_name, csv=args.csv) if args.csv or args.table else None
         with Echo(topic, type_name) as echo:
             try:
@@ -169,9 +173,15 @@ class TopicMagics(ExtensionMagics):
                             rows.add(msg)
                         else:
                             text = _fields_yaml(msg, fields, type_name) if fields else to_yaml(msg)
-                            printer.show(Syntax(text, "yaml", background_color="default"), "---")
+                            if rolling is not None:
+                                rolling.write(f"{text}\n---\n")
+                            else:
+                                printer.show(Syntax(text, "yaml", background_color="default"), "---")
             except KeyboardInterrupt:
                 print(f"stopped listening to {topic} after {len(seen)} message{'s' * (len(seen) != 1)}")
+            finally:
+                if rolling is not None:
+                    rolling.flush()
         if rows is not None and args.table:
             printer.show(rows.table(f"{len(seen)} message{'s' * (len(seen) != 1)} from {topic}"))
         return seen
