@@ -96,6 +96,7 @@ class Extension:
             cell_output.route()
             self._saved["output_scope"] = self.session.output_scope
             self.session.output_scope = _output_below_the_cell
+        self._whole_names_in_menus()
         self._start_logging()
         shell.events.register("post_run_cell", self._after_cell)
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
@@ -170,6 +171,19 @@ class Extension:
         threading.Thread(target=_start_master, args=(session,), name="ipyros-master", daemon=True).start()
         return f"no ROS master answered at {uri}; starting one there (it stops when this session exits)"
 
+    def _whole_names_in_menus(self) -> None:
+        """Show ROS names whole in the terminal's completion menu.
+
+        IPython shortens a long completion with three slashes in the middle, as it does file
+        paths (``/mobile_base/commands/velocity`` shows as ``/m…s/velocity``), which hides the
+        very part that tells two topics apart. Unless the user has set ``min_elide``, it is
+        turned off while ipyros is loaded.
+        """
+        shell = self.shell
+        if hasattr(shell, "min_elide") and "min_elide" not in shell.config.get("TerminalInteractiveShell", {}):
+            self._saved["min_elide"] = shell.min_elide
+            shell.min_elide = 0
+
     def _start_logging(self) -> None:
         logger = logging.getLogger("ipyros")
         self._saved["logging"] = (logger.level, logger.propagate)
@@ -239,6 +253,8 @@ class Extension:
             session.config = saved  # the master settings as they were before loading
         else:
             session.config = dataclasses.replace(session.config, announce=saved.announce)
+        if "min_elide" in self._saved and shell.min_elide == 0:
+            shell.min_elide = self._saved["min_elide"]
         shell.custom_exceptions, shell.CustomTB = self._saved["custom_exc"]
         if "atexit_once" in self._saved:
             del shell._atexit_once  # the class's method again

@@ -306,3 +306,33 @@ def test_every_magic_has_a_help_text_that_reads_right(ip, capsys):
         assert garbled is None, f"%{name}? shows {garbled and garbled.group()!r}:\n{text}"
         usage = re.search(r"::\s+(%\S+)", text)
         assert usage is None or usage.group(1) == f"%{name}", f"%{name}? shows its usage under another name:\n{text}"
+
+
+def test_terminal_menus_show_ros_names_whole(ros_session):
+    """IPython shortens long completions with three slashes in the middle, as file paths; ROS names stay whole
+    while ipyros is loaded (unless the user set min_elide), and the setting comes back at unload."""
+    from IPython.terminal.interactiveshell import TerminalInteractiveShell
+    from IPython.terminal.ptutils import _elide
+
+    name = "/robot/mobile_base/commands/velocity"
+    for configured in (None, 20):
+        config = Config()
+        config.HistoryManager.hist_file = ":memory:"
+        config.TerminalInteractiveShell.simple_prompt = True
+        if configured is not None:
+            config.TerminalInteractiveShell.min_elide = configured
+        TerminalInteractiveShell.clear_instance()
+        shell = TerminalInteractiveShell.instance(config=config)
+        try:
+            assert _elide(name, "", min_elide=shell.min_elide) != name  # what IPython does by itself
+            shell.run_line_magic("load_ext", "ipyros")
+            if configured is None:
+                assert _elide(name, "", min_elide=shell.min_elide) == name
+            else:
+                assert shell.min_elide == configured, "the user's own setting is kept"
+            shell.run_line_magic("unload_ext", "ipyros")
+            assert shell.min_elide == (configured or 30)
+        finally:
+            if "ipyros" in shell.extension_manager.loaded:
+                shell.run_line_magic("unload_ext", "ipyros")
+            TerminalInteractiveShell.clear_instance()
