@@ -613,6 +613,9 @@ class RosMatcher:
     def __init__(self, shell: Any, graph: GraphCache, catalog: Catalog):
         self.shell = shell
         self.answerer = Answerer(graph, catalog)
+        #: JupyterLab shows a completion's type in lower case (a message type would read
+        #: ``geometry_msgs/twist``, which is no type): in a kernel the type says the kind of name.
+        self.kinds_only = getattr(shell, "kernel", None) is not None
 
     def want(self, context: CompletionContext) -> Optional[Want]:
         """The decision for this context, or None when another matcher should answer."""
@@ -634,6 +637,8 @@ class RosMatcher:
             if want is None:
                 return SimpleMatcherResult(completions=[], suppress=False)
             completions = self.answerer.completions(want, self.shell.user_ns)
+            if self.kinds_only:
+                completions = [SimpleCompletion(c.text, type=want.kind) for c in completions]
         except Exception:  # TAB must never show a traceback; say why at debug level
             log.debug("ipyros completion failed", exc_info=True)
             return SimpleMatcherResult(completions=[], suppress=False)

@@ -100,9 +100,14 @@ class Kernel:
 
     def complete(self, code: str) -> list[str]:
         """The matches a front end gets for TAB at the end of ``code``."""
+        return [text for text, _ in self.complete_typed(code)]
+
+    def complete_typed(self, code: str) -> list[tuple[str, str]]:
+        """The matches with the type JupyterLab shows beside each (its ``_jupyter_types_experimental``)."""
         reply = self.client.complete(code, len(code), reply=True, timeout=TIMEOUT)["content"]
         assert reply["status"] == "ok", reply
-        return reply["matches"]
+        types = {t["text"]: t.get("type", "") for t in reply.get("metadata", {}).get("_jupyter_types_experimental", [])}
+        return [(text, types.get(text, "")) for text in reply["matches"]]
 
 
 def start_kernel(ros_master: str, tmp_path, name: str = "kernel") -> Kernel:

@@ -41,6 +41,8 @@ def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
     # Completion from the live graph (refreshed in the background: ask until it has the topic).
     wait_for(lambda: kernel.complete("%topics /e2e_k") == [TOPIC], timeout=20, what=f"{TOPIC} completed")
     assert "std_msgs/UInt32" in kernel.complete("%topics --type std_msgs/UInt")
+    # JupyterLab shows each completion's type in lower case: there it says the kind of name, not a message type.
+    assert kernel.complete_typed("%topics /e2e_k") == [(TOPIC, "topic")]
 
     # %topics shows a table (rich: text and HTML).
     cell = kernel.ok(f"%topics {TOPIC}")
