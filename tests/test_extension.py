@@ -244,6 +244,9 @@ def test_embedded_master_starts_in_the_background_and_outlives_the_load(tmp_path
         assert took < 2, lines
         assert "created /embedded_user" in lines, lines
         assert master_mod.answers(uri)
+        # Loading again names it in one plain line: no brackets inside brackets.
+        described = master_mod.MasterHandle(uri, started=True).describe()
+        assert re.fullmatch(r"ROS master \S+ \([^()]*\)", described), described
     finally:
         proc.stdin.close()  # type: ignore[union-attr]
         proc.wait(20)
