@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from typing import Any, Callable, Optional
 
-from ..errors import DeclarationError, NodeStateError
+from ..errors import DeclarationError, IpyrosError, NodeStateError
 from ..qos import Qos
 from ..slots import HandlerSlot
 from . import introspect, runtime
@@ -147,7 +147,12 @@ class Ros2:
         found = {}
         for node in self.graph_snapshot().nodes:
             if node.startswith(prefix) or prefix.startswith(node + "/"):
-                for key, value in introspect.node_params(self.process, node).items():
+                try:
+                    params = introspect.node_params(self.process, node, timeout=1.0)
+                except IpyrosError:  # no parameter services (or it just left): said in its row
+                    found[f"{node}/*"] = "? (its parameter services do not answer)"
+                    continue
+                for key, value in params.items():
                     name = f"{node}/{key}"
                     if name.startswith(prefix) or name == namespace.rstrip("/"):
                         found[name] = value
