@@ -160,7 +160,8 @@ class TopicMagics(ExtensionMagics):
         printer = self.ext.printer
         # In Jupyter, listening until interrupted would print past the front end's output limit:
         # the last messages in one area redrawn in place instead.
-        rolling = OutputArea(lines=400) if not count and not (args.csv or args.table) and in_kernel(self.shell) else None
+        endless = not count and not (args.csv or args.table)
+        rolling = OutputArea(lines=400) if endless and in_kernel(self.shell) else None
         rows = _Rows(fields, type_name, csv=args.csv) if args.csv or args.table else None
         with Echo(topic, type_name) as echo:
             try:
@@ -314,11 +315,16 @@ def _as_dsl_nodes(snap: GraphSnapshot, session: Any) -> GraphSnapshot:
     uses: dict[tuple[str, str], list[str]] = {}
     for node in list(session.nodes.values()):
         for spec in planning.plan(node.model()):
-            for topic, side in ((getattr(spec, "topic", None), "publish" if isinstance(spec, planning.PublishSpec)
-                                 else "subscribe"), (getattr(spec, "source", None), "subscribe"),
-                                (getattr(spec, "target", None), "publish")):
-                if topic and not isinstance(spec, (planning.ServiceSpec, planning.ServiceRelaySpec, planning.TimerSpec)):
-                    uses.setdefault((topic, side), []).append(node.fullname)
+            if isinstance(spec, planning.PublishSpec):
+                ends = [(spec.topic, "publish")]
+            elif isinstance(spec, planning.SubscribeSpec):
+                ends = [(spec.topic, "subscribe")]
+            elif isinstance(spec, planning.RelaySpec):
+                ends = [(spec.source, "subscribe"), (spec.target, "publish")]
+            else:  # timers and services: no topic
+                ends = []
+            for end in ends:
+                uses.setdefault(end, []).append(node.fullname)
 
     def named(mapping: Any, side: str) -> dict[str, tuple[str, ...]]:
         return {topic: tuple(sorted({n for node in nodes for n in (uses.get((topic, side)) or [node]

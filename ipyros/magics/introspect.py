@@ -32,7 +32,7 @@ from ..probe import is_tool, tool_name
 from .common import ExtensionMagics, global_topic, split_head
 
 
-def internal(name: str, snap: GraphSnapshot, session_nodes: list[Any]) -> str:
+def internal(name: str, session_nodes: list[Any]) -> str:
     """Why ``name`` (a node or topic) is ipyros's, not the robot's: "" when it is not."""
     if is_tool(name):
         return "ipyros tool"
@@ -163,7 +163,7 @@ class IntrospectMagics(ExtensionMagics):
             table.add_column(column, justify=justify, overflow="fold")  # type: ignore[arg-type]
         for node in found:
             pubs, subs, srvs = _interface(snap, node)
-            note = internal(node, snap, mine) or ("this session" if node == self.ext.session.process.name else "")
+            note = internal(node, mine) or ("this session" if node == self.ext.session.process.name else "")
             table.add_row(node, str(len(pubs)), str(len(subs)), str(len(srvs)), note)
         self.ext.printer.show(table)
 
@@ -180,24 +180,26 @@ class IntrospectMagics(ExtensionMagics):
         pid = self._ready().node_pid(name)
         mine = list(self.ext.session.nodes.values())
         pubs, subs, srvs = _interface(snap, name)
-        title = f"node {name}" + (f" (pid {pid})" if pid else "") + (
-            f" ({internal(name, snap, mine)})" if internal(name, snap, mine) else "")
+        why = internal(name, mine)
+        title = f"node {name}" + (f" (pid {pid})" if pid else "") + (f" ({why})" if why else "")
         table = Table(title=title, title_justify="left")
         for column in ("", "name", "type", "note"):
             table.add_column(column, overflow="fold")
         for kind, names in (("publishes", pubs), ("subscribes", subs)):
             for topic in names:
-                table.add_row(kind, topic, snap.topics.get(topic) or "?", internal(topic, snap, mine))
+                table.add_row(kind, topic, snap.topics.get(topic) or "?", internal(topic, mine))
         for service in srvs:
-            table.add_row("serves", service, "", internal(service, snap, mine))
+            table.add_row("serves", service, "", internal(service, mine))
         if not table.row_count:
             table.add_row("", "nothing", "", "")
         self.ext.printer.show(table)
 
 
 def _interface(snap: GraphSnapshot, node: str) -> tuple[list[str], list[str], list[str]]:
-    return ([t for t, ns in snap.publishers.items() if node in ns], [t for t, ns in snap.subscribers.items() if node in ns],
-            [s for s, ns in snap.services.items() if node in ns])
+    def of(mapping: Any) -> list[str]:
+        return [name for name, nodes in mapping.items() if node in nodes]
+
+    return of(snap.publishers), of(snap.subscribers), of(snap.services)
 
 
 def _matches(name: str, pattern: str) -> bool:

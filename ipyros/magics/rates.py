@@ -89,7 +89,8 @@ def _options(topics: str) -> Callable[[Callable[..., None]], Callable[..., None]
     def decorate(magic: Callable[..., None]) -> Callable[..., None]:
         magic = argument("-n", "--count", type=int, default=0,
                          help="stop after this many reports (default: until Ctrl-C)")(magic)
-        magic = argument("-w", "--window", type=float, default=1.0, help="report every this many seconds (default 1)")(magic)
+        magic = argument("-w", "--window", type=float, default=1.0,
+                         help="report every this many seconds (default 1)")(magic)
         magic = argument("topic", nargs="+", help=topics)(magic)
         return magic_arguments()(magic)
     return decorate
