@@ -152,7 +152,7 @@ class HandlerSlot:
     def __call__(self, arg: Any = None) -> Any:
         return self.run(arg)[1]
 
-    def run(self, arg: Any = None, pristine: Pristine | None = None,
+    def run(self, arg: Any = None, pristine: Optional[Pristine] = None,
             came: Optional[Arrival] = None) -> tuple[bool, Any]:
         """Call the handler: ``(True, what it returned)``, or ``(False, None)`` once its exception is reported.
 
