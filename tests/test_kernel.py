@@ -156,3 +156,9 @@ def test_echo_until_interrupted_in_a_kernel_is_one_rolling_view(kernel, ticks):
     shown = cell.updated(area["transient"]["display_id"])
     assert shown.count("data: ") >= 10 and shown.count("---") >= 10, shown
     assert "stopped listening to" in cell.stdout() and "data: " not in cell.stdout(), cell.stdout()
+    # %hz redraws one table in place, as an HTML table, report after report.
+    cell = kernel.ok(f"%hz {TOPIC} -w 0.5 -n 3")
+    (table,) = cell.outputs("display_data")
+    updates = [c for c in cell.outputs("update_display_data")
+               if c["transient"]["display_id"] == table["transient"]["display_id"]]
+    assert len(updates) == 3 and "<table" in updates[-1]["data"]["text/html"] and TOPIC in updates[-1]["data"]["text/html"]
