@@ -60,8 +60,8 @@ class Extension:
         self.plot_magics = PlotMagics(shell, self)
         self.record_magics = RecordMagics(shell, self)
         self.magics = [self.settings, self.topic_magics, RateMagics(shell, self), IntrospectMagics(shell, self),
-                       self.node_magics,
-                       WrapMagics(shell, self), self.plot_magics, self.record_magics, DemoMagics(shell, self)]
+                       self.node_magics, WrapMagics(shell, self), self.plot_magics, self.record_magics,
+                       DemoMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
         self._log_handler = StderrLogHandler()
         self._report = failure_report(lambda: self.settings.handler_tracebacks)

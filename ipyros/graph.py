@@ -98,7 +98,7 @@ class GraphSnapshot:
         """
         names: Iterable[str] = self.topic_names
         if pattern:
-            names = (n for n in names if _matches(n, pattern))
+            names = (n for n in names if name_matches(n, pattern))
         if type:
             names = (n for n in names if _matches_exactly(self.topics[n], type))
         if node:
@@ -118,7 +118,8 @@ def _is_glob(pattern: str) -> bool:
     return any(c in pattern for c in "*?[")
 
 
-def _matches(name: str, pattern: str) -> bool:
+def name_matches(name: str, pattern: str) -> bool:
+    """``pattern`` as ``%topics`` reads it: a glob when it has ``*?[``, else a substring; empty matches all."""
     return fnmatch.fnmatchcase(name, pattern) if _is_glob(pattern) else pattern in name
 
 

@@ -169,11 +169,16 @@ class RateMeter:
             self._arrivals[topic] = _Arrivals()
             self.node.new.subscribe(topic, handler=self._arrivals[topic], msgType=type_name)
 
+    @property
+    def listening(self) -> bool:
+        """Whether any of the topics could be listened to (their message classes are installed)."""
+        return bool(self._arrivals)
+
     def rates(self) -> dict[str, Optional[Rate]]:
         return {t: self._arrivals[t].rate() if t in self._arrivals else None for t in self.topics}
 
     def __enter__(self) -> "RateMeter":
-        if self._arrivals:
+        if self.listening:
             self.node.create()
         return self
 
@@ -187,7 +192,8 @@ def measure_rates(topics: Mapping[str, str], window: float) -> dict[str, Optiona
     Ctrl-C stops the measurement (KeyboardInterrupt propagates); the node is shut down either way.
     """
     with RateMeter(topics) as meter:
-        time.sleep(window)  # the measurement itself: note what arrives in the window
+        if meter.listening:
+            time.sleep(window)  # the measurement itself: note what arrives in the window
         return meter.rates()
 
 

@@ -102,7 +102,9 @@ def test_exit_after_the_master_died_is_quiet(tmp_path, ros_home):
             for i in range(5): nd.new.publish(f"/orphan/t{i}", msgType=String)
             nd.new.subscribe("/orphan/in", print, msgType=String)
             nd.create(); print("CREATED")
-            import os, signal, time; os.kill(int(os.environ["MASTER_PID"]), signal.SIGTERM); time.sleep(1.5)
+            import os, signal, time; os.kill(int(os.environ["MASTER_PID"]), signal.SIGTERM)
+            from ipyros.ros1.master import answers
+            while answers(os.environ["ROS_MASTER_URI"], 0.2): time.sleep(0.05)
             exit
             """)
         ipython = Path(sys.executable).with_name("ipython")

@@ -290,9 +290,10 @@ class TopicMagics(ExtensionMagics):
             print(f"stopped waiting for {topic}")
             return None
 
-    def live_type(self, topic: str, for_pub: bool = False) -> str:
-        """The type of the live ``topic`` from the graph read afresh; a one-line error if there is none."""
-        snap = self.live_graph()
+    def live_type(self, topic: str, for_pub: bool = False, snap: Optional[GraphSnapshot] = None) -> str:
+        """The type of the live ``topic`` from the graph read afresh (or from ``snap``, read once for
+        several topics); a one-line error if there is none."""
+        snap = snap if snap is not None else self.live_graph()
         if topic not in snap.topics:
             fix = f"; give its type: %pub {topic} pkg/Type ..." if for_pub else "; %topics lists them"
             raise UsageError(f"no live topic {topic}{_close(topic, snap.topic_names)}{fix}")

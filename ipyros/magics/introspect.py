@@ -26,7 +26,7 @@ from rich.syntax import Syntax
 from rich.table import Table
 
 from .. import msgtypes
-from ..graph import GraphSnapshot
+from ..graph import GraphSnapshot, name_matches
 from ..msgbuild import build_message, parse_data, to_yaml
 from ..probe import is_tool, tool_name
 from .common import ExtensionMagics, global_topic, split_head
@@ -62,7 +62,7 @@ class IntrospectMagics(ExtensionMagics):
         args = parse_argstring(self.services, line)
         snap = self.ext.topic_magics.live_graph()
         backend = self._ready()
-        found = [s for s in snap.services if _matches(s, args.pattern)]
+        found = [s for s in snap.services if name_matches(s, args.pattern)]
         if not found:
             print(f"no live services matching {args.pattern!r}" if args.pattern else "no live services")
             return
@@ -151,7 +151,7 @@ class IntrospectMagics(ExtensionMagics):
         """List the live nodes with how many topics each publishes and subscribes to and services it serves."""
         args = parse_argstring(self.nodes, line)
         snap = self.ext.topic_magics.live_graph()
-        found = [n for n in snap.nodes if _matches(n, args.pattern)]
+        found = [n for n in snap.nodes if name_matches(n, args.pattern)]
         if not found:
             print(f"no live nodes matching {args.pattern!r}" if args.pattern else "no live nodes")
             return
@@ -200,14 +200,6 @@ def _interface(snap: GraphSnapshot, node: str) -> tuple[list[str], list[str], li
         return [name for name, nodes in mapping.items() if node in nodes]
 
     return of(snap.publishers), of(snap.subscribers), of(snap.services)
-
-
-def _matches(name: str, pattern: str) -> bool:
-    import fnmatch
-
-    if not pattern:
-        return True
-    return fnmatch.fnmatchcase(name, pattern) if any(c in pattern for c in "*?[") else pattern in name
 
 
 def _short(value: Any, most: int = 200) -> str:

@@ -15,18 +15,16 @@ text to a pipe, and in Jupyter emits the table as HTML.
 from __future__ import annotations
 
 import itertools
-from html import escape
 import logging
 import sys
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Optional
 
 from rich.console import Console
 from rich.protocol import rich_cast
 from rich.table import Table
 
-from ..display import render_plain, table_html
-
+from ..display import render_html, render_plain
 from ..slots import HandlerFailure
 
 
@@ -45,11 +43,10 @@ class Printer:
         """Print tables, rich markup strings or anything rich can render; in Jupyter a table as HTML."""
         console = self.console()
         for renderable in renderables:
-            table = rich_cast(renderable)
-            if console.is_jupyter and isinstance(table, Table):
+            if console.is_jupyter and isinstance(rich_cast(renderable), Table):
                 from IPython.display import display
 
-                display({"text/plain": render_plain(table), "text/html": table_html(table)}, raw=True)
+                display(mime_bundle(renderable), raw=True)
             else:
                 console.print(renderable)
 
@@ -60,46 +57,43 @@ class Printer:
         updated by its id). Anywhere else (a pipe) only the last one is printed, when it stops.
         """
         console = self.console()
-        start = time.monotonic()
-        live: Any = None
+        redraw: Optional[Callable[[Any], None]] = None
+        stop: Callable[[], None] = lambda: None  # noqa: E731
         if console.is_terminal:
             from rich.live import Live
 
             live = Live(console=console, auto_refresh=False)
             live.start()
+            redraw, stop = (lambda shown: live.update(shown, refresh=True)), live.stop
         elif console.is_jupyter:
             from IPython.display import display
 
-            live = display({"text/plain": ""}, raw=True, display_id=True)
-        shown = None
+            handle = display({"text/plain": ""}, raw=True, display_id=True)
+            redraw = lambda shown: handle.update(mime_bundle(shown), raw=True)  # noqa: E731
+        start, shown = time.monotonic(), None
         try:
             for done in itertools.count(1):
                 time.sleep(max(0.0, start + done * period - time.monotonic()))
                 shown = render(time.monotonic() - start)
-                if live is not None:
-                    self._redraw(live, shown)
+                if redraw is not None:
+                    redraw(shown)
                 if times and done >= times:
                     break
         except KeyboardInterrupt:
             pass
         finally:
-            if live is not None and hasattr(live, "stop"):
-                live.stop()
-        if live is None and shown is not None:
+            stop()
+        if redraw is None and shown is not None:
             self.show(shown)
-
-    @staticmethod
-    def _redraw(live: Any, renderable: Any) -> None:
-        if hasattr(live, "stop"):  # rich's Live
-            live.update(renderable, refresh=True)
-            return
-        table = rich_cast(renderable)
-        html = table_html(table) if isinstance(table, Table) else f"<pre>{escape(render_plain(renderable))}</pre>"
-        live.update({"text/plain": render_plain(renderable), "text/html": html}, raw=True)
 
     def text(self, renderable: Any) -> str:
         """``renderable`` as plain text (no colour), e.g. to put inside a one-line message."""
         return render_plain(renderable)
+
+
+def mime_bundle(renderable: Any) -> dict[str, str]:
+    """``renderable`` for Jupyter: HTML (a table as an HTML table), with plain text beside it."""
+    return {"text/plain": render_plain(renderable), "text/html": render_html(renderable)}
 
 
 def note(text: str) -> None:

@@ -106,10 +106,8 @@ class RateMagics(ExtensionMagics):
             raise UsageError(f"-w must be between 0.05 and 600 seconds, not {args.window}")
         if args.count < 0:
             raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {args.count}")
-        topics = {}
-        for name in args.topic:
-            topic = global_topic(name)
-            topics[topic] = self.ext.topic_magics.live_type(topic)
+        snap = self.ext.topic_magics.live_graph()  # one read of the graph for every topic
+        topics = {topic: self.ext.topic_magics.live_type(topic, snap=snap) for topic in map(global_topic, args.topic)}
         where = self.ext.graph.where
         with RateMeter(topics) as meter:
             self.ext.printer.repeat(lambda listened: report(what, topics, meter.rates(), listened, where, columns),

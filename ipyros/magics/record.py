@@ -51,7 +51,8 @@ class RecordMagics(ExtensionMagics):
         path = Path(args.file).expanduser()
         if path.exists():
             raise UsageError(f"{path} exists; give a new file name (a recording never overwrites one)")
-        topics = {topic: self.ext.topic_magics.live_type(topic) for topic in map(global_topic, args.topics)}
+        snap = self.ext.topic_magics.live_graph()  # one read of the graph for every topic
+        topics = {topic: self.ext.topic_magics.live_type(topic, snap=snap) for topic in map(global_topic, args.topics)}
         self.stop()
         self.recording = Recording(path, topics, args.duration)
         until = f"for {args.duration:g} s" if args.duration else "until %record --stop"

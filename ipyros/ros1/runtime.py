@@ -115,12 +115,6 @@ class ProcessNode:
 def _no_out_of_sync(record: logging.LogRecord) -> bool:
     return "registrations are now out of sync" not in record.getMessage()
 
-    def require(self) -> None:
-        if self.name is None:
-            raise NodeStateError("the ROS node is not running; call create() on a node first")
-        if rospy.core.is_shutdown():
-            raise NodeStateError("the ROS node of this session was shut down; restart the interpreter")
-
 
 def _registration_manager() -> Any:
     """rospy's RegManager: given a topic's publishers, it connects to those it lacks."""
@@ -325,10 +319,18 @@ class Subscription:
         header = raw._connection_header
         first = id(header) not in self._connections  # a latched publisher sends its last message on connecting
         if first:
-            self._connections[id(header)] = header  # (kept: its id stays unique while it is a key)
+            self._remember(header)
         self.slot.run(_message(self.cls, raw._buff, header),
                       Pristine(functools.partial(_message, self.cls, raw._buff, header)),
                       Arrival(header.get("callerid", "?"), len(raw._buff), first and header.get("latching") == "1"))
+
+    def _remember(self, header: dict) -> None:
+        """Note a connection by its header (kept: its id stays unique while it is a key); the
+        headers of connections that are gone are dropped now and then, so they do not pile up."""
+        sub = getattr(self, "_sub", None)  # None while rospy hands a latched message to the new callback
+        if sub is not None and len(self._connections) >= 16:
+            self._connections = {id(c.header): c.header for c in sub.impl.connections if getattr(c, "header", None)}
+        self._connections[id(header)] = header
 
     def connections(self) -> int:
         return self._sub.get_num_connections()

@@ -357,7 +357,8 @@ class Subscription:
     def _deliver(self, data: bytes, info: Any) -> None:
         # A transient-local publisher sends its last messages again to a new subscription:
         # they were published before it existed.
-        came = Arrival(str(info.get("publisher_gid") or "?"), len(data), info["source_timestamp"] < self._since)
+        gid = info.get("publisher_gid")
+        came = Arrival(bytes(gid["data"]).hex() if gid else "?", len(data), info["source_timestamp"] < self._since)
         self.slot.run(deserialize_message(data, self.cls),
                       Pristine(functools.partial(deserialize_message, data, self.cls)), came)
 
