@@ -4,9 +4,12 @@
 #                         demo turtle running (on the master at ROS_MASTER_URI, started if none answers)
 #   bash run.sh ipython   the same without the demo robot
 #   bash run.sh notebook  the notebooks in Jupyter (installs Jupyter into the venv the first time)
-#   bash run.sh test      install what is missing, then run the whole test suite (ROS 1, then ROS 2
-#                         in a venv of its own, rclpy from PyPI)
-#   bash run.sh test-ros2 the ROS 2 suite alone
+#   bash run.sh test      install what is missing, then run the whole test suite: the unit layer (no ROS),
+#                         then tests/both + tests/ros1 on ROS 1, then tests/both + tests/ros2 on ROS 2
+#                         (rclpy from PyPI, in a venv of its own); each is run and reported, whatever
+#                         the one before it did
+#   bash run.sh unit      the unit layer alone, in a venv without ROS (seconds)
+#   bash run.sh test-ros1 the ROS 1 layers alone;  bash run.sh test-ros2  the ROS 2 layers alone
 #   bash run.sh ros2      the same as bash run.sh, on ROS 2 (rclpy from PyPI, no ROS from apt), in
 #                         the DDS domain of ROS_DOMAIN_ID (0 if unset)
 #   bash run.sh bench     install what is missing, then run the benchmarks (ROS 1, then ROS 2's relay bench)
@@ -68,6 +71,38 @@ ros2_venv() {
   fi
 }
 
+# The unit layer runs where no ROS is: a venv of its own, without the system's site-packages.
+venv0="$here/.venv-unit"
+unit_venv() {
+  if [[ ! -x "$venv0/bin/python" ]]; then
+    /usr/bin/python3 -m venv "$venv0"
+  fi
+  local stamp0="$venv0/.ipyros-installed"
+  if [[ ! -f "$stamp0" || "$here/pyproject.toml" -nt "$stamp0" ]]; then
+    "$venv0/bin/pip" install -q --disable-pip-version-check -e "$here[unit]" >&2
+    touch "$stamp0"
+  fi
+}
+
+# Runs one layer of the suite and notes how it ended, so that every layer runs and is reported.
+results=()
+layer() {
+  local label="$1" rc=0
+  shift
+  "$@" || rc=$?
+  if ((rc == 0)); then results+=("$label: passed"); else results+=("$label: FAILED (pytest exit $rc)"); fi
+  return 0
+}
+report() {
+  local line failed=0
+  echo >&2
+  for line in "${results[@]}"; do
+    echo "run.sh test: $line" >&2
+    [[ "$line" == *FAILED* ]] && failed=1
+  done
+  return "$failed"
+}
+
 # Jupyter, for the notebook target only (the tests run notebooks without it).
 notebook() {
   if ! "$venv/bin/python" -c "import notebook" 2>/dev/null; then
@@ -100,22 +135,31 @@ handle.stop()' &
 
 cmd="${1:-demo}"
 shift || true
-[[ "$cmd" == ros2 || "$cmd" == test-ros2 ]] || ros1_setup
+[[ "$cmd" == ros2 || "$cmd" == test-ros2 || "$cmd" == unit ]] || ros1_setup
 case "$cmd" in
   ros2)     ros2_venv && AMENT_PREFIX_PATH="${AMENT_PREFIX_PATH:-$venv2}" IPYROS_ROS=2 \
               exec "$venv2/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   demo)     exec "$venv/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   ipython)  exec "$venv/bin/ipython" --ext ipyros "$@" ;;
   notebook) notebook "$@" ;;
-  test)     # ROS 1 (tests/), then ROS 2 (tests_ros2/); with arguments, pytest gets them on ROS 1 only
-            cd "$here" && "$venv/bin/python" -m pytest "$@"
-            if (($# == 0)); then ros2_venv && exec "$venv2/bin/python" -m pytest tests_ros2; fi ;;
-  test-ros2) cd "$here" && ros2_venv && exec "$venv2/bin/python" -m pytest tests_ros2 "$@" ;;
+  test)     # every layer, each reported; with arguments, pytest gets them in the ROS 1 venv only
+            cd "$here"
+            if (($# > 0)); then exec "$venv/bin/python" -m pytest "$@"; fi
+            unit_venv
+            layer "unit (no ROS)" "$venv0/bin/python" -m pytest -q tests/unit
+            layer "ROS 1" "$venv/bin/python" -m pytest tests/both tests/ros1
+            ros2_venv
+            layer "ROS 2" "$venv2/bin/python" -m pytest tests/both tests/ros2
+            report ;;
+  unit)     cd "$here" && unit_venv && exec "$venv0/bin/python" -m pytest tests/unit "$@" ;;
+  test-ros1) cd "$here" && exec "$venv/bin/python" -m pytest tests/both tests/ros1 "$@" ;;
+  test-ros2) cd "$here" && ros2_venv && exec "$venv2/bin/python" -m pytest tests/both tests/ros2 "$@" ;;
   bench)    # ROS 1's benchmarks, then ROS 2's relay bench in its venv (side by side in one run)
             cd "$here" && status=0
             "$venv/bin/python" -m bench "$@" || status=$?
             ros2_venv && "$venv2/bin/python" -m bench.relay_ros2 "$@" || status=$?
             "$venv2/bin/python" -m bench.completion "$@" || status=$?
             exit "$status" ;;
-  *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|test-ros2|bench] [args...]" >&2; exit 2 ;;
+  *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|unit|test-ros1|test-ros2|bench] [args...]" >&2
+     exit 2 ;;
 esac

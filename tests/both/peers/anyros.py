@@ -1,0 +1,30 @@
+"""What the peers of tests/both/ stand on: ipyros's demo node shim, which runs on rospy or rclpy.
+
+A peer is a plain ROS node in a process of its own, written once for both ROS (the ROS
+is the interpreter's: the ROS 1 venv has rospy, the ROS 2 venv rclpy). Message types
+are given as ``pkg/Type`` and imported from ``pkg.msg``, the same module on both.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from pathlib import Path
+from typing import Any
+
+import ipyros
+
+sys.path.insert(0, str(Path(ipyros.__file__).resolve().parent / "demo"))
+from demonode import DemoNode  # noqa: E402,F401 - what the peers import from here
+
+
+def message_class(type_name: str) -> Any:
+    package, _, name = type_name.partition("/")
+    return getattr(importlib.import_module(f"{package}.msg"), name.split("/")[-1])
+
+
+def field(msg: Any, path: str) -> Any:
+    """The value at a dotted field path (``linear.x``) of a message; the message itself for ``""``."""
+    for part in filter(None, path.split(".")):
+        msg = getattr(msg, part)
+    return msg

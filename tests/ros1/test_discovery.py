@@ -1,0 +1,102 @@
+"""Black-box discovery of a running basenode's interface, read from a real master."""
+
+from __future__ import annotations
+
+import pytest
+from rich.console import Console
+
+from ros1_fixtures import free_port
+from helpers import use_test_nodes
+from ipyros.base import BaseProcess, find_executable
+from ipyros.discovery import Interface, discover, interface_table, wait_for_node
+from ipyros.errors import BaseNodeError, MasterError
+
+
+@pytest.fixture(autouse=True)
+def test_nodes(monkeypatch):
+    use_test_nodes(monkeypatch)
+
+
+@pytest.fixture
+def launch(ros_master):
+    """Start a basenode for the test; all are stopped at its end."""
+    procs: list[BaseProcess] = []
+
+    def start(package: str, executable: str, *args: str, **options) -> BaseProcess:
+        proc = BaseProcess(find_executable(package, executable), args, master_uri=ros_master, **options)
+        procs.append(proc)
+        return proc.start()
+
+    yield start
+    for proc in procs:
+        proc.stop()
+
+
+def render(table) -> str:
+    console = Console(record=True, width=140)
+    console.print(table)
+    return console.export_text()
+
+
+def test_python_node_in_a_namespace_with_a_remap(ros_master, launch):
+    launch("ipyros_test_nodes", "echo_node", node_name="probe", namespace="/robot", remaps={"/robot/in": "/w/in"})
+    interface = wait_for_node(ros_master, "/robot/probe")
+    assert interface == Interface(
+        node="/robot/probe",
+        publications=[("/robot/out", "std_msgs/String")],
+        subscriptions=[("/robot/crash", "std_msgs/Int32"), ("/w/in", "std_msgs/String")],
+        services=[("/robot/probe/reset", "std_srvs/Empty")],
+        left_out=["/rosout (publishes)", "/robot/probe/get_loggers (service)",
+                  "/robot/probe/set_logger_level (service)"],
+    )
+    assert discover(ros_master, "/robot/probe") == interface  # once registered, one read gives the same
+
+
+def test_the_demo_robot_as_the_paper_session_would_discover_it(ros_master, launch):
+    launch("ipyros_demo", "turtle_sim")
+    launch("ipyros_demo", "move_base")
+    sim = wait_for_node(ros_master, "turtle_sim")  # a name without namespace is global
+    assert sim.publications == [("/turtle1/pose", "geometry_msgs/Pose"), ("/turtle1/speed_exceeded", "std_msgs/Bool")]
+    assert sim.subscriptions == [("/turtle1/cmd_vel", "geometry_msgs/Twist")]
+    assert sim.services == []
+    nav = wait_for_node(ros_master, "/move_base")
+    assert nav.publications == [("/cmd_vel", "geometry_msgs/Twist")]
+    assert nav.subscriptions == [("/move_base_simple/goal", "geometry_msgs/PoseStamped"),
+                                 ("/turtle1/pose", "geometry_msgs/Pose")]
+    assert nav.services == [("/move_base/clear_goal", "std_srvs/Empty")]
+
+    text = render(interface_table(nav))
+    assert "Interface of /move_base" in text
+    assert "publishes" in text and "/cmd_vel" in text and "geometry_msgs/Twist" in text
+    assert "service" in text and "/move_base/clear_goal" in text and "std_srvs/Empty" in text
+    assert "not shown" in text and "/rosout, ~get_loggers, ~set_logger_level" in text and "ROS plumbing" in text
+    assert render(nav) == text  # an Interface renders itself as its table
+
+
+def test_cpp_relay_subscribes_with_any_type_so_the_type_is_unknown(ros_master, launch):
+    launch("topic_tools", "relay", "/relay_in", "/relay_out", node_name="lazy_relay")
+    interface = wait_for_node(ros_master, "/lazy_relay")
+    # topic_tools relay subscribes as "any type" and advertises its output only at the first message.
+    assert interface.subscriptions == [("/relay_in", "")]
+    assert interface.publications == []
+    assert "unknown" in render(interface)
+
+
+def test_a_node_that_is_not_running_is_reported_with_the_nodes_that_are(ros_master, launch):
+    launch("ipyros_test_nodes", "echo_node", node_name="present")
+    wait_for_node(ros_master, "/present")
+    with pytest.raises(BaseNodeError, match=r"node /absent is not registered .* after 0.3s: start it first "
+                                            r"\(registered nodes: .*/present"):
+        discover(ros_master, "absent", timeout=0.3)
+    with pytest.raises(BaseNodeError, match="after 0.3s"):
+        wait_for_node(ros_master, "/absent", timeout=0.3)
+
+
+def test_no_master_is_a_master_error():
+    with pytest.raises(MasterError, match="no ROS master answers at http://127.0.0.1:"):
+        discover(f"http://127.0.0.1:{free_port()}/", "/any", timeout=0.2)
+
+
+def test_an_empty_interface_renders_as_such():
+    text = render(Interface(node="/quiet"))
+    assert "Interface of /quiet" in text and "no topics or services" in text

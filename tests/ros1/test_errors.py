@@ -1,0 +1,109 @@
+"""Bad input gets one clear line, and nothing already running is disturbed."""
+
+from __future__ import annotations
+
+import pytest
+from geometry_msgs.msg import Twist
+from std_msgs.msg import String, UInt32
+
+from ros1_fixtures import wait_for
+from peer import Peer
+
+from ipyros import errors
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("geometry_msgs/Twst", "unknown message type 'geometry_msgs/Twst': package 'geometry_msgs' has no 'Twst'; "
+                           "did you mean geometry_msgs/Twist"),
+    ("geometry_msg/Twist", "unknown message package 'geometry_msg' in 'geometry_msg/Twist'; did you mean geometry_msgs"),
+    ("Twist", "malformed message type 'Twist': write 'package/Type'; did you mean geometry_msgs/Twist"),
+    ("a/b/c", "malformed message type 'a/b/c'"),
+    (42, "message type must be a class or a 'pkg/Type' string, not int"),
+    (dict, "dict is not a ROS message class"),
+])
+def test_unknown_or_malformed_message_type(make_node, spec, message):
+    with pytest.raises(errors.MessageTypeError) as caught:
+        make_node("err_type").new.publish("/err", msgType=spec)
+    assert message in str(caught.value)
+    assert "\n" not in str(caught.value)
+
+
+def test_missing_and_disagreeing_types(make_node):
+    nd = make_node("err_type2")
+    with pytest.raises(errors.MessageTypeError, match="no message type given; add msgType="):
+        nd.new.publish("/err")
+    with pytest.raises(errors.MessageTypeError, match="disagree; give just one"):
+        nd.new.publish("/err", msgType=Twist, type=String)
+    nd.new.publish("/err", type="geometry_msgs/Twist")  # the paper's other spelling
+    assert nd.model().topics[0].type == "geometry_msgs/Twist"
+
+
+@pytest.mark.parametrize("name", ["bad name", "1abc", "/a//b", "a/", "", "/a-b"])
+def test_invalid_topic_names(make_node, name):
+    with pytest.raises(errors.TopicNameError, match="topic name"):
+        make_node("err_names").new.publish(name, msgType=Twist)
+
+
+def test_invalid_node_names(make_node):
+    with pytest.raises(errors.TopicNameError, match="invalid node name 'a/b'"):
+        make_node("a/b")
+
+
+def test_handler_not_callable_or_wrong_arity(make_node):
+    nd = make_node("err_handler")
+    with pytest.raises(errors.HandlerError, match=r"handler for err_handler /x is str 'showPose', not a function"):
+        nd.new.subscribe("/x", handler="showPose", msgType=Twist)
+    with pytest.raises(errors.HandlerError, match=r"handler two\(a, b\) for err_handler /x must take one argument, "
+                                                 "the message"):
+        def two(a, b):
+            pass
+        nd.new.subscribe("/x", handler=two, msgType=Twist)
+    with pytest.raises(errors.HandlerError, match="needs handler="):
+        nd.new.subscribe("/x", msgType=Twist)
+    with pytest.raises(errors.HandlerError, match="relays messages unchanged and takes no handler"):
+        nd.reuse.subscribe("/x", handler=print, msgType=Twist)
+    assert nd.model().topics == []
+
+
+def test_write_errors(make_node):
+    nd = make_node("err_write")
+    nd.new.publish("/err_write/out", msgType=Twist)
+    with pytest.raises(errors.NodeStateError, match=r"err_write is not running; call err_write.create\(\) before write"):
+        nd.write("/err_write/out", Twist())
+    nd.create()
+    with pytest.raises(errors.NotDeclaredError, match=r"err_write does not publish /elsewhere; declare it first: "
+                                                      r"err_write.new.publish\(topic='/elsewhere', msgType=...\)"):
+        nd.write("/elsewhere", Twist())
+    with pytest.raises(errors.MessageTypeError, match="/err_write/out carries geometry_msgs/Twist, not std_msgs/String"):
+        nd.write("/err_write/out", String("x"))
+    with pytest.raises(errors.MessageTypeError, match="not dict"):
+        nd.write("/err_write/out", {"linear": {"x": 1}})
+
+
+def test_type_conflict_with_the_live_topic(make_node):
+    with Peer("publish_type.py", "/err_live", "std_msgs/String") as peer:
+        peer.wait_line("ready")
+        nd = make_node("err_live").create()
+        with pytest.raises(errors.TopicTypeConflict, match="/err_live already carries std_msgs/String, not "
+                                                           "geometry_msgs/Twist; declare msgType='std_msgs/String'"):
+            nd.new.subscribe("/err_live", handler=print, msgType=Twist)
+        assert nd.model().topics == []
+        nd.new.subscribe("/err_live", handler=print, msgType=String)  # the right type is fine
+
+
+def test_a_rejected_declaration_leaves_the_running_node_alone(make_node):
+    seen = []
+    nd = make_node("err_keep")
+    nd.new.subscribe("/err_keep", handler=seen.append, msgType=UInt32).publish("/err_keep", msgType=UInt32)
+    nd.create()
+    before = nd.model()
+    for bad in (lambda: nd.new.subscribe("/err_keep", handler=print, msgType="std_msgs/Strin"),
+                lambda: nd.new.subscribe("/err_keep", handler=lambda a, b: 0, msgType=UInt32),
+                lambda: nd.new.publish("/err_keep", msgType=String),
+                lambda: nd.remove("/not_there")):
+        with pytest.raises(errors.IpyrosError):
+            bad()
+    assert nd.model() == before
+    wait_for(lambda: nd._writer("/err_keep")[0].connections(), what="connection")
+    nd.write("/err_keep", UInt32(7))
+    wait_for(lambda: [m.data for m in seen] == [7], what="the old handler to still run")

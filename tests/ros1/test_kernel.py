@@ -1,0 +1,164 @@
+"""End to end: ipyros in a Jupyter kernel (ipykernel), driven over the messaging protocol.
+
+What a notebook front end sends and gets back: execute requests (the magics' output as
+stream and display_data messages, errors as error replies), complete requests (live
+topic names and message types), and the ``set_next_input`` payload by which
+``%handler`` puts a handler's source into the next cell.
+
+The kernel is the venv's Python, on the test master (see tests/kernels.py).
+"""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from ros1_fixtures import master_state, wait_for
+from kernels import kernel  # noqa: F401 - the fixture
+from peer import Peer
+
+TOPIC = "/e2e_kernel/ticks"  # std_msgs/UInt32 0, 1, 2, ... from peers/ticker.py
+
+HANDLER = '''\
+ticks = []
+def on_tick(msg):
+    print("OLD", msg.data)
+    ticks.append(("OLD", msg.data))
+'''
+
+
+@pytest.fixture
+def ticks(ros_master):
+    with Peer("ticker.py", TOPIC, 20) as peer:
+        peer.wait_line("ready")
+        yield peer
+
+
+def test_magics_and_completion_through_a_kernel(kernel, ticks, ros_master):
+    cell = kernel.ok("%load_ext ipyros")
+    assert cell.stdout() == f"ipyros: ROS master {ros_master} (found running)\n"
+
+    # Completion from the live graph (refreshed in the background: ask until it has the topic).
+    wait_for(lambda: kernel.complete("%topics /e2e_k") == [TOPIC], timeout=20, what=f"{TOPIC} completed")
+    assert "std_msgs/UInt32" in kernel.complete("%topics --type std_msgs/UInt")
+    # JupyterLab shows each completion's type in lower case: there it says the kind of name, not a message type.
+    assert kernel.complete_typed("%topics /e2e_k") == [(TOPIC, "topic")]
+
+    # %topics shows a table (rich: text and HTML).
+    cell = kernel.ok(f"%topics {TOPIC}")
+    row = next(line for line in cell.shown().splitlines() if TOPIC in line)
+    assert "std_msgs/UInt32" in row and "/ticker_" in row
+    assert TOPIC in cell.shown("text/html")
+
+    # A node declared and created in cells; completion inside its DSL calls.
+    kernel.ok(HANDLER + "from std_msgs.msg import UInt32\nnd = rosNode('e2e_kernel_node')")
+    assert TOPIC in kernel.complete('nd.new.subscribe(topic="/e2e_k')
+    assert "std_msgs/UInt32" in kernel.complete(f'nd.new.subscribe(topic="{TOPIC}", msgType="std_msgs/UInt')
+    cell = kernel.ok(f'nd.new.subscribe(topic="{TOPIC}", handler=on_tick, msgType=UInt32)\nnd.create()')
+    (area,) = cell.outputs("display_data")  # where the node's handlers print: below the cell that created it
+    area = area["transient"]["display_id"]
+    cell = kernel.ok("nd")
+    assert "/e2e_kernel_node" in cell.shown("text/html") and "on_tick" in cell.shown("text/html")
+
+    # Handler prints from ROS threads stay below the creating cell, whichever cell runs now.
+    cell = kernel.ok(wait_ticks("OLD", 10))
+    assert re.search(r"^OLD \d+$", cell.updated(area), re.MULTILINE) and "OLD" not in cell.stdout(), cell.messages
+
+    # %handler puts the source into the next cell; running the edited source swaps it in.
+    cell = kernel.ok(f"%handler nd {TOPIC}")
+    assert cell.said() == [f"ipyros: edit on_tick and run it: it replaces the handler of e2e_kernel_node {TOPIC}"]
+    source = cell.payload("set_next_input")["text"]
+    assert source == HANDLER.split("\n", 1)[1].rstrip("\n")
+    cell = kernel.ok(source.replace("OLD", "NEW"))
+    assert cell.said() == [f"ipyros: e2e_kernel_node {TOPIC} is now handled by the new on_tick"]
+    cell = kernel.ok(wait_ticks("NEW", 10))
+    assert re.search(r"^NEW \d+$", cell.updated(area), re.MULTILINE), cell.messages
+    # What the handlers saw: OLD up to the swap, NEW after, no message lost.
+    seen = kernel.value("[tuple(tick) for tick in ticks]")
+    words = [word for word, _ in seen]
+    assert words == sorted(words, key=["OLD", "NEW"].index), f"OLD after NEW: {seen}"
+    numbers = [number for _, number in seen]
+    assert numbers == list(range(numbers[0], numbers[0] + len(numbers))), f"a message lost or repeated: {seen}"
+
+    # %status: per-handler figures of the node, and the session's nodes.
+    cell = kernel.ok("%status nd")
+    row = next(line for line in cell.shown().splitlines() if TOPIC in line)
+    assert "on_tick" in row and "/e2e_kernel_node" in cell.shown()
+    cell = kernel.ok("%status")
+    assert "/e2e_kernel_node" in cell.shown() and "nd" in cell.shown()
+
+    # Errors come back as error replies: a usage error, and an ipyros error in one line.
+    cell = kernel.run("%status ghost")
+    assert cell.reply["ename"] == "UsageError" and "no rosNode called 'ghost'" in cell.reply["evalue"]
+    cell = kernel.run("%handler nd /e2e_kernel/nothing")
+    assert not cell.ok and "has no handler for /e2e_kernel/nothing" in cell.reply["evalue"]
+    assert len(cell.reply["traceback"]) == 1, cell.reply["traceback"]
+
+    # Shutting the kernel down takes its ROS node off the master.
+    ros_node = kernel.value("import rospy\nrospy.get_name()")
+    assert ros_node in (state := master_state(ros_master))["sub"].get(TOPIC, ()), (ros_node, state)
+    kernel.shutdown()
+    wait_for(lambda: not registered(ros_master, ros_node), timeout=10, what=f"{ros_node} to leave the master")
+
+
+def test_a_node_shows_once_in_a_notebook(kernel):
+    kernel.ok("%load_ext ipyros")
+    cell = kernel.ok("nd = rosNode('e2e_kernel_shown')\nnd")
+    assert not cell.outputs("display_data"), "showing a node must not display anything besides the result"
+    (result,) = cell.outputs("execute_result")
+    assert "/e2e_kernel_shown" in result["data"]["text/plain"]
+    assert "/e2e_kernel_shown" in result["data"]["text/html"]
+
+
+def registered(master_uri: str, node: str) -> list[str]:
+    """The topics and services ``node`` is registered for on the master."""
+    return [name for kind in master_state(master_uri).values() for name, nodes in kind.items() if node in nodes]
+
+
+def wait_ticks(word: str, count: int) -> str:
+    """A cell that waits (20 s at most) until the handler has seen ``count`` more messages marked ``word``
+    (at 20 Hz: long enough for the node's output area to be redrawn while the cell runs)."""
+    return (f"import time\ndeadline = time.monotonic() + 20\nstart = sum(w == {word!r} for w, _ in ticks)\n"
+            f"while sum(w == {word!r} for w, _ in ticks) < start + {count} and time.monotonic() < deadline:\n"
+            f"    time.sleep(0.02)\n"
+            f"assert sum(w == {word!r} for w, _ in ticks) >= start + {count}, 'too few messages'")
+
+
+def test_plot_in_a_kernel_is_a_figure_redrawn_below_the_cell_and_its_data_stays(kernel, ticks):
+    import base64
+
+    kernel.ok("%load_ext ipyros")
+    wait_for(lambda: kernel.complete("%topics /e2e_k") == [TOPIC], timeout=20, what=f"{TOPIC} in the graph")
+    cell = kernel.ok(f"p = %plot {TOPIC} data --duration 2")
+    images = [out["data"]["image/png"] for out in cell.outputs("display_data") if "image/png" in out["data"]]
+    assert images and base64.b64decode(images[0])[:8] == b"\x89PNG\r\n\x1a\n", "a figure below the cell"
+    assert cell.outputs("display_data")[0].get("transient", {}).get("display_id"), "redrawn in place, by its id"
+    # the prompt is free while it records; after the duration it stops by itself, and the data stays
+    cell = kernel.ok("import time\nwhile p.running: time.sleep(0.1)\n"
+                     "print('DATA', len(p.data['t']), list(p.data['data']) == sorted(p.data['data']))")
+    found = re.search(r"DATA (\d+) (True|False)", cell.stdout())
+    assert found and int(found[1]) >= 20 and found[2] == "True", cell.stdout()
+
+
+def test_echo_until_interrupted_in_a_kernel_is_one_rolling_view(kernel, ticks):
+    """%echo without -n in Jupyter: the messages in one area redrawn in place, not a print each (which would run
+    into the front end's output limit); interrupting the kernel stops it, as Ctrl-C does in a terminal."""
+    import threading
+
+    kernel.ok("%load_ext ipyros")
+    interrupt = threading.Timer(3.0, kernel.manager.interrupt_kernel)
+    interrupt.start()
+    try:
+        cell = kernel.run(f"%echo {TOPIC}")
+    finally:
+        interrupt.cancel()
+    (area,) = cell.outputs("display_data")
+    shown = cell.updated(area["transient"]["display_id"])
+    assert shown.count("data: ") >= 10 and shown.count("---") >= 10, shown
+    assert "stopped listening to" in cell.stdout() and "data: " not in cell.stdout(), cell.stdout()
+    # %hz redraws one table in place, as an HTML table, report after report.
+    cell = kernel.ok(f"%hz {TOPIC} -w 0.5 -n 3")
+    (table,) = cell.outputs("display_data")
+    updates = [c for c in cell.outputs("update_display_data")
+               if c["transient"]["display_id"] == table["transient"]["display_id"]]
+    assert len(updates) == 3 and "<table" in updates[-1]["data"]["text/html"] and TOPIC in updates[-1]["data"]["text/html"]

@@ -1,0 +1,64 @@
+"""%services, %call, %params, %param, %nodes, %node in a real shell, against the test master."""
+
+from __future__ import annotations
+
+from ros1_fixtures import wait_for
+
+from ipyros.extension import _loaded
+from shell import error_of, ip, ok  # noqa: F401
+
+SERVER = """\
+from std_srvs.srv import SetBool, SetBoolResponse
+asked = []
+def check(req):
+    asked.append(req.data)
+    return SetBoolResponse(success=req.data, message='checked')
+srv = rosNode('mi_server', namespace='/mi')
+srv.new.service('check', SetBool, check).publish('out', msgType='std_msgs/String')
+srv.params['gain'] = 1.5
+srv.create()
+"""
+
+
+def test_services_call_params_and_nodes_at_the_prompt(ip, capsys):
+    ok(ip, SERVER)
+    try:
+        graph = _loaded[id(ip)].graph
+        wait_for(lambda: "/mi/check" in graph.refresh_now().services, what="/mi/check on the master")
+        capsys.readouterr()
+        ok(ip, "%services /mi/")
+        out = capsys.readouterr().out
+        row = next(line for line in out.splitlines() if "/mi/check" in line)
+        assert "std_srvs/SetBool" in row and "/ipyros_test" in row, out
+
+        # %call: the type asked of the live service; the request built field by field; the answer as YAML.
+        ok(ip, "%call /mi/check {data: true}")
+        out = capsys.readouterr().out
+        assert "success: True" in out and "message: \"checked\"" in out, out
+        assert ip.user_ns["asked"] == [True]
+        ok(ip, "%call /mi/check std_srvs/SetBool {'data': False}")
+        assert "success: False" in capsys.readouterr().out
+        assert "SetBoolRequest: dat: no such field" in str(error_of(ip, "%call /mi/check {dat: 1}"))
+        assert "no live service /mi/nothing; %services lists them" in str(error_of(ip, "%call /mi/nothing {}"))
+
+        # %params / %param: read, set, read back.
+        ok(ip, "%params /mi")
+        out = capsys.readouterr().out
+        assert "/mi/mi_server/gain" in out and "1.5" in out, out
+        ok(ip, "%param /mi/mi_server/gain 2.5")
+        assert "ipyros: /mi/mi_server/gain = 2.5" in capsys.readouterr().out
+        assert ip.user_ns["srv"].params["gain"] == 2.5
+        ok(ip, "%param /mi/mi_server/gain")
+        assert "/mi/mi_server/gain: 2.5" in capsys.readouterr().out
+
+        # %nodes / %node: the session's own node, with its pid, what it publishes and serves.
+        ok(ip, "%nodes ipyros_test")
+        out = capsys.readouterr().out
+        assert "/ipyros_test" in out and "this session" in out, out
+        ok(ip, "%node /ipyros_test")
+        out = capsys.readouterr().out
+        import os
+        assert f"(pid {os.getpid()})" in out and "/mi/out" in out and "/mi/check" in out, out
+        assert "no live node /nobody; %nodes lists them" in str(error_of(ip, "%node /nobody"))
+    finally:
+        ok(ip, "srv.shutdown()")

@@ -1,0 +1,107 @@
+"""Writing never loses data silently and never blocks: rejected messages, slow subscribers."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+from std_msgs.msg import UInt32
+from ros1_fixtures import wait_for
+from peer import Peer
+
+from ipyros.errors import MessageTypeError
+from shell import error_of, ip, ok  # noqa: F401
+
+
+def last_x(peer: Peer) -> float | None:
+    """The linear.x of the last Twist the echo peer printed."""
+    for line in reversed(peer.lines):
+        if "linear:" in line:
+            return float(line.split("x:")[1].split()[0])
+    return None
+
+
+def test_a_rejected_write_leaves_every_connection_as_it_was(make_node):
+    from geometry_msgs.msg import Twist, Vector3
+
+    nd = make_node("rejecting")
+    nd.new.publish("/reject/cmd", msgType=Twist).create()
+    with Peer("echo_topic.py", "/reject/cmd", "geometry_msgs/Twist") as peer:
+        peer.wait_line("ready")
+
+        def delivered(x: float) -> bool:
+            nd.write("/reject/cmd", Twist(linear=Vector3(x=x)))
+            return last_x(peer) == x
+
+        wait_for(lambda: delivered(1.0), timeout=20, what="the peer to get a first message")
+        bad = Twist()
+        bad.linear.x = "fast"
+        with pytest.raises(MessageTypeError, match=r"cannot send this geometry_msgs/Twist on /reject/cmd: .*"
+                                                   r"nothing was sent"):
+            nd.write("/reject/cmd", bad)
+        with pytest.raises(MessageTypeError, match="carries geometry_msgs/Twist, not the class geometry_msgs/Twist"):
+            nd.write("/reject/cmd", Twist)
+        nd.write("/reject/cmd", Twist(linear=Vector3(x=2.0)))
+        wait_for(lambda: last_x(peer) == 2.0, timeout=5, what="the next good message after the rejected ones")
+        got = [line for line in peer.lines if line != "ready"]
+        assert all("x: 1.0" in line for line in got[:-1]) and "x: 2.0" in got[-1], got
+
+
+def test_a_pub_that_cannot_be_serialized_breaks_nothing(ip, capsys):
+    with Peer("echo_topic.py", "/reject/stamp", "std_msgs/Time") as peer:
+        peer.wait_line("ready")
+        ok(ip, "%pub /reject/stamp std_msgs/Time {data: 5}")
+        peer.wait_line("secs: 5")
+        error = error_of(ip, "%pub /reject/stamp std_msgs/Time {data: 99999999999}")  # caught when built
+        assert isinstance(error, MessageTypeError) and "does not fit a time" in str(error)
+        # nsecs carried into secs overflow only when serialised: caught there, before any connection
+        error = error_of(ip, "%pub /reject/stamp std_msgs/Time {data: {secs: 4294967295, nsecs: 2000000000}}")
+        assert isinstance(error, MessageTypeError) and "nothing was sent" in str(error)
+        ok(ip, "%pub /reject/stamp std_msgs/Time {data: 7}")
+        peer.wait_line("secs: 7")
+
+
+def test_a_slow_subscriber_blocks_neither_the_writer_nor_the_others(make_node):
+    """1 MiB images at 20 Hz, one subscriber asleep in its callback: write() stays fast, the
+    other subscriber gets them all, and the slow one's dropped messages are counted."""
+    from sensor_msgs.msg import Image
+
+    nd = make_node("imaging")
+    nd.new.publish("/slow/image", msgType=Image).create()
+    image = Image(height=512, width=512, encoding="mono32", step=2048, data=bytes(1 << 20))
+    with Peer("count_topic.py", "/slow/image", "sensor_msgs/Image", "--sleep", "30") as slow, \
+            Peer("count_topic.py", "/slow/image", "sensor_msgs/Image") as fast:
+        slow.wait_line("ready")
+        fast.wait_line("ready")
+        wait_for(lambda: nd.status().row("/slow/image").connections == 2, timeout=20,
+                 what="both subscribers to connect")
+        longest, start = 0.0, time.monotonic()
+        for _ in range(60):
+            before = time.monotonic()
+            nd.write("/slow/image", image)
+            longest = max(longest, time.monotonic() - before)
+            time.sleep(0.05)
+        assert longest < 0.5, f"a write blocked for {longest:.2f} s"
+        assert time.monotonic() - start < 10
+        fast.wait_line("got 60", timeout=20)
+        row = nd.status().row("/slow/image")
+        assert row.calls == 60 and row.dropped > 0, row
+        assert "got 2" not in slow.lines, "the slow peer is still in its first callback"
+
+
+def test_a_publisher_that_closes_and_reopens_its_topic_is_followed(make_node):
+    """rospy drops a publisher for good when it unregisters and advertises again faster than the
+    master's updates arrive (the old connection is still listed when the new update comes, then
+    ends): the subscription asks the master again whenever a connection ends."""
+    heard = []
+    make_node("reopen_listener").new.subscribe("/reopen", handler=lambda m: heard.append(m.data),
+                                               msgType=UInt32).create()
+    with Peer("reopen_topic.py", "/reopen") as peer:
+        peer.wait_line("ready")
+        wait_for(lambda: heard, timeout=20, what="the first messages")
+        for n in range(1, 16):
+            peer.proc.stdin.write("reopen\n")
+            peer.proc.stdin.flush()
+            peer.wait_line(f"reopened {n}")
+            count = len(heard)
+            wait_for(lambda: len(heard) > count + 5, timeout=10, what=f"messages after reopen {n}")

@@ -1,0 +1,242 @@
+"""Wrapping a running ROS 2 node: launched remapped onto the wrapper, relayed, intercepted, live."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from ros2_fixtures import wait_for
+from std_msgs.msg import String
+
+ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
+
+
+def listen(make_node, name, topic):
+    seen: list[str] = []
+    make_node(name).new.subscribe(topic, handler=lambda m: seen.append(m.data), msgType=String).create()
+    return seen
+
+
+def test_wrapping_a_python_basenode_in_a_namespace(make_node, failures):
+    out = listen(make_node, "w2_listener", "/robot2/out")
+    shouted = listen(make_node, "w2_shout_listener", "/robot2/shouted")
+    feeder = make_node("w2_feeder").new.publish("/robot2/in", msgType=String).create()
+    send = lambda text: feeder.write("/robot2/in", String(data=text))  # noqa: E731
+
+    w = make_node("w2")
+    w.baseNode(ECHO_NODE, namespace="robot2", params={"prefix": "B:"})
+    w.reuse.subscribe("in", type=String).publish("out", type=String)
+    assert w.fullname == "/robot2/w2"
+    w.create()
+    assert w.base.running and "--ros-args" in w.base.argv
+    wait_for(lambda: any("echo_node ready" in line for line in w.base.tail()), what="the basenode's log")
+    # Relayed both ways through the wrapper: in → basenode → out.
+    wait_for(lambda: send("a") or "B:a" in out, timeout=20, interval=0.1, what="a message through the wrap")
+
+    # Intercept its output live with a handler that writes a new topic.
+    w.new.publish("/robot2/shouted", msgType=String)
+    w.new.subscribe("out", handler=lambda m: w.write("/robot2/shouted", String(data=m.data.upper())), msgType=String)
+    wait_for(lambda: send("b") or "B:B" in shouted, timeout=20, interval=0.1, what="the intercepting handler")
+    count = len(out)
+    wait_for(lambda: send("c") or "B:C" in shouted, timeout=20, interval=0.1, what="more through the handler")
+    assert len(out) == count, "while intercepted, the basenode's output does not reach /robot2/out"
+
+    # Give it back: the relay serves /robot2/out again.
+    w.new.unsubscribe("out")
+    wait_for(lambda: send("d") or "B:d" in out, timeout=20, interval=0.1, what="the relay back")
+    pid = w.base.pid
+    w.shutdown()
+    assert w.base is None and not Path(f"/proc/{pid}").exists() or _zombie(pid)
+    assert failures == []
+
+
+def _zombie(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except OSError:
+        return True
+
+
+def test_a_latched_output_stays_latched_through_the_wrapper(make_node):
+    """The basenode says "up" once, transient-local; a subscriber that comes later still gets it, from the relay."""
+    import time
+
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+
+    w = make_node("w2_latch")
+    w.baseNode(ECHO_NODE, namespace="robot6", params={"prefix": "L"})
+    w.reuse.publish("status", type=String)
+    w.create()
+    wait_for(lambda: w.sent() and w.sent()[0].messages >= 1, timeout=20, what="the relay to forward the status")
+    time.sleep(0.5)  # the subscriber below comes after the message went by: only latching brings it
+    late: list[str] = []
+    listener = make_node("w2_late_listener").create()
+    graph_node = listener.session.process.host(listener.fullname)
+    graph_node.create_subscription(String, "/robot6/status", lambda m: late.append(m.data),
+                                   QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    wait_for(lambda: late == ["L up"], timeout=10, what="the latched status for a late subscriber")
+
+
+def test_a_basenode_service_relayed_then_intercepted(make_node, caller):
+    from std_srvs.srv import SetBool
+
+    w = make_node("w2_srv")
+    w.baseNode(ECHO_NODE, namespace="robot5", params={"prefix": "S"})
+    w.reuse.service("check", type=SetBool)
+    w.create()
+    answer = caller("/robot5/check", SetBool, SetBool.Request(data=True))
+    assert answer.success is True and answer.message == "S checked", "the basenode answers through the wrapper"
+    w.new.service("check", SetBool, handler=lambda request: SetBool.Response(success=False, message="mine"))
+    assert caller("/robot5/check", SetBool, SetBool.Request(data=True)).message == "mine"
+    w.remove(service="check")
+    w.reuse.service("check", type=SetBool)  # given back to the basenode
+    assert caller("/robot5/check", SetBool, SetBool.Request(data=True)).message == "S checked"
+
+
+def test_discovery_reads_the_basenode_from_the_ros2_graph(make_node):
+    w = make_node("w2_discovered")
+    w.baseNode(ECHO_NODE, namespace="robot3")
+    interface = w.discover()
+    assert interface.node == "/robot3/echo_node"
+    assert ("/robot3/out", "std_msgs/String") in interface.publications
+    assert ("/robot3/in", "std_msgs/String") in interface.subscriptions
+    assert "/rosout (publishes)" in interface.left_out
+    assert ("/robot3/check", "std_srvs/SetBool") in interface.services
+    assert [(t.name, t.direction, t.role) for t in w.model().topics] == [
+        ("out", "publish", "reuse"), ("status", "publish", "reuse"), ("in", "subscribe", "reuse")]
+
+
+def test_a_basenode_by_package_is_found_in_the_ament_index(make_node, tmp_path, monkeypatch):
+    """An installed package, as colcon lays one out: a marker in the resource index, executables in lib/."""
+    import os
+    import shutil
+    import sys
+
+    from ipyros import errors
+
+    prefix = tmp_path / "install"
+    (prefix / "share" / "ament_index" / "resource_index" / "packages").mkdir(parents=True)
+    (prefix / "share" / "ament_index" / "resource_index" / "packages" / "echo_pkg").touch()
+    (prefix / "lib" / "echo_pkg").mkdir(parents=True)
+    node = prefix / "lib" / "echo_pkg" / "echo_node"
+    node.write_text(f"#!{sys.executable}\n" + Path(ECHO_NODE).read_text())
+    node.chmod(0o755)
+    monkeypatch.setenv("AMENT_PREFIX_PATH", os.pathsep.join([str(prefix), sys.prefix]))
+
+    with pytest.raises(errors.BaseNodeError, match="package 'echo_pkg' has no executable 'echo_nod'; did you mean "
+                                                  "echo_node\\? its executables: echo_node"):
+        make_node("w2_typo").baseNode("echo_nod").basePackage("echo_pkg").create()
+    with pytest.raises(errors.BaseNodeError, match="unknown ROS 2 package 'echo_pk': did you mean echo_pkg\\?"):
+        make_node("w2_typo2").baseNode("echo_node").basePackage("echo_pk").create()
+
+    out = listen(make_node, "w2_pkg_listener", "/robot4/out")
+    feeder = make_node("w2_pkg_feeder").new.publish("/robot4/in", msgType=String).create()
+    w = make_node("w2_pkg")
+    w.baseNode("echo_node", namespace="robot4").basePackage("echo_pkg")
+    w.reuse.subscribe("in", type=String).publish("out", type=String)
+    w.create()
+    assert w.base.argv[:2] == [sys.executable, str(node)]  # a Python script runs with ipyros's own Python
+    wait_for(lambda: feeder.write("/robot4/in", String(data="p")) or "echo:p" in out, timeout=20, interval=0.1,
+             what="a message through the packaged basenode")
+    w.shutdown()
+    shutil.rmtree(prefix)
+
+
+def test_the_basenode_lifecycle_log_restart_crash_and_no_orphan(make_node, ros2_session):
+    told: list[str] = []
+    previous, ros2_session.notice = ros2_session.notice, told.append
+    try:
+        feeder = make_node("w2_life_feeder").new.publish("/robot7/in", msgType=String).create()
+        w = make_node("w2_life")
+        w.baseNode(ECHO_NODE, namespace="robot7")
+        w.reuse.subscribe("in", type=String)
+        w.create()
+        wait_for(lambda: any("echo_node ready" in line for line in w.base.tail()), what="the basenode's log")
+        first = w.base.pid
+        w.base.restart()
+        assert w.base.pid != first and _gone(first)
+        wait_for(lambda: w.base.running and any("echo_node ready" in line for line in w.base.tail()),
+                 what="the restarted basenode")
+        wait_for(lambda: feeder.write("/robot7/in", String(data="crash")) or told, timeout=20, interval=0.2,
+                 what="the crash to be reported")
+        assert "basenode /robot7/echo_node of w2_life exited with code 3; restart it with w2_life.base.restart()" \
+            in told[0] and "asked to crash" in told[0]
+        w.base.restart()  # and it runs again
+        wait_for(lambda: w.base.running, what="the basenode after the crash")
+        pid = w.base.pid
+        w.shutdown()
+        assert _gone(pid), "shutdown stops the basenode"
+    finally:
+        ros2_session.notice = previous
+
+
+def _gone(pid: int) -> bool:
+    return wait_for(lambda: not Path(f"/proc/{pid}").exists() or _zombie(pid), timeout=10, what=f"pid {pid} to end")
+
+
+_INTERPRETER = """
+import sys
+from ipyros import rosNode
+from std_msgs.msg import String
+w = rosNode("orphan_wrapper")
+w.baseNode(sys.argv[2], namespace="orphans")
+w.reuse.publish("out", type=String)
+w.create()
+print("BASE", w.base.pid, flush=True)
+if sys.argv[1] == "wait":
+    sys.stdin.read()
+"""
+
+
+@pytest.mark.parametrize("ending", ["exit", "SIGKILL"])
+def test_no_orphan_basenode_when_the_interpreter_exits_or_is_killed(ending):
+    """The basenode dies with the interpreter that wrapped it, even one killed without a chance to clean up."""
+    import signal
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-c", _INTERPRETER, "exit" if ending == "exit" else "wait", ECHO_NODE],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("BASE"), line
+        base_pid = int(line.split()[1])
+        if ending == "SIGKILL":
+            assert not _zombie(base_pid)
+            proc.send_signal(signal.SIGKILL)
+        assert proc.wait(30) in (0, -signal.SIGKILL)
+        _gone(base_pid)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+@pytest.mark.parametrize("typed_first", [True, False], ids=["typed-then-relay", "relay-then-typed"])
+def test_a_relay_and_a_typed_subscriber_on_one_topic_each_get_what_they_asked_for(make_node, failures,
+                                                                                   typed_first):
+    """A reuse relay (bytes) and a handler (a message) on one topic, in either order, with %echo as a
+    third party: each gets what it asked for (as on ROS 1, where rospy has one subscription per topic)."""
+    from ipyros.probe import Echo
+
+    n = int(typed_first)
+    feeder = make_node(f"w2_share_feeder_{n}").new.publish(f"/share{n}/in", msgType=String).create()
+    relayed = listen(make_node, f"w2_share_out_{n}", f"/share{n}/out")
+
+    def wrap():
+        w = make_node(f"w2_share_{n}")
+        w.baseNode(ECHO_NODE, namespace=f"share{n}", params={"prefix": ""})
+        w.reuse.subscribe("in", type=String)
+        w.create()
+
+    if not typed_first:
+        wrap()
+    typed = listen(make_node, f"w2_share_typed_{n}", f"/share{n}/in")
+    if typed_first:
+        wrap()
+    with Echo(f"/share{n}/in", "std_msgs/String") as echo:
+        wait_for(lambda: feeder.write(f"/share{n}/in", String(data="x")) or (relayed and len(typed) > 1),
+                 timeout=20, interval=0.2, what="the message to reach both the relay and the handler")
+        echoed = echo.get(timeout=10)
+    assert set(typed) == {"x"} and set(relayed) == {"x"} and echoed.data == "x"
+    assert failures == []

@@ -1,0 +1,24 @@
+"""Helpers shared by tests: the test basenodes package, and whether a process is still alive."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+#: Put this on ROS_PACKAGE_PATH to find the package ``ipyros_test_nodes`` (echo_node, ...).
+TEST_NODES = Path(__file__).resolve().parents[1] / "nodes"
+
+
+def use_test_nodes(monkeypatch) -> None:
+    """Make ``ipyros_test_nodes`` findable by package and executable for this test."""
+    paths = [str(TEST_NODES), *filter(None, os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep))]
+    monkeypatch.setenv("ROS_PACKAGE_PATH", os.pathsep.join(paths))
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether ``pid`` names a living process (a zombie waiting to be reaped counts as gone)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"

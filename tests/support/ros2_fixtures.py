@@ -1,0 +1,119 @@
+"""ROS 2 fixtures (a pytest plugin, loaded by tests/conftest.py in the ROS 2 venv): a DDS domain of the run's own.
+
+Run with the ROS 2 venv (``bash run.sh test`` makes it): rclpy from PyPI, no ROS 1.
+Each DSL node is a ROS 2 node of its own in the pytest process; peers are rclpy
+scripts in ``ros2/peers/``, started and stopped by the tests.
+
+``session``, ``make_node``, ``failures``, ``notices`` and ``peer`` are the names the
+tests in ``both/`` use; ``ros1_fixtures`` gives the same on ROS 1.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+TESTS = Path(__file__).resolve().parents[1]
+PEERS = TESTS / "ros2" / "peers"
+
+from peer import Peer as SharedPeer  # noqa: E402
+from support import node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
+
+# Set before rclpy starts: the backend, a domain no other run on this machine uses, and
+# discovery kept to this machine.
+os.environ["IPYROS_ROS"] = "2"
+os.environ["ROS_DOMAIN_ID"] = str(1 + os.getpid() % 100)  # 1..100: the ids safe on Linux
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
+
+#: The ROS this plugin is for (the tests in both/ ask).
+ROS = 2
+
+
+class Peer(SharedPeer):
+    """An rclpy peer process from ``ros2/peers/``."""
+
+    PEERS = PEERS
+
+
+@pytest.fixture(scope="session")
+def ros2_session():
+    """The ipyros session of this pytest process, on ROS 2."""
+    from ipyros import session as sessions
+
+    session = sessions.configure(sessions.SessionConfig(start_master=False))
+    assert session.backend.name == "ROS 2"
+    yield session
+    session.close()
+
+
+@pytest.fixture
+def failures(ros2_session):
+    seen: list = []
+    previous, ros2_session.report = ros2_session.report, seen.append
+    yield seen
+    ros2_session.report = previous
+
+
+@pytest.fixture
+def notices(ros2_session):
+    """What the session tells the user on its own (a QoS mismatch, a basenode that died, ...)."""
+    seen: list[str] = []
+    previous, ros2_session.notice = ros2_session.notice, seen.append
+    yield seen
+    ros2_session.notice = previous
+
+
+@pytest.fixture
+def make_node(ros2_session):
+    """Build rosNodes that are shut down when the test ends."""
+    yield from node_maker(ros2_session)
+
+
+@pytest.fixture
+def session(ros2_session):
+    """The run's ipyros session, by the name the tests in both/ use."""
+    return ros2_session
+
+
+@pytest.fixture
+def caller():
+    """``call(service, cls, request)`` from a context of its own, as another process would call.
+
+    Right after discovery a reply can go out before the caller's reply reader is matched,
+    and DDS drops it: the call is made again, as ROS 2 clients do, up to 5 times.
+    """
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("test_caller", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    clients: dict = {}
+
+    def call(service: str, cls: type, request):
+        client = clients.get(service) or clients.setdefault(service, node.create_client(cls, service))
+        assert client.wait_for_service(timeout_sec=10), f"no service {service}"
+        for _ in range(5):
+            future = client.call_async(request)
+            executor.spin_until_future_complete(future, timeout_sec=3)
+            if future.done():
+                return future.result()
+            client.remove_pending_request(future)
+        raise AssertionError(f"no answer from {service} in 5 tries")
+
+    yield call
+    executor.shutdown()
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)
+
+
+@pytest.fixture
+def call(caller):
+    """``call(service, cls, request)`` as the tests in both/ name it: :func:`caller`."""
+    return caller

@@ -1,0 +1,81 @@
+"""A real IPython InteractiveShell for tests, with ipyros loaded, and helpers to drive it.
+
+Import the fixtures into a test module (``from shell import ip  # noqa: F401``). ``ip``
+depends on the run's ``session`` (either ROS), so the shell works against the test
+master or DDS domain, and its DSL nodes live in the pytest process.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import threading
+import _thread
+from typing import Iterator, Optional
+
+import pytest
+from IPython.core.interactiveshell import ExecutionResult, InteractiveShell
+from traitlets.config import Config
+
+
+@contextlib.contextmanager
+def interactive_shell(config: Optional[Config] = None, load: bool = True) -> Iterator[InteractiveShell]:
+    """A fresh shell (history in memory), ipyros loaded if ``load``; unloaded and cleared after."""
+    config = Config(config) if config is not None else Config()
+    config.HistoryManager.hist_file = ":memory:"
+    config.InteractiveShell.colors = "nocolor"  # assertions read plain text
+    InteractiveShell.clear_instance()
+    shell = InteractiveShell.instance(config=config)
+    columns = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "200"  # rich's width off a terminal: wide, so table rows stay on one line
+    try:
+        if load:
+            shell.run_line_magic("load_ext", "ipyros")
+        yield shell
+    finally:
+        if "ipyros" in shell.extension_manager.loaded:
+            shell.run_line_magic("unload_ext", "ipyros")
+        InteractiveShell.clear_instance()
+        if columns is None:
+            os.environ.pop("COLUMNS", None)
+        else:
+            os.environ["COLUMNS"] = columns
+
+
+@pytest.fixture
+def ip(session) -> Iterator[InteractiveShell]:
+    """An InteractiveShell with ipyros loaded, on the run's ROS."""
+    with interactive_shell() as shell:
+        yield shell
+
+
+def run(shell: InteractiveShell, cell: str) -> ExecutionResult:
+    """Run ``cell`` as if typed at the prompt (history and post_run_cell included)."""
+    return shell.run_cell(cell, store_history=True)
+
+
+def ok(shell: InteractiveShell, cell: str) -> ExecutionResult:
+    """Run ``cell``; fail the test if it raised."""
+    result = run(shell, cell)
+    if not result.success:
+        raise AssertionError(f"{cell!r} failed: {result.error_before_exec or result.error_in_exec!r}")
+    return result
+
+
+def error_of(shell: InteractiveShell, cell: str) -> BaseException:
+    """Run ``cell``, which must fail; its exception."""
+    result = run(shell, cell)
+    error = result.error_before_exec or result.error_in_exec
+    assert error is not None, f"{cell!r} should have failed"
+    return error
+
+
+@contextlib.contextmanager
+def ctrl_c_after(seconds: float) -> Iterator[None]:
+    """Press Ctrl-C (KeyboardInterrupt in the main thread) after ``seconds``, unless the block ended."""
+    timer = threading.Timer(seconds, _thread.interrupt_main)
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()

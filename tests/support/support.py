@@ -1,0 +1,71 @@
+"""Test helpers that need no ROS: shared by every layer of the suite."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+
+def wait_for(predicate: Callable[[], Any], timeout: float = 10.0, interval: float = 0.02, what: str = "condition"):
+    """Poll ``predicate`` until it returns a truthy value; fail the test after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout}s waiting for {what}")
+        time.sleep(interval)
+
+
+def node_maker(session: Any) -> Iterator[Callable[..., Any]]:
+    """The body of a ``make_node`` fixture: build rosNodes in ``session``, shut down when the test ends."""
+    from ipyros import rosNode
+
+    nodes = []
+
+    def make(name: str, **kwargs: Any) -> Any:
+        node = rosNode(name, session=session, **kwargs)
+        nodes.append(node)
+        return node
+
+    yield make
+    for node in nodes:
+        node.shutdown()
+
+
+#: Processes that live for the whole run (a rosmaster): not leftovers of any one test.
+SESSION_PIDS: set[int] = set()
+
+
+def children() -> set[int]:
+    """PIDs of this process's living children (zombies and :data:`SESSION_PIDS` excluded)."""
+    out = set()
+    kids: list[str] = []
+    for task in Path(f"/proc/{os.getpid()}/task").iterdir():  # children of every thread
+        try:
+            kids += (task / "children").read_text().split()
+        except OSError:
+            pass
+    for pid in map(int, kids):
+        if pid in SESSION_PIDS:
+            continue
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if state != "Z":
+            out.add(pid)
+    return out
+
+
+def request_of(service: type) -> type:
+    """A service's request class on either ROS (``SetBool.Request``; ROS 1: ``SetBoolRequest``)."""
+    return getattr(service, "Request", None) or service._request_class  # type: ignore[attr-defined]
+
+
+def response_of(service: type) -> type:
+    """A service's response class on either ROS."""
+    return getattr(service, "Response", None) or service._response_class  # type: ignore[attr-defined]

@@ -1,0 +1,87 @@
+"""What TAB completes, read from the line alone: magic arguments and the string arguments of DSL calls."""
+
+from __future__ import annotations
+
+import pytest
+
+from ipyros import completion
+from ipyros.completion import (DSL_NODE, EXECUTABLE, MSG_TEMPLATE, MSG_TYPE, NODE, OWN_TOPIC, PACKAGE, SERVICE,
+                               SRV_TYPE, TOPIC, call_want, magic_want, string_argument)
+from ipyros.model import NodeModel, TopicModel
+
+
+class Declared:
+    """Something in the user's namespace with a model(): what the completer takes for a DSL node."""
+
+    def __init__(self, model: NodeModel) -> None:
+        self._model = model
+
+    def model(self) -> NodeModel:
+        return self._model
+
+
+NODE_MODEL = NodeModel("nd", topics=[TopicModel("/turtle1/cmd_vel", "/turtle1/cmd_vel", "publish", "g/Twist")])
+USER_NS = {"nd": Declared(NODE_MODEL), "f": open}
+
+
+@pytest.mark.parametrize("line, kind, fragment", [
+    ("%topics /tur", TOPIC, "/tur"),
+    ("%topics --type geometry_msgs/Tw", MSG_TYPE, "geometry_msgs/Tw"),
+    ("%topics --node /tu", NODE, "/tu"),
+    ("%echo ", TOPIC, ""),
+    ("%pub /t ", MSG_TYPE, ""),
+    ("%pub /t std_msgs/String ", MSG_TEMPLATE, ""),
+    ("%pub -r 5 /t std_msgs/Str", MSG_TYPE, "std_msgs/Str"),
+    ("%handler ", DSL_NODE, ""),
+    ("%handler nd /t", OWN_TOPIC, "/t"),
+    ("%wrap topic_tools r", EXECUTABLE, "r"),
+    ("%wrap top", PACKAGE, "top"),
+    ("%call /reset ", SRV_TYPE, ""),
+    ("%call ", SERVICE, ""),
+    ("%hz /a /b /c", TOPIC, "/c"),
+])
+def test_magic_lines(line, kind, fragment):
+    want = magic_want(line, USER_NS)
+    assert want is not None and (want.kind, want.fragment) == (kind, fragment)
+
+
+def test_a_magic_typed_without_percent_counts_only_when_automagic_would_run_it():
+    assert magic_want("topics /t", USER_NS) is None
+    assert magic_want("topics /t", USER_NS, {"topics": None}).kind == TOPIC
+    assert magic_want("topics /t", {"topics": 1}, {"topics": None}) is None
+
+
+def test_a_node_is_known_for_its_own_topics():
+    want = magic_want("%handler nd ", USER_NS)
+    assert want.model is NODE_MODEL and want.direction == "subscribe"
+
+
+def test_not_ours():
+    assert magic_want("%timeit x", USER_NS) is None
+    assert magic_want("x = 1", USER_NS) is None
+
+
+@pytest.mark.parametrize("source, fragment, keyword, index, chain, called", [
+    ('nd.new.subscribe(topic="/tur', "/tur", "topic", 0, ("nd", "new", "subscribe"), False),
+    ("nd.new.publish('/a', msgType='geometry_msgs/Tw", "geometry_msgs/Tw", "msgType", 1, ("nd", "new", "publish"), False),
+    ('nd.write("', "", None, 0, ("nd", "write"), False),
+    ('(nd.new\n   .subscribe("/x", h, Pose)\n   .publish(topic="/cm', "/cm", "topic", 0,
+     ("nd", "new", "subscribe", "publish"), False),
+    ('rosNode("x").new.subscribe("/a', "/a", None, 0, ("rosNode", "new", "subscribe"), True),
+])
+def test_string_arguments(source, fragment, keyword, index, chain, called):
+    arg = string_argument(source)
+    assert arg == completion.StringArgument(fragment, keyword, index, chain, called)
+
+
+@pytest.mark.parametrize("source", ['x = "/tur', 'nd.write("a" + "b', '"""nd.write("', 'f(x) # nd.write("'])
+def test_strings_that_are_not_arguments(source):
+    assert string_argument(source) is None
+
+
+def test_what_a_call_argument_completes():
+    assert call_want(string_argument('nd.new.subscribe(topic="/t'), USER_NS).kind == TOPIC
+    assert call_want(string_argument('nd.write("'), USER_NS).model is NODE_MODEL
+    assert call_want(string_argument('f.write("'), USER_NS) is None  # a file's write is not ours
+    assert call_want(string_argument('x.anything(msgType="std'), USER_NS).kind == MSG_TYPE
+    assert call_want(string_argument('nd.service("/s", "'), USER_NS).kind == SRV_TYPE

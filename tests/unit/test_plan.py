@@ -1,0 +1,90 @@
+"""The plan: from a node model to the endpoints that must run (the wrapping semantics of the paper's fig. 1)."""
+
+from __future__ import annotations
+
+from ipyros import plan as planning
+from ipyros.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from ipyros.plan import PublishSpec, RelaySpec, ServiceRelaySpec, ServiceSpec, SubscribeSpec, TimerSpec
+from ipyros.qos import Qos
+
+TWIST = "geometry_msgs/Twist"
+
+
+def wrapper(*topics: TopicModel, services: tuple = (), timers: tuple = ()) -> NodeModel:
+    return NodeModel("w", "/", BaseModel(executable="b", package="p"), list(topics), list(timers), list(services))
+
+
+def topic(name: str, direction: str, role: str = "new", handler: str | None = None, **more) -> TopicModel:
+    return TopicModel(name, name, direction, TWIST, role, handler, **more)
+
+
+def test_a_plain_node_publishes_and_subscribes_where_it_says():
+    model = NodeModel("n", "/", None, [topic("/out", "publish"), topic("/in", "subscribe", handler="h")])
+    assert list(planning.plan(model)) == [PublishSpec("/out", TWIST), SubscribeSpec("/in", TWIST, "topic /in")]
+
+
+def test_reuse_publish_relays_the_basenodes_output_out():
+    plan = list(planning.plan(wrapper(topic("/cmd_vel", "publish", "reuse"))))
+    assert plan == [RelaySpec("/w/base/cmd_vel", "/cmd_vel", TWIST)]
+
+
+def test_reuse_subscribe_relays_the_world_in():
+    plan = list(planning.plan(wrapper(topic("/scan", "subscribe", "reuse"))))
+    assert plan == [RelaySpec("/scan", "/w/base/scan", TWIST)]
+
+
+def test_intercepting_an_output_hands_the_basenodes_messages_to_the_handler_and_takes_the_public_name():
+    plan = list(planning.plan(wrapper(topic("/cmd_vel", "publish", "reuse"),
+                                      topic("/cmd_vel", "subscribe", "new", "h"))))
+    assert SubscribeSpec("/w/base/cmd_vel", TWIST, "topic /cmd_vel") in plan
+    assert PublishSpec("/cmd_vel", TWIST) in plan
+    assert not any(isinstance(s, RelaySpec) for s in plan)
+
+
+def test_intercepting_an_input_feeds_the_basenode_through_write():
+    plan = list(planning.plan(wrapper(topic("/goal", "subscribe", "reuse"), topic("/goal", "subscribe", "new", "h"))))
+    assert plan == [SubscribeSpec("/goal", TWIST, "topic /goal"), PublishSpec("/w/base/goal", TWIST)]
+
+
+def test_write_targets():
+    model = wrapper(topic("/goal", "subscribe", "reuse"), topic("/goal", "subscribe", "new", "h"),
+                    topic("/cmd", "publish", "reuse"), topic("/cmd", "subscribe", "new", "g"),
+                    topic("/extra", "publish"))
+    assert planning.write_target(model, "/goal") == "/w/base/goal"
+    assert planning.write_target(model, "/cmd") == "/cmd"
+    assert planning.write_target(model, "/extra") == "/extra"
+    assert planning.write_target(model, "/nothing") is None
+
+
+def test_services_relayed_or_answered():
+    relayed = wrapper(services=(ServiceModel("/reset", "/reset", "std_srvs/Empty", "reuse"),))
+    assert list(planning.plan(relayed)) == [ServiceRelaySpec("/w/base/reset", "/reset", "std_srvs/Empty")]
+    answered = wrapper(services=(ServiceModel("/reset", "/reset", "std_srvs/Empty", "reuse"),
+                                 ServiceModel("/reset", "/reset", "std_srvs/Empty", "new", "h")))
+    assert list(planning.plan(answered)) == [ServiceSpec("/reset", "std_srvs/Empty", "service /reset")]
+
+
+def test_timers_and_their_slots():
+    model = NodeModel("n", timers=[TimerModel("tick", 0.5, "f", oneshot=True)])
+    assert list(planning.plan(model)) == [TimerSpec("tick", 0.5, True, "timer tick")]
+    assert planning.timer_slot("tick") == "timer tick"
+    assert planning.service_slot("/s") == "service /s"
+    assert planning.topic_slot("/t") == "topic /t"
+
+
+def test_the_plan_keeps_qos_and_latch():
+    model = NodeModel("n", topics=[topic("/map", "publish", latch=True, qos={"depth": 1, "durability": "transient_local"})])
+    (spec,) = planning.plan(model)
+    assert spec == PublishSpec("/map", TWIST, True, Qos(1, None, "transient_local"))
+
+
+def test_internal_names_live_under_the_wrapping_node():
+    model = NodeModel("w", "/robot1/")
+    assert planning.node_fullname(model) == "/robot1/w"
+    assert planning.internal_name(model, "/robot1/cmd_vel") == "/robot1/w/base/robot1/cmd_vel"
+
+
+def test_the_plan_is_a_pure_function_of_the_model():
+    model = wrapper(topic("/a", "publish", "reuse"), topic("/b", "subscribe", "new", "h"))
+    assert list(planning.plan(model)) == list(planning.plan(model))
+    assert model == wrapper(topic("/a", "publish", "reuse"), topic("/b", "subscribe", "new", "h"))
