@@ -14,7 +14,9 @@ declaration raises a one-line error and changes nothing, neither model nor runni
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import weakref
 from dataclasses import replace
 import re
 import threading
@@ -555,7 +557,7 @@ class rosNode:  # noqa: N801 - the paper's name
             return backend.subscription(host, spec.topic, msgtypes.resolve_message(spec.type)[1], slot, spec.qos,
                                         self._complain)
         if isinstance(spec, planning.TimerSpec):
-            return backend.timer(host, spec.period, slot, spec.oneshot)
+            return backend.timer(host, spec.period, slot, spec.oneshot, self._complain)
         return backend.service(host, spec.name, msgtypes.resolve_service(spec.type)[1], slot)
 
     def _complain(self, text: str) -> None:
@@ -572,6 +574,24 @@ class rosNode:  # noqa: N801 - the paper's name
             change = f"revert {slot} to version {version.number} ({version.name})"
         self._session.record(self.fullname, change, slot=slot, version=version.number, handler=version.name,
                              source=version.source)
+
+    def _snapshot(self) -> tuple:
+        """What a declaration chain may have to come back to: the model, the handlers and their versions."""
+        with self._lock:
+            return (copy.deepcopy(self._model), dict(self._handlers), dict(self._takes_argument),
+                    {slot: list(found) for slot, found in self._versions.items()}, dict(self._current_version))
+
+    def _restore(self, snapshot: tuple, change: str) -> None:
+        """Make the node (live, if it runs) what it was at ``snapshot``, as one recorded change."""
+        model, handlers, takes, versions, current = snapshot
+        with self._lock:
+            def edit(new: NodeModel) -> None:
+                new.__dict__.update(copy.deepcopy(model).__dict__)
+
+            swapped = {k: (h, takes.get(k, True)) for k, h in handlers.items() if self._handlers.get(k) is not h}
+            self._change(edit, swapped, drop=[k for k in self._handlers if k not in handlers])
+            self._versions, self._current_version, self._new_version = versions, current, None
+            self._record(change)
 
     # -- handler versions --------------------------------------------------------------
     def _add_version(self, slot: str, handler: Callable[..., Any]) -> None:
@@ -698,24 +718,78 @@ class rosNode:  # noqa: N801 - the paper's name
             self._session.backend.set_param(self._resolve("~" + key, "parameter"), value)
 
 
-class TopicHandler:
-    """``node.new`` or ``node.reuse``: declares topics and services, chainable."""
+class _Chain:
+    """One chain of declarations (``nd.new.subscribe(...).publish(...)``): all of it applies, or none.
 
-    def __init__(self, node: rosNode, role: str) -> None:
+    Each call of a chain is applied as it comes (a running node changes at once); if a
+    later call fails, the earlier ones are undone, so that a chain is one change. A chain
+    ends when the prompt shows it, when the cell that typed it has run (the extension
+    says so: :func:`end_chains`), or when ``.create()`` ends it.
+    """
+
+    def __init__(self, snapshot: Any) -> None:
+        self.snapshot = snapshot
+        self.parts: list[str] = []
+        self.open = True
+
+
+_open_chains: "weakref.WeakSet[_Chain]" = weakref.WeakSet()
+
+
+def end_chains() -> None:
+    """End every open declaration chain (after a cell has run): a later call on one starts a new chain."""
+    for chain in list(_open_chains):
+        chain.open = False
+    _open_chains.clear()
+
+
+class TopicHandler:
+    """``node.new`` or ``node.reuse``: declares topics and services, chainable; a chain is all or nothing."""
+
+    def __init__(self, node: rosNode, role: str, chain: Optional[_Chain] = None) -> None:
         self._node = node
         self._role = role
-        self._done: list[str] = []  # what the current chain declared, for the prompt's Out[]
+        self._chain = chain
 
     def __repr__(self) -> str:
         # A chain typed at the prompt shows what it did, in one line, not an object address.
         node = self._node
         state = "live" if node.created else "declared, not created yet"
-        done = "; ".join(self._done) or "subscribe(), publish(), service(), unsubscribe(), unpublish()"
-        self._done.clear()
+        chain = self._chain
+        done = "; ".join(chain.parts) if chain is not None and chain.parts else \
+            "subscribe(), publish(), service(), unsubscribe(), unpublish()"
+        if chain is not None:
+            chain.open = False
         return f"{node.name}.{self._role}: {done} ({state})"
 
+    @contextlib.contextmanager
+    def _part(self, call: str) -> Iterator["TopicHandler"]:
+        """One call of a chain: yields the handler the chain goes on with; a failure undoes the chain's earlier calls."""
+        link = self
+        if self._chain is None or not self._chain.open:
+            chain = _Chain(self._node._snapshot())
+            _open_chains.add(chain)
+            link = TopicHandler(self._node, self._role, chain)
+        chain = link._chain
+        assert chain is not None
+        try:
+            yield link
+        except IpyrosError as error:
+            if not chain.parts:
+                raise
+            done = "; ".join(f"{self._role}.{part}" for part in chain.parts)
+            try:
+                self._node._restore(chain.snapshot, f"undo {done} ({self._role}.{call} failed)")
+            except Exception as undo:  # noqa: BLE001 - said, with the error that matters first
+                raise type(error)(f"{self._role}.{call} (call {len(chain.parts) + 1} of the chain) failed: {error}; "
+                                  f"undoing the calls before it ({done}) failed too: {undo}") from None
+            chain.open = False
+            raise type(error)(f"{self._role}.{call} (call {len(chain.parts) + 1} of the chain) failed: {error}; "
+                              f"the calls before it ({done}) were undone: the chain changed nothing") from None
+
     def _did(self, text: str) -> None:
-        self._done.append(text)
+        assert self._chain is not None
+        self._chain.parts.append(text)
         self._node._record(f"{self._role}.{text}")
 
     def subscribe(self, topic: str, handler: Optional[Callable[..., Any]] = None, msgType: Any = _UNSET,
@@ -725,9 +799,13 @@ class TopicHandler:
         ``qos``: a profile name (``"sensor_data"``, ``"best_effort"``, ``"transient_local"``, ...),
         a depth, or a dict of depth, reliability, durability (see :mod:`ipyros.qos`).
         """
+        with self._part(f"subscribe({topic!r})") as link:
+            return link._subscribe(topic, handler, _one_type(msgType, type, topic), qos)
+
+    def _subscribe(self, topic: str, handler: Optional[Callable[..., Any]], msg_type: Any, qos: Any) -> "TopicHandler":
         node, role = self._node, self._role
         resolved = node._resolve_as(role, topic, "topic")
-        type_name, _ = msgtypes.resolve_message(_one_type(msgType, type, topic))
+        type_name, _ = msgtypes.resolve_message(msg_type)
         given = self._qos(qos, f"{role}.subscribe({topic!r})")
         if role == "reuse":
             check_reuse(node._model, resolved, "subscribe")
@@ -753,9 +831,13 @@ class TopicHandler:
         ``latch``: a subscriber that connects later gets the last message (on ROS 2,
         transient-local durability); ``qos`` as for :meth:`subscribe`.
         """
+        with self._part(f"publish({topic!r})") as link:
+            return link._publish(topic, _one_type(msgType, type, topic), latch, qos)
+
+    def _publish(self, topic: str, msg_type: Any, latch: bool, qos: Any) -> "TopicHandler":
         node = self._node
         resolved = node._resolve_as(self._role, topic, "topic")
-        type_name, _ = msgtypes.resolve_message(_one_type(msgType, type, topic))
+        type_name, _ = msgtypes.resolve_message(msg_type)
         where = f"{self._role}.publish({topic!r})"
         given = self._qos(qos, where)
         if latch and given.durability == "volatile":
@@ -776,16 +858,20 @@ class TopicHandler:
         return qos_mod.parse(value, where)
 
     def create(self) -> rosNode:
-        """Create the node, so a declaration chain can end with ``.create()``."""
+        """Create the node, so a declaration chain can end with ``.create()`` (which ends the chain)."""
+        if self._chain is not None:
+            self._chain.open = False
         return self._node.create()
 
     def unsubscribe(self, topic: str) -> "TopicHandler":
         """Drop this role's subscription to ``topic``."""
-        return self._drop(topic, "subscribe")
+        with self._part(f"unsubscribe({topic!r})") as link:
+            return link._drop(topic, "subscribe")
 
     def unpublish(self, topic: str) -> "TopicHandler":
         """Drop this role's publication of ``topic``."""
-        return self._drop(topic, "publish")
+        with self._part(f"unpublish({topic!r})") as link:
+            return link._drop(topic, "publish")
 
     def _drop(self, topic: str, direction: str) -> "TopicHandler":
         node, role = self._node, self._role
@@ -805,9 +891,13 @@ class TopicHandler:
     def service(self, name: str, srvType: Any = _UNSET, handler: Optional[Callable[..., Any]] = None,
                 type: Any = _UNSET) -> "TopicHandler":  # noqa: A002,N803
         """Serve ``name`` with ``handler(request) -> response`` (new), or relay the basenode's (reuse)."""
+        with self._part(f"service({name!r})") as link:
+            return link._service(name, _one_type(srvType, type, name), handler)
+
+    def _service(self, name: str, srv_type: Any, handler: Optional[Callable[..., Any]]) -> "TopicHandler":
         node, role = self._node, self._role
         resolved = node._resolve_as(role, name, "service")
-        type_name, _ = msgtypes.resolve_service(_one_type(srvType, type, name))
+        type_name, _ = msgtypes.resolve_service(srv_type)
         handlers = {}
         if role == "new":
             if handler is None:
@@ -838,6 +928,7 @@ class NodeParams(MutableMapping):
     def _name(self, key: str) -> str:
         if not isinstance(key, str) or key.startswith(("/", "~")):
             raise DeclarationError(f"parameter key {key!r}: give the private name without ~ or /, e.g. 'gain'")
+        names.check_param_key(key, f"{self._node.name}.params")
         return self._node._resolve("~" + key, "parameter")
 
     def __getitem__(self, key: str) -> Any:

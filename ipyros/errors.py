@@ -33,6 +33,10 @@ class TopicTypeConflict(MessageTypeError):
     """The declared type differs from the type the live topic already has."""
 
 
+class DataError(DeclarationError):
+    """Data typed or read from a file cannot be read (malformed, nested too deeply, too large)."""
+
+
 class NotDeclaredError(IpyrosError, LookupError):
     """The node does not have the topic, timer or service that was named."""
 

@@ -13,6 +13,7 @@ launch file a roboticist reads like any other: ``<node>``, ``<remap>``, ``<param
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import getpass
 import json
@@ -24,7 +25,6 @@ import types
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Optional
-from xml.sax.saxutils import escape
 
 import yaml
 
@@ -95,6 +95,20 @@ def stop_basenode(proc):
         except (ProcessLookupError, subprocess.TimeoutExpired):
             pass
 '''
+
+
+def docstring(text: str) -> str:
+    """``text`` as a triple-quoted string literal that reads back as exactly ``text``.
+
+    Names in a docstring come from the user (an export path, a basenode's path): a ``\"\"\"``
+    in one would end the docstring and make the rest of the name code. So backslashes and
+    quotes are escaped, and the literal is checked to read back as the text it stands for.
+    """
+    body = text.replace("\\", "\\\\").replace('"', '\\"')
+    literal = f'"""{body}"""'
+    if ast.literal_eval(literal) != text:  # ipyros's bug, not the user's: never write it
+        raise IpyrosError(f"cannot write {text[:60]!r} as a docstring")
+    return literal
 
 
 class _Script:
@@ -202,15 +216,15 @@ class _Script:
     def _docstring(self) -> list[str]:
         model = self.model
         run = f"rosrun {self.package} {model.name}" if self.package else f"./{Path(self.path).name}"
-        lines = [f"#!/usr/bin/python3\n\"\"\"{model.name}: a rospy node exported by ipyros from the DSL node "
-                 f"{planning.node_fullname(model)}.\n\nIt needs no ipyros: {run} [from:=to ...] [_param:=value ...]"]
+        lines = [f"{model.name}: a rospy node exported by ipyros from the DSL node {planning.node_fullname(model)}.",
+                 "", f"It needs no ipyros: {run} [from:=to ...] [_param:=value ...]"]
         if model.base is not None:
             wrapped = f"{model.base.package}/{model.base.executable}"
             lines.append(f"It runs its basenode {wrapped} itself, remapped as ipyros ran it, and stops it on exit."
                          if self.starts_base else
                          f"Its basenode {wrapped} is started next to it, remapped as ipyros ran it, by\n"
                          f"roslaunch {self.package} {model.name}.launch (which starts this node too).")
-        return [*lines, '"""']
+        return ["#!/usr/bin/python3", docstring("\n".join(lines))]
 
     def render(self) -> str:
         main = self.main()  # first: it adds the message imports
@@ -374,13 +388,12 @@ class _Ros2Script(_Script):
 
     def _docstring(self) -> list[str]:
         model = self.model
-        lines = [f"#!{sys.executable}\n\"\"\"{model.name}: an rclpy node exported by ipyros from the DSL node "
-                 f"{planning.node_fullname(model)}.\n\nIt needs no ipyros: ./{Path(self.path).name} "
-                 "[--ros-args -r from:=to -p param:=value ...]"]
+        lines = [f"{model.name}: an rclpy node exported by ipyros from the DSL node {planning.node_fullname(model)}.",
+                 "", f"It needs no ipyros: ./{Path(self.path).name} [--ros-args -r from:=to -p param:=value ...]"]
         if model.base is not None:
             lines.append(f"It runs its basenode {model.base.package or model.base.executable} itself, remapped as "
                          "ipyros ran it, and stops it on exit.")
-        return [*lines, '"""']
+        return [f"#!{sys.executable}", docstring("\n".join(lines))]
 
     def _head(self, starts_base: bool) -> list[str]:
         stdlib = ["os", "signal", "subprocess", "sys", "threading"] if starts_base else ["sys", "threading"]
@@ -468,26 +481,26 @@ def _maintainer() -> tuple[str, str]:
 
 
 def _package_xml(script: _Script, package: str, files: Iterable[str]) -> str:
+    """package.xml, written by an XML library (every name escaped), with the comment that marks it as ipyros's."""
     model = script.model
     user, email = _maintainer()
     what = f"{model.name}: a rospy node exported by ipyros from the DSL node {planning.node_fullname(model)}"
     if model.base is not None:
         what += f", and a launch file that starts it next to its basenode {model.base.package}/{model.base.executable}"
-    depends = "".join(f"  <exec_depend>{dep}</exec_depend>\n" for dep in _dependencies(script, package))
-    return (f'<?xml version="1.0"?>\n'
-            f"<!-- {_MARK} from the DSL node {escape(planning.node_fullname(model))}.\n"
-            f"     Exporting again replaces the package: this file and the files listed here (and only these).\n"
-            f"     files: {' '.join(sorted(files))}\n"
-            f"-->\n"
-            f'<package format="2">\n'
-            f"  <name>{package}</name>\n"
-            f"  <version>0.0.0</version>\n"
-            f"  <description>{escape(what)}.</description>\n"
-            f'  <maintainer email="{escape(email)}">{escape(user)}</maintainer>\n'
-            f"  <license>TODO</license>\n"
-            f"  <buildtool_depend>catkin</buildtool_depend>\n"
-            f"{depends}"
-            f"</package>\n")
+    root = ET.Element("package", format="2")
+    for tag, text in (("name", package), ("version", "0.0.0"), ("description", what + ".")):
+        ET.SubElement(root, tag).text = text
+    ET.SubElement(root, "maintainer", email=email).text = user
+    ET.SubElement(root, "license").text = "TODO"
+    ET.SubElement(root, "buildtool_depend").text = "catkin"
+    for dependency in _dependencies(script, package):
+        ET.SubElement(root, "exec_depend").text = dependency
+    ET.indent(root, space="  ")
+    mark = ET.Comment(f" {_MARK} from the DSL node {planning.node_fullname(model)}.\n"
+                      "     Exporting again replaces the package: this file and the files listed here (and only these).\n"
+                      f"     files: {' '.join(sorted(files))}\n")
+    return ('<?xml version="1.0"?>\n' + ET.tostring(mark, encoding="unicode") + "\n"
+            + ET.tostring(root, encoding="unicode") + "\n")
 
 
 def _add_params(node: ET.Element, params: dict[str, Any]) -> None:
@@ -581,13 +594,21 @@ def _previous_export(directory: Path) -> set[str]:
         shown = ", ".join(sorted(present)[:3]) + (", ..." if len(present) > 3 else "")
         raise IpyrosError(f"{directory} holds files that ipyros did not export ({shown}): export to a new or empty "
                           "directory")
-    listed = set(found.group(1).split())
+    # Only names of files inside the folder count: a package.xml may have been edited to list ../anything.
+    listed = {name for name in found.group(1).split() if _inside(directory, name)}
     foreign = sorted(present - listed - {"package.xml"})
     if foreign:
         raise IpyrosError(f"{directory} is an earlier ipyros export, but holds files it did not write "
                           f"({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''}): move them away, or export "
                           "to another directory")
     return listed
+
+
+def _inside(directory: Path, name: str) -> bool:
+    """Whether ``directory / name`` is a file of ``directory`` itself (no ``..``, no link leading out)."""
+    target = directory / name
+    return not Path(name).is_absolute() and ".." not in Path(name).parts and \
+        os.path.realpath(target).startswith(os.path.realpath(directory) + os.sep)
 
 
 def export_package(node: "rosNode", directory: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:
@@ -614,7 +635,8 @@ def export_package(node: "rosNode", directory: "str | os.PathLike[str]", namespa
         _write_atomic(directory / name, content, mode=mode)
     if stale:
         for name in stale:
-            (directory / name).unlink(missing_ok=True)
+            if _inside(directory, name):  # listed by an earlier export, and checked so: never a file elsewhere
+                (directory / name).unlink(missing_ok=True)
         _write_atomic(directory / "package.xml", _package_xml(script, package, files))
     _warn_unset(script, script_path)
     return directory

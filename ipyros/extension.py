@@ -29,7 +29,7 @@ from collections import deque
 from typing import Any, Optional
 
 from . import completion, plan as planning
-from .dsl import rosNode
+from .dsl import end_chains, rosNode
 from .errors import IpyrosError, MasterError
 from .graph import GraphCache
 from .magics import (DemoMagics, IntrospectMagics, NodeMagics, PlotMagics, RateMagics, RecordMagics, RosMagics,
@@ -198,7 +198,9 @@ class Extension:
 
     # -- while loaded ------------------------------------------------------------------------
     def _after_cell(self, result: Any = None) -> None:
-        """``post_run_cell``: swap edited handlers in; give new subscriptions their history size."""
+        """``post_run_cell``: end the cell's declaration chains; swap edited handlers in; give new subscriptions
+        their history size."""
+        end_chains()
         self.node_magics.after_cell(result)
         self._keep_history(self.settings.try_history)
 

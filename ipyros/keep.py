@@ -35,6 +35,7 @@ import json
 import linecache
 import os
 import re
+import shlex
 import sys
 import tempfile
 import textwrap
@@ -46,7 +47,8 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Optional
 import yaml
 
 from . import plan as planning
-from .errors import IpyrosError
+from .errors import DataError, IpyrosError
+from .userdata import load_json, load_yaml
 from .model import NodeModel
 
 if TYPE_CHECKING:
@@ -332,12 +334,8 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
     path = Path(path).expanduser()
     namespace = {} if namespace is None else namespace
     data = _read(path)
-    if data["handlers"] and not trust:
-        imports = sorted({line for entry in data["handlers"] for line in entry.get("imports") or []})
-        code = f"imports {'; '.join(imports)} and " if imports else ""
-        raise IpyrosError(f"{path} carries code that loading would run: {code}the handlers "
-                          f"{', '.join(entry['name'] for entry in data['handlers'])}; read it, and if you trust it "
-                          f"load it with trust=True (rosNode.load({str(path)!r}, trust=True), %load_nodes --trust)")
+    if not trust:
+        _refuse_untrusted(path, data)
     try:
         model = NodeModel.from_dict(data["node"])
     except (TypeError, ValueError, AttributeError) as error:
@@ -354,6 +352,43 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
         for name in _WRITER.findall(entry["source"]):
             namespace.setdefault(name, node)
     return node
+
+
+def _refuse_untrusted(path: Path, data: dict) -> None:
+    """Refuse, in one line saying what would run, a model file that would run anything: code, or a process.
+
+    A model file looks like data and travels like data (an attachment, a repository), so
+    loading it runs nothing unless asked: not the handlers' sources and imports, and not a
+    basenode either, which is a program started with the user's rights (a launch file, a
+    bag, ``/bin/sh -c ...``: whatever ``base`` names). A model of topics, timers, services and
+    parameters whose handlers are found by name in the namespace loads without trust.
+    """
+    would = []
+    if data["handlers"]:
+        imports = sorted({line for entry in data["handlers"] for line in entry.get("imports") or []})
+        would.append((f"imports {'; '.join(imports)} and " if imports else "") + "the handlers "
+                     + ", ".join(entry["name"] for entry in data["handlers"]))
+    base = data["node"].get("base")
+    if base is not None:
+        would.append(f"the basenode {_command_of(base)}")
+    if would:
+        raise IpyrosError(f"{path} would run {' and '.join(would)}; read it, and if you trust it load it with "
+                          f"trust=True (rosNode.load({str(path)!r}, trust=True), %load_nodes --trust)")
+
+
+def _command_of(base: Any) -> str:
+    """What a model file's ``base`` would start, in words: a launch file's node, a package's executable, a file."""
+    if not isinstance(base, dict):
+        return repr(base)[:80]
+    args = base.get("args") if isinstance(base.get("args"), list) else []
+    line = " ".join(shlex.quote(str(word)) for word in [base.get("executable") or "?", *args])
+    if len(line) > 200:
+        line = line[:197] + "..."
+    if base.get("launch"):
+        return f"{base.get('launch_node') or '?'} of the launch file {base['launch']} (and the rest of that file)"
+    if base.get("package"):
+        return f"{line} of package {base['package']}"
+    return line
 
 
 def _across_ros(path: Path, made_on: Optional[str], model: NodeModel, node: "rosNode") -> None:
@@ -400,15 +435,12 @@ def _read(path: Path) -> dict:
     """The file's data, checked for shape; every problem is one line naming the file."""
     try:
         text = path.read_text(encoding="utf-8")
-        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
-    except OSError as error:
-        raise IpyrosError(f"cannot read {path}: {error.strerror}") from None
-    except json.JSONDecodeError as error:
-        raise IpyrosError(f"{path} is not valid JSON at line {error.lineno}: {error.msg}") from None
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark else ""
-        raise IpyrosError(f"{path} is not valid YAML{where}: {getattr(error, 'problem', error)}") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise IpyrosError(f"cannot read {path}: {getattr(error, 'strerror', None) or error}") from None
+    try:
+        data = (load_json if path.suffix.lower() == ".json" else load_yaml)(text, str(path))
+    except DataError as error:
+        raise IpyrosError(str(error)) from None
     if not isinstance(data, dict) or FORMAT_KEY not in data:
         raise IpyrosError(f"{path} is not a saved ipyros node (no {FORMAT_KEY}: key); save one with nd.save(path)")
     if data[FORMAT_KEY] != FORMAT:
@@ -476,8 +508,9 @@ def _declare(node: "rosNode", model: NodeModel, functions: dict[str, Callable[..
             role.publish(t.name, type=t.type, latch=t.latch, qos=t.qos)
         else:
             role.subscribe(t.name, handler=functions.get(planning.topic_slot(t.resolved)), type=t.type, qos=t.qos)
-    for s in model.services:
-        getattr(node, s.role).service(s.name, type=s.type, handler=functions.get(planning.service_slot(s.resolved)))
+    for s in model.services:  # a reuse relays and takes no handler: the slot is the intercepting new's
+        handler = functions.get(planning.service_slot(s.resolved)) if s.role == "new" else None
+        getattr(node, s.role).service(s.name, type=s.type, handler=handler)
     for timer in model.timers:
         node.timer(timer.period, functions.get(planning.timer_slot(timer.name)), name=timer.name,
                    oneshot=timer.oneshot)

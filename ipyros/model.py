@@ -118,6 +118,8 @@ class NodeModel:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "NodeModel":
         """Inverse of :meth:`to_dict`; unknown keys are an error, not silently dropped."""
+        if not isinstance(data, dict):
+            raise ValueError(f"a node must be a mapping of its fields, not {type(data).__name__}")
         data = dict(data)
         _check_keys(cls, data)
         base = data.pop("base", None)
@@ -136,6 +138,15 @@ def _check_keys(cls: type, data: dict[str, Any]) -> None:
         raise ValueError(f"unknown {cls.__name__} field(s): {', '.join(sorted(unknown))}")
 
 
+#: The values a field may take, where it has a fixed set (checked when a model is read from a file).
+_CHOICES = {"direction": ("publish", "subscribe"), "role": ("new", "reuse")}
+
+
 def _build(cls: type, data: dict[str, Any]):
+    if not isinstance(data, dict):
+        raise ValueError(f"a {cls.__name__} must be a mapping of its fields, not {type(data).__name__}")
     _check_keys(cls, data)
+    for key, allowed in _CHOICES.items():
+        if key in data and data[key] not in allowed:
+            raise ValueError(f"{cls.__name__} {key} {data[key]!r:.40} is not one of {', '.join(allowed)}")
     return cls(**data)

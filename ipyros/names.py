@@ -115,3 +115,38 @@ def resolve(name: str, namespace: str, node_name: str, kind: str = "topic") -> s
             "e.g. '/turtle1/cmd_vel', 'cmd_vel' or '~status'"
         )
     return resolve_in(name, join(global_ns(namespace), node_name))
+
+
+# REP 144: letters, digits and underscores, starting with a letter (lower case for new packages;
+# upper case is still found in older ones, so it is read, not refused).
+_PACKAGE_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+
+
+def check_package_name(package: str) -> str:
+    """A ROS package name as it may enter the model (and later a launch file, package.xml, a script)."""
+    if not isinstance(package, str) or not _PACKAGE_NAME.fullmatch(package):
+        raise TopicNameError(f"invalid package name {package!r:.80}: a ROS package name is letters, digits and _, "
+                             "starting with a letter (REP 144), e.g. 'topic_tools'")
+    return package
+
+
+def check_param_key(key: str, where: str) -> str:
+    """A parameter name given without ``~`` (``gain``, ``pid/p``): a legal relative ROS name, nothing else.
+
+    A key is written into the parameter server, an exported launch file (``<param name=...>``,
+    which roslaunch would read ``$(...)`` in) and the command line (``_key:=value``).
+    """
+    if not isinstance(key, str) or not key or key.startswith("/") or not is_legal_name(key) or \
+            key.endswith("/") or not is_legal_base_name(key.split("/")[0].lstrip("~_") or "x"):
+        raise TopicNameError(f"{where}: invalid parameter name {key!r:.80}: give a name like 'gain' or 'pid/p' "
+                             "(letters, digits, _ and /, each part starting with a letter)")
+    return key
+
+
+def check_remap(source: str, target: str) -> None:
+    """Both sides of a remap ``source:=target``: legal ROS names (``__name``-style special keys allowed on the left)."""
+    for side in (source, target):
+        special = side is source and isinstance(side, str) and re.fullmatch(r"__[a-z]+", side) is not None
+        if not isinstance(side, str) or not special and (not side or not is_legal_name(side)):
+            raise TopicNameError(f"invalid remap {source!r:.60}:={target!r:.60}: both sides must be ROS names, "
+                                 "e.g. {'scan': '/robot1/scan'}")

@@ -168,7 +168,9 @@ class HandlerSlot:
         start = time.perf_counter()
         try:
             return True, (handler(arg) if pass_argument else handler())
-        except Exception as error:  # a handler's bug must never kill the node
+        except BaseException as error:  # a handler's bug must never kill the node, not even sys.exit()
+            if isinstance(error, KeyboardInterrupt) and threading.current_thread() is threading.main_thread():
+                raise  # Ctrl-C at the prompt (a handler tried there): the user's, not the handler's
             self._failed(handler, error)
             return False, None
         finally:
@@ -189,7 +191,7 @@ class HandlerSlot:
         """Count and report a failure found after the handler returned (e.g. a wrong response)."""
         self._failed(self.handler, error, with_traceback=False)
 
-    def _failed(self, handler: Callable[..., Any], error: Exception, with_traceback: bool = True) -> None:
+    def _failed(self, handler: Callable[..., Any], error: BaseException, with_traceback: bool = True) -> None:
         with self._lock:
             self._errors += 1
             now = time.monotonic()

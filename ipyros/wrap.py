@@ -118,6 +118,10 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
         if key in fields and (not isinstance(fields[key], str) or not fields[key].strip()):
             what = "basePackage('package')" if key == "package" else "baseNode('executable')"
             raise DeclarationError(f"{what} needs a non-empty name")
+    if "package" in fields:
+        names.check_package_name(fields["package"])
+    if "executable" in fields:
+        _check_executable(fields["executable"])
     if fields.get("name"):
         names.check_node_name(fields["name"])
     _check_base_options(fields, node.session.backend)
@@ -143,6 +147,8 @@ def _check_base_options(fields: dict[str, Any], backend: Any) -> None:
                                or not all(isinstance(k, str) and isinstance(v, str) for k, v in remaps.items())):
         raise DeclarationError(f"baseNode(remaps={remaps!r}): give a dict of names, "
                                "e.g. remaps={'scan': '/robot1/scan'}")
+    for source, target in (remaps or {}).items():
+        names.check_remap(source, target)
     args = fields.get("args")
     if args is not None and (isinstance(args, (str, bytes)) or not isinstance(args, (list, tuple))
                              or not all(isinstance(a, str) for a in args)):
@@ -153,7 +159,19 @@ def _check_base_options(fields: dict[str, Any], backend: Any) -> None:
             raise DeclarationError(f"baseNode(params={params!r}): give a dict of private parameters, "
                                    "e.g. params={'rate': 5}")
         for key, value in params.items():
+            names.check_param_key(key.lstrip("~_") if key[:1] in "~_" else key, f"baseNode(params={{{key!r}: ...}})")
             backend.check_param(f"~{key.lstrip('~_')}", value)
+
+
+def _check_executable(executable: str) -> None:
+    """An executable name (or a path): no control characters, nothing a shell or a launch file would expand.
+
+    It is passed to ``exec`` as one argument, never to a shell; but it is also written into
+    exported scripts and launch files, where ``$(...)`` would be evaluated by roslaunch.
+    """
+    if any(ord(c) < 32 or c == "\x7f" for c in executable) or "$(" in executable:
+        raise DeclarationError(f"baseNode({executable[:80]!r}): an executable's name or path may hold neither "
+                               "control characters nor '$('; give the file's name or path as it is on disk")
 
 
 def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional[dict] = None) -> "rosNode":

@@ -64,15 +64,18 @@ def global_topic(name: str) -> str:
     return names.resolve(name, names.default_namespace(), "ipyros", "topic")
 
 
-def split_head(line: str, value_options: set[str], positional: Callable[[int, str], bool]) -> tuple[str, str]:
+def split_head(line: str, parser: Any, positional: Callable[[int, str], bool]) -> tuple[str, str]:
     """Split a magic line into its options-and-names head and the raw text after it.
 
     For magics whose last argument is free text (a YAML message, a Python expression),
     which argparse's shell-like splitting would mangle (quotes removed, spaces lost).
-    The head is every option (``value_options`` take the next word as their value) and
-    the words for which ``positional(index, word)`` is true; the first other word starts
-    the raw text, kept exactly as typed.
+    The options are the magic's own (``parser``, what ``@argument`` made of its
+    decorators: one grammar, for parsing, help and completion alike). The head is every
+    option with its value and the words for which ``positional(index, word)`` is true;
+    the first other word starts the raw text, kept exactly as typed, but for options
+    typed after it (``%pub /t std_msgs/String hi -r 2``), which go to the head too.
     """
+    values, flags = option_words(parser)
     head: list[str] = []
     rest = line
     count = 0
@@ -85,13 +88,42 @@ def split_head(line: str, value_options: set[str], positional: Callable[[int, st
         if takes_value:
             takes_value = False
         elif word.startswith("-") and not _NUMBER.match(word):
-            takes_value = word in value_options
+            takes_value = word in values
         elif positional(count, word):
             count += 1
         else:
-            return " ".join(head), rest.strip()
+            data, trailing = _trailing_options(rest.strip(), values, flags)
+            return " ".join(head + trailing), data
         head.append(word)
         rest = rest[match.end():]
+
+
+def option_words(parser: Any) -> tuple[set[str], set[str]]:
+    """The option strings of ``parser`` that take a value, and those that do not (flags)."""
+    values, flags = set(), set()
+    for action in getattr(parser, "_actions", ()):
+        (flags if action.nargs == 0 else values).update(action.option_strings)
+    return values, flags
+
+
+def _trailing_options(text: str, values: set[str], flags: set[str]) -> tuple[str, list[str]]:
+    """``text`` without the magic's options at its end, and those options (``{data: 1} -t 2`` → ``{data: 1}``, ``-t 2``)."""
+    words = [(m.start(1), m.group(1)) for m in _WORD.finditer(text)]
+    taken: list[str] = []
+    cut = len(text)
+    while words:
+        start, word = words[-1]
+        if word in flags or word.split("=", 1)[0] in values and "=" in word:
+            taken[:0] = [word]
+            words.pop()
+        elif len(words) >= 2 and words[-2][1] in values and not word.startswith(("{", "[")):
+            taken[:0] = [words[-2][1], word]
+            start = words[-2][0]
+            words[-2:] = []
+        else:
+            break
+        cut = start
+    return text[:cut].rstrip(), taken
 
 
 _WORD = re.compile(r"""\s*("[^"]*"|'[^']*'|\S+)""")  # a quoted word is one word, as the shell reads it

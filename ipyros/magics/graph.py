@@ -211,12 +211,12 @@ class TopicMagics(ExtensionMagics):
             linear: {x: 1.0}
             angular: {z: 0.5}
 
-        Options go before the message: everything after TOPIC and TYPE is the message.
+        Options may go before or after the message: everything else after TOPIC and TYPE is the message.
         The publisher is latched and stays advertised until the extension is unloaded, so
         subscribers still connecting get the message too. A topic that one of your nodes
         already publishes is published through that node.
         """
-        head, data = split_head(line, {"-t", "--type", "-r", "--rate"},
+        head, data = split_head(line, self.pub.parser,
                                 lambda index, word: index == 0 or (index == 1 and bool(_TYPE_WORD.fullmatch(word))))
         args = parse_argstring(self.pub, head)
         if cell is not None:

@@ -90,7 +90,7 @@ class IntrospectMagics(ExtensionMagics):
         """Call SERVICE with a request built field by field (as %pub builds a message) and show the response
         as YAML. Unknown or mistyped fields are errors naming the field; a server that does not answer
         within the timeout is said so."""
-        head, data = split_head(line, {"-t", "--timeout"}, lambda index, word: index < 1 or (
+        head, data = split_head(line, self.call.parser, lambda index, word: index < 1 or (
             index == 1 and "/" in word and not word.startswith(("{", "[", "/"))))
         args = parse_argstring(self.call, head)
         name = global_topic(args.service)
@@ -131,7 +131,7 @@ class IntrospectMagics(ExtensionMagics):
     @line_magic
     def param(self, line: str) -> None:
         """Show the parameter NAME, or set it to VALUE (as rosparam get/set; ros2 param get/set)."""
-        head, data = split_head(line, set(), lambda index, word: index < 1)
+        head, data = split_head(line, self.param.parser, lambda index, word: index < 1)
         args = parse_argstring(self.param, head)
         name = global_topic(args.name)
         backend = self._ready()

@@ -108,7 +108,7 @@ class NodeMagics(ExtensionMagics):
         and what it writes through node.write() is captured and shown, not published.
         Anything else it does (globals, parameters, its own publishers) happens for real.
         """
-        head, expression = split_head(line, {"-n", "--last"}, lambda index, word: index < 2)
+        head, expression = split_head(line, self.try_handler.parser, lambda index, word: index < 2)
         args = parse_argstring(self.try_handler, head)
         if not expression:
             raise UsageError("give the candidate handler after NODE and TOPIC, e.g. %try nd /chatter new_handler")

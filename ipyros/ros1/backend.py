@@ -39,8 +39,9 @@ class Ros1:
               on_wrong_type: Optional[Callable[[str], None]], complain: Callable[[str], None]) -> runtime.Relay:
         return runtime.Relay(source, target, cls, on_wrong_type)
 
-    def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool) -> runtime.Timer:
-        return runtime.Timer(period, slot, oneshot)
+    def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
+              complain: Optional[Callable[[str], None]] = None) -> runtime.Timer:
+        return runtime.Timer(period, slot, oneshot)  # rospy gives each timer a thread of its own
 
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
         return runtime.ServiceServer(name, cls, slot)
@@ -75,7 +76,7 @@ class Ros1:
         return introspect.service_type(self._master(), name)
 
     def call(self, name: str, cls: type, request: Any, timeout: float) -> Any:
-        return introspect.call(name, cls, request, timeout)
+        return introspect.call(self._master(), name, cls, request, timeout)
 
     def params_under(self, namespace: str) -> dict[str, Any]:
         """Every parameter under ``namespace``, by global name."""

@@ -9,12 +9,13 @@ prompt.
 
 from __future__ import annotations
 
+import io
 import socket
 import struct
+import time
 from typing import Any, Optional
 from urllib.parse import urlparse
 
-import rospy
 
 from ..errors import IpyrosError
 from .master import master_proxy
@@ -68,20 +69,50 @@ def _read(sock: socket.socket, count: int) -> bytes:
     return data
 
 
-def call(name: str, cls: type, request: Any, timeout: float) -> Any:
-    """Call the service ``name`` with ``request``; its response. A one-line error if it fails."""
+def call(master_uri: str, name: str, cls: type, request: Any, timeout: float) -> Any:
+    """Call the service ``name`` with ``request``; its response, or a one-line error within ``timeout`` s.
+
+    rospy's ServiceProxy has no timeout once connected (a server that takes 8 s holds the
+    prompt for 8 s whatever was asked), so the call is made here, over TCPROS on a socket
+    whose every read and write has the time that is left.
+    """
+    deadline = time.monotonic() + timeout
+    code, message, uri = master_proxy(master_uri, min(timeout, 2.0)).lookupService(CALLER_ID, name)
+    if code != 1:
+        raise IpyrosError(f"no live service {name} ({message}); %services lists them")
+    where = urlparse(uri)
+    buffer = io.BytesIO()
+    request.serialize(buffer)
+    body = buffer.getvalue()
+    fields = {"callerid": CALLER_ID, "service": name, "md5sum": cls._md5sum, "persistent": "0"}  # type: ignore[attr-defined]
     try:
-        rospy.wait_for_service(name, timeout)
-    except rospy.ROSException:
-        raise IpyrosError(f"service {name} did not come up within {timeout:g} s; %services lists the live ones") \
-            from None
-    proxy = rospy.ServiceProxy(name, cls)
-    try:
-        return proxy(request)
-    except rospy.ServiceException as error:
-        raise IpyrosError(f"{name} failed: {error}") from None
-    finally:
-        proxy.close()
+        with socket.create_connection((where.hostname, where.port), timeout=_left(deadline, name, timeout)) as sock:
+            sock.sendall(_header(fields))
+            sock.settimeout(_left(deadline, name, timeout))
+            header = _read_header(sock)
+            if "error" in header:
+                raise IpyrosError(f"the server of {name} refused the call: {header['error']}")
+            sock.sendall(struct.pack("<I", len(body)) + body)
+            sock.settimeout(_left(deadline, name, timeout))
+            ok = _read(sock, 1)
+            (size,) = struct.unpack("<I", _read(sock, 4))
+            payload = _read(sock, size)
+    except socket.timeout:
+        raise IpyrosError(f"{name} did not answer within {timeout:g} s (-t SECONDS waits longer)") from None
+    except OSError as error:
+        raise IpyrosError(f"the server of {name} at {uri} does not answer ({error}); is its node alive?") from None
+    if ok != b"\x01":
+        raise IpyrosError(f"{name} failed: {payload.decode(errors='replace') or 'the server gave no reason'}")
+    response = cls._response_class()  # type: ignore[attr-defined]
+    response.deserialize(payload)
+    return response
+
+
+def _left(deadline: float, name: str, timeout: float) -> float:
+    left = deadline - time.monotonic()
+    if left <= 0:
+        raise socket.timeout()
+    return left
 
 
 def params_under(master_uri: str, namespace: str, timeout: float = 2.0) -> dict[str, Any]:

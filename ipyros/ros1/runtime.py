@@ -35,6 +35,7 @@ from rospy.msg import serialize_message
 
 from . import sending
 from ..errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
+from ..msgbuild import explain_unsendable
 from .master import master_proxy
 from ..slots import Arrival, HandlerSlot, Pristine, SendFigures
 
@@ -242,8 +243,9 @@ class Publication:
             try:
                 serialize_message(buffer, impl.seq + 1, msg)
             except Exception as error:  # genpy's SerializationError, struct.error, TypeError, ...
-                raise MessageTypeError(f"cannot send this {self.cls._type} on {self.topic}: {_first_line(error)}; "
-                                       "nothing was sent: check the field types and ranges") from None
+                why = explain_unsendable(msg) or f"{_first_line(error)}; nothing was sent: check the field types " \
+                                                 "and ranges"
+                raise MessageTypeError(f"cannot send this {self.cls._type} on {self.topic}: {why}") from None
             impl.seq += 1
             if impl.is_latch:
                 impl.latch = msg  # rospy sends it to a subscriber connecting later
@@ -445,6 +447,8 @@ class ServiceServer:
             response.serialize(io.BytesIO())
         except Exception as error:  # noqa: BLE001 - whatever the value, the caller gets one line
             detail = str(error).splitlines()[0][:120] if str(error) else type(error).__name__
+            if isinstance(result, response_class):
+                detail = explain_unsendable(result) or detail
             problem = HandlerError(f"the handler of service {self.name} returned {_short(result)}, which is not a "
                                    f"{response_class.__name__} ({detail}); return {response_class.__name__}(...) "
                                    "with its fields filled")

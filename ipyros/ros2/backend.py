@@ -34,8 +34,9 @@ class Ros2:
               on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.Relay:
         return runtime.Relay(self.process, self.process.host(host), source, target, cls, on_wrong_type, complain)
 
-    def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool) -> runtime.Timer:
-        return runtime.Timer(self.process.host(host), period, slot, oneshot)
+    def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
+              complain: Optional[Complain] = None) -> runtime.Timer:
+        return runtime.Timer(self.process.host(host), period, slot, oneshot, complain)
 
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
         return runtime.ServiceServer(self.process.host(host), name, cls, slot)

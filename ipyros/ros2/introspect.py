@@ -14,6 +14,7 @@ import threading
 from typing import Any
 
 from ..errors import IpyrosError
+from ..msgbuild import conform
 from .runtime import ProcessNode
 
 __all__ = ["call", "node_params", "service_type", "set_node_param"]
@@ -45,7 +46,7 @@ def call(process: ProcessNode, name: str, cls: type, request: Any, timeout: floa
     try:
         if not client.wait_for_service(timeout_sec=timeout):
             raise IpyrosError(f"service {name} did not come up within {timeout:g} s; %services lists the live ones")
-        return _wait(client.call_async(request), timeout, f"service {name}")
+        return _wait(client.call_async(conform(request)), timeout, f"service {name}")
     finally:
         caller.destroy_client(client)
 

@@ -19,9 +19,11 @@ never deserialising.
 
 from __future__ import annotations
 
+import collections
 import functools
 import logging
 import os
+import queue
 import threading
 import time
 from typing import Any, Callable, Optional
@@ -34,6 +36,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
 from ..errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
+from ..msgbuild import conform
 from ..qos import Qos
 from ..slots import Arrival, HandlerSlot, Pristine, SendFigures
 
@@ -141,11 +144,13 @@ class ProcessNode:
 
     @staticmethod
     def _spin(executor: Any) -> None:
-        """Spin until the context shuts down; a callback that raised does not stop the others.
+        """Spin until the context shuts down: the supervised executor thread.
 
-        rclpy's executor lets a callback's exception out of ``spin()``; handlers are guarded
-        by their slots, but an error of rclpy's own (a publish the middleware refused) must
-        not end every node of the session.
+        rclpy's executor lets a callback's exception out of ``spin()``, which would end the
+        thread and with it every node of the session. Handlers are guarded by their slots,
+        but an error of rclpy's own (a publish the middleware refused), or a ``SystemExit``
+        from a callback that is not a handler, must not stop the session: it is said in one
+        line and the executor spins again.
         """
         from rclpy.executors import ExternalShutdownException
 
@@ -154,10 +159,12 @@ class ProcessNode:
                 executor.spin()
             except ExternalShutdownException:
                 return
-            except Exception:  # noqa: BLE001 - logged; the nodes go on
+            except BaseException as error:  # noqa: BLE001 - said; the nodes go on
                 if not executor.context.ok():
                     return
-                logging.getLogger("ipyros").exception("ipyros: a ROS 2 callback failed; the nodes go on")
+                logging.getLogger("ipyros").warning(
+                    "ipyros: a ROS 2 callback raised %s%s, which ended the executor of the session's nodes; it runs "
+                    "again (nothing of yours was stopped)", type(error).__name__, f" ({error})" if str(error) else "")
 
     def host(self, fullname: str, parameters: bool = True) -> Node:
         """The ROS 2 node of the DSL node ``fullname`` (``/ns/name``), made on first use.
@@ -284,6 +291,7 @@ class Publication:
         if isinstance(msg, type):
             raise MessageTypeError(f"{self.topic}: write() got the class {msg.__name__}, not a message; "
                                    f"build one, {msg.__name__}(), and write that (nothing was sent)")
+        conform(msg)  # rclpy would send an int in a float field as garbage (see msgbuild.conform)
         try:
             self._pub.publish(msg)
         except (TypeError, ValueError, AssertionError) as error:
@@ -336,6 +344,7 @@ class Subscription:
         self.topic, self.cls, self.slot = topic, cls, slot
         self._process, self._node, self._declared, self._complain = process, node, qos, complain
         self._lock = threading.Lock()
+        self._lane = Lane(slot, complain, topic)
         self._follows = qos.reliability is None and qos.durability is None
         self.qos = self._wanted() or Qos(qos.depth, qos.reliability or "reliable", qos.durability or "volatile")
         self._sub = self._open(self.qos)
@@ -359,8 +368,8 @@ class Subscription:
         # they were published before it existed.
         gid = info.get("publisher_gid")
         came = Arrival(bytes(gid["data"]).hex() if gid else "?", len(data), info["source_timestamp"] < self._since)
-        self.slot.run(deserialize_message(data, self.cls),
-                      Pristine(functools.partial(deserialize_message, data, self.cls)), came)
+        self._lane(deserialize_message(data, self.cls), Pristine(functools.partial(deserialize_message, data, self.cls)),
+                   came)
 
     def _follow_publishers(self) -> None:
         with self._lock:
@@ -375,6 +384,7 @@ class Subscription:
         return self._sub.get_publisher_count()
 
     def close(self) -> None:
+        self._lane.close()
         if self._follows:
             self._process.unwatch(self._follow_publishers)
         with self._lock:
@@ -463,30 +473,139 @@ class Relay:
                 self._sub = None
 
 
-class Timer:
-    """A periodic (or one-shot) callback through a :class:`HandlerSlot`."""
+class Lane:
+    """Where a handler runs: on the executor thread while it is quick, on a thread of its own once it is not.
 
-    def __init__(self, node: Node, period: float, slot: HandlerSlot, oneshot: bool = False) -> None:
+    One executor thread runs every callback of the session (see the module's docstring),
+    so a handler that blocks would hold up every other node. A handler call that takes
+    longer than :attr:`LONG` seconds moves its slot to a thread of its own, in order, from
+    the next call on, and the session is told once; the quick ones keep the executor's fast
+    path (one time measurement per call). What waits for a slow handler is bounded: at most
+    :attr:`BACKLOG` calls; a timer's ticks are not queued up behind one still running.
+    """
+
+    LONG = 0.2  # seconds
+    BACKLOG = 1000
+
+    def __init__(self, slot: HandlerSlot, complain: Optional[Complain], what: str, coalesce: bool = False) -> None:
+        self.slot, self._complain, self._what, self._coalesce = slot, complain, what, coalesce
+        self._queue: Optional[collections.deque] = None
+        self._ready = threading.Condition()
+        self._closed = False
+        self.dropped = 0
+
+    def __call__(self, *args: Any) -> None:
+        queue = self._queue
+        if queue is not None:
+            with self._ready:
+                if self._coalesce and queue:
+                    return
+                if len(queue) >= self.BACKLOG:
+                    queue.popleft()
+                    self.dropped += 1
+                queue.append(args)
+                self._ready.notify()
+            return
+        start = time.perf_counter()
+        self.slot.run(*args)
+        took = time.perf_counter() - start
+        if took > self.LONG and not self._closed:
+            self._move(took)
+
+    def _move(self, took: float) -> None:
+        self._queue = collections.deque()
+        threading.Thread(target=self._work, name=f"ipyros-slow-{self.slot.label}", daemon=True).start()
+        if self._complain is not None:
+            self._complain(f"the handler of {self._what} took {took:.2f} s, which held up every other handler of "
+                           "the session; it runs on a thread of its own from now on")
+
+    def _work(self) -> None:
+        queue = self._queue
+        assert queue is not None
+        while True:
+            with self._ready:
+                while not queue and not self._closed:
+                    self._ready.wait()
+                if self._closed:
+                    return
+                args = queue.popleft()
+            self.slot.run(*args)
+
+    def close(self) -> None:
+        with self._ready:
+            self._closed = True
+            self._ready.notify_all()
+
+
+class Timer:
+    """A periodic (or one-shot) callback through a :class:`HandlerSlot` (on its :class:`Lane`)."""
+
+    def __init__(self, node: Node, period: float, slot: HandlerSlot, oneshot: bool = False,
+                 complain: Optional[Complain] = None) -> None:
         self.period, self.slot, self._oneshot = period, slot, oneshot
         self._node = node
+        self._lane = Lane(slot, complain, f"timer {slot.label.split(' ', 1)[-1]}", coalesce=True)
         self._timer = node.create_timer(period, self._tick)
 
     def _tick(self) -> None:
         if self._oneshot:
             self._timer.cancel()
-        self.slot(None)
+        self._lane(None)
 
     def close(self) -> None:
+        self._lane.close()
         self._node.destroy_timer(self._timer)
 
 
+class _Later:
+    """What a service callback returns to rclpy instead of a response: "answered on the service's own thread"."""
+
+    __slots__ = ("request",)
+
+    def __init__(self, request: Any) -> None:
+        self.request = request
+
+
 class ServiceServer:
-    """A service whose handler is a :class:`HandlerSlot` (it returns the response)."""
+    """A service whose handler is a :class:`HandlerSlot` (it returns the response), run on a thread of its own.
+
+    A service handler may take long (it may even call another service), and on the one
+    executor thread it would stop every subscription of the session for that long. So the
+    executor only takes the request: the callback gives rclpy a :class:`_Later`, this
+    service's ``send_response`` sees it and hands request and header to the service's own
+    thread, which runs the handler and sends the answer itself (rcl's send is thread-safe).
+    Calls to one service are answered in order; the other callbacks never wait for them.
+    """
 
     def __init__(self, node: Node, name: str, cls: type, slot: HandlerSlot) -> None:
         self.name, self.cls, self.slot = name, cls, slot
         self._node = node
-        self._service = node.create_service(cls, name, self._serve)
+        self._requests: "queue.SimpleQueue[Optional[tuple[Any, Any]]]" = queue.SimpleQueue()
+        self._service = node.create_service(cls, name, lambda request, response: _Later(request))
+        send = self._service.send_response  # rclpy's, for the answers of the service's thread
+        self._send = send
+
+        def send_or_hand_over(response: Any, header: Any) -> None:
+            if isinstance(response, _Later):
+                self._requests.put((response.request, header))
+            else:
+                send(response, header)
+
+        self._service.send_response = send_or_hand_over  # type: ignore[method-assign]
+        self._worker = threading.Thread(target=self._answer, name=f"ipyros-service-{name}", daemon=True)
+        self._worker.start()
+
+    def _answer(self) -> None:
+        while True:
+            item = self._requests.get()
+            if item is None:
+                return
+            request, header = item
+            response = self._serve(request, self.cls.Response())  # type: ignore[attr-defined]
+            try:
+                self._send(response, header)
+            except Exception:  # noqa: BLE001 - the service was closed meanwhile, or the caller left
+                pass
 
     def _serve(self, request: Any, response: Any) -> Any:
         # ROS 2 has no error reply: a failing or wrong answer is reported to the session
@@ -494,14 +613,20 @@ class ServiceServer:
         ok, result = self.slot.run(request)
         if not ok:
             return response
+        expected = f"{self.cls.__name__}.Response"
         if not isinstance(result, self.cls.Response):  # type: ignore[attr-defined]
-            expected = f"{self.cls.__name__}.Response"
             self.slot.fail(HandlerError(f"the handler of service {self.name} returned {result!r:.60}, which is not "
                                         f"a {expected}; return {expected}(...) with its fields filled"))
             return response
-        return result
+        try:
+            return conform(result)
+        except MessageTypeError as error:
+            self.slot.fail(HandlerError(f"the handler of service {self.name} returned a {expected} that cannot be "
+                                        f"sent: {error}"))
+            return response
 
     def close(self) -> None:
+        self._requests.put(None)
         self._node.destroy_service(self._service)
 
 

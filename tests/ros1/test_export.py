@@ -435,3 +435,27 @@ def test_a_file_in_the_way_is_refused(make_node, tmp_path):
     with pytest.raises(IpyrosError, match=r"file_pkg is a file: export to a directory .* or to a \.py script"):
         export.export(plain_node(make_node, "/file"), tmp_path / "file_pkg")
     assert (tmp_path / "file_pkg").read_text() == "mine"
+
+
+def test_an_export_removes_only_files_inside_its_own_folder(make_node, tmp_path):
+    """A package.xml edited to list ../victim.txt as an earlier export's file does not make export delete it."""
+    target = tmp_path / "victim_pkg"
+    export.export(plain_node(make_node, "/victim"), target)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("mine")
+    manifest = target / "package.xml"
+    manifest.write_text(manifest.read_text().replace("files: ", "files: ../victim.txt /etc/hostname "))
+    export.export(plain_node(make_node, "/victim2"), target)
+    assert victim.read_text() == "mine"
+    assert "../victim.txt" not in manifest.read_text()
+
+
+def test_package_xml_is_written_by_an_xml_library(make_node, tmp_path):
+    """Every name in package.xml is escaped: the file parses, and says what it was given."""
+    import xml.etree.ElementTree as ET
+
+    node = plain_node(make_node, "/escaped")
+    package = export.export(node, tmp_path / "escaped_pkg")
+    root = ET.parse(package / "package.xml").getroot()
+    assert root.tag == "package" and root.findtext("name") == "escaped_pkg"
+    assert [e.text for e in root.findall("exec_depend")] == ["geometry_msgs", "rospy", "std_msgs"]

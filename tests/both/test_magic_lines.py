@@ -1,0 +1,70 @@
+"""Options of the magics that take free text work wherever the usage line puts them, and timeouts are kept."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+from std_srvs.srv import SetBool
+
+from shell import error_of, ip, ok  # noqa: F401 - the ip fixture
+from support import response_of, wait_for
+
+
+@pytest.fixture
+def slow_service(make_node):
+    """/lines/slow answers after 8 s (or when released)."""
+    release = threading.Event()
+
+    def slow(request):
+        release.wait(8)
+        return response_of(SetBool)(success=True, message="late")
+
+    make_node("lines_slow").new.service("/lines/slow", SetBool, handler=slow).create()
+    yield
+    release.set()
+
+
+@pytest.mark.parametrize("line", [
+    "%call /lines/slow -t 1",
+    "%call /lines/slow std_srvs/SetBool {data: true} -t 1",
+    "%call -t 1 /lines/slow {data: true}",
+    "%call /lines/slow {data: true} --timeout=1",
+])
+def test_call_honours_its_timeout_wherever_it_is_given(ip, slow_service, line):  # noqa: F811
+    start = time.monotonic()
+    error = error_of(ip, line)
+    took = time.monotonic() - start
+    assert "did not answer within 1 s" in str(error), error
+    assert took < 6, f"the call waited {took:.1f} s for a server that takes 8 s, with -t 1"
+
+
+def test_pub_reads_options_after_the_message(ip, peer, capsys):  # noqa: F811
+    listener = peer("listen.py", "/lines/chatter", "std_msgs/String", "data")
+    listener.wait_line("ready")
+    with_interrupt = threading.Timer(3.0, __import__("_thread").interrupt_main)
+    with_interrupt.start()
+    try:
+        ok(ip, "%pub /lines/chatter std_msgs/String {data: hello} -r 5")
+    finally:
+        with_interrupt.cancel()
+    assert listener.wait_line("heard") == "heard 'hello'"
+    out = capsys.readouterr().out
+    assert "at 5 Hz" in out
+
+
+@pytest.mark.parametrize("line", [
+    "%pub /lines/bomb std_msgs/String " + "{a: &a [1,2,3,4,5,6,7,8,9], b: &b [*a,*a,*a,*a,*a,*a,*a,*a,*a], "
+    "c: &c [*b,*b,*b,*b,*b,*b,*b,*b,*b], d: &d [*c,*c,*c,*c,*c,*c,*c,*c,*c], e: &e [*d,*d,*d,*d,*d,*d,*d,*d,*d], "
+    "f: &f [*e,*e,*e,*e,*e,*e,*e,*e,*e], g: &g [*f,*f,*f,*f,*f,*f,*f,*f,*f], h: [*g,*g,*g,*g,*g,*g,*g,*g,*g]}",
+    "%param /lines/bomb " + "{a: &a [1,2,3,4,5,6,7,8,9], b: &b [*a,*a,*a,*a,*a,*a,*a,*a,*a], "
+    "c: &c [*b,*b,*b,*b,*b,*b,*b,*b,*b], d: &d [*c,*c,*c,*c,*c,*c,*c,*c,*c], e: &e [*d,*d,*d,*d,*d,*d,*d,*d,*d], "
+    "f: &f [*e,*e,*e,*e,*e,*e,*e,*e,*e], g: &g [*f,*f,*f,*f,*f,*f,*f,*f,*f], h: [*g,*g,*g,*g,*g,*g,*g,*g,*g]}",
+])
+def test_a_yaml_alias_bomb_is_refused_at_once(ip, line, make_node):  # noqa: F811
+    make_node("lines_bomb_host").create()  # %param needs a running session
+    start = time.monotonic()
+    error = error_of(ip, line)
+    assert "expands to more than" in str(error) and "\n" not in str(error)
+    assert time.monotonic() - start < 5

@@ -1,0 +1,123 @@
+"""No handler, service or chain of declarations can stall or stop a session, on either ROS."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+from std_msgs.msg import UInt32
+from std_srvs.srv import SetBool
+
+from support import request_of, response_of, wait_for
+
+from ipyros import errors
+
+
+def counting(make_node, name: str, topic: str):
+    """A node that counts what it hears on ``topic``, and a talker that writes there; (seen, talker)."""
+    seen: list[int] = []
+    make_node(f"{name}_listener").new.subscribe(topic, handler=lambda m: seen.append(m.data), msgType=UInt32).create()
+    talker = make_node(f"{name}_talker").new.publish(topic, msgType=UInt32).create()
+    wait_for(lambda: any(f.connections for f in talker.sent()), timeout=20, what="the talker to connect")
+    return seen, talker
+
+
+@pytest.mark.parametrize("error", [SystemExit, KeyboardInterrupt, GeneratorExit])
+def test_a_handler_raising_a_base_exception_is_a_handler_error_and_the_session_goes_on(make_node, failures, error):
+    seen, talker = counting(make_node, f"base_{error.__name__.lower()}", f"/resilience/{error.__name__}")
+    calls = []
+
+    def bad(msg):
+        calls.append(msg.data)
+        raise error("from the handler")
+
+    bad_node = make_node(f"bad_{error.__name__.lower()}")
+    bad_node.new.subscribe(f"/resilience/{error.__name__}", handler=bad, msgType=UInt32).create()
+    topic = f"/resilience/{error.__name__}"
+    wait_for(lambda: talker.write(topic, UInt32(data=0)) or (seen and calls), interval=0.2, timeout=20,
+             what="both subscriptions to hear the talker")
+    for i in range(1, 4):
+        talker.write(topic, UInt32(data=i))
+        wait_for(lambda: i in seen and i in calls, what=f"message {i} to both handlers")
+    assert failures and isinstance(failures[0].error, error), failures
+    assert bad_node.status().row(topic).errors == len(calls)
+    assert {1, 2, 3} <= set(seen)
+
+
+def test_a_slow_service_stalls_no_subscription(make_node, call):
+    seen, talker = counting(make_node, "slow_service", "/resilience/during_service")
+    started, release = threading.Event(), threading.Event()
+
+    def slow(request):
+        started.set()
+        release.wait(10)
+        return response_of(SetBool)(success=True, message="slow")
+
+    make_node("slow_server").new.service("/resilience/slow", SetBool, handler=slow).create()
+    answer: list = []
+    caller = threading.Thread(target=lambda: answer.append(call("/resilience/slow", SetBool,
+                                                                request_of(SetBool)(data=True))))
+    caller.start()
+    try:
+        assert started.wait(20), "the service was not called"
+        before = len(seen)
+        for i in range(5):
+            talker.write("/resilience/during_service", UInt32(data=i))
+        wait_for(lambda: len(seen) >= before + 5, what="messages handled while the service handler blocks")
+    finally:
+        release.set()
+        caller.join(20)
+    assert answer and answer[0].message == "slow"
+
+
+def test_a_slow_handler_holds_up_no_other_handler(make_node, notices, session):
+    """ROS 1 runs each subscription on a thread of its own; ROS 2 runs every callback on one executor thread,
+    and moves a handler that took long to a thread of its own (saying so)."""
+    seen, talker = counting(make_node, "slow_handler", "/resilience/quick")
+    gate = threading.Event()
+    slow_calls = []
+
+    def slow(msg):
+        slow_calls.append(msg.data)
+        gate.wait(5)
+
+    make_node("slow_sub").new.subscribe("/resilience/slow_in", handler=slow, msgType=UInt32).create()
+    feeder = make_node("slow_feeder").new.publish("/resilience/slow_in", msgType=UInt32).create()
+    wait_for(lambda: feeder.sent()[0].connections, timeout=20, what="the slow subscription to connect")
+    try:
+        feeder.write("/resilience/slow_in", UInt32(data=1))  # blocks until the gate opens or 5 s pass
+        wait_for(lambda: slow_calls, what="the slow handler to start")
+        time.sleep(0.3)  # let it be slow: past the executor's patience for a handler (ROS 2)
+        gate.set()
+        gate.clear()
+        feeder.write("/resilience/slow_in", UInt32(data=2))  # now on a thread of its own (ROS 2)
+        wait_for(lambda: len(slow_calls) == 2, what="the second call of the slow handler")
+        for i in range(5):
+            talker.write("/resilience/quick", UInt32(data=i))
+        wait_for(lambda: len(seen) >= 5, timeout=3, what="the quick handler, while the slow one blocks")
+    finally:
+        gate.set()
+    if session.backend.name == "ROS 2":
+        assert any("/resilience/slow_in took" in n and "runs on a thread of its own" in n for n in notices), notices
+
+
+def test_a_chain_that_fails_part_way_changes_nothing(make_node):
+    nd = make_node("chain_all_or_nothing").create()
+    before = nd.model()
+    with pytest.raises(errors.MessageTypeError) as caught:
+        nd.new.subscribe("/chain/a", handler=lambda m: None, msgType=UInt32).publish("/chain/b", msgType="nope/Nope")
+    text = str(caught.value)
+    assert "new.publish('/chain/b') (call 2 of the chain) failed" in text, text
+    assert "new.subscribe /chain/a [std_msgs/UInt32]" in text and "were undone" in text and "\n" not in text
+    assert nd.model() == before
+    assert nd.handler("/chain/a") is None
+    nd.new.subscribe("/chain/a", handler=lambda m: None, msgType=UInt32)  # a new chain works
+    assert nd.model().topic("/chain/a", "subscribe") is not None
+
+
+def test_a_chain_that_fails_before_create_changes_nothing_either(make_node):
+    nd = make_node("chain_declared")
+    with pytest.raises(errors.IpyrosError, match="call 3 of the chain"):
+        nd.new.publish("/chain/x", msgType=UInt32).publish("/chain/y", msgType=UInt32).subscribe("/chain/z")
+    assert nd.model().topics == []
