@@ -93,7 +93,8 @@ class TopicMagics(ExtensionMagics):
     @argument("--hz", action="store_true",
               help="also measure each topic's message rate, listening for c.RosMagics.hz_window seconds")
     @argument("-v", "--verbose", action="store_true",
-              help="one row per publisher and subscription, with the QoS each offers or asks for (ROS 2)")
+              help="one row per publisher and subscription, with the type each uses and (ROS 2) the QoS each "
+                   "offers or asks for")
     @line_magic
     def topics(self, line: str) -> None:
         """List the live topics: name, type, publishers and subscribers."""
@@ -112,12 +113,9 @@ class TopicMagics(ExtensionMagics):
             print(f"no live topics {what}".rstrip() + (" (the master knows none)" if not snap.topics else ""))
             return
         if args.verbose:
-            endpoints = getattr(self.ext.session.backend, "topic_endpoints", None)
-            if endpoints is not None:
-                self.ext.printer.show(_endpoints_table(snap, found, endpoints, self.ext.graph.where))
-                return
-            print("ipyros: -v shows the QoS of each endpoint, which ROS 2 has; on ROS 1 every connection is "
-                  "reliable TCP")
+            self.ext.printer.show(_endpoints_table(snap, found, self.ext.session.backend.topic_endpoints,
+                                                   self.ext.graph.where))
+            return
         window = self.ext.settings.hz_window
         rates = measure_rates({t: snap.topics[t] for t in found}, window) if args.hz else None
         self.ext.printer.show(_topics_table(_as_dsl_nodes(snap, self.ext.session), found, rates, window,
@@ -404,12 +402,15 @@ def _endpoints_table(snap: GraphSnapshot, found: list[str], endpoints: Any, wher
     """``%topics -v``: a row per publisher and subscription of each topic, with its QoS."""
     table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}, by endpoint",
                   title_justify="left")
-    for column in ("topic", "type", "node", "endpoint", "QoS"):  # names and QoS whole; the type gives way
+    for column in ("topic", "node", "endpoint", "type", "QoS"):  # names and QoS whole; the type gives way
         table.add_column(column, overflow="fold", no_wrap=column != "type", style="bold" if column == "topic" else None)
     for topic in found:
-        rows = endpoints(topic) or [("", "", "")]
-        for i, (node, kind, qos) in enumerate(rows):
-            table.add_row(topic if i == 0 else "", (snap.topics[topic] or "?") if i == 0 else "", node, kind, qos)
+        rows = endpoints(topic) or [("", "", snap.topics[topic] or "?", "")]
+        types = {row[2] for row in rows if not row[2].startswith("?")}
+        for i, (node, kind, type_name, qos) in enumerate(rows):
+            if len(types) > 1:  # ROS connects no two types: say which endpoint hears nothing from which
+                type_name = f"[red]{type_name}[/] (not {' or '.join(sorted(types - {type_name}))}: nothing passes)"
+            table.add_row(topic if i == 0 else "", node, kind, type_name, qos)
     return table
 
 

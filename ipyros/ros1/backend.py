@@ -33,11 +33,11 @@ class Ros1:
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Callable[[str], None]) -> runtime.Subscription:
-        return runtime.Subscription(topic, cls, slot)
+        return runtime.Subscription(topic, cls, slot, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
               on_wrong_type: Optional[Callable[[str], None]], complain: Callable[[str], None]) -> runtime.Relay:
-        return runtime.Relay(source, target, cls, on_wrong_type)
+        return runtime.Relay(source, target, cls, on_wrong_type, complain)
 
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
               complain: Optional[Callable[[str], None]] = None) -> runtime.Timer:
@@ -84,6 +84,10 @@ class Ros1:
 
     read_param = staticmethod(runtime.get_param)
     write_param = staticmethod(runtime.set_param)
+
+    def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]:
+        """Who publishes and subscribes to ``topic``, each with its type (``%topics -v``)."""
+        return introspect.topic_endpoints(self._master(), topic)
 
     def node_pid(self, node: str) -> Optional[int]:
         return introspect.node_pid(self._master(), node)

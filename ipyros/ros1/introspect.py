@@ -20,7 +20,7 @@ from urllib.parse import urlparse
 from ..errors import IpyrosError
 from .master import master_proxy
 
-__all__ = ["call", "node_pid", "params_under", "service_type"]
+__all__ = ["call", "node_pid", "params_under", "service_type", "topic_endpoints"]
 
 CALLER_ID = "/ipyros_introspect"
 
@@ -141,3 +141,24 @@ def node_pid(master_uri: str, node: str, timeout: float = 2.0) -> Optional[int]:
         return int(pid) if code == 1 else None
     except (OSError, ValueError):
         return None
+
+
+def topic_endpoints(master_uri: str, topic: str, timeout: float = 2.0) -> list[tuple[str, str, str, str]]:
+    """Who publishes and subscribes to ``topic``, each with the type it uses there (asked of the node itself,
+    as the master keeps one type per topic): ``(node, "publisher" | "subscriber", type, "TCP")``."""
+    master = master_proxy(master_uri, timeout)
+    _, _, (publishers, subscribers, _) = master.getSystemState(CALLER_ID)
+    found = []
+    for kind, listed, ask in (("publisher", publishers, "getPublications"), ("subscriber", subscribers,
+                                                                              "getSubscriptions")):
+        for node in dict(listed).get(topic, ()):
+            type_name = "?"
+            try:
+                code, _, uri = master.lookupNode(CALLER_ID, node)
+                if code == 1:
+                    _, _, topics = getattr(master_proxy(uri, timeout), ask)(CALLER_ID)
+                    type_name = next((t for name, t in topics if name == topic), "?")
+            except (OSError, ValueError):
+                type_name = "? (does not answer)"
+            found.append((node, kind, type_name, "TCP"))
+    return sorted(found)

@@ -23,6 +23,8 @@ import functools
 import io
 import logging
 import os
+import re
+import sys
 import threading
 import warnings
 import xmlrpc.client
@@ -77,6 +79,7 @@ class ProcessNode:
             namespace, base = name.rsplit("/", 1)
             # Signals stay IPython's: Ctrl-C must interrupt the prompt, not kill the node.
             rospy.init_node(base, argv=[f"__ns:={namespace or '/'}"], disable_signals=True)
+            _python_warnings_still_shown()
             self.name, self.master_uri = rospy.get_name(), master_uri
             return self.name
 
@@ -115,6 +118,46 @@ class ProcessNode:
 
 def _no_out_of_sync(record: logging.LogRecord) -> bool:
     return "registrations are now out of sync" not in record.getMessage()
+
+
+class _Stderr(logging.StreamHandler):
+    """A handler that writes to ``sys.stderr`` as it is now (IPython, Jupyter and tests replace it)."""
+
+    @property  # type: ignore[override]
+    def stream(self) -> Any:
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value: Any) -> None:
+        pass
+
+
+class _NotRos(logging.Filter):
+    """Records of every logger but ROS's own (which rospy sends to /rosout and its log file)."""
+
+    ROS = ("rospy", "rosout", "rosgraph", "roslaunch", "rosmaster", "rosbag", "topic_tools")
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not record.name.startswith(self.ROS)
+
+
+def _python_warnings_still_shown() -> None:
+    """Give Python's warnings and errors a way to the user again after ``rospy.init_node``.
+
+    rospy configures logging for the whole process: the root logger gets its log file as
+    its only handler, so what IPython, traitlets or any library logs (``%config`` refusing a
+    value, say) went to ``~/.ros/log`` and the user saw nothing. A handler on stderr, for
+    warnings and up from every logger but ROS's own, gives them back what Python's
+    ``lastResort`` gave them before rospy started.
+    """
+    root = logging.getLogger()
+    if any(isinstance(f, _NotRos) for h in root.handlers for f in h.filters):
+        return
+    shown = _Stderr()
+    shown.setLevel(logging.WARNING)
+    shown.addFilter(_NotRos())
+    shown.setFormatter(logging.Formatter("%(levelname)s:%(name)s:%(message)s"))
+    root.addHandler(shown)
 
 
 def _registration_manager() -> Any:
@@ -292,7 +335,92 @@ def _subscribe_bytes(topic: str, cls: type, callback: Callable[[Any], None]) -> 
     sub = rospy.Subscriber(topic, raw_class(cls), callback, queue_size=None, buff_size=_BUFF_SIZE,
                            tcp_nodelay=True)
     _Reconnect.guard(sub)
+    _OtherTypes.install()
     return sub
+
+
+class _OtherTypes(logging.Handler):
+    """Tells the user, once per peer, of a publisher whose type differs from a subscription's here.
+
+    rospy subscribes with the declared type and md5, and a publisher of another type
+    refuses the connection: nothing passes, which is right, but rospy only writes it to its
+    log file ("Client [...] wants topic [...] to have datatype/md5sum [...], but our version
+    has [...]") and tries again and again. This handler on rospy's internal logger reads
+    that line and tells each subscription's ``complain`` who the peer is and both types.
+    """
+
+    # What a rospy publisher answers (tcpros_pubsub): the types, or (same name) the md5sums, differ.
+    _LINES = (re.compile(r"topic types do not match: \[(?P<wanted>[^\]]*)\] vs\. \[(?P<theirs>[^\]]*)\]"),
+              re.compile(r"wants topic \[(?P<topic>[^\]]+)\] to have datatype/md5sum \[(?P<wanted>[^\]]*?)/\w+\], "
+                         r"but our version has \[(?P<theirs>[^\]]*?)/\w+\]"))
+    _installed = False
+    watchers: dict[str, list[tuple[str, Callable[[str], None]]]] = {}  # topic → (declared type, complain)
+    told: set[tuple[str, str, Callable[[str], None]]] = set()
+
+    @classmethod
+    def install(cls) -> None:
+        if not cls._installed:
+            logging.getLogger("rospy.internal").addHandler(cls(level=logging.ERROR))
+            cls._installed = True
+
+    @classmethod
+    def watch(cls, topic: str, type_name: str, complain: Optional[Callable[[str], None]]) -> None:
+        if complain is not None:
+            cls.watchers.setdefault(topic, []).append((type_name, complain))
+
+    @classmethod
+    def unwatch(cls, topic: str, complain: Optional[Callable[[str], None]]) -> None:
+        cls.watchers[topic] = [w for w in cls.watchers.get(topic, []) if w[1] is not complain]
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = record.getMessage()
+        except Exception:  # noqa: BLE001 - a record that does not format is not ours
+            return
+        found = next((m for m in (line.search(text) for line in self._LINES) if m is not None), None)
+        if found is None:
+            return
+        wanted, theirs = found["wanted"], found["theirs"]
+        topic = found.groupdict().get("topic") or _connecting_topic()
+        for declared, complain in list(self.watchers.get(topic or "", ())):
+            if declared != wanted or (topic, theirs, complain) in self.told:
+                continue
+            self.told.add((topic, theirs, complain))
+            peers = _publishers_of_type(topic, theirs)
+            complain(f"{topic}: {', '.join(peers) or 'a publisher'} publishes {theirs} there, and this node "
+                     f"subscribes to it as {declared}: nothing passes between them (ROS connects no two types); "
+                     f"subscribe with msgType={theirs!r}, or publish {declared}")
+
+
+def _connecting_topic() -> Optional[str]:
+    """The topic rospy's connecting thread (``robust_connect_subscriber``, which logged the refusal) is for.
+
+    The publisher's "topic types do not match" answer does not name the topic; the thread
+    that logs it is connecting that topic's subscription, and holds its name.
+    """
+    frame = sys._getframe(1)
+    while frame is not None:
+        if frame.f_code.co_name == "robust_connect_subscriber":
+            return frame.f_locals.get("resolved_topic_name")
+        frame = frame.f_back
+    return None
+
+
+def _publishers_of_type(topic: str, type_name: str) -> list[str]:
+    """The nodes that publish ``topic`` as ``type_name`` (each asked, as rostopic info would)."""
+    found = []
+    try:
+        master = master_proxy(os.environ["ROS_MASTER_URI"], timeout=2.0)
+        _, _, (publishers, _, _) = master.getSystemState(rospy.get_name())
+        for name in dict(publishers).get(topic, ()):
+            code, _, uri = master.lookupNode(rospy.get_name(), name)
+            if code == 1:
+                _, _, topics = master_proxy(uri, timeout=2.0).getPublications(rospy.get_name())
+                if [topic, type_name] in [list(t) for t in topics]:
+                    found.append(name)
+    except (OSError, KeyError, ValueError, xmlrpc.client.Error):
+        pass
+    return found
 
 
 def _message(cls: type, buff: bytes, header: dict) -> Any:
@@ -312,10 +440,12 @@ class Subscription:
     original. (Deserialising is also quicker than rospy's shared message plus a deepcopy.)
     """
 
-    def __init__(self, topic: str, cls: type, slot: HandlerSlot) -> None:
+    def __init__(self, topic: str, cls: type, slot: HandlerSlot, complain: Optional[Callable[[str], None]] = None) -> None:
         self.topic, self.cls, self.slot = topic, cls, slot
         self._connections: dict[int, dict] = {}  # the header of each connection a message came on
         self._sub = _subscribe_bytes(topic, cls, self._deliver)
+        self._complain = complain
+        _OtherTypes.watch(topic, cls._type, complain)
 
     def _deliver(self, raw: rospy.AnyMsg) -> None:
         header = raw._connection_header
@@ -338,6 +468,7 @@ class Subscription:
         return self._sub.get_num_connections()
 
     def close(self) -> None:
+        _OtherTypes.unwatch(self.topic, self._complain)
         self._sub.unregister()
 
 
@@ -370,8 +501,10 @@ class Relay:
     """
 
     def __init__(self, source: str, target: str, cls: type,
-                 on_wrong_type: Optional[Callable[[str], None]] = None) -> None:
+                 on_wrong_type: Optional[Callable[[str], None]] = None,
+                 complain: Optional[Callable[[str], None]] = None) -> None:
         self.source, self.target, self.cls = source, target, cls
+        self._complain = complain
         self.count = 0
         self.dropped = 0
         self._type = cls._type
@@ -384,6 +517,7 @@ class Relay:
         except DeclarationError:
             self._pub.unregister()
             raise
+        _OtherTypes.watch(source, cls._type, complain)
 
     def _forward(self, raw: rospy.AnyMsg) -> None:
         header = raw._connection_header
@@ -413,6 +547,7 @@ class Relay:
         return _send_figures(self.target, "relay", self.count, self._impl)
 
     def close(self) -> None:
+        _OtherTypes.unwatch(self.source, self._complain)
         self._sub.unregister()
         self._pub.unregister()
 

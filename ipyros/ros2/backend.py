@@ -120,9 +120,9 @@ class Ros2:
             self.process.start(f"/_ipyros_graph_{os.getpid()}")
         return self.process.graph()
 
-    def topic_endpoints(self, topic: str) -> list[tuple[str, str, str]]:
-        """Who publishes and subscribes to ``topic``, with the QoS each offers or asks for:
-        ``(node, "publisher" | "subscription", "reliable transient-local depth 1")``."""
+    def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]:
+        """Who publishes and subscribes to ``topic``, each with its type and the QoS it offers or asks for:
+        ``(node, "publisher" | "subscription", "std_msgs/String", "reliable transient-local depth 1")``."""
         graph = self._graph()
         found = []
         for kind, infos in (("publisher", graph.get_publishers_info_by_topic(topic)),
@@ -130,7 +130,7 @@ class Ros2:
             for info in infos:
                 if not info.node_name.startswith("_"):
                     found.append((f"{info.node_namespace.rstrip('/')}/{info.node_name}", kind,
-                                  str(runtime.qos_of(info.qos_profile))))
+                                  runtime._short(info.topic_type), str(runtime.qos_of(info.qos_profile))))
         return sorted(found)
 
     # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----

@@ -35,6 +35,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
+from .. import msgtypes
 from ..errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
 from ..msgbuild import conform
 from ..qos import Qos
@@ -121,6 +122,9 @@ class ProcessNode:
         self.hosted: set[str] = set()  # every name this process has had a node at (the graph lags behind)
         self._watchers: list[Callable[[], None]] = []
         self._watch_timer: Any = None
+        self._looks = 0
+        self._typed: list[tuple[str, str, Complain]] = []  # (topic, type, complain): peers of another type are told
+        self._told: set[tuple[str, str, str, Complain]] = set()
         self._caller: Optional[tuple[Node, Any, threading.Thread]] = None
 
     @property
@@ -232,8 +236,49 @@ class ProcessNode:
     def _look(self) -> None:
         with self._lock:
             watchers = list(self._watchers)
+            self._looks += 1
+            types_due = self._looks % self.TYPES_EVERY == 0 and self._typed
         for follow in watchers:
             follow()
+        if types_due:
+            self._check_types()
+
+    #: Looks between two checks of the types peers publish (about once a second).
+    TYPES_EVERY = 10
+
+    def watch_types(self, topic: str, type_name: str, complain: Optional[Complain]) -> None:
+        """Tell ``complain`` once per peer that publishes ``topic`` as another type than ``type_name``.
+
+        DDS matches nothing between two types and says nothing about it: a subscription just
+        never hears the peer. The graph knows each publisher's type, so it is looked at.
+        """
+        if complain is None:
+            return
+        self.caller()  # the watch runs on the caller node's executor
+        with self._lock:
+            self._typed.append((topic, type_name, complain))
+            if self._watch_timer is None:
+                self._watch_timer = self._caller[0].create_timer(self.WATCH_PERIOD, self._look)
+
+    def unwatch_types(self, complain: Optional[Complain], topic: str) -> None:
+        with self._lock:
+            self._typed = [t for t in self._typed if not (t[0] == topic and t[2] is complain)]
+
+    def _check_types(self) -> None:
+        with self._lock:
+            typed = list(self._typed)
+        graph, publishers = self.caller(), {}
+        for topic, type_name, complain in typed:
+            if topic not in publishers:
+                publishers[topic] = graph.get_publishers_info_by_topic(topic)
+            for info in publishers[topic]:
+                theirs, peer = _short(info.topic_type), f"{info.node_namespace.rstrip('/')}/{info.node_name}"
+                if theirs == type_name or (topic, peer, theirs, complain) in self._told:
+                    continue
+                self._told.add((topic, peer, theirs, complain))
+                complain(f"{topic}: {peer} publishes {theirs} there, and this node subscribes to it as {type_name}: "
+                         f"nothing passes between them (ROS 2 connects no two types); subscribe with "
+                         f"msgType={theirs!r}, or publish {type_name}")
 
     def hosts(self) -> list[str]:
         """The full names of the DSL nodes that have a ROS 2 node now."""
@@ -350,6 +395,8 @@ class Subscription:
         self._sub = self._open(self.qos)
         if self._follows:
             process.watch(self._follow_publishers)
+        self._type_name = msgtypes.type_name(cls) or ""
+        process.watch_types(topic, self._type_name, complain)
 
     def _wanted(self) -> Optional[Qos]:
         """The publishers' QoS with the declared depth, if this subscription follows them and they are there."""
@@ -385,6 +432,7 @@ class Subscription:
 
     def close(self) -> None:
         self._lane.close()
+        self._process.unwatch_types(self._complain, self.topic)
         if self._follows:
             self._process.unwatch(self._follow_publishers)
         with self._lock:
@@ -416,6 +464,7 @@ class Relay:
         self._skip: Optional[bytes] = None
         self._pub, self._sub = self._endpoints(self.qos)
         process.watch(self._follow_source)
+        process.watch_types(source, msgtypes.type_name(cls) or "", complain)
 
     def _endpoints(self, qos: Qos) -> tuple[Any, Any]:
         node = self._node
@@ -466,6 +515,7 @@ class Relay:
 
     def close(self) -> None:
         self._process.unwatch(self._follow_source)
+        self._process.unwatch_types(self._complain, self.source)
         with self._lock:
             if self._sub is not None:
                 self._node.destroy_subscription(self._sub)

@@ -1,0 +1,36 @@
+"""A peer that publishes another type on a topic a node subscribes to is told, once, naming the peer and both
+types: ROS connects no two types, and says so only in a log file (ROS 1) or not at all (ROS 2)."""
+
+from __future__ import annotations
+
+from std_msgs.msg import String
+
+from shell import ip, ok  # noqa: F401 - the ip fixture
+from support import wait_for
+
+
+def test_a_peer_of_another_type_is_told_once(make_node, peer, notices):
+    """(A type that a live topic has already is refused at the declaration; this peer comes later.)"""
+    heard = []
+    make_node("types_listener").new.subscribe("/types/mixed", handler=heard.append, msgType=String).create()
+    talker = peer("talk.py", "/types/mixed", "geometry_msgs/Point", 5, "x=1.0")
+    talker.wait_line("ready")
+    told = wait_for(lambda: [n for n in notices if "/types/mixed" in n], timeout=20, what="the notice")
+    assert len(told) == 1, told
+    text = told[0]
+    assert "/talk_peer publishes geometry_msgs/Point there" in text and "as std_msgs/String" in text, text
+    assert "nothing passes between them" in text and "msgType='geometry_msgs/Point'" in text
+    assert not heard
+
+
+def test_topics_v_shows_each_endpoints_type(ip, make_node, peer, capsys):  # noqa: F811
+    make_node("types_shown").new.subscribe("/types/shown", handler=lambda m: None, msgType=String).create()
+    talker = peer("talk.py", "/types/shown", "geometry_msgs/Point", 5)
+    talker.wait_line("ready")
+
+    def shown() -> bool:
+        ok(ip, "%topics -v /types/shown")
+        out = capsys.readouterr().out
+        return "std_msgs/String" in out and "geometry_msgs/Point" in out and "nothing passes" in out
+
+    wait_for(shown, timeout=20, interval=0.5, what="%topics -v to show both types")
