@@ -287,6 +287,20 @@ def _lookup_error(package: str, executable: str) -> BaseNodeError:
     return BaseNodeError(f"package {package!r} has no executable {executable!r}: {hint + ' ' if hint else ''}{listing}")
 
 
+def link_outside(package: str, path: Path) -> Optional[str]:
+    """Where ``path``, an executable found in ``package``, really is, if a link takes it out of the package.
+
+    rosrun follows such links (``find -L``), and so does ipyros: a package may well link to a
+    program installed elsewhere. But what runs is then not the package's own file, so it is
+    said.
+    """
+    real = os.path.realpath(path)
+    homes = [os.path.realpath(d) + os.sep for d in _search_dirs(package)]
+    if not homes or any(real.startswith(home) for home in homes):
+        return None
+    return real
+
+
 def package_executable(package: str, executable: str, ros2: bool) -> Path:
     """The file ``rosrun`` (ROS 1) or ``ros2 run`` (ROS 2, the ament index) would run."""
     if ros2:

@@ -16,17 +16,19 @@ from __future__ import annotations
 
 import contextlib
 import copy
-import weakref
-from dataclasses import replace
+import os
 import re
 import threading
 import time
+import weakref
 from collections.abc import MutableMapping
+from dataclasses import replace
+from pathlib import Path
 from typing import Any, Callable, Iterator, Optional
 
 from . import msgtypes, names, plan as planning, qos as qos_mod, versions as versions_mod
 from .errors import (DeclarationError, HandlerError, IpyrosError, MessageTypeError, NodeStateError,
-                     NotDeclaredError, TopicNameError, TopicTypeConflict)
+                     NotDeclaredError, TopicNameError, TopicTypeConflict, cut, first_line)
 from .model import NodeModel, ServiceModel, TimerModel, TopicModel
 from .plan import Spec
 from .session import Session, current
@@ -45,7 +47,12 @@ class rosNode:  # noqa: N801 - the paper's name
     one session: they share the process's single rospy node (see the README).
     """
 
-    def __init__(self, name: str, namespace: Optional[str] = None, *, session: Optional[Session] = None) -> None:
+    def __init__(self, name: str = _UNSET, namespace: Optional[str] = None, *, session: Optional[Session] = None,
+                 **unknown: Any) -> None:
+        if name is _UNSET or unknown:
+            given = f"got unknown keyword argument(s) {', '.join(sorted(unknown))}; it" if unknown else "needs a name:"
+            raise TypeError(f"rosNode() {given} takes name and namespace, e.g. rosNode('turtle_control_node') "
+                            "or rosNode('planner', namespace='/robot1')")
         self._session = session or current()
         # A wrapping node without a namespace of its own lives in its basenode's (see wrap.set_base).
         self._explicit_namespace = namespace is not None
@@ -186,12 +193,11 @@ class rosNode:  # noqa: N801 - the paper's name
         ``rate`` scales the playing speed, ``loop`` plays it again and again, ``topics`` plays
         only these; the player waits until each topic has a subscriber, ``delay`` seconds at most.
         """
-        from pathlib import Path
-
+        from .record import bag_module
         from .wrap import set_base
 
-        from .record import bag_module
-
+        if not isinstance(path, (str, os.PathLike)):
+            raise DeclarationError(f"baseBag({cut(path)}): give the bag's path, e.g. baseBag('run1.bag')")
         bagfile = bag_module()
         bag = Path(path).expanduser().absolute()
         if not bag.exists():
@@ -262,6 +268,8 @@ class rosNode:  # noqa: N801 - the paper's name
                 self._check_live_types(self._model.topics)
                 self._set_params(self._model.params)
                 self._output = self._session.output_scope(self)
+                for slot in self._slots.values():  # heard again (quietened by a shutdown)
+                    slot.closing = False
                 self._open(planning.plan(self._model))
                 self.created = True
                 start_base(self)
@@ -273,6 +281,7 @@ class rosNode:  # noqa: N801 - the paper's name
 
     def shutdown(self) -> None:
         """Stop the node's publishers, subscribers, timers, services and its basenode."""
+        self.quieten()
         with self._lock:
             if self.created:
                 self._record("shutdown()")
@@ -283,6 +292,12 @@ class rosNode:  # noqa: N801 - the paper's name
             self._session.backend.close_host(self.fullname)
             self.created = False
             self._session.remove(self)
+
+    def quieten(self) -> None:
+        """Let the node's handlers fail silently from now on: it is shutting down (its timer's last call may
+        find its publisher closed, which is no news). ``create()`` makes them heard again."""
+        for slot in list(self._slots.values()):
+            slot.closing = True
 
     # -- timers -----------------------------------------------------------------------
     def timer(self, period: float, handler: Callable[..., Any], *, name: Optional[str] = None,
@@ -296,6 +311,8 @@ class rosNode:  # noqa: N801 - the paper's name
             raise DeclarationError(f"timer period must be a number of seconds from {MIN_TIMER_PERIOD:g} "
                                    f"(10 kHz) up, not {period!r}")
         name = name or getattr(handler, "__name__", "timer")
+        if not isinstance(name, str) or not (re.fullmatch(r"\w+", name) or name == "<lambda>"):
+            raise DeclarationError(f"timer name {cut(name)}: give letters, digits and _, e.g. name='heartbeat'")
         label = f"{self.name} timer {name}"
         takes_event = call_arity(handler, "timer", label)
         timer = TimerModel(name=name, period=float(period), handler=_name_of(handler), oneshot=oneshot)
@@ -378,6 +395,11 @@ class rosNode:  # noqa: N801 - the paper's name
         from .keep import MODEL_SUFFIXES, save
         from .savefile import save_nodes
 
+        if not isinstance(path, (str, os.PathLike)):
+            raise DeclarationError(f"save({cut(path)}): give a path ending in .py, .yaml or .json")
+        if Path(path).expanduser().is_dir():
+            raise DeclarationError(f"save({str(path)!r}): that is a directory; give a file, e.g. "
+                                   f"{os.path.join(str(path), self.name + '.py')!r}")
         suffix = str(path).rsplit(".", 1)[-1].lower() if "." in str(path) else ""
         if suffix == "py":
             return save_nodes([self], path, namespace)
@@ -415,6 +437,10 @@ class rosNode:  # noqa: N801 - the paper's name
         path becomes a ROS package (package.xml, scripts/<node>, launch/<node>.launch with its basenode);
         see :mod:`ipyros.export`."""
         from .export import export
+
+        if not isinstance(path, (str, os.PathLike)):
+            raise DeclarationError(f"export({cut(path)}): give a path: 'my_node.py' (one script) or 'my_node_pkg' "
+                                   "(a ROS package)")
 
         return export(self, path, namespace)
 
@@ -528,9 +554,10 @@ class rosNode:  # noqa: N801 - the paper's name
                 self._live[spec] = self._open_one(spec, handlers, takes_arg)
             except IpyrosError:
                 raise
-            except Exception as error:  # rospy's own complaint, made one line
+            except Exception as error:  # the client library's own complaint, made one line
                 raise DeclarationError(f"cannot open {type(spec).__name__[:-4].lower()} "
-                                       f"{getattr(spec, 'topic', None) or getattr(spec, 'name', '')}: {error}") from None
+                                       f"{getattr(spec, 'topic', None) or getattr(spec, 'name', '')}: "
+                                       f"{first_line(error)}") from None
 
     def _open_one(self, spec: Spec, handlers: dict[str, Callable[..., Any]], takes_arg: dict[str, bool]) -> Any:
         backend, host = self._session.backend, self.fullname
@@ -935,9 +962,17 @@ class NodeParams(MutableMapping):
         name = self._name(key)
         if self._node.created:
             if not self._backend.has_param(name):
-                raise KeyError(key)
+                raise self._missing(key)
             return self._backend.get_param(name)
+        if key not in self._node._model.params:
+            raise self._missing(key)
         return self._node._model.params[key]
+
+    def _missing(self, key: str) -> KeyError:
+        """A KeyError, as a mapping raises, that says which parameters there are."""
+        have = ", ".join(repr(k) for k in self._node._model.params) or "none yet"
+        return KeyError(f"{self._node.name} has no parameter {key!r} (it has {have}); "
+                        f"set one with {self._node.called}.params[{key!r}] = value")
 
     def __setitem__(self, key: str, value: Any) -> None:
         name = self._name(key)
@@ -955,7 +990,7 @@ class NodeParams(MutableMapping):
         node = self._node
         with node._lock:
             if key not in node._model.params and not (node.created and self._backend.has_param(name)):
-                raise KeyError(key)
+                raise self._missing(key)
             if node.created and self._backend.has_param(name):
                 self._backend.delete_param(name)
             node._model.params.pop(key, None)

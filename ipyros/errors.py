@@ -53,6 +53,18 @@ class NodeStateError(IpyrosError, RuntimeError):
     """The node is not in a state where this operation makes sense (e.g. shut down)."""
 
 
+def cut(value: object, limit: int = 80) -> str:
+    """``repr(value)`` on one line, cut to about ``limit`` characters: what an error line may quote of a value."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= limit else f"{text[:limit - 20]}... ({len(text):,} characters)"
+
+
+def first_line(error: BaseException) -> str:
+    """An exception of a library as one line: its first line (rclpy's name errors draw a caret below the name)."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    return (lines[0].rstrip(":") if lines else type(error).__name__)[:300]
+
+
 def warn_user(message: str, category: type[Warning]) -> None:
     """``warnings.warn`` attributed to the user's own line: the first caller outside ipyros and IPython.
 

@@ -305,7 +305,10 @@ def _show_error(shell: Any, previous: Any, etype: type, value: BaseException, tb
     name = etype.__name__
     if str(getattr(shell, "colors", "nocolor")).lower() != "nocolor":
         name = f"\x1b[31;1m{name}\x1b[0m"
-    stb = [f"{name}: {value}"]
+    text = " ".join(str(value).split())  # one line, whatever a library put in it
+    if len(text) > 2000:  # a value quoted whole would fill the screen
+        text = f"{text[:1000]} ... {text[-400:]} ({len(text):,} characters)"
+    stb = [f"{name}: {text}"]
     shell._showtraceback(etype, value, stb)  # a kernel sends it as the cell's error
     return stb
 

@@ -253,9 +253,11 @@ def _write_atomic(path: "str | os.PathLike[str]", text: str, mode: int = 0o644) 
             os.fsync(out.fileno())
         os.chmod(tmp, mode)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as error:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+        if isinstance(error, OSError):  # a full disk, a quota: the file as it was stays
+            raise IpyrosError(f"cannot write {path}: {error.strerror or error}; nothing was changed there") from None
         raise
     return path
 

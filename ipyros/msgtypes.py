@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import difflib
 import importlib
+import importlib.util
+import os
 import re
 import sys
 from functools import lru_cache
@@ -81,7 +83,9 @@ def _resolve(spec: Any, kind: str) -> tuple[str, type]:
         module = importlib.import_module(f"{package}.{kind}")
     except ImportError:
         close = difflib.get_close_matches(package, _packages(kind), n=3)
-        hint = f"; did you mean {', '.join(close)}?" if close else f" (is python3-{package.replace('_', '-')} installed?)"
+        hint = f"; it is not installed here ({install_hint(package)})"
+        if close:
+            hint += f", or did you mean {', '.join(close)}?"
         raise MessageTypeError(f"unknown {what} package {package!r} in {spec!r}{hint}") from None
     cls = getattr(module, name, None)
     if not isinstance(cls, type) or type_name(cls) != f"{package}/{name}":
@@ -143,3 +147,25 @@ def known_message_types() -> list[str]:
 def known_service_types() -> list[str]:
     """Every service type whose Python class is importable here, as "pkg/Type", sorted."""
     return [f"{p}/{t}" for p, types in _index("srv").items() for t in types]
+
+
+def install_hint(package: str) -> str:
+    """How to install the Python messages of ROS package ``package`` where this Python gets its ROS.
+
+    ROS 2 from PyPI (a venv's rclpy): the wheel ``ros-<name>`` (``ros-jazzy-<name>`` for Jazzy's);
+    ROS 2 from apt (``/opt/ros/<distro>``): ``ros-<distro>-<name>``; ROS 1 from Debian: ``python3-<name>``.
+    """
+    dashed = package.replace("_", "-")
+    rclpy = importlib.util.find_spec("rclpy")
+    if rclpy is not None and rclpy.origin and not rclpy.origin.startswith("/opt/ros/"):
+        from importlib import metadata
+
+        try:
+            metadata.version("ros-jazzy-rclpy")
+            return f"pip install ros-jazzy-{dashed}"
+        except metadata.PackageNotFoundError:
+            return f"pip install ros-{dashed}"
+    if rclpy is not None:
+        distro = os.environ.get("ROS_DISTRO") or (rclpy.origin or "").split("/")[3]
+        return f"apt install ros-{distro}-{dashed}"
+    return f"apt install python3-{dashed}"

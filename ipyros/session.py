@@ -94,6 +94,7 @@ class Session:
         self._lock = threading.RLock()
         self.watch: Optional[MasterWatch] = None
         self.closed = False
+        self._closes_at_exit = False
 
     def record(self, node: str, change: str, **handler: Any) -> Change:
         """Add a change to the session's history, and to its file (see :mod:`ipyros.journal`)."""
@@ -136,16 +137,30 @@ class Session:
                 raise NodeStateError("this ipyros session was closed; restart the interpreter")
             if not self.backend.has_master:  # ROS 2: peers find each other, nothing to attach or watch
                 name = self.process.start(self.config.process_node_name or fullname)
+                self._close_before_ros_at_exit()
                 stop_on_termination()
                 return name
             uri = self.attach_master().uri
             name = self.process.start(self.config.process_node_name or fullname, uri)
+            self._close_before_ros_at_exit()
             if fullname != name:  # a DSL node hosted in the process node: its name must be free too
                 self.backend.refuse_taken_name(uri, fullname)
             stop_on_termination()
             if self.watch is None:
                 self.watch = MasterWatch(uri, self._master_down, self.master_back).start()
             return name
+
+    def _close_before_ros_at_exit(self) -> None:
+        """Close the session at exit before the ROS client library shuts itself down.
+
+        rospy (and rclpy) register their own exit hooks when they start, after this module's:
+        hooks run last-registered first, so theirs closed every publisher while the nodes'
+        timers still ran, and a timer's last write printed a traceback on the way out. This
+        hook, registered once the client library has started, runs before theirs.
+        """
+        if not self._closes_at_exit:
+            atexit.register(self.close)
+            self._closes_at_exit = True
 
     # -- the master going away and coming back ------------------------------------------
     def require_master(self, doing: str) -> None:
@@ -237,6 +252,8 @@ class Session:
                     stop()
                 except Exception as error:  # keep closing the rest
                     print(f"ipyros: error while closing: {error}", file=sys.stderr)
+            for node in list(self.nodes.values()):  # first all: one node's handler may write through another
+                node.quieten()
             for node in reversed(list(self.nodes.values())):
                 try:
                     node.shutdown()

@@ -135,6 +135,8 @@ class HandlerSlot:
         self._stamps: deque[float] = deque(maxlen=200)
         self._last_report = -float("inf")
         self._suppressed = 0
+        #: Set while the node shuts down: a last call that fails because its topics close is not news.
+        self.closing = False
 
     def swap(self, handler: Callable[..., Any], pass_argument: bool = True) -> None:
         """Make ``handler`` serve every call from now on."""
@@ -192,6 +194,8 @@ class HandlerSlot:
         self._failed(self.handler, error, with_traceback=False)
 
     def _failed(self, handler: Callable[..., Any], error: BaseException, with_traceback: bool = True) -> None:
+        if self.closing:
+            return
         with self._lock:
             self._errors += 1
             now = time.monotonic()

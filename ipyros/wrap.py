@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Optional
 
 
 from . import names
-from .errors import BaseNodeError, DeclarationError, TopicTypeConflict
+from .errors import BaseNodeError, DeclarationError, TopicTypeConflict, cut
 from .model import BaseModel, NodeModel
 from .plan import internal_name, node_fullname
 
@@ -145,18 +145,18 @@ def _check_base_options(fields: dict[str, Any], backend: Any) -> None:
     remaps = fields.get("remaps")
     if remaps is not None and (not isinstance(remaps, dict)
                                or not all(isinstance(k, str) and isinstance(v, str) for k, v in remaps.items())):
-        raise DeclarationError(f"baseNode(remaps={remaps!r}): give a dict of names, "
+        raise DeclarationError(f"baseNode(remaps={cut(remaps)}): give a dict of names, "
                                "e.g. remaps={'scan': '/robot1/scan'}")
     for source, target in (remaps or {}).items():
         names.check_remap(source, target)
     args = fields.get("args")
     if args is not None and (isinstance(args, (str, bytes)) or not isinstance(args, (list, tuple))
                              or not all(isinstance(a, str) for a in args)):
-        raise DeclarationError(f"baseNode(args={args!r}): give a list of strings, e.g. args=['--rate', '5']")
+        raise DeclarationError(f"baseNode(args={cut(args)}): give a list of strings, e.g. args=['--rate', '5']")
     params = fields.get("params")
     if params is not None:
         if not isinstance(params, dict) or not all(isinstance(k, str) and k for k in params):
-            raise DeclarationError(f"baseNode(params={params!r}): give a dict of private parameters, "
+            raise DeclarationError(f"baseNode(params={cut(params)}): give a dict of private parameters, "
                                    "e.g. params={'rate': 5}")
         for key, value in params.items():
             names.check_param_key(key.lstrip("~_") if key[:1] in "~_" else key, f"baseNode(params={{{key!r}: ...}})")
@@ -188,7 +188,7 @@ def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional
     if node.created:
         raise DeclarationError(f"{node.name} is already running; declare its basenode before create()")
     if args is not None and not (isinstance(args, dict) and all(isinstance(k, str) for k in args)):
-        raise DeclarationError(f"baseLaunch(args={args!r}): give a dict of the launch file's args, e.g. {{'rate': 5}}")
+        raise DeclarationError(f"baseLaunch(args={cut(args)}): give a dict of the launch file's args, e.g. {{'rate': 5}}")
     base, notes = read_base(launch, node_name, args)
 
     def edit(model: NodeModel) -> None:
@@ -271,6 +271,13 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
 
     uri = session.master.uri if session.master is not None else None  # ROS 2 has no master
     process = BaseProcess.from_model(base, master_uri=uri, on_exit=died, ros2=not session.backend.has_master)
+    if base.package and session.backend.has_master:
+        from .base import link_outside
+
+        real = link_outside(base.package, process.executable)
+        if real is not None:
+            session.notify(f"ipyros: {base.package}/{base.executable} is a link to {real}, outside the package; "
+                           "that is what runs (as rosrun would run it)")
     handle: Any = process
     if from_launch:
         from .ros1.launch_rest import LaunchBase
@@ -358,6 +365,9 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
     from .base import BaseProcess
 
     model = node.model()
+    if model.base is None:
+        raise DeclarationError(f"{node.name} wraps no basenode, so there is nothing to discover; declare one first: "
+                               f"{node.called}.baseNode('executable').basePackage('package')")
     check_wrapping(model)
     if node.created:
         raise DeclarationError(f"{node.name} is already running; discover() its basenode before create()")

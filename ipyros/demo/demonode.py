@@ -79,13 +79,18 @@ class DemoNode:
         qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL) if latch else QoSProfile(depth=10)
         return self._node.create_publisher(cls, topic, qos)
 
-    def subscribe(self, topic: str, cls: type, callback: Callable[[Any], None], depth: int = 10) -> None:
+    def subscribe(self, topic: str, cls: type, callback: Callable[[Any], None], depth: int = 10,
+                  best_effort: bool = False) -> None:
+        """Call ``callback(msg)`` for each message; ``best_effort``: as a sensor's subscriber (ROS 2; ROS 1 has TCP)."""
         if not self.ros2:
             import rospy
 
             rospy.Subscriber(topic, cls, callback, queue_size=depth)
             return
-        self._node.create_subscription(cls, topic, callback, depth)
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+        reliability = ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE
+        self._node.create_subscription(cls, topic, callback, QoSProfile(depth=depth, reliability=reliability))
 
     def service(self, name: str, cls: type, callback: Callable[[Any], None]) -> None:
         """Serve ``name`` (``~name``: the node's own) by calling ``callback(request)``; the answer is empty."""

@@ -11,7 +11,7 @@ import threading
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-from ..errors import DeclarationError
+from ..errors import DeclarationError, first_line
 
 __all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
 
@@ -34,8 +34,9 @@ def bag_topics(path: Path) -> dict[str, str]:
     try:
         with rosbag.Bag(str(path)) as bag:
             return {topic: info.msg_type for topic, info in bag.get_type_and_topic_info().topics.items()}
-    except (OSError, rosbag.ROSBagException) as error:
-        raise DeclarationError(f"cannot read the bag {path}: {error}") from None
+    except Exception as error:  # noqa: BLE001 - rosbag's errors of any kind (a garbage file: UnicodeDecodeError)
+        raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}; is it a ROS 1 bag "
+                               "(rosbag record, %record)?") from None
 
 
 def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[str]], delay: float) -> list[str]:

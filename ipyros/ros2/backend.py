@@ -5,10 +5,13 @@ from __future__ import annotations
 import os
 from typing import Any, Callable, Optional
 
-from ..errors import DeclarationError, IpyrosError, NodeStateError
+from rclpy._rclpy_pybind11 import RCLError
+from rclpy.exceptions import NameValidationException
+
+from ..errors import DeclarationError, IpyrosError, NodeStateError, first_line
 from ..qos import Qos
 from ..slots import HandlerSlot
-from . import introspect, runtime
+from . import fastdds, introspect, runtime
 from .runtime import Complain
 
 __all__ = ["Ros2"]
@@ -21,6 +24,8 @@ class Ros2:
     has_master = False
 
     def __init__(self) -> None:
+        #: Which Fast DDS configuration this session (and what it starts) runs with, in words.
+        self.transport = fastdds.prepare()  # before rclpy starts, and before any child is started
         self.process = runtime.ProcessNode()
 
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain) -> runtime.Publication:
@@ -51,9 +56,17 @@ class Ros2:
         return runtime.wait_for_node(self._graph(), name, timeout, alive=alive)
 
     def open_host(self, host: str) -> None:
+        if any(token[:1].isdigit() for token in host.split("/")):  # before rclpy, which warns as it refuses
+            raise DeclarationError(f"ROS 2 refuses the node {host}: a part of a ROS 2 name may not start with a "
+                                   "digit; ROS 2 names are letters, digits and _, each part starting with a letter")
         if host not in self.process.hosted:  # a name of ours lingers in the graph for a while after shutdown
             self.refuse_taken_name(None, host)
-        self.process.host(host)
+        try:
+            self.process.host(host)
+        except (ValueError, RCLError, NameValidationException) as error:  # rclpy's name rules (a namespace token
+            # may not start with a digit), which are stricter than ROS 1's
+            raise DeclarationError(f"ROS 2 refuses the node {host}: {first_line(error)}; ROS 2 names are letters, "
+                                   "digits and _, each part starting with a letter") from None
 
     def close_host(self, host: str) -> None:
         self.process.close_host(host)
@@ -191,7 +204,7 @@ class Ros2:
 
     def describe(self) -> str:
         """One line for ``%load_ext``: which ROS 2, which domain, which middleware, how far discovery reaches."""
-        return describe()
+        return describe(self.transport)
 
     def __repr__(self) -> str:
         return f"<ipyros backend {self.name}>"
@@ -200,7 +213,7 @@ class Ros2:
 _DISTROS = {3: "Humble", 7: "Jazzy", 9: "Kilted"}  # rclpy's major version in each distro
 
 
-def describe() -> str:
+def describe(transport: str = "") -> str:
     from importlib.metadata import PackageNotFoundError, version
 
     import rclpy
@@ -214,4 +227,5 @@ def describe() -> str:
         "LOCALHOST" if os.environ.get("ROS_LOCALHOST_ONLY") == "1" else "SUBNET")
     return (f"ROS 2{f' {distro.capitalize()}' if distro else ''} (rclpy {release}), ROS_DOMAIN_ID "
             f"{runtime.domain_id()}, {rclpy.get_rmw_implementation_identifier()}, discovery "
-            f"{reach.lower()}; the DSL, wrapping, %topics, %echo, %pub, %demo and completion run here")
+            f"{reach.lower()}{f', {transport}' if transport else ''}; the DSL, wrapping, %topics, %echo, %pub, "
+            "%demo and completion run here")

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-from ..errors import DeclarationError
+from ..errors import DeclarationError, first_line
 
 __all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
 
@@ -42,7 +42,7 @@ def bag_topics(path: Path) -> dict[str, str]:
             reader = rosbag2.Reader(path)
         reader.open()
     except Exception as error:  # noqa: BLE001 - rosbags' errors of any kind: not a bag we can read
-        raise DeclarationError(f"cannot read the bag {path}: {error}") from None
+        raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}") from None
     try:
         return {c.topic: c.msgtype for c in reader.connections}
     finally:

@@ -77,6 +77,14 @@ _MATCH_ADVICE = {
 }
 
 
+def peer_name(namespace: str, name: str) -> Optional[str]:
+    """A peer endpoint's node as ``/ns/name``, or None while discovery has not told it (rclpy then gives
+    ``_NODE_NAMESPACE_UNKNOWN_`` and ``_NODE_NAME_UNKNOWN_``)."""
+    if "_UNKNOWN_" in name or "_UNKNOWN_" in namespace:
+        return None
+    return f"{namespace.rstrip('/')}/{name}"
+
+
 def _mismatch_report(node: Node, topic: str, mine: Qos, what: str, complain: Optional[Complain]) -> Any:
     """Event callbacks that say, in one line, which peer's QoS keeps it from connecting.
 
@@ -93,12 +101,20 @@ def _mismatch_report(node: Node, topic: str, mine: Qos, what: str, complain: Opt
 
     here = qos_of(_profile(mine))
 
-    def report(event: Any) -> None:
+    def report(event: Any, final: bool = False) -> None:
         policy = qos_policy_name_from_kind(event.last_policy_kind).lower()
-        others = [f"{info.node_namespace.rstrip('/')}/{info.node_name} ({theirs.reliability.replace('_', '-')} "
-                  f"{theirs.durability.replace('_', '-')})"
-                  for info in peers_of(topic) for theirs in [qos_of(info.qos_profile)]
-                  if (theirs.reliability, theirs.durability) != (here.reliability, here.durability)]
+        peers = [(peer_name(info.node_namespace, info.node_name), qos_of(info.qos_profile)) for info in peers_of(topic)]
+        peers = [(name, theirs) for name, theirs in peers
+                 if (theirs.reliability, theirs.durability) != (here.reliability, here.durability)]
+        if not final and any(name is None for name, _ in peers):
+            # The event can come before discovery has told which node the peer endpoint is: look again shortly.
+            later = threading.Timer(1.0, report, args=(event, True))
+            later.daemon = True
+            later.start()
+            return
+        others = [f"{name or 'a node not known yet (discovery is still under way)'} "
+                  f"({theirs.reliability.replace('_', '-')} {theirs.durability.replace('_', '-')})"
+                  for name, theirs in peers]
         complain(f"{topic}: the {what} here ({here.reliability.replace('_', '-')} "
                  f"{here.durability.replace('_', '-')}) and a {peer_kind} of "
                  f"{', '.join(others) or 'another node'} have incompatible {policy}: nothing passes between them; "

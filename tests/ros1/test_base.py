@@ -7,6 +7,7 @@ tests/nodes/ipyros_test_nodes/echo_node, and ipyros's own demo robot.
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -141,8 +142,10 @@ def test_a_package_runs_only_its_own_files():
     with pytest.raises(BaseNodeError, match=r"with a package, the executable is a name in it .* not the path '/bin/sh'; "
                                             r"to run a file by its path, give no package: baseNode\('/bin/sh'\)"):
         find_executable("topic_tools", "/bin/sh")
-    with pytest.raises(BaseNodeError, match=r"'../../../../../../bin/true' leads out of package 'ipyros_test_nodes'"):
-        find_executable("ipyros_test_nodes", "../../../../../../bin/true")
+    # A path out of the package, as deep as it needs to be from wherever this clone is (any depth).
+    outside = os.path.relpath("/bin/true", TEST_NODES / "ipyros_test_nodes")
+    with pytest.raises(BaseNodeError, match=rf"'{re.escape(outside)}' leads out of package 'ipyros_test_nodes'"):
+        find_executable("ipyros_test_nodes", outside)
 
 
 def test_a_basenode_given_by_its_path_runs_as_a_script(tmp_path):

@@ -15,7 +15,8 @@ from ipyros import errors
 @pytest.mark.parametrize("spec, message", [
     ("geometry_msgs/Twst", "unknown message type 'geometry_msgs/Twst': package 'geometry_msgs' has no 'Twst'; "
                            "did you mean geometry_msgs/Twist"),
-    ("geometry_msg/Twist", "unknown message package 'geometry_msg' in 'geometry_msg/Twist'; did you mean geometry_msgs"),
+    ("geometry_msg/Twist", "unknown message package 'geometry_msg' in 'geometry_msg/Twist'; it is not installed here "
+                            "(apt install python3-geometry-msg), or did you mean geometry_msgs"),
     ("Twist", "malformed message type 'Twist': write 'package/Type'; did you mean geometry_msgs/Twist"),
     ("a/b/c", "malformed message type 'a/b/c'"),
     (42, "message type must be a class or a 'pkg/Type' string, not int"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 
 import pytest
@@ -309,3 +310,23 @@ def test_a_relay_and_a_typed_subscriber_on_one_topic_each_get_what_they_asked_fo
         echoed = echo.get(timeout=10)
     assert set(typed) == {"x"} and {m.data for m in relayed} == {"x"} and echoed.data == "x"
     assert not failures
+
+
+def test_a_package_link_that_leads_outside_is_run_and_said(make_node, tmp_path, monkeypatch, notices):
+    """rosrun follows a package's links; so does ipyros, saying where one leads when it leaves the package."""
+    from helpers import TEST_NODES
+
+    outside = tmp_path / "elsewhere" / "tool"
+    outside.parent.mkdir()
+    outside.write_text((TEST_NODES / "ipyros_test_nodes" / "echo_node").read_text())
+    outside.chmod(0o755)
+    package = tmp_path / "pkgs" / "link_pkg"
+    (package / "bin").mkdir(parents=True)
+    (package / "package.xml").write_text("<package format='2'><name>link_pkg</name></package>")
+    (package / "bin" / "linked_tool").symlink_to(outside)
+    monkeypatch.setenv("ROS_PACKAGE_PATH", f"{tmp_path / 'pkgs'}{os.pathsep}{os.environ['ROS_PACKAGE_PATH']}")
+    nd = make_node("link_wrapper").baseNode("linked_tool").basePackage("link_pkg")
+    nd.create()
+    assert nd.base.running
+    told = [n for n in notices if "link_pkg/linked_tool is a link to" in n]
+    assert told and str(outside) in told[0], notices

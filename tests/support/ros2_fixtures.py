@@ -10,8 +10,11 @@ tests in ``both/`` use; ``ros1_fixtures`` gives the same on ROS 1.
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -28,6 +31,11 @@ os.environ["IPYROS_ROS"] = "2"
 os.environ["ROS_DOMAIN_ID"] = str(1 + os.getpid() % 100)  # 1..100: the ids safe on Linux
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
+# ROS_HOME of the run's own (basenode logs, ipyros's Fast DDS profile), removed at the end.
+ROS_HOME = tempfile.mkdtemp(prefix="ipyros-ros2-test-home-")
+os.environ["ROS_HOME"] = ROS_HOME
+os.environ["ROS_LOG_DIR"] = os.path.join(ROS_HOME, "log")
+atexit.register(shutil.rmtree, ROS_HOME, ignore_errors=True)
 
 #: The ROS this plugin is for (the tests in both/ ask).
 ROS = 2

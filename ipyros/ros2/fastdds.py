@@ -1,0 +1,121 @@
+"""Fast DDS as an ipyros session runs it: a profile of ipyros's own, unless the user has one.
+
+Two defaults of Fast DDS (the only middleware of the PyPI wheels) hurt a session:
+
+* its shared-memory segment is 512 KiB, so a camera image or a point cloud leaves shared
+  memory and goes fragmented over UDP: 13 ms for 1 MiB between two processes on one
+  machine, where a 64 MiB segment takes 2.3 ms (measured with the wheels' Fast DDS 3.2; a
+  best-effort 1 MiB topic delivered nothing at all with the default);
+* with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` its participants still receive on every
+  interface (``0.0.0.0``): discovery is kept to the machine, the sockets are not.
+
+So a session writes a profile of its own and points ``FASTDDS_DEFAULT_PROFILES_FILE`` at
+it before rclpy starts: a shared-memory transport with :data:`SEGMENT` bytes, and UDPv4
+(for peers on other machines, and as Fast DDS's fallback), restricted to the loopback
+interface when the session is local. The processes ipyros starts (basenodes, bag players,
+the demo robot) inherit the environment, and so the profile. A user who configured Fast DDS
+(a profile file, builtin transports, another middleware) is left alone, and the load line
+says which applies.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+from typing import Optional
+
+__all__ = ["SEGMENT", "USER_SETTINGS", "local", "prepare", "profile_xml"]
+
+#: The shared-memory segment of each participant: room for a few 16 MiB point clouds in flight.
+SEGMENT = 64 * 1024 * 1024
+
+#: What a user sets to configure Fast DDS themselves; any of them means "leave it alone".
+USER_SETTINGS = ("FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_BUILTIN_TRANSPORTS",
+                 "RMW_FASTRTPS_USE_QOS_FROM_XML", "ROS_DISCOVERY_SERVER")
+
+_MARK = "ipyros-profile"  # in the file's name: a profile of ipyros's, not the user's
+
+
+def local() -> bool:
+    """Whether discovery is kept to this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, or the older
+    ``ROS_LOCALHOST_ONLY=1``)."""
+    return (os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").upper() == "LOCALHOST"
+            or os.environ.get("ROS_LOCALHOST_ONLY") == "1")
+
+
+def profile_xml(loopback_only: bool) -> str:
+    """The Fast DDS XML profile: shared memory of :data:`SEGMENT` bytes, and UDPv4 (on ``lo`` alone if asked)."""
+    interfaces = ("\n        <interfaces><allowlist><interface name=\"lo\"/></allowlist></interfaces>"
+                  if loopback_only else "")
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<!-- Written by ipyros for its session and the processes it starts (see ipyros/ros2/fastdds.py).
+     Set FASTDDS_DEFAULT_PROFILES_FILE to a profile of your own to use that instead. -->
+<dds xmlns="http://www.eprosima.com">
+  <profiles>
+    <transport_descriptors>
+      <transport_descriptor>
+        <transport_id>ipyros_shm</transport_id>
+        <type>SHM</type>
+        <segment_size>{SEGMENT}</segment_size>
+      </transport_descriptor>
+      <transport_descriptor>
+        <transport_id>ipyros_udp</transport_id>
+        <type>UDPv4</type>{interfaces}
+      </transport_descriptor>
+    </transport_descriptors>
+    <participant profile_name="ipyros" is_default_profile="true">
+      <rtps>
+        <userTransports>
+          <transport_id>ipyros_shm</transport_id>
+          <transport_id>ipyros_udp</transport_id>
+        </userTransports>
+        <useBuiltinTransports>false</useBuiltinTransports>
+      </rtps>
+    </participant>
+  </profiles>
+</dds>
+"""
+
+
+def prepare() -> str:
+    """Point Fast DDS at ipyros's profile, unless the user configured it; say which applies, in words.
+
+    Called before rclpy starts in this process; the environment it sets is inherited by every
+    process ipyros starts after it.
+    """
+    rmw = os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    if rmw != "rmw_fastrtps_cpp":
+        return f"{rmw} as configured"
+    mine = os.environ.get("FASTDDS_DEFAULT_PROFILES_FILE", "")
+    if _MARK in Path(mine).name:  # set by this session (or the one that started this process): keep it
+        return _describe(mine)
+    given = next((f"{name}={os.environ[name]}" for name in USER_SETTINGS if os.environ.get(name)), None)
+    if given is not None:
+        return f"Fast DDS as you configured it ({given})"
+    path = _write(profile_xml(loopback_only=local()))
+    if path is None:
+        return "Fast DDS's defaults (ipyros could not write its profile)"
+    os.environ["FASTDDS_DEFAULT_PROFILES_FILE"] = str(path)
+    return _describe(str(path))
+
+
+def _describe(path: str) -> str:
+    where = "UDP on loopback only" if "loopback" in Path(path).name else "UDP on every interface"
+    return f"Fast DDS with ipyros's profile (shared memory up to {SEGMENT >> 20} MiB, {where}; {path})"
+
+
+def _write(text: str) -> Optional[Path]:
+    """The profile in a file of ipyros's (named by its content, so sessions share one and never race)."""
+    folder = Path(os.environ.get("ROS_HOME") or Path.home() / ".ros").expanduser() / "ipyros"
+    kind = "loopback" if "<allowlist>" in text else "any"
+    path = folder / f"{_MARK}-{kind}-{hashlib.sha1(text.encode()).hexdigest()[:10]}.xml"
+    try:
+        if not path.exists():
+            folder.mkdir(parents=True, exist_ok=True)
+            partial = path.with_suffix(f".{os.getpid()}.tmp")
+            partial.write_text(text, encoding="utf-8")
+            os.replace(partial, path)
+    except OSError:
+        return None
+    return path

@@ -1,0 +1,99 @@
+"""Bad input gets one line that says what is wrong and what to do, never a traceback or a wall of text."""
+
+from __future__ import annotations
+
+import pytest
+from std_msgs.msg import String
+
+from ipyros import errors, rosNode
+
+
+def one_line(error: BaseException) -> str:
+    text = str(error)
+    assert "\n" not in text, text
+    assert len(text) < 1000, f"{len(text)} characters"
+    return text
+
+
+def test_a_missing_message_package_names_what_to_install(make_node, session):
+    with pytest.raises(errors.MessageTypeError) as caught:
+        make_node("install_hint").new.subscribe("/hint", handler=print, msgType="nav_msgs/Odometry")
+    text = one_line(caught.value)
+    wanted = "pip install ros-nav-msgs" if session.backend.name == "ROS 2" else "apt install python3-nav-msgs"
+    assert wanted in text, text
+
+
+@pytest.mark.parametrize("call, says, kind", [
+    (lambda: rosNode(), "rosNode() needs a name: takes name and namespace", TypeError),
+    (lambda: rosNode("x", ns="/robot1"), "got unknown keyword argument(s) ns; it takes name and namespace", TypeError),
+    (lambda: rosNode("x", colour="red", size=3), "unknown keyword argument(s) colour, size", TypeError),
+])
+def test_a_node_made_wrong_says_what_rosnode_takes(call, says, kind):
+    with pytest.raises(kind) as caught:
+        call()
+    assert says in one_line(caught.value)
+
+
+def test_one_line_for_what_used_to_be_a_traceback(make_node, tmp_path):
+    nd = make_node("one_line_node")
+    nd.new.publish("/one_line/out", msgType=String)
+    cases = [
+        (lambda: rosNode("one_line_x", session=nd.session).discover(), errors.DeclarationError,
+         "wraps no basenode, so there is nothing to discover"),
+        (lambda: nd.baseBag(5), errors.DeclarationError, "baseBag(5): give the bag's path"),
+        (lambda: nd.export(5), errors.DeclarationError, "export(5): give a path"),
+        (lambda: nd.save(tmp_path), errors.DeclarationError, "that is a directory; give a file"),
+        (lambda: nd.save(5), errors.DeclarationError, "save(5): give a path"),
+        (lambda: nd.timer(1, print, name="bad name"), errors.DeclarationError, "timer name 'bad name'"),
+        (lambda: nd.params["nope"], KeyError, "has no parameter 'nope' (it has none yet)"),
+        (lambda: nd.baseNode("talker", remaps={"a": ["b"] * 100000}), errors.DeclarationError, "characters)"),
+        (lambda: nd.baseNode("talker", args="x" * 200000), errors.DeclarationError, "characters)"),
+    ]
+    for call, kind, says in cases:
+        with pytest.raises(kind) as caught:
+            call()
+        text = one_line(caught.value)
+        assert says in text, text
+    nd.params["gain"] = 1
+    with pytest.raises(KeyError, match="it has 'gain'"):
+        del nd.params["nope"]
+
+
+def test_a_garbage_bag_is_one_line(make_node, tmp_path):
+    garbage = tmp_path / "garbage.bag"
+    garbage.write_bytes(bytes(range(256)) * 64)
+    with pytest.raises(errors.DeclarationError) as caught:
+        make_node("garbage_bag").baseBag(garbage)
+    assert f"cannot read the bag {garbage}" in one_line(caught.value)
+
+
+def test_a_model_with_an_unknown_role_is_one_line(tmp_path):
+    from ipyros import keep
+
+    path = tmp_path / "role.yaml"
+    path.write_text(f"{keep.FORMAT_KEY}: {keep.FORMAT}\nnode: {{name: x, topics: [{{name: /a, resolved: /a, "
+                    "direction: publish, type: std_msgs/String, role: borrowed}]}\n")
+    with pytest.raises(errors.IpyrosError) as caught:
+        keep.load(path)
+    assert "role 'borrowed' is not one of new, reuse" in one_line(caught.value)
+
+
+def test_a_full_disk_is_one_line_and_keeps_the_file(make_node, tmp_path, monkeypatch):
+    import errno
+    import os
+
+    from ipyros import keep
+
+    nd = make_node("full_disk")
+    nd.new.publish("/full/out", msgType=String)
+    target = tmp_path / "node.yaml"
+    target.write_text("before")
+
+    def no_space(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(keep.os, "fsync", no_space)
+    with pytest.raises(errors.IpyrosError) as caught:
+        nd.save(target)
+    assert "No space left on device; nothing was changed there" in one_line(caught.value)
+    assert target.read_text() == "before" and [p.name for p in tmp_path.iterdir()] == ["node.yaml"]

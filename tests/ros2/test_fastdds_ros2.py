@@ -1,0 +1,81 @@
+"""Fast DDS as a session runs it: ipyros's profile (large messages in shared memory; on a local session, UDP on
+loopback only) for the session and what it starts, unless the user configured Fast DDS."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from sensor_msgs.msg import Image
+
+from ros2_fixtures import wait_for
+
+
+def receiving_sockets(pid: int) -> list[tuple[str, int]]:
+    """(address, port) of the UDP sockets ``pid`` has bound to a fixed port (Fast DDS's receivers; its senders
+    take ephemeral ports, from which nothing is read)."""
+    low = int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
+    inodes = set()
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        try:
+            target = os.readlink(fd)
+        except OSError:
+            continue
+        if target.startswith("socket:["):
+            inodes.add(target[8:-1])
+    found = []
+    for line in Path("/proc/net/udp").read_text().splitlines()[1:]:
+        fields = line.split()
+        if fields[9] not in inodes:
+            continue
+        address, port = fields[1].split(":")
+        address = ".".join(str(int(address[i:i + 2], 16)) for i in (6, 4, 2, 0))
+        if int(port, 16) < low:
+            found.append((address, int(port, 16)))
+    return found
+
+
+def test_a_local_session_receives_on_loopback_only(ros2_session, make_node):
+    make_node("fastdds_local").create()
+    assert "ipyros's profile" in ros2_session.backend.transport and "loopback only" in ros2_session.backend.transport
+    sockets = receiving_sockets(os.getpid())
+    assert sockets, "no DDS receivers found"
+    assert all(address in ("127.0.0.1", "239.255.0.1") for address, _ in sockets), sockets
+
+
+def test_a_basenode_it_starts_receives_on_loopback_only_too(make_node):
+    script = Path(__file__).resolve().parent / "peers" / "echo_node.py"
+    nd = make_node("fastdds_base").baseNode(str(script))
+    nd.create()
+    pid = nd.base.pid
+    wait_for(lambda: receiving_sockets(pid), timeout=20, what="the basenode's receivers")
+    assert all(address in ("127.0.0.1", "239.255.0.1") for address, _ in receiving_sockets(pid))
+    assert "ipyros-profile" in Path(f"/proc/{pid}/environ").read_bytes().decode(errors="replace")
+
+
+def test_a_users_own_fast_dds_profile_is_left_alone(tmp_path):
+    mine = tmp_path / "mine.xml"
+    mine.write_text('<?xml version="1.0"?><dds xmlns="http://www.eprosima.com"><profiles/></dds>')
+    code = ("from ipyros.ros2 import fastdds; import os; print(fastdds.prepare()); "
+            "print(os.environ['FASTDDS_DEFAULT_PROFILES_FILE'])")
+    env = {**os.environ, "FASTDDS_DEFAULT_PROFILES_FILE": str(mine)}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60).stdout
+    assert f"Fast DDS as you configured it (FASTDDS_DEFAULT_PROFILES_FILE={mine})" in out and str(mine) in out
+
+
+def test_a_large_best_effort_topic_is_delivered(make_node, peer):
+    """With Fast DDS's default 512 KiB shared-memory segment, a best-effort 1 MiB image delivered nothing."""
+    listener = peer("listen.py", "/fastdds/image", "sensor_msgs/Image", "header.frame_id", "--best-effort")
+    listener.wait_line("ready")
+    nd = make_node("fastdds_camera").new.publish("/fastdds/image", msgType=Image, qos="sensor_data").create()
+    wait_for(lambda: nd.sent()[0].connections, timeout=20, what="the listener")
+    image = Image(height=1024, width=1024, encoding="mono8", step=1024, data=bytes(1 << 20))
+    for i in range(30):
+        image.header.frame_id = str(i)
+        nd.write("/fastdds/image", image)
+        time.sleep(1 / 30)
+    wait_for(lambda: sum(line.startswith("heard") for line in listener.lines) >= 15, timeout=10,
+             what="most of 30 images (best effort)")
