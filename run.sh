@@ -137,7 +137,9 @@ cmd="${1:-demo}"
 shift || true
 [[ "$cmd" == ros2 || "$cmd" == test-ros2 || "$cmd" == unit ]] || ros1_setup
 case "$cmd" in
-  ros2)     ros2_venv && AMENT_PREFIX_PATH="${AMENT_PREFIX_PATH:-$venv2}" IPYROS_ROS=2 \
+  ros2)     # discovery kept to this machine unless asked (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET reaches a robot)
+            ros2_venv && AMENT_PREFIX_PATH="${AMENT_PREFIX_PATH:-$venv2}" IPYROS_ROS=2 \
+              ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}" \
               exec "$venv2/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   demo)     exec "$venv/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   ipython)  exec "$venv/bin/ipython" --ext ipyros "$@" ;;

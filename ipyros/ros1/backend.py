@@ -87,7 +87,9 @@ class Ros1:
 
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]:
         """Who publishes and subscribes to ``topic``, each with its type (``%topics -v``)."""
-        return introspect.topic_endpoints(self._master(), topic)
+        from .master import configured_uri
+
+        return introspect.topic_endpoints(self.process.master_uri or configured_uri(), topic)
 
     def node_pid(self, node: str) -> Optional[int]:
         return introspect.node_pid(self._master(), node)

@@ -227,7 +227,7 @@ def test_launch_args_are_given_like_roslaunch_file_name_value(make_node, ros_mas
         wait_for(lambda: feeder.write("/in", String("x")) or out, timeout=20, what="a message through it")
     finally:
         nd.shutdown()
-    again = rosNode.load(tmp_path / "r2.yaml", session=nd._session)
+    again = rosNode.load(tmp_path / "r2.yaml", session=nd._session, trust=True)
     assert again.model().base.launch_args == {"robot": "r2"} and again.basenode_name == "/r2_planner"
 
 

@@ -91,5 +91,5 @@ def test_parse_data_reads_python_literals_then_yaml():
     assert parse_data("linear:\n  x: 1\nangular: {z: 2}") == {"linear": {"x": 1}, "angular": {"z": 2}}
     assert parse_data("hello world") == "hello world"
     assert parse_data("[1, 2, 3]") == [1, 2, 3]
-    with pytest.raises(MessageTypeError, match=r"cannot read the message data \(line 1, column \d+\)"):
+    with pytest.raises(MessageTypeError, match=r"the message data is not valid YAML at line 1, column \d+"):
         parse_data("{a: [1,")
