@@ -42,7 +42,7 @@ def test_topics_lists_live_topics_with_type_publishers_and_subscribers(ip, capsy
         assert "/mg/words" in out and "/mg/rate" not in out
         ok(ip, "%topics -v /mg/words")  # by endpoint: each node's own type (QoS is ROS 2's: here TCP)
         out = capsys.readouterr().out
-        assert "/mg/words" in out and "publisher" in out and "std_msgs/String" in out and "TCP" in out
+        assert "/mg/words" in out and "subscriber" in out and "std_msgs/String" in out and "TCP" in out, out
         publisher = _loaded[id(ip)].graph.snapshot.publishers["/mg/rate"][0]  # this test's peer, not an older one
         ok(ip, f"%topics -n {publisher.lstrip('/')}")
         out = capsys.readouterr().out
