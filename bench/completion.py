@@ -43,9 +43,9 @@ from IPython.core.interactiveshell import InteractiveShell
 from traitlets.config import Config
 
 from bench.relay import BenchError, Child, Master, stop_cleanly_on_sigterm, wait_until
-from ipyros.completion import RosMatcher, default_catalog, install, uninstall
-from ipyros.graph import GraphCache
-from ipyros.model import NodeModel, TopicModel
+from ipyros.ipython.completion import RosMatcher, default_catalog, install, uninstall
+from ipyros.tools.graph import GraphCache
+from ipyros.core.model import NodeModel, TopicModel
 
 ROOT = Path(__file__).resolve().parent.parent
 SCRIPT = ROOT / "tests" / "nodes" / "many_topics.py"
@@ -213,7 +213,7 @@ def run_ros2(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[
     env = environment()
     os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "AMENT_PREFIX_PATH")})
     os.environ["IPYROS_ROS"] = "2"
-    from ipyros.session import current
+    from ipyros.node.session import current
 
     rows: list[Row] = []
     notes: list[str] = []

@@ -8,22 +8,22 @@ from __future__ import annotations
 
 __version__ = "0.1.0"
 
-from .dsl import rosNode  # noqa: E402
-from .errors import IpyrosError  # noqa: E402
-from .robot import demo_robot, stop_demo_robot  # noqa: E402
-from .savefile import restore, restoring, save_session, spin  # noqa: E402
+from .core.errors import IpyrosError  # noqa: E402
+from .files.savefile import restore, restoring, save_session, spin  # noqa: E402
+from .node.dsl import rosNode  # noqa: E402
+from .tools.robot import demo_robot, stop_demo_robot  # noqa: E402
 
 __all__ = ["rosNode", "IpyrosError", "save_session", "restore", "restoring", "spin", "demo_robot", "stop_demo_robot",
            "load_ipython_extension", "unload_ipython_extension"]
 
 
-def load_ipython_extension(ipython):  # noqa: D103 - documented in ipyros.extension
-    from .extension import load_ipython_extension as load
+def load_ipython_extension(ipython):  # noqa: D103 - documented in ipyros.ipython.extension
+    from .ipython.extension import load_ipython_extension as load
 
     load(ipython)
 
 
 def unload_ipython_extension(ipython):  # noqa: D103
-    from .extension import unload_ipython_extension as unload
+    from .ipython.extension import unload_ipython_extension as unload
 
     unload(ipython)

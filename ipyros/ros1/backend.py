@@ -1,12 +1,12 @@
-"""ROS 1 as a :class:`~ipyros.backend.Backend`: the seam's calls, answered by :mod:`.runtime`."""
+"""ROS 1 as a :class:`~ipyros.node.backend.Backend`: the seam's calls, answered by :mod:`.runtime`."""
 
 from __future__ import annotations
 
 from typing import Any, Callable, Optional
 
-from ..qos import Qos
-from ..slots import HandlerSlot
-from ..errors import MasterError
+from ..core.errors import MasterError
+from ..core.qos import Qos
+from ..core.slots import HandlerSlot
 from . import introspect, runtime
 
 __all__ = ["Ros1"]
@@ -53,7 +53,7 @@ class Ros1:
     def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
                       alive: Optional[Callable[[], bool]] = None) -> Any:
         """The interface of the running node ``name``, read from the master once it has settled."""
-        from ..discovery import wait_for_node
+        from ..tools.discovery import wait_for_node
 
         return wait_for_node(master_uri or "", name, timeout=timeout, alive=alive)
 

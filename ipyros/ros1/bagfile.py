@@ -11,7 +11,7 @@ import threading
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-from ..errors import DeclarationError, first_line
+from ..core.errors import DeclarationError, first_line
 
 __all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
 

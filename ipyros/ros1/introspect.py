@@ -16,8 +16,7 @@ import time
 from typing import Any, Optional
 from urllib.parse import urlparse
 
-
-from ..errors import IpyrosError
+from ..core.errors import IpyrosError
 from .master import master_proxy
 
 __all__ = ["call", "node_pid", "params_under", "service_type", "topic_endpoints"]

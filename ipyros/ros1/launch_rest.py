@@ -12,7 +12,7 @@ two things, held by one handle, :class:`LaunchBase` (``nd.base``):
    ``roslaunch`` on SIGINT or SIGTERM, stopping its nodes;
 2. **the basenode**, once the rest is up: its private params are set on the parameter
    server (as roslaunch would have set them) and it is started remapped as for
-   ``baseNode`` (:class:`~ipyros.base.BaseProcess`), at the name it has in the file.
+   ``baseNode`` (:class:`~ipyros.processes.basenode.BaseProcess`), at the name it has in the file.
 
 ``stop()`` stops the basenode, then the rest. The runner is a managed child process
 (own process group, SIGINT → SIGTERM → SIGKILL, stopped at exit, dies with the
@@ -32,10 +32,10 @@ import time
 from pathlib import Path
 from typing import Any, Optional
 
-from ..base import BaseProcess, OnExit, temp_log
-from ..errors import BaseNodeError, IpyrosError
+from ..core.errors import BaseNodeError, IpyrosError
+from ..core.model import BaseModel
+from ..processes.basenode import BaseProcess, OnExit, temp_log
 from .master import master_proxy
-from ..model import BaseModel
 
 #: Lines the runner prints to say how its start went (the session reads its log for them).
 READY = "ipyros-launch-rest: running"
@@ -54,7 +54,7 @@ RUNNER_STOP_TIMEOUT = 3 * (NODE_SIGINT_TIMEOUT + NODE_SIGTERM_TIMEOUT)
 class LaunchBase:
     """A basenode from a launch file together with the rest of that file: started and stopped as one.
 
-    Behaves like the :class:`~ipyros.base.BaseProcess` of the basenode (``tail``,
+    Behaves like the :class:`~ipyros.processes.basenode.BaseProcess` of the basenode (``tail``,
     ``restart``, ``running``, ``pid``, ``log_path`` are the basenode's); ``rest`` is the
     runner of the rest of the launch file, with a log of its own (``rest.tail()``).
     """

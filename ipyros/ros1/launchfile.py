@@ -8,7 +8,7 @@ doing, so ipyros reads exactly what ``roslaunch`` would run) and answers two que
 
 - **the node** (:func:`read_base`): which ``<node>`` is meant (by full name
   ``/robot1/planner``, or a relative or short name if only one node has it), and what
-  it is as a :class:`~ipyros.model.BaseModel`: package, executable, name, namespace,
+  it is as a :class:`~ipyros.core.model.BaseModel`: package, executable, name, namespace,
   remaps (resolved as the node resolves them), private params (``<param>`` and
   ``<rosparam>`` inside the node, nested again), args and environment;
 - **the rest** (:func:`without`): the same loaded configuration minus that node and
@@ -27,10 +27,9 @@ import socket
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-
-from .. import names
-from ..errors import BaseNodeError
-from ..model import BaseModel
+from ..core import names
+from ..core.errors import BaseNodeError
+from ..core.model import BaseModel
 
 if TYPE_CHECKING:
     from roslaunch.config import ROSLaunchConfig

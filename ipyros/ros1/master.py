@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 from typing import Optional
 from urllib.parse import urlparse
 
-from ..errors import MasterError
-from ..process import spawn, stop_process
+from ..core.errors import MasterError
+from ..processes.process import spawn, stop_process
 
 DEFAULT_URI = "http://localhost:11311/"
 LOOPBACK = "127.0.0.1"

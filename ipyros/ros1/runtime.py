@@ -3,7 +3,7 @@
 rospy allows one ROS node per process. :class:`ProcessNode` is that node; every DSL
 node of the session hosts its publishers, subscribers, relays, timers and services in
 it. Endpoints are small objects with a ``close()``; the DSL decides which exist
-(see :mod:`ipyros.plan`), this module only opens and closes them.
+(see :mod:`ipyros.core.plan`), this module only opens and closes them.
 
 Performance choices (measured in bench/relay.py):
 - publishers are synchronous (``queue_size=None``): no hand-off to a publisher thread;
@@ -35,11 +35,12 @@ import rospy
 from rospy.impl.tcpros_service import convert_return_to_response
 from rospy.msg import serialize_message
 
+from ..core.errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
+from ..core.msgbuild import explain_unsendable
+from ..core.slots import Arrival, HandlerSlot, Pristine, SendFigures
 from . import sending
-from ..errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
-from ..msgbuild import explain_unsendable
 from .master import master_proxy
-from ..slots import Arrival, HandlerSlot, Pristine, SendFigures
+
 
 def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
     """A synchronous publisher (``queue_size=None`` on purpose; see the module docstring)."""

@@ -4,7 +4,7 @@
   thread; publications, subscriptions, byte relays, timers, services, parameters, and
   a basenode's interface read from the graph;
 - :mod:`.packages`: a package's executables as ``ros2 run`` finds them (the ament index);
-- :mod:`.backend`: those behind :class:`ipyros.backend.Backend`.
+- :mod:`.backend`: those behind :class:`ipyros.node.backend.Backend`.
 
 The DSL and wrapping run here; the magics' view of the graph (%topics, %echo, %pub,
 completion of live names) and a qos= option are the next steps (issues 10 and 11).

@@ -1,4 +1,4 @@
-"""ROS 2 as a :class:`~ipyros.backend.Backend`: the seam's calls, answered by :mod:`.runtime`."""
+"""ROS 2 as a :class:`~ipyros.node.backend.Backend`: the seam's calls, answered by :mod:`.runtime`."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from typing import Any, Callable, Optional
 from rclpy._rclpy_pybind11 import RCLError
 from rclpy.exceptions import NameValidationException
 
-from ..errors import DeclarationError, IpyrosError, NodeStateError, first_line
-from ..qos import Qos
-from ..slots import HandlerSlot
+from ..core.errors import DeclarationError, IpyrosError, NodeStateError, first_line
+from ..core.qos import Qos
+from ..core.slots import HandlerSlot
 from . import fastdds, introspect, runtime
 from .runtime import Complain
 

@@ -25,7 +25,7 @@ class Ros1Bag:
 
     def __init__(self, path: str) -> None:
         from rosbags.rosbag1 import Reader as Ros1Reader
-        from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
         self._reader = Ros1Reader(path)
         self._store = get_typestore(Stores.ROS2_JAZZY)

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-from ..errors import DeclarationError, first_line
+from ..core.errors import DeclarationError, first_line
 
 __all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
 
@@ -109,7 +109,7 @@ class BagWriter:
     def write(self, topic: str, msg: Any) -> None:
         from rclpy.serialization import serialize_message
 
-        from ..msgtypes import type_name
+        from ..core.msgtypes import type_name
 
         if self._closed:
             return

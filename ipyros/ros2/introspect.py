@@ -13,8 +13,8 @@ import re
 import threading
 from typing import Any
 
-from ..errors import IpyrosError
-from ..msgbuild import conform
+from ..core.errors import IpyrosError
+from ..core.msgbuild import conform
 from .runtime import ProcessNode
 
 __all__ = ["call", "node_params", "service_type", "set_node_param"]

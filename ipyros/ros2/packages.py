@@ -12,8 +12,8 @@ import os
 import sys
 from pathlib import Path
 
-from ..base import DEMO_DIR, did_you_mean, refuse_path_with_package
-from ..errors import BaseNodeError
+from ..core.errors import BaseNodeError
+from ..processes.basenode import DEMO_DIR, did_you_mean, refuse_path_with_package
 
 __all__ = ["find_executable", "list_executables", "list_packages", "prefixes"]
 

@@ -13,7 +13,7 @@ spins, which a prompt does all the time. So, as in any rclpy node, a handler tha
 holds up the session's other callbacks: keep handlers short (a timer, not a sleep).
 
 Endpoints mirror :mod:`ipyros.ros1.runtime`: each has ``close()``; handlers go through
-a :class:`~ipyros.slots.HandlerSlot`; relays forward serialized bytes (``raw=True``),
+a :class:`~ipyros.core.slots.HandlerSlot`; relays forward serialized bytes (``raw=True``),
 never deserialising.
 """
 
@@ -35,11 +35,11 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
-from .. import msgtypes
-from ..errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
-from ..msgbuild import conform
-from ..qos import Qos
-from ..slots import Arrival, HandlerSlot, Pristine, SendFigures
+from ..core import msgtypes
+from ..core.errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
+from ..core.msgbuild import conform
+from ..core.qos import Qos
+from ..core.slots import Arrival, HandlerSlot, Pristine, SendFigures
 
 #: Reliable, and deep enough that a burst is not cut short: what ROS 1's unbounded
 #: subscriber queue gave. A declaration's ``qos=`` overrides any of it.
@@ -288,9 +288,9 @@ class ProcessNode:
             if topic not in publishers:
                 publishers[topic] = graph.get_publishers_info_by_topic(topic)
             for info in publishers[topic]:
-                theirs, peer = _short(info.topic_type), f"{info.node_namespace.rstrip('/')}/{info.node_name}"
-                if theirs == type_name or (topic, peer, theirs, complain) in self._told:
-                    continue
+                theirs, peer = _short(info.topic_type), peer_name(info.node_namespace, info.node_name)
+                if theirs == type_name or peer is None or (topic, peer, theirs, complain) in self._told:
+                    continue  # (a peer discovery has not named yet is looked at again next time)
                 self._told.add((topic, peer, theirs, complain))
                 complain(f"{topic}: {peer} publishes {theirs} there, and this node subscribes to it as {type_name}: "
                          f"nothing passes between them (ROS 2 connects no two types); subscribe with "
@@ -747,7 +747,7 @@ def _short(type_name: str) -> str:
 
 def node_interface(graph: Node, fullname: str) -> Any:
     """The publications, subscriptions and services of the running node ``fullname``, or None if unseen."""
-    from ..discovery import Interface
+    from ..tools.discovery import Interface
 
     namespace, name = fullname.rsplit("/", 1)
     namespace = namespace or "/"
@@ -782,7 +782,7 @@ def wait_for_node(graph: Node, fullname: str, timeout: float = 10.0, settle: flo
 
     Raises :class:`BaseNodeError` if it never shows up, at once when ``alive()`` turns False.
     """
-    from ..errors import BaseNodeError
+    from ..core.errors import BaseNodeError
 
     deadline = time.monotonic() + timeout
     last, stable_since = None, time.monotonic()

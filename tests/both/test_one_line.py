@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 from std_msgs.msg import String
 
-from ipyros import errors, rosNode
+from ipyros.core import errors
+from ipyros import rosNode
 
 
 def one_line(error: BaseException) -> str:
@@ -68,7 +69,7 @@ def test_a_garbage_bag_is_one_line(make_node, tmp_path):
 
 
 def test_a_model_with_an_unknown_role_is_one_line(tmp_path):
-    from ipyros import keep
+    from ipyros.files import modelfile as keep
 
     path = tmp_path / "role.yaml"
     path.write_text(f"{keep.FORMAT_KEY}: {keep.FORMAT}\nnode: {{name: x, topics: [{{name: /a, resolved: /a, "
@@ -82,7 +83,7 @@ def test_a_full_disk_is_one_line_and_keeps_the_file(make_node, tmp_path, monkeyp
     import errno
     import os
 
-    from ipyros import keep
+    from ipyros.files import modelfile as keep
 
     nd = make_node("full_disk")
     nd.new.publish("/full/out", msgType=String)

@@ -11,7 +11,7 @@ from std_srvs.srv import SetBool
 
 from support import request_of, response_of, wait_for
 
-from ipyros import errors
+from ipyros.core import errors
 
 
 def counting(make_node, name: str, topic: str):

@@ -21,7 +21,9 @@ from std_msgs.msg import String
 
 from shell import error_of, ip, ok  # noqa: F401 - the ip fixture
 
-from ipyros import errors, keep, rosNode
+from ipyros.core import errors
+from ipyros.files import modelfile as keep
+from ipyros import rosNode
 
 FORMAT = {keep.FORMAT_KEY: keep.FORMAT}
 

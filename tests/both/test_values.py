@@ -17,7 +17,7 @@ from std_srvs.srv import SetBool
 from shell import ip, ok  # noqa: F401 - the ip fixture
 from support import request_of, response_of, wait_for
 
-from ipyros import errors
+from ipyros.core import errors
 
 
 def one_line(error: BaseException) -> str:

@@ -11,7 +11,7 @@ from std_srvs.srv import SetBool, SetBoolResponse
 from ros1_fixtures import master_state, wait_for
 from peer import Peer
 
-from ipyros import errors
+from ipyros.core import errors
 
 
 def one_line(error: BaseException) -> str:

@@ -20,16 +20,10 @@ import rosgraph
 
 from ros1_fixtures import master_state, wait_for
 from helpers import TEST_NODES, pid_alive, use_test_nodes
-from ipyros.base import (
-    BaseProcess,
-    exit_reason,
-    find_executable,
-    list_executables,
-    list_packages,
-    param_arg,
-)
-from ipyros.errors import BaseNodeError, NodeStateError
-from ipyros.model import BaseModel
+from ipyros.processes.basenode import (BaseProcess, exit_reason, find_executable, list_executables, list_packages,
+                                       param_arg)
+from ipyros.core.errors import BaseNodeError, NodeStateError
+from ipyros.core.model import BaseModel
 from peer import Peer
 
 
@@ -341,7 +335,7 @@ def test_restart_is_possible_from_on_exit(ros_master, stopper):
 
 INTERPRETER = textwrap.dedent("""
     import sys, time
-    from ipyros.base import BaseProcess, find_executable
+    from ipyros.processes.basenode import BaseProcess, find_executable
     proc = BaseProcess(find_executable("ipyros_test_nodes", "echo_node"), node_name=sys.argv[1]).start()
     while not any("echo_node ready" in line for line in proc.tail()):
         time.sleep(0.02)

@@ -17,9 +17,10 @@ from IPython.core.interactiveshell import InteractiveShell
 from topic_nodes import many_topics
 from traitlets.config import Config
 
-from ipyros.completion import IDENTIFIER, Catalog, RosMatcher, default_catalog, install, string_argument, uninstall
-from ipyros.graph import GraphCache
-from ipyros.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from ipyros.ipython.completion import (IDENTIFIER, Catalog, RosMatcher, default_catalog, install, string_argument,
+                                       uninstall)
+from ipyros.tools.graph import GraphCache
+from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
 
 LIVE = {
     "/ct/turtle1/cmd_vel": "geometry_msgs/Twist",
@@ -162,7 +163,7 @@ def test_pub_magic_offers_the_live_type_then_a_template(matcher):
     # After the type: the whole message, every field at its default, which %pub reads back.
     (template,) = texts(matcher, "%pub /ct/turtle2/cmd_vel geometry_msgs/Twist ")
     assert template == "{linear: {x: 0.0, y: 0.0, z: 0.0}, angular: {x: 0.0, y: 0.0, z: 0.0}}"
-    from ipyros.msgbuild import build_message, parse_data
+    from ipyros.core.msgbuild import build_message, parse_data
 
     assert build_message("geometry_msgs/Twist", parse_data(template)).linear.x == 0.0
     assert texts(matcher, "%pub /ct/odom std_msgs/String ") == ["{data: ''}"]

@@ -20,9 +20,10 @@ from geometry_msgs.msg import Pose, PoseStamped, Twist, Vector3
 from IPython.core.error import UsageError
 from std_msgs.msg import Bool
 
-from ipyros.base import BaseProcess, DEMO_DIR, find_executable
-from ipyros.errors import BaseNodeError
-from ipyros.robot import ROBOTS, DemoRobotError, demo_robot, launch_args, read_launch, running_robot, stop_demo_robot
+from ipyros.processes.basenode import BaseProcess, DEMO_DIR, find_executable
+from ipyros.core.errors import BaseNodeError
+from ipyros.tools.robot import (ROBOTS, DemoRobotError, demo_robot, launch_args, read_launch, running_robot,
+                                stop_demo_robot)
 from shell import error_of, ip, ok  # noqa: F401
 
 

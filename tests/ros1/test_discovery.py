@@ -7,9 +7,9 @@ from rich.console import Console
 
 from ros1_fixtures import free_port
 from helpers import use_test_nodes
-from ipyros.base import BaseProcess, find_executable
-from ipyros.discovery import Interface, discover, interface_table, wait_for_node
-from ipyros.errors import BaseNodeError, MasterError
+from ipyros.processes.basenode import BaseProcess, find_executable
+from ipyros.tools.discovery import Interface, discover, interface_table, wait_for_node
+from ipyros.core.errors import BaseNodeError, MasterError
 
 
 @pytest.fixture(autouse=True)

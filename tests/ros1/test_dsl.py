@@ -12,7 +12,7 @@ from std_msgs.msg import String, UInt32
 from ros1_fixtures import master_state, wait_for
 from peer import Peer
 
-from ipyros import errors
+from ipyros.core import errors
 
 
 def test_two_nodes_share_the_process_node(make_node, ros_master):
@@ -219,7 +219,7 @@ def test_a_raising_handler_is_reported_counted_and_the_node_keeps_serving(make_n
 
 
 def test_model_is_plain_data_and_round_trips(make_node):
-    from ipyros.model import NodeModel
+    from ipyros.core.model import NodeModel
 
     nd = make_node("dsl_model")
     (nd.new.subscribe(topic="/turtle1/pose", handler=print, msgType=Pose)
@@ -239,7 +239,7 @@ def test_names_resolve_in_the_node_namespace(make_node):
 
 
 def test_the_node_displays_as_a_table(make_node):
-    from ipyros.display import render_text
+    from ipyros.ipython.display import render_text
 
     nd = make_node("dsl_show")
     nd.new.publish("/dsl_show", msgType=Twist)
@@ -248,7 +248,7 @@ def test_the_node_displays_as_a_table(make_node):
 
 
 def test_every_change_is_in_the_history(make_node):
-    from ipyros.display import render_text
+    from ipyros.ipython.display import render_text
 
     nd = make_node("dsl_history")
     nd.new.publish("/dsl_history/out", msgType=Twist)

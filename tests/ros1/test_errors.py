@@ -9,7 +9,7 @@ from std_msgs.msg import String, UInt32
 from ros1_fixtures import wait_for
 from peer import Peer
 
-from ipyros import errors
+from ipyros.core import errors
 
 
 @pytest.mark.parametrize("spec, message", [

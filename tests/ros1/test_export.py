@@ -27,10 +27,10 @@ from std_srvs.srv import Empty
 from ros1_fixtures import master_state, wait_for
 from helpers import pid_alive
 
-from ipyros import export
+from ipyros.files import export
 from ipyros.ros1 import runtime
-from ipyros.errors import IpyrosError
-from ipyros.wrap import basenode_remaps
+from ipyros.core.errors import IpyrosError
+from ipyros.node.wrapping import basenode_remaps
 
 speed = 2.5  # read by on_pose when called: exported as a literal
 plain = wrapper = None  # the nodes the handlers write with: bound to the live node by the builders below

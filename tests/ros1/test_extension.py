@@ -19,9 +19,9 @@ from traitlets.config import Config
 
 from ipyros import IpyrosError, rosNode
 from ipyros.ros1 import master as master_mod
-from ipyros.completion import IDENTIFIER
-from ipyros.extension import _loaded
-from ipyros.magics import RosMagics
+from ipyros.ipython.completion import IDENTIFIER
+from ipyros.ipython.extension import _loaded
+from ipyros.ipython.magics import RosMagics
 from shell import error_of, interactive_shell, ip, ok  # noqa: F401
 
 MAGICS = {"line": {"topics", "echo", "pub", "handler", "try", "status", "wrap"}, "cell": {"pub", "handler"}}
@@ -183,7 +183,7 @@ def test_handler_failures_print_the_handler_traceback(ip, capsys):
 
 
 def _failure():
-    from ipyros.slots import HandlerFailure
+    from ipyros.core.slots import HandlerFailure
 
     return HandlerFailure("n /t", "h", ValueError("boom"), "Traceback ...", 0)
 
@@ -294,7 +294,7 @@ def rate_topic():
 
 def test_every_magic_has_a_help_text_that_reads_right(ip, capsys):
     """%name? shows each magic's docstring and usage: under its own name, with no argparse leftovers."""
-    from ipyros.extension import _loaded as loaded
+    from ipyros.ipython.extension import _loaded as loaded
 
     extension = loaded[id(ip)]
     names = sorted({name for magics in extension.magics for kind in ("line", "cell")

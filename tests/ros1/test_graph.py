@@ -10,7 +10,7 @@ import pytest
 from ros1_fixtures import free_port, wait_for
 from topic_nodes import many_topics, stop
 
-from ipyros.graph import GraphCache, GraphSnapshot, fetch_snapshot
+from ipyros.tools.graph import GraphCache, GraphSnapshot, fetch_snapshot
 
 
 @pytest.fixture

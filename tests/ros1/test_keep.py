@@ -24,9 +24,10 @@ from std_srvs.srv import Empty, EmptyResponse
 
 from ros1_fixtures import master_state, wait_for
 
-from ipyros import export, keep, rosNode
+from ipyros.files import export, modelfile as keep
+from ipyros import rosNode
 from ipyros.ros1 import runtime
-from ipyros.errors import IpyrosError
+from ipyros.core.errors import IpyrosError
 
 speed = 2.5  # read by showPose when called: exported as a literal
 

@@ -22,9 +22,9 @@ from std_msgs.msg import Int32, String
 from ros1_fixtures import master_state, wait_for
 from helpers import pid_alive
 
-from ipyros import errors
-from ipyros.model import NodeModel
-from ipyros.wrap import basenode_remaps
+from ipyros.core import errors
+from ipyros.core.model import NodeModel
+from ipyros.node.wrapping import basenode_remaps
 
 LAUNCH = Path(__file__).resolve().parents[1] / "launch"
 ROBOT = str(LAUNCH / "robot.launch")

@@ -9,8 +9,8 @@ from ros1_fixtures import master_state, wait_for
 from IPython.core.error import UsageError
 from peer import Peer
 
-from ipyros.errors import MessageTypeError, TopicTypeConflict
-from ipyros.extension import _loaded
+from ipyros.core.errors import MessageTypeError, TopicTypeConflict
+from ipyros.ipython.extension import _loaded
 from shell import ctrl_c_after, error_of, ip, ok  # noqa: F401
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ros1_fixtures import wait_for
 
-from ipyros.extension import _loaded
+from ipyros.ipython.extension import _loaded
 from shell import error_of, ip, ok  # noqa: F401
 
 SERVER = """\

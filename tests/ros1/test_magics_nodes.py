@@ -9,8 +9,8 @@ from ros1_fixtures import wait_for
 from IPython.core.error import UsageError
 from peer import Peer
 
-from ipyros.errors import HandlerError, IpyrosError, NotDeclaredError
-from ipyros.extension import _loaded
+from ipyros.core.errors import HandlerError, IpyrosError, NotDeclaredError
+from ipyros.ipython.extension import _loaded
 from shell import error_of, ip, ok  # noqa: F401
 
 LISTENER = textwrap.dedent("""\
@@ -242,7 +242,7 @@ def test_status_shows_the_figures_of_each_handler_and_the_nodes(node_ip, capsys)
 
 def test_try_history_setting_resizes_what_subscriptions_keep(node_ip):
     ip = node_ip
-    from ipyros.plan import topic_slot
+    from ipyros.core.plan import topic_slot
 
     slot = ip.user_ns["nd"].slot(topic_slot("/mn/numbers"))
     assert slot.recent.maxlen == 20

@@ -8,8 +8,8 @@ from IPython.core.error import UsageError
 from peer import Peer
 
 from ipyros import rosNode
-from ipyros.errors import BaseNodeError
-from ipyros.magics.wrap import rosrun_words
+from ipyros.core.errors import BaseNodeError
+from ipyros.ipython.magics.wrap import rosrun_words
 from shell import error_of, ip, ok  # noqa: F401
 
 

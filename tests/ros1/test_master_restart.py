@@ -13,7 +13,7 @@ from peer import Peer
 
 SETUP = """
 from ipyros import rosNode
-from ipyros.session import SessionConfig, configure
+from ipyros.node.session import SessionConfig, configure
 from std_msgs.msg import String, UInt32
 from std_srvs.srv import Empty, EmptyResponse
 configure(SessionConfig(master_uri={uri!r}, start_master=False))

@@ -8,8 +8,8 @@ from geometry_msgs.msg import Twist, Vector3
 from sensor_msgs.msg import Image
 from std_msgs.msg import String
 
-from ipyros.errors import MessageTypeError
-from ipyros.msgbuild import build_message, parse_data
+from ipyros.core.errors import MessageTypeError
+from ipyros.core.msgbuild import build_message, parse_data
 
 
 def test_nested_dict_fills_the_fields_given_and_keeps_defaults_for_the_rest():

@@ -19,7 +19,7 @@ from helpers import pid_alive
 from readme import ROOT, readme_lines, watch_the_turtle_go_round
 from terminal import Terminal, descendants, prompt, prompt_reads, run
 
-from ipyros.robot import TURTLE_CIRCLE
+from ipyros.tools.robot import TURTLE_CIRCLE
 
 def test_the_readme_shows_the_lines_the_demo_suggests():
     assert readme_lines() == list(TURTLE_CIRCLE) and len(TURTLE_CIRCLE) == 5

@@ -18,8 +18,10 @@ import pytest
 from ros1_fixtures import wait_for
 from shell import error_of, ip, ok  # noqa: F401
 
-from ipyros import journal, rosNode, savefile
-from ipyros.errors import IpyrosError
+from ipyros.core import journal
+from ipyros import rosNode
+from ipyros.files import savefile
+from ipyros.core.errors import IpyrosError
 
 SETUP = '''
 from std_msgs.msg import String
@@ -115,7 +117,7 @@ def test_the_history_is_written_to_a_file_of_its_own_as_it_goes(sf):
 
 def test_history_files_are_the_users_alone(tmp_path):
     """Handler sources and parameter values (tokens typed at the prompt) are in there."""
-    from ipyros.session import Change
+    from ipyros.node.session import Change
 
     made_open = tmp_path / "history"
     made_open.mkdir(mode=0o755)  # as an older ipyros left it

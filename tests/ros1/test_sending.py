@@ -9,7 +9,7 @@ from std_msgs.msg import UInt32
 from ros1_fixtures import wait_for
 from peer import Peer
 
-from ipyros.errors import MessageTypeError
+from ipyros.core.errors import MessageTypeError
 from shell import error_of, ip, ok  # noqa: F401
 
 

@@ -12,7 +12,7 @@ import pytest
 from ros1_fixtures import free_port, master_state, wait_for
 
 from ipyros.ros1 import master as masters
-from ipyros.errors import MasterError
+from ipyros.core.errors import MasterError
 
 
 def run_python(code: str, env: dict, timeout: float = 60) -> subprocess.CompletedProcess:
@@ -63,7 +63,7 @@ def test_an_embedded_master_and_what_it_starts_listen_on_loopback_only(ros_home)
     code = textwrap.dedent("""
         import os, subprocess, sys
         from ipyros import rosNode
-        from ipyros.session import current
+        from ipyros.node.session import current
         from std_msgs.msg import String
         w = rosNode("loopback_wrapper")
         w.baseNode("echo_node").basePackage("ipyros_test_nodes").reuse.publish("out", type=String)
@@ -110,7 +110,7 @@ def test_a_name_taken_by_a_live_node_is_refused(ros_master):
         peer.wait_line("ready")
         result = run_python("""
             from ipyros import rosNode
-            from ipyros.errors import NodeStateError
+            from ipyros.core.errors import NodeStateError
             try:
                 rosNode("taken_name").create()
             except NodeStateError as e:

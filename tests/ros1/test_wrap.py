@@ -11,7 +11,8 @@ from std_msgs.msg import String
 
 from ros1_fixtures import master_state, wait_for
 
-from ipyros import errors, rosNode
+from ipyros.core import errors
+from ipyros import rosNode
 
 speed = 4.5
 
@@ -173,7 +174,7 @@ def test_discovery_declares_the_whole_interface(make_node):
     assert ("/in", "subscribe", "std_msgs/String") in declared
     assert {(s.resolved, s.type) for s in w.model().services} == {("/echo_node/reset", "std_srvs/Empty")}
     assert all(t.role == "reuse" for t in w.model().topics)
-    from ipyros.display import render_text
+    from ipyros.ipython.display import render_text
 
     assert "/out" in render_text(interface)
     out = listen(make_node, "disc_listener", "/out", String)
@@ -285,7 +286,7 @@ def test_a_relay_and_a_typed_subscriber_on_one_topic_each_get_what_they_asked_fo
                                                                                    typed_first):
     """rospy keeps one subscription per topic in a process: a reuse relay (bytes) and a handler
     (a message) on the same topic, in either order, with %echo as a third party, each get theirs."""
-    from ipyros.probe import Echo
+    from ipyros.tools.probe import Echo
 
     topic = f"/share_{int(typed_first)}/in"
     feeder = make_node(f"share_feeder_{int(typed_first)}").new.publish(topic, msgType=String).create()

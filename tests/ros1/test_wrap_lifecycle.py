@@ -16,7 +16,7 @@ from std_msgs.msg import Int32, String
 
 from ros1_fixtures import master_state, wait_for
 
-from ipyros.errors import BaseNodeError
+from ipyros.core.errors import BaseNodeError
 
 
 def alive(pid: int) -> bool:

@@ -9,7 +9,7 @@ from ros2_fixtures import Peer, wait_for
 from std_msgs.msg import String, UInt32
 from std_srvs.srv import SetBool
 
-from ipyros import errors
+from ipyros.core import errors
 
 
 def test_each_dsl_node_is_a_ros2_node_and_talks_to_other_processes(make_node):

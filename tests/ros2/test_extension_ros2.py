@@ -121,7 +121,7 @@ def test_topics_echo_and_live_completion_read_the_ros2_graph(ip, capsys):
     wait_for(lambda: ip.user_ns["heard"], timeout=10, what="the message %pub sent")
     assert (ip.user_ns["heard"][0].linear.x, ip.user_ns["heard"][0].angular.z) == (0.5, 1.0)
     assert "published a geometry_msgs/" in capsys.readouterr().out
-    from ipyros.msgbuild import to_yaml
+    from ipyros.core.msgbuild import to_yaml
     ip.user_ns["echoed"] = to_yaml(ip.user_ns["heard"][0])
     assert ip.run_cell("%%pub /g2/cmd geometry_msgs/Twist\n" + ip.user_ns["echoed"]).success
     wait_for(lambda: len(ip.user_ns["heard"]) >= 2, timeout=10, what="the echoed message sent back")
@@ -265,7 +265,7 @@ def test_services_call_params_and_nodes_at_the_ros2_prompt(ip, capsys):
     ip.run_line_magic("load_ext", "ipyros")
     with Peer("echo_node.py", "--ros-args", "-r", "__ns:=/mi2", "-p", "prefix:=P>") as peer:
         peer.wait_line("echo_node ready")
-        graph = __import__("ipyros.extension", fromlist=["_loaded"])._loaded[id(ip)].graph
+        graph = __import__("ipyros.ipython.extension", fromlist=["_loaded"])._loaded[id(ip)].graph
         wait_for(lambda: "/mi2/check" in graph.refresh_now().services, what="/mi2/check discovered")
         capsys.readouterr()
         _ok(ip, "%services /mi2/")

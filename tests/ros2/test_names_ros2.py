@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from std_msgs.msg import String
 
-from ipyros import errors
+from ipyros.core import errors
 
 
 def test_a_namespace_rclpy_refuses_is_one_line(make_node):

@@ -8,8 +8,8 @@ import pytest
 from ros2_fixtures import wait_for
 from std_msgs.msg import String
 
-from ipyros import errors
-from ipyros.display import node_table
+from ipyros.core import errors
+from ipyros.ipython.display import node_table
 
 ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
 

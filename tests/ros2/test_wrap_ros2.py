@@ -112,7 +112,7 @@ def test_a_basenode_by_package_is_found_in_the_ament_index(make_node, tmp_path, 
     import shutil
     import sys
 
-    from ipyros import errors
+    from ipyros.core import errors
 
     prefix = tmp_path / "install"
     (prefix / "share" / "ament_index" / "resource_index" / "packages").mkdir(parents=True)
@@ -217,7 +217,7 @@ def test_a_relay_and_a_typed_subscriber_on_one_topic_each_get_what_they_asked_fo
                                                                                    typed_first):
     """A reuse relay (bytes) and a handler (a message) on one topic, in either order, with %echo as a
     third party: each gets what it asked for (as on ROS 1, where rospy has one subscription per topic)."""
-    from ipyros.probe import Echo
+    from ipyros.tools.probe import Echo
 
     n = int(typed_first)
     feeder = make_node(f"w2_share_feeder_{n}").new.publish(f"/share{n}/in", msgType=String).create()

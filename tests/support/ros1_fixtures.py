@@ -90,7 +90,7 @@ def ros_session(ros_master):
 
     Its one rospy node is named /ipyros_test; every DSL node of the run lives in it.
     """
-    from ipyros import session as sessions
+    from ipyros.node import session as sessions
 
     session = sessions.configure(sessions.SessionConfig(
         master_uri=ros_master, start_master=False, process_node_name="/ipyros_test"))

@@ -50,7 +50,7 @@ class Peer(SharedPeer):
 @pytest.fixture(scope="session")
 def ros2_session():
     """The ipyros session of this pytest process, on ROS 2."""
-    from ipyros import session as sessions
+    from ipyros.node import session as sessions
 
     session = sessions.configure(sessions.SessionConfig(start_master=False))
     assert session.backend.name == "ROS 2"

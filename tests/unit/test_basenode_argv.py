@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from ipyros.base import BaseProcess, exit_reason, param_arg, plain, python_command, script_command
-from ipyros.errors import BaseNodeError
+from ipyros.processes.basenode import BaseProcess, exit_reason, param_arg, plain, python_command, script_command
+from ipyros.core.errors import BaseNodeError
 
 
 def argv(ros2: bool, **options) -> list[str]:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from ipyros import completion
-from ipyros.completion import (DSL_NODE, EXECUTABLE, MSG_TEMPLATE, MSG_TYPE, NODE, OWN_TOPIC, PACKAGE, SERVICE,
-                               SRV_TYPE, TOPIC, call_want, magic_want, string_argument)
-from ipyros.model import NodeModel, TopicModel
+from ipyros.ipython import completion
+from ipyros.ipython.completion import (DSL_NODE, EXECUTABLE, MSG_TEMPLATE, MSG_TYPE, NODE, OWN_TOPIC, PACKAGE,
+                                       SERVICE, SRV_TYPE, TOPIC, call_want, magic_want, string_argument)
+from ipyros.core.model import NodeModel, TopicModel
 
 
 class Declared:

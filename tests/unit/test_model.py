@@ -7,7 +7,7 @@ import json
 import pytest
 import yaml
 
-from ipyros.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
 
 
 def full_model() -> NodeModel:

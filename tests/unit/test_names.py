@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from ipyros import names
-from ipyros.errors import TopicNameError
+from ipyros.core import names
+from ipyros.core.errors import TopicNameError
 
 
 @pytest.mark.parametrize("name, namespace, node, resolved", [

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from ipyros import plan as planning
-from ipyros.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
-from ipyros.plan import PublishSpec, RelaySpec, ServiceRelaySpec, ServiceSpec, SubscribeSpec, TimerSpec
-from ipyros.qos import Qos
+from ipyros.core import plan as planning
+from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from ipyros.core.plan import PublishSpec, RelaySpec, ServiceRelaySpec, ServiceSpec, SubscribeSpec, TimerSpec
+from ipyros.core.qos import Qos
 
 TWIST = "geometry_msgs/Twist"
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from ipyros import qos
-from ipyros.errors import DeclarationError
-from ipyros.qos import Qos
+from ipyros.core import qos
+from ipyros.core.errors import DeclarationError
+from ipyros.core.qos import Qos
 
 
 @pytest.mark.parametrize("given, expected", [

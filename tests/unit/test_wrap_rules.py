@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from ipyros import wrap
-from ipyros.errors import DeclarationError
-from ipyros.model import BaseModel, NodeModel, ServiceModel, TopicModel
+from ipyros.node import wrapping as wrap
+from ipyros.core.errors import DeclarationError
+from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TopicModel
 
 
 def model(base: BaseModel | None = None, namespace: str = "/", **more) -> NodeModel:

@@ -1,0 +1,89 @@
+"""Errors that ipyros raises for bad input or a broken ROS graph.
+
+Every error is one line that says what is wrong and what to do about it. Inside
+IPython the extension shows only that line (no traceback); outside IPython they are
+ordinary exceptions. Each subclass is also a ``ValueError``/``RuntimeError`` where
+that is what it is, so generic code can still catch them the usual way.
+"""
+
+from __future__ import annotations
+
+
+class IpyrosError(Exception):
+    """Base class: a one-line, actionable message about something the user asked for."""
+
+
+class DeclarationError(IpyrosError, ValueError):
+    """A DSL declaration was rejected; nothing already running was changed."""
+
+
+class MessageTypeError(DeclarationError):
+    """A message or service type is unknown, malformed, or not the one expected."""
+
+
+class TopicNameError(DeclarationError):
+    """A topic, service or parameter name is not a valid ROS name."""
+
+
+class HandlerError(DeclarationError):
+    """A handler is not callable or does not take the arguments it will be given."""
+
+
+class TopicTypeConflict(MessageTypeError):
+    """The declared type differs from the type the live topic already has."""
+
+
+class DataError(DeclarationError):
+    """Data typed or read from a file cannot be read (malformed, nested too deeply, too large)."""
+
+
+class NotDeclaredError(IpyrosError, LookupError):
+    """The node does not have the topic, timer or service that was named."""
+
+
+class MasterError(IpyrosError, RuntimeError):
+    """No ROS master could be reached or started."""
+
+
+class BaseNodeError(IpyrosError, RuntimeError):
+    """The basenode could not be found, started, or kept running."""
+
+
+class NodeStateError(IpyrosError, RuntimeError):
+    """The node is not in a state where this operation makes sense (e.g. shut down)."""
+
+
+def cut(value: object, limit: int = 80) -> str:
+    """``repr(value)`` on one line, cut to about ``limit`` characters: what an error line may quote of a value."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= limit else f"{text[:limit - 20]}... ({len(text):,} characters)"
+
+
+def first_line(error: BaseException) -> str:
+    """An exception of a library as one line: its first line (rclpy's name errors draw a caret below the name)."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    return (lines[0].rstrip(":") if lines else type(error).__name__)[:300]
+
+
+def warn_user(message: str, category: type[Warning]) -> None:
+    """``warnings.warn`` attributed to the user's own line: the first caller outside ipyros and IPython.
+
+    A fixed ``stacklevel`` is right for one path only: ``nd.save()`` typed at the prompt and
+    ``%save_nodes`` reach the same code through different depths, and the magic's warning
+    pointed into IPython's own file.
+    """
+    import sys
+    import warnings
+
+    frame, level = sys._getframe(1), 2  # stacklevel 2: the caller of warn_user
+    while frame is not None and _internal(frame.f_code.co_filename):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)
+
+
+def _internal(filename: str) -> bool:
+    import os
+
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep  # the package, ipyros/
+    return (filename.startswith(here) or f"{os.sep}IPython{os.sep}" in filename
+            or filename.startswith("<decorator-gen"))

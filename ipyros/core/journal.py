@@ -1,0 +1,96 @@
+"""The session's history on disk: one JSON line per change, written as it happens.
+
+A crash of the interpreter loses nothing already recorded: each line is flushed and
+synced before the change returns. The files hold handler sources and parameter values, so
+the directory is created 0700 and each file 0600. Every session writes a file of its own, created
+exclusively (``<start time>-<pid>.jsonl`` in the history directory), so no session
+ever overwrites another's history. A line looks like::
+
+    {"time": 1795254721.3, "node": "/kobuki", "change": "new.subscribe /cmd_vel [geometry_msgs/Twist] -> clamp",
+     "slot": "topic /cmd_vel", "version": 2, "handler": "clamp", "source": "def clamp(msg):\\n    ..."}
+
+``slot``, ``version``, ``handler`` and ``source`` are there for handler changes only.
+:func:`read` turns a file back into :class:`~ipyros.node.session.Change` records.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Optional
+
+if TYPE_CHECKING:
+    from ..node.session import Change
+
+ENV_DIR = "IPYROS_HISTORY_DIR"
+
+
+def default_dir() -> Path:
+    """``$IPYROS_HISTORY_DIR``, else ``~/.ipyros/history``."""
+    return Path(os.environ.get(ENV_DIR) or Path.home() / ".ipyros" / "history").expanduser()
+
+
+class Journal:
+    """Appends changes to a file of this session's own, opened on the first change.
+
+    If the directory cannot be written, :meth:`append` raises ``OSError`` once and the
+    journal turns itself off: losing the file must not stop anyone's work at the prompt.
+    """
+
+    def __init__(self, directory: Optional[Path] = None) -> None:
+        self.directory = directory or default_dir()
+        self.path: Optional[Path] = None
+        self.failed = False
+        self._file = None
+
+    def append(self, change: "Change") -> None:
+        if self.failed:
+            return
+        try:
+            if self._file is None:
+                self._file = self._open()
+            self._file.write(json.dumps({k: v for k, v in asdict(change).items() if v is not None}) + "\n")
+            self._file.flush()
+            os.fsync(self._file.fileno())
+        except OSError:
+            self.failed = True
+            raise
+
+    def _open(self):  # type: ignore[no-untyped-def]
+        # Handler sources and parameter values (tokens, passwords typed at the prompt) are in
+        # here: the directory is the user's alone (0700), each file too (0600).
+        self.directory.mkdir(mode=0o700, parents=True, exist_ok=True)
+        info = self.directory.stat()
+        if info.st_uid == os.getuid() and info.st_mode & 0o077:
+            self.directory.chmod(0o700)  # made before ipyros kept it private
+        stem = time.strftime("%Y%m%d-%H%M%S") + f"-{os.getpid()}"
+        for n in range(1000):
+            path = self.directory / (stem + (f"-{n}" if n else "") + ".jsonl")
+            try:  # O_EXCL: never an existing file
+                fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+            except FileExistsError:
+                continue
+            self.path = path
+            return os.fdopen(fd, "w", encoding="utf-8")
+        raise FileExistsError(f"{self.directory} has 1000 history files named {stem}*")
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+
+def read(path: "str | os.PathLike[str]") -> list["Change"]:
+    """The changes recorded in a journal file, oldest first (a torn last line is skipped)."""
+    from ..node.session import Change
+
+    changes = []
+    for line in Path(path).read_text(encoding="utf-8").splitlines():
+        try:
+            changes.append(Change(**json.loads(line)))
+        except (ValueError, TypeError):  # the interpreter died while writing this line
+            continue
+    return changes

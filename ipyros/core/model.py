@@ -1,0 +1,152 @@
+"""The node model: what a DSL node is declared to be, as plain data.
+
+Every DSL call edits one of these; the runtime makes the running ROS world match it,
+and save, export and display read it. Nothing here touches ROS. Handlers are kept as
+names (``module.qualname``-free, just the function's ``__name__``): the live function
+objects belong to the DSL node, not to the model, so the model can be saved as JSON/YAML.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+from typing import Any, Literal, Optional
+
+Direction = Literal["publish", "subscribe"]
+Role = Literal["new", "reuse"]
+
+
+@dataclass
+class TopicModel:
+    """One declared topic of a node.
+
+    ``name`` is the name as the user typed it; ``resolved`` is the global name ROS
+    gives it (relative names resolve in the node's namespace, ``~`` under the node).
+    ``qos`` holds the QoS fields given (see :mod:`ipyros.core.qos`), None for the defaults.
+    """
+
+    name: str
+    resolved: str
+    direction: Direction
+    type: str
+    role: Role = "new"
+    handler: Optional[str] = None
+    latch: bool = False
+    qos: Optional[dict[str, Any]] = None
+
+
+@dataclass
+class TimerModel:
+    """A periodic callback of the node; ``name`` identifies it for replace and remove."""
+
+    name: str
+    period: float
+    handler: str
+    oneshot: bool = False
+
+
+@dataclass
+class ServiceModel:
+    """A service the node provides (``new``) or relays from its basenode (``reuse``)."""
+
+    name: str
+    resolved: str
+    type: str
+    role: Role = "new"
+    handler: Optional[str] = None
+
+
+@dataclass
+class BaseModel:
+    """The basenode a wrapping node wraps: found as ``rosrun package executable`` finds it.
+
+    A basenode read from a launch file (``baseLaunch``) also keeps ``launch``, the file
+    (absolute, or ``$(find pkg)/...`` as written), ``launch_node``, its full name in it,
+    and ``launch_args``, the ``<arg>`` values it was read with (as ``roslaunch file a:=1``);
+    its ``env`` comes from the file's ``<env>`` tags.
+    """
+
+    executable: Optional[str] = None
+    package: Optional[str] = None
+    node_name: Optional[str] = None
+    namespace: Optional[str] = None
+    remaps: dict[str, str] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+    args: list[str] = field(default_factory=list)
+    env: dict[str, str] = field(default_factory=dict)
+    launch: Optional[str] = None
+    launch_node: Optional[str] = None
+    launch_args: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass
+class NodeModel:
+    """Everything declared about one DSL node."""
+
+    name: str
+    namespace: str = "/"
+    base: Optional[BaseModel] = None
+    topics: list[TopicModel] = field(default_factory=list)
+    timers: list[TimerModel] = field(default_factory=list)
+    services: list[ServiceModel] = field(default_factory=list)
+    params: dict[str, Any] = field(default_factory=dict)
+
+    # -- queries -------------------------------------------------------------
+    def topic(self, resolved: str, direction: Direction, role: Optional[Role] = None) -> Optional[TopicModel]:
+        """The declared topic with this resolved name and direction (and role), if any."""
+        for t in self.topics:
+            if t.resolved == resolved and t.direction == direction and (role is None or t.role == role):
+                return t
+        return None
+
+    def publications(self) -> list[TopicModel]:
+        return [t for t in self.topics if t.direction == "publish"]
+
+    def subscriptions(self) -> list[TopicModel]:
+        return [t for t in self.topics if t.direction == "subscribe"]
+
+    def timer(self, name: str) -> Optional[TimerModel]:
+        return next((t for t in self.timers if t.name == name), None)
+
+    def service(self, resolved: str) -> Optional[ServiceModel]:
+        return next((s for s in self.services if s.resolved == resolved), None)
+
+    # -- plain data ----------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON/YAML-ready dict (only str, float, bool, list, dict, None)."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "NodeModel":
+        """Inverse of :meth:`to_dict`; unknown keys are an error, not silently dropped."""
+        if not isinstance(data, dict):
+            raise ValueError(f"a node must be a mapping of its fields, not {type(data).__name__}")
+        data = dict(data)
+        _check_keys(cls, data)
+        base = data.pop("base", None)
+        return cls(
+            base=_build(BaseModel, base) if base is not None else None,
+            topics=[_build(TopicModel, t) for t in data.pop("topics", [])],
+            timers=[_build(TimerModel, t) for t in data.pop("timers", [])],
+            services=[_build(ServiceModel, s) for s in data.pop("services", [])],
+            **data,
+        )
+
+
+def _check_keys(cls: type, data: dict[str, Any]) -> None:
+    unknown = set(data) - {f.name for f in fields(cls)}
+    if unknown:
+        raise ValueError(f"unknown {cls.__name__} field(s): {', '.join(sorted(unknown))}")
+
+
+#: The values a field may take, where it has a fixed set (checked when a model is read from a file).
+_CHOICES = {"direction": ("publish", "subscribe"), "role": ("new", "reuse")}
+
+
+def _build(cls: type, data: dict[str, Any]):
+    if not isinstance(data, dict):
+        raise ValueError(f"a {cls.__name__} must be a mapping of its fields, not {type(data).__name__}")
+    _check_keys(cls, data)
+    for key, allowed in _CHOICES.items():
+        if key in data and data[key] not in allowed:
+            raise ValueError(f"{cls.__name__} {key} {data[key]!r:.40} is not one of {', '.join(allowed)}")
+    return cls(**data)

@@ -1,0 +1,334 @@
+"""Saved nodes as Python: the DSL as a person would type it, run to bring the nodes back.
+
+    nd.save("kobuki.py")                  # one node
+    ipyros.save_session("lab.py")         # every node of the session (%save_nodes lab.py)
+
+The file holds, in this order: imports, the plain-literal globals the handlers read,
+the handlers' and their helpers' sources (current versions), then the declarations
+inside ``with restoring():`` ending with ``create()``; earlier handler versions come as
+``nd.restore_versions(...)`` so ``nd.revert`` still reaches them. Restoring is running it:
+``python3 kobuki.py`` (:func:`spin` keeps the nodes up until Ctrl-C), ``%run kobuki.py``,
+or :func:`restore` (``rosNode.load``, ``%load_nodes``). No pickle: text and code only.
+
+Nothing is dropped silently: a handler without source fails the save, naming every such
+handler; a global that is neither importable nor a literal is listed in the file and in
+a :class:`SaveWarning`.
+"""
+
+from __future__ import annotations
+
+import keyword
+import os
+import re
+import sys
+import time
+import types
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Iterable, Optional, Sequence
+
+from ..core import plan as planning
+from ..core.errors import IpyrosError, warn_user
+from ..core.model import NodeModel
+from .modelfile import _WRITER, Bindings, _write_atomic, handler_slots, handler_sources
+
+if TYPE_CHECKING:
+    from ..node.dsl import rosNode
+
+MARKER = "# ipyros saved nodes, format 1"
+_OWN_NAMES = {"rosNode", "restoring", "spin"}  # what the file imports from ipyros
+
+
+class SaveWarning(UserWarning):
+    """A saved file needs globals it could not hold; they are listed at its top."""
+
+
+class RestoreError(IpyrosError):
+    """Running a saved file failed; what it had started was stopped again."""
+
+
+# -- save -------------------------------------------------------------------------------------
+
+def save_nodes(nodes: Sequence["rosNode"], path: "str | os.PathLike[str]",
+               namespace: Optional[dict] = None) -> Path:
+    """Write ``nodes`` to the Python file ``path``; return its path.
+
+    ``namespace`` (IPython's ``user_ns``) is where the handlers' globals and the nodes'
+    variable names are looked up first.
+    """
+    if not nodes:
+        raise IpyrosError("there is no node to save; create one first (nd = rosNode('name'))")
+    if Path(path).suffix != ".py":
+        raise IpyrosError(f"{path}: a saved session is Python; give a path ending in .py")
+    text = _SavedFile(nodes, namespace).render(Path(path).name)
+    compile(text, str(path), "exec")  # a file that does not compile is ipyros's bug: fail before writing
+    return _write_atomic(path, text)
+
+
+def save_session(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:
+    """Write every node running in this session to the Python file ``path``; return its path."""
+    from ..node.session import current
+
+    return save_nodes(list(current().nodes.values()), path, namespace)
+
+
+class _SavedFile:
+    """The text of a saved file, gathered node by node."""
+
+    def __init__(self, nodes: Sequence["rosNode"], namespace: Optional[dict]) -> None:
+        self.nodes, self.namespace = list(nodes), namespace
+        self.bindings = Bindings()
+        self.handlers: dict[str, str] = {}  # function name in the file → source
+        self.slot_names: dict[tuple[int, str], str] = {}  # (node id, slot) → function name in the file
+        self.sources = handler_sources(self.nodes)
+        self.variables = self._variables()
+        for node in self.nodes:
+            for slot, _ in handler_slots(node.model()):
+                self._handler(node, slot)
+                for version in node.slot_versions(slot)[0]:  # what an earlier version needs, to revert to it
+                    if isinstance(version.function, types.FunctionType) and version.source:
+                        self.bindings.bind(version.function, version.source, self.namespace, self._skip)
+
+    # -- names ------------------------------------------------------------------------------
+    def _variables(self) -> dict[int, str]:
+        """Each node's variable in the file: the name its handlers write through, else the user's, else its name."""
+        taken: set[str] = set(_OWN_NAMES)
+        chosen: dict[int, str] = {}
+        for node in self.nodes:
+            scopes = [self.namespace or {}] + [fn.__globals__ for fn in node.handlers().values()
+                                               if isinstance(fn, types.FunctionType)]
+            bound = [k for scope in scopes for k, v in scope.items() if v is node and not k.startswith("_")]
+            writers = [w for (owner, _), src in self.sources.items() if owner == id(node) for w in _WRITER.findall(src)]
+            candidates = [w for w in writers if w in bound] + bound + [_identifier(node.name)]
+            name = next((c for c in candidates if c not in taken), None) or _unique(_identifier(node.name), taken)
+            chosen[id(node)] = name
+            taken.add(name)
+        return chosen
+
+    def _skip(self, name: str, value: Any) -> bool:
+        """Globals the file binds itself: the saved nodes' variables and what it imports from ipyros."""
+        return name in _OWN_NAMES or name in self.variables.values()
+
+    # -- handlers ----------------------------------------------------------------------------
+    def _handler(self, node: "rosNode", slot: str) -> None:
+        fn, source = node.handlers()[slot], self.sources[(id(node), slot)]
+        name = fn.__name__
+        if name == "<lambda>":  # a name of its own: on_cmd_vel, timer_tick, ...
+            name = _identifier(re.sub(r"\W+", "_", slot.replace("topic ", "on ", 1)).strip("_"))
+            source = f"{name} = {source}"
+        if self.handlers.get(name, source) != source:
+            raise IpyrosError(f"nothing saved: two different handlers are named {name}; rename one "
+                              "(def another_name(msg): ...), declare it again, then save")
+        self.handlers[name] = source
+        self.slot_names[(id(node), slot)] = name
+        if isinstance(fn, types.FunctionType):
+            self.bindings.bind(fn, source, self.namespace, self._skip)
+
+    # -- the text ----------------------------------------------------------------------------
+    def render(self, stem: str) -> str:
+        names = ", ".join(n.fullname for n in self.nodes)
+        made_on = self.nodes[0].session.backend.name if self.nodes else "ROS"
+        parts = [f'"""Nodes saved by ipyros on {time.strftime("%Y-%m-%d %H:%M:%S")}: {names}.\n\n'
+                 f"Made on {made_on}. The DSL is the same on ROS 1 and ROS 2: it runs on either where the\n"
+                 f"message packages and basenodes it names are installed.\n\n"
+                 f"Bring them back, running: python3 {stem} (Ctrl-C stops them), %run {stem} in IPython,\n"
+                 f"or rosNode.load(path). It is plain Python with the ipyros DSL: edit it, commit it, share it.\n"
+                 f'"""\n{MARKER}\n' + "\n".join(["from ipyros import restoring, rosNode, spin",
+                                                 *self.bindings.import_lines(skip=_OWN_NAMES)])]
+        b = self.bindings
+        if b.values or b.unbound:
+            lines = ["# The globals the handlers read, as they were when saved."] + list(b.values.values())
+            lines += [f"# Not saved: {name} ({why}); define it before running this file." for name, why in
+                      b.unbound.items()]
+            parts.append("\n".join(lines))
+        parts += [src.rstrip("\n") for src in {**b.functions, **self.handlers}.values()]
+        body = [line for node in self.nodes for line in self._declarations(node)][:-1]
+        parts.append("with restoring():  # if a line below fails, the nodes it started are stopped again\n"
+                     + "\n".join(f"    {line}" if line else "" for line in body))
+        parts.append('if __name__ == "__main__":  # run as a script: keep the nodes up until Ctrl-C\n    spin()')
+        if b.unbound:
+            warn_user(f"ipyros: the saved file needs {', '.join(b.unbound)} defined before it runs "
+                      "(listed at its top): " + "; ".join(f"{k} is {v.split(', ', 1)[1]}" for k, v in
+                                                         b.unbound.items()), SaveWarning)
+        return "\n\n\n".join(parts) + "\n"
+
+    def _declarations(self, node: "rosNode") -> list[str]:
+        """The DSL calls that declare ``node`` as it is, then create it if it runs."""
+        model, var = node.model(), self.variables[id(node)]
+        ns = f", namespace={model.namespace!r}" if model.namespace != "/" else ""
+        lines = [f"{var} = rosNode({model.name!r}{ns})"]
+        lines += _base_lines(var, model)
+        fn_of = lambda slot: self.slot_names[(id(node), slot)]  # noqa: E731
+        for t in model.topics:
+            args = [repr(t.name)]
+            if t.role == "new" and t.direction == "subscribe":
+                args.append(f"handler={fn_of(planning.topic_slot(t.resolved))}")
+            args.append(f"msgType={t.type!r}")
+            if t.latch:
+                args.append("latch=True")
+            if t.qos:
+                args.append(f"qos={t.qos!r}")
+            lines.append(f"{var}.{t.role}.{t.direction}({', '.join(args)})")
+        for s in model.services:
+            handler = f", handler={fn_of(planning.service_slot(s.resolved))}" if s.role == "new" else ""
+            lines.append(f"{var}.{s.role}.service({s.name!r}, srvType={s.type!r}{handler})")
+        for timer in model.timers:
+            fn = fn_of(planning.timer_slot(timer.name))
+            options = (f", name={timer.name!r}" if timer.name != fn else "") + (", oneshot=True" if timer.oneshot else "")
+            lines.append(f"{var}.timer({timer.period!r}, {fn}{options})")
+        lines += [f"{var}.params[{key!r}] = {value!r}" for key, value in model.params.items()]
+        lines += self._versions(node, var, model)
+        lines.append(f"{var}.create()" if node.created else f"# {var}.create()  (it was not running when saved)")
+        return lines + [""]
+
+    def _versions(self, node: "rosNode", var: str, model: NodeModel) -> list[str]:
+        """``restore_versions`` calls for the handlers that had more than one version."""
+        lines = []
+        for slot, _ in handler_slots(model):
+            versions, current = node.slot_versions(slot)
+            if len(versions) < 2 or any(v.source is None for v in versions):
+                continue
+            what = _declared_name(model, slot)
+            current = current or len(versions)
+            lines.append(f"{var}.restore_versions({what!r}, [  # {var}.versions({what!r}) lists them")
+            lines += [f"    ({v.when!r}, {_python_string(v.source)})," for v in versions]  # type: ignore[arg-type]
+            lines.append(f"], current={current})")
+        return lines
+
+
+def _base_lines(var: str, model: NodeModel) -> list[str]:
+    base = model.base
+    if base is None:
+        return []
+    if base.launch:  # a node of a launch file: the launch file says the rest
+        args = f", args={base.launch_args!r}" if base.launch_args else ""
+        return [f"{var}.baseLaunch({base.launch!r}, {base.launch_node!r}{args})"]
+    options = {"name": base.node_name, "namespace": base.namespace, "remaps": base.remaps or None,
+               "params": base.params or None, "args": base.args or None}
+    text = "".join(f", {k}={v!r}" for k, v in options.items() if v)
+    lines = [f"{var}.baseNode({base.executable!r}{text})"] if base.executable else []
+    return lines + ([f"{var}.basePackage({base.package!r})"] if base.package else [])
+
+
+def _declared_name(model: NodeModel, slot: str) -> str:
+    """What the user typed for the handler in ``slot``: the topic, the service, or the timer's name."""
+    for t in model.topics:
+        if planning.topic_slot(t.resolved) == slot and t.role == "new":
+            return t.name
+    for s in model.services:
+        if planning.service_slot(s.resolved) == slot:
+            return s.name
+    return slot.split(" ", 1)[1]
+
+
+def _python_string(text: str) -> str:
+    """``text`` as a string literal a person can read: a raw triple-quoted block where it can be."""
+    if "'''" not in text and not text.endswith("\\") and "\r" not in text:
+        return "r'''" + text + "'''"
+    return repr(text)
+
+
+def _identifier(text: str) -> str:
+    name = re.sub(r"\W", "_", text.strip("/").rsplit("/", 1)[-1]) or "node"
+    return name if name[0].isalpha() and not keyword.iskeyword(name) else f"node_{name}"
+
+
+def _unique(name: str, taken: Iterable[str]) -> str:
+    taken = set(taken)
+    return next(f"{name}_{i}" for i in range(2, 10_000) if f"{name}_{i}" not in taken)
+
+
+# -- restore ----------------------------------------------------------------------------------
+
+class restoring:  # noqa: N801 - used as a statement: with restoring():
+    """Stop what a saved file started if it fails halfway, and say where it failed in one line."""
+
+    def __init__(self) -> None:
+        from ..node.session import current
+
+        self.session = current()
+        self.file = sys._getframe(1).f_code.co_filename  # the saved file running this block
+        self.before: set[int] = set()
+
+    def __enter__(self) -> "restoring":
+        self.before = {id(n) for n in self.session.nodes.values()}
+        return self
+
+    def __exit__(self, kind: Any, error: Any, tb: Any) -> bool:
+        if error is None:
+            return False
+        started = [n for n in self.session.nodes.values() if id(n) not in self.before]
+        for node in reversed(started):
+            node.shutdown()
+        line = next((frame.tb_lineno for frame in _frames(tb) if frame.tb_frame.f_code.co_filename == self.file), None)
+        where = f"{Path(self.file).name}, line {line}" if line else Path(self.file).name
+        stopped = f"; stopped {', '.join(n.fullname for n in started)} again" if started else ""
+        message = str(error) if isinstance(error, IpyrosError) else f"{type(error).__name__}: {error}"
+        raise RestoreError(f"restoring {where} failed: {message}{stopped}") from None
+
+
+def _frames(tb: Any) -> Iterable[Any]:
+    while tb is not None:
+        yield tb
+        tb = tb.tb_next
+
+
+def restore(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> list["rosNode"]:
+    """Run the saved file ``path`` in ``namespace`` (default: a fresh one); return the nodes it made.
+
+    Its ``if __name__ == "__main__"`` part does not run (``__name__`` is not ``__main__``).
+    """
+    from ..node.dsl import rosNode
+
+    path = Path(path).expanduser()
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise IpyrosError(f"cannot read {path}: {error.strerror}") from None
+    if MARKER not in text.splitlines()[:12]:
+        raise IpyrosError(f"{path} is not a file saved by ipyros (no '{MARKER}' line at its top); "
+                          "save nodes with nd.save('file.py') or %save_nodes file.py")
+    namespace = {} if namespace is None else namespace
+    before = {id(v) for v in namespace.values() if isinstance(v, rosNode)}
+    saved = {k: namespace[k] for k in ("__name__", "__file__") if k in namespace}
+    namespace.update(__name__="__ipyros_restore__", __file__=str(path))
+    try:
+        code = compile(text, str(path), "exec")
+        exec(code, namespace)  # noqa: S102 - the user's own saved file, as %run would
+    except SyntaxError as error:
+        raise RestoreError(f"{path} does not compile: {error.msg} at line {error.lineno}") from None
+    except RestoreError:
+        raise
+    except Exception as error:  # before the with block: an import, a global
+        line = next((f.tb_lineno for f in _frames(error.__traceback__) if f.tb_frame.f_code.co_filename == str(path)),
+                    None)
+        raise RestoreError(f"restoring {path.name}{f', line {line}' if line else ''} failed: "
+                           f"{type(error).__name__}: {error}") from None
+    finally:
+        for key in ("__name__", "__file__"):
+            namespace.pop(key, None)
+        namespace.update(saved)
+    return [v for v in dict.fromkeys(v for v in namespace.values() if isinstance(v, rosNode))
+            if id(v) not in before]
+
+
+def spin() -> None:
+    """Keep the nodes up until Ctrl-C when a saved file runs as a script; at a prompt, return at once."""
+    from ..node.session import current
+
+    if sys.flags.interactive or _in_ipython():
+        return
+    session = current()
+    running = ", ".join(session.nodes) or "no nodes"
+    print(f"ipyros: running {running}; Ctrl-C stops {'them' if len(session.nodes) > 1 else 'it'}", flush=True)
+    try:
+        while session.nodes and not session.closed:
+            time.sleep(0.2)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        session.close()
+
+
+def _in_ipython() -> bool:
+    shell = sys.modules.get("IPython")
+    return shell is not None and shell.get_ipython() is not None

@@ -1,0 +1,688 @@
+"""Tab completion of topics, types, nodes, packages and executables, from cached data only.
+
+One IPython matcher (Matcher API v2, identifier ``"ipyros"``) answers in two places:
+
+* magic lines, e.g. ``%topics /tur<TAB>``, ``%topics --type geometry_msgs/Tw<TAB>``,
+  ``%handler nd <TAB>``, ``%wrap turtle<TAB>`` (see :data:`MAGICS` for which argument
+  is what);
+* string arguments of DSL calls, e.g. ``nd.new.subscribe(topic="/tur<TAB>``,
+  ``.publish(topic='/tu<TAB>`` on a continuation line, ``nd.write("<TAB>``,
+  ``msgType="geometry_msgs/Tw<TAB>`` (see :data:`CALLS`).
+
+Answers come from the :class:`~ipyros.tools.graph.GraphCache` snapshot (live topics, nodes,
+services), from a :class:`Catalog` of installed types, packages and executables (scanned
+from disk once, then cached), and from the DSL node models found in the user's
+namespace. Never from the network, so a TAB press costs well under a millisecond of
+ipyros time even with thousands of topics and the master gone.
+
+The receiver of a DSL call is found by reading the code, never by running it: in
+``wnode.new.subscribe(topic="`` only the plain name ``wnode`` is looked up in
+``shell.user_ns``; if its class has a ``model()`` method returning a
+:class:`~ipyros.core.model.NodeModel`, the node's own topics are offered first.
+
+IPython facts this relies on: ``/`` is not a token delimiter but ``"'(=`` are, so the
+token at ``subscribe(topic="/tur`` is ``/tur``; a matcher that answers sets
+``suppress=True`` so Jedi and the file matcher do not add noise; ``ordered=True``
+keeps our order (the node's own names first) instead of IPython's alphabetical sort.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import threading
+import time
+import types
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any, Callable, Mapping, Optional, Sequence
+
+from IPython.core.completer import CompletionContext, SimpleCompletion, SimpleMatcherResult, context_matcher
+
+from ..core import names
+from ..core.model import NodeModel
+from ..core.names import default_namespace
+from ..tools.graph import GraphCache, GraphSnapshot, names_with_prefix
+
+log = logging.getLogger(__name__)
+
+#: The matcher's identifier: ``%config IPCompleter.disable_matchers = ["ipyros"]`` turns it off.
+IDENTIFIER = "ipyros"
+
+# What an argument is, i.e. where its completions come from.
+TOPIC = "topic"              # live topics (+ the node's own first, when a node is known)
+OWN_TOPIC = "own topic"      # the node's own topics only (live ones if no node is known)
+SERVICE = "service"          # live services + the node's own
+MSG_TYPE = "message type"
+SRV_TYPE = "service type"
+NODE = "node"                # live ROS node names
+DSL_NODE = "DSL node"        # variables in user_ns holding a DSL node
+FUNCTION = "function"        # the user's functions (a candidate handler for %try)
+TIMER = "timer"              # the node's timer names
+PACKAGE = "package"
+EXECUTABLE = "executable"    # executables of the package named by the argument before
+DEMO_ROBOT = "demo robot"    # the robots %demo starts
+MSG_TEMPLATE = "template"    # a message of the type before it, every field at its default
+REQUEST_TEMPLATE = "request template"  # the request of the service type before it, at its defaults
+
+
+# -- the catalog of installed things ------------------------------------------------
+@dataclass
+class Catalog:
+    """Where message/service types, packages and executables come from; results cached.
+
+    Each source scans the disk, so it runs once (per package, for executables) and its
+    sorted result is kept; :meth:`refresh` forgets them (after installing packages).
+    Tests pass small fixed lists; :func:`default_catalog` wires the real scanners.
+    """
+
+    message_types: Callable[[], Sequence[str]]
+    service_types: Callable[[], Sequence[str]]
+    packages: Callable[[], Sequence[str]]
+    executables: Callable[[str], Sequence[str]]
+    templates: Callable[[str], str] = field(default=lambda msg_type: _template(msg_type))
+    request_templates: Callable[[str], str] = field(default=lambda srv_type: _template(srv_type, request=True))
+
+    def __post_init__(self) -> None:
+        self._sources = (self.message_types, self.service_types, self.packages, self.executables, self.templates,
+                         self.request_templates)
+        self.refresh()
+
+    def refresh(self) -> None:
+        """Forget every cached scan; the next completion scans again."""
+        types, srvs, pkgs, exes, templates, requests = self._sources
+        self.message_types = _sorted_once(types)
+        self.service_types = _sorted_once(srvs)
+        self.packages = _sorted_once(pkgs)
+        self.executables = lru_cache(maxsize=512)(lambda package: tuple(sorted(exes(package))))
+        self.templates = lru_cache(maxsize=256)(templates)
+        self.request_templates = lru_cache(maxsize=256)(requests)
+
+    def warm(self) -> None:
+        """Run the whole-catalog scans now, so the first TAB does not pay for them."""
+        try:
+            self.message_types(), self.service_types(), self.packages()
+        except Exception:  # a broken scanner shows up (at debug level) on TAB instead
+            log.debug("warming the completion catalog failed", exc_info=True)
+
+
+def _template(type_name: str, request: bool = False) -> str:
+    """A message of ``type_name`` (or the request of the service ``type_name``) at its defaults, one line."""
+    from ..core import msgtypes
+    from ..core.msgbuild import template
+
+    if not request:
+        return template(type_name)
+    _, cls = msgtypes.resolve_service(type_name)
+    return template(cls._request_class if hasattr(cls, "_request_class") else cls.Request)
+
+
+def _sorted_once(source: Callable[[], Sequence[str]]) -> Callable[[], tuple[str, ...]]:
+    return lru_cache(maxsize=1)(lambda: tuple(sorted(source())))
+
+
+def default_catalog() -> Catalog:
+    """The catalog of this machine: Python message modules on sys.path, and the ROS packages as
+    the session's ROS runs them (``rosrun`` on ROS 1, ``ros2 run``'s ament index on ROS 2)."""
+    from ..core import msgtypes
+    from ..node.session import current
+
+    if current().backend.has_master:
+        from ..processes import basenode as lookup
+    else:
+        from ..ros2 import packages as lookup  # type: ignore[no-redef]
+    return Catalog(
+        message_types=msgtypes.known_message_types,
+        service_types=msgtypes.known_service_types,
+        packages=lookup.list_packages,
+        executables=lookup.list_executables,
+    )
+
+
+# -- what is being completed --------------------------------------------------------
+@dataclass(frozen=True)
+class Want:
+    """A decision about the text before the cursor: complete ``fragment`` as a ``kind``.
+
+    ``fragment`` is the part of the line the completions replace (a suffix of the text
+    before the cursor). ``model`` is the DSL node in play, if any; ``direction`` picks
+    which of its topics come first ("publish", "subscribe" or None for all);
+    ``package`` is the package whose executables are wanted; ``before`` the positional
+    words before the one typed (``%pub``'s topic, then its type).
+    """
+
+    kind: str
+    fragment: str
+    model: Optional[NodeModel] = None
+    direction: Optional[str] = None
+    package: Optional[str] = None
+    before: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class MagicSpec:
+    """What the words of a line magic are: positional kinds, and option → value kind.
+
+    An option mapped to None takes a value that is not completed; an option missing
+    from ``options`` is a flag, unless ``other_options`` gives the kind of its value.
+    """
+
+    positional: tuple[Optional[str], ...] = ()  # None: a word not completed (a path)
+    options: Mapping[str, Optional[str]] = field(default_factory=dict)
+    other_options: Optional[str] = None
+    #: For a positional OWN_TOPIC: which of the node's topics (None: all of them).
+    direction: Optional[str] = None
+
+
+_TYPE_OPTIONS = {"--type": MSG_TYPE, "-t": MSG_TYPE}
+
+#: The line magics whose arguments are completed. Keep in step with ipyros/magics/.
+MAGICS: dict[str, MagicSpec] = {
+    "topics": MagicSpec((TOPIC,), {**_TYPE_OPTIONS, "--node": NODE, "-n": NODE}),
+    "echo": MagicSpec((TOPIC,), {"-n": None, "--count": None}),
+    "handler": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
+    "pub": MagicSpec((TOPIC, MSG_TYPE, MSG_TEMPLATE), {**_TYPE_OPTIONS, "-r": None, "--rate": None}),
+    "try": MagicSpec((DSL_NODE, OWN_TOPIC, FUNCTION), {"-n": None, "--last": None}, direction="subscribe"),
+    "status": MagicSpec((DSL_NODE,)),
+    "versions": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
+    "revert": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
+    "save_nodes": MagicSpec((None, DSL_NODE, DSL_NODE, DSL_NODE)),
+    "demo": MagicSpec((DEMO_ROBOT,)),
+    "hz": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
+    "bw": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
+    "delay": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
+    "services": MagicSpec((SERVICE,)),
+    "call": MagicSpec((SERVICE, SRV_TYPE, REQUEST_TEMPLATE), {"-t": None, "--timeout": None}),
+    "params": MagicSpec((NODE,)),
+    "param": MagicSpec((NODE,)),
+    "nodes": MagicSpec((NODE,)),
+    "node": MagicSpec((NODE,)),
+    "wrap": MagicSpec((PACKAGE, EXECUTABLE), {"--as": None, "--name": None, "--namespace": None, "--ns": None},
+                      other_options=TOPIC),
+}
+
+
+@dataclass(frozen=True)
+class CallSpec:
+    """What the string arguments of a DSL method are, by position and by keyword.
+
+    ``direction`` says which of the node's topics come first for a TOPIC/OWN_TOPIC
+    argument (None: all of them). ``needs_node``: answer only when the receiver is a
+    DSL node (``f.write("`` on a file is none of our business).
+    """
+
+    positional: tuple[Optional[str], ...] = ()
+    keywords: Mapping[str, str] = field(default_factory=dict)
+    direction: Optional[str] = None
+    needs_node: bool = False
+
+
+_MSG_KEYWORDS = {"topic": TOPIC, "msgType": MSG_TYPE, "type": MSG_TYPE}
+
+#: The methods whose string arguments are completed (the DSL's, and rospy's own).
+CALLS: dict[str, CallSpec] = {
+    "subscribe": CallSpec((TOPIC, None, MSG_TYPE, MSG_TYPE), _MSG_KEYWORDS, "subscribe"),
+    "publish": CallSpec((TOPIC, MSG_TYPE, MSG_TYPE), _MSG_KEYWORDS, "publish"),
+    "write": CallSpec((TOPIC,), {"topic": TOPIC}, "publish", needs_node=True),
+    "unsubscribe": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC}, "subscribe"),
+    "unpublish": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC}, "publish"),
+    "handler": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC}, "subscribe", needs_node=True),
+    "remove": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC, "timer": TIMER, "service": SERVICE}, needs_node=True),
+    "service": CallSpec((SERVICE, SRV_TYPE, None, SRV_TYPE), {"name": SERVICE, "srvType": SRV_TYPE, "type": SRV_TYPE},
+                        needs_node=True),
+    "baseNode": CallSpec((EXECUTABLE,), {"executable": EXECUTABLE}),
+    "basePackage": CallSpec((PACKAGE,), {"package": PACKAGE}),
+    "Subscriber": CallSpec((TOPIC,)),
+    "Publisher": CallSpec((TOPIC,)),
+    "wait_for_message": CallSpec((TOPIC,)),
+}
+
+#: Keywords so specific to ROS that any call with them is answered, DSL or not.
+_ROS_KEYWORDS = {"msgType": MSG_TYPE, "msg_type": MSG_TYPE, "srvType": SRV_TYPE, "srv_type": SRV_TYPE}
+
+
+# -- reading magic lines --------------------------------------------------------------
+_MAGIC_LINE = re.compile(r"^\s*(%?)([A-Za-z_]\w*)\s+(.*)$", re.S)
+
+
+def magic_want(line: str, user_ns: Mapping[str, Any], line_magics: Optional[Mapping[str, Any]] = None) -> Optional[Want]:
+    """What to complete at the end of ``line`` if it is one of :data:`MAGICS`, else None.
+
+    Without ``%`` the line counts only when automagic would run it: ``line_magics``
+    (the shell's registered line magics) has the name and no variable shadows it.
+    """
+    m = _MAGIC_LINE.match(line)
+    if not m:
+        return None
+    percent, name, args = m.groups()
+    spec = MAGICS.get(name)
+    if spec is None or (not percent and (line_magics is None or name not in line_magics or name in user_ns)):
+        return None
+    words = args.split()
+    current = "" if not args or args[-1].isspace() else words.pop()
+    kind, positionals = _classify(spec, words, current)
+    if kind is None:
+        return None
+    # The value of --opt=value or a remap from:=to: only the part after the last = or :.
+    fragment = re.split(r"[=:]", current)[-1] if current.startswith("-") or ":=" in current else current
+    model = _model_of(user_ns, positionals[0]) if kind == OWN_TOPIC and positionals else None
+    package = positionals[0] if kind == EXECUTABLE and positionals else None
+    return Want(kind, fragment, model, spec.direction, package, tuple(positionals))
+
+
+def _classify(spec: MagicSpec, words: list[str], current: str) -> tuple[Optional[str], list[str]]:
+    """The kind of the word being typed, given the words before it; and the positionals seen."""
+    positionals: list[str] = []
+    pending: Optional[str] = "none"  # "none": the next word is not an option value
+    for word in words:
+        if pending != "none":
+            pending = "none"
+        elif word.startswith("-") and len(word) > 1:
+            if "=" not in word and _takes_value(spec, word):
+                pending = _option_kind(spec, word)
+        else:
+            positionals.append(word)
+    if pending != "none":
+        return pending, positionals
+    if current.startswith("-"):
+        option, eq, _ = current.partition("=")
+        return (_option_kind(spec, option) if eq and _takes_value(spec, option) else None), positionals
+    index = len(positionals)
+    return (spec.positional[index] if index < len(spec.positional) else None), positionals
+
+
+def _takes_value(spec: MagicSpec, option: str) -> bool:
+    return option in spec.options or spec.other_options is not None
+
+
+def _option_kind(spec: MagicSpec, option: str) -> Optional[str]:
+    return spec.options[option] if option in spec.options else spec.other_options
+
+
+# -- reading DSL calls ----------------------------------------------------------------
+@dataclass(frozen=True)
+class StringArgument:
+    """An unfinished one-line string literal, passed as an argument of a call.
+
+    For ``nd.new.subscribe(topic="/tur``: ``fragment="/tur"``, ``keyword="topic"``,
+    ``index=0`` (top-level commas before it), ``chain=("nd", "new", "subscribe")``
+    (attribute names from the root, calls skipped), ``root_called=False``.
+    """
+
+    fragment: str
+    keyword: Optional[str]
+    index: int
+    chain: tuple[str, ...]
+    root_called: bool
+
+
+_ARG_START = re.compile(r"\s*(?:([A-Za-z_]\w*)\s*=\s*)?[rRuU]?$")
+
+
+def string_argument(source: str) -> Optional[StringArgument]:
+    """Read ``source`` (a cell up to the cursor) and describe the string argument it ends in.
+
+    A small scanner, not a parser: it tracks strings, comments and brackets, which is
+    all it takes to find the call around the cursor across continuation lines.
+    """
+    stack: list[list[int]] = []  # [open position, top-level commas, start of the current argument]
+    pairs: dict[int, int] = {}  # closing bracket position → its opening position
+    i, n = 0, len(source)
+    while i < n:
+        c = source[i]
+        if c == "#":
+            end = source.find("\n", i)
+            i = n if end < 0 else end
+        elif c in "\"'":
+            quote = c * 3 if source.startswith(c * 3, i) else c
+            end = _string_end(source, i + len(quote), quote)
+            if end is None:  # the string runs to the cursor: this is the one being typed
+                return None if len(quote) == 3 else _argument_at(source, i, stack, pairs)
+            i = end
+            continue
+        elif c in "([{":
+            stack.append([i, 0, i + 1])
+        elif c in ")]}":
+            if stack:
+                pairs[i] = stack.pop()[0]
+        elif c == "," and stack:
+            stack[-1][1] += 1
+            stack[-1][2] = i + 1
+        i += 1
+    return None
+
+
+def _string_end(source: str, i: int, quote: str) -> Optional[int]:
+    """Position after the literal's closing quote; None if it is still open at the end."""
+    n = len(source)
+    while i < n:
+        c = source[i]
+        if c == "\\":
+            i += 2
+        elif source.startswith(quote, i):
+            return i + len(quote)
+        elif c == "\n" and len(quote) == 1:
+            return i + 1  # an unterminated one-line string: a syntax error, skip past it
+        else:
+            i += 1
+    return None
+
+
+def _argument_at(source: str, quote_at: int, stack: list[list[int]], pairs: dict[int, int]) -> Optional[StringArgument]:
+    if not stack or source[stack[-1][0]] != "(":
+        return None
+    paren, commas, arg_start = stack[-1]
+    m = _ARG_START.match(source, arg_start, quote_at)
+    if not m:
+        return None  # e.g. "a" + "b", or a string inside an expression: not an argument by itself
+    chain = _call_chain(source, paren, pairs)
+    if chain is None:
+        return None
+    names, root_called = chain
+    return StringArgument(source[quote_at + 1:], m.group(1), commas, names, root_called)
+
+
+def _call_chain(source: str, paren: int, pairs: dict[int, int]) -> Optional[tuple[tuple[str, ...], bool]]:
+    """The dotted names before ``source[paren]``: ``a.b(x).c(`` → (("a", "b", "c"), False)."""
+    names: list[str] = []
+    called = True  # the name right before `paren` is the one being called
+    j = paren
+    while True:
+        end = _skip_space_back(source, j)
+        start = end
+        while start > 0 and (source[start - 1].isalnum() or source[start - 1] == "_"):
+            start -= 1
+        if start == end or source[start].isdigit():
+            return None
+        names.append(source[start:end])
+        dot = _skip_space_back(source, start)
+        if dot == 0 or source[dot - 1] != ".":
+            return tuple(reversed(names)), called
+        before = _skip_space_back(source, dot - 1)
+        if before > 0 and source[before - 1] == ")" and before - 1 in pairs:
+            j, called = pairs[before - 1], True
+        else:
+            j, called = before, False
+
+
+def _skip_space_back(source: str, j: int) -> int:
+    """The position just after the last non-space character before ``j``."""
+    while j > 0 and source[j - 1].isspace():
+        j -= 1
+    return j
+
+
+def call_want(arg: StringArgument, user_ns: Mapping[str, Any]) -> Optional[Want]:
+    """What to complete in the string argument ``arg``, or None if it is not ours."""
+    method, root = arg.chain[-1], arg.chain[0]
+    model = None if arg.root_called or len(arg.chain) < 2 else _model_of(user_ns, root)
+    spec = CALLS.get(method)
+    kind: Optional[str] = None
+    if spec is not None and (model is not None or not spec.needs_node):
+        if arg.keyword is not None:
+            kind = spec.keywords.get(arg.keyword)
+        elif arg.index < len(spec.positional):
+            kind = spec.positional[arg.index]
+    elif model is not None and arg.keyword is not None:
+        kind = {**_MSG_KEYWORDS, **_ROS_KEYWORDS}.get(arg.keyword)
+    if kind is None and arg.keyword in _ROS_KEYWORDS:
+        kind = _ROS_KEYWORDS[arg.keyword]
+    if kind is None:
+        return None
+    package = model.base.package if kind == EXECUTABLE and model is not None and model.base else None
+    return Want(kind, arg.fragment, model, spec.direction if spec else None, package)
+
+
+def _model_of(user_ns: Mapping[str, Any], name: str) -> Optional[NodeModel]:
+    """The NodeModel of the DSL node held by variable ``name``; a dict lookup, nothing evaluated."""
+    obj = user_ns.get(name)
+    if not is_dsl_node(obj):
+        return None
+    try:
+        model = obj.model()
+    except Exception:  # a broken object must not break TAB
+        log.debug("%s.model() failed", name, exc_info=True)
+        return None
+    return model if isinstance(model, NodeModel) else None
+
+
+def is_dsl_node(obj: Any) -> bool:
+    """Whether ``obj`` looks like a DSL node: its class has a ``model()`` method."""
+    return obj is not None and not isinstance(obj, type) and callable(getattr(type(obj), "model", None))
+
+
+# -- answering ------------------------------------------------------------------------
+class Answerer:
+    """Turns a :class:`Want` into completions, from the graph snapshot, the catalog and user_ns.
+
+    Each completion carries a short description IPython shows beside it: the message
+    type of a topic (when known), else what kind of name it is.
+    """
+
+    def __init__(self, graph: GraphCache, catalog: Catalog):
+        self.graph = graph
+        self.catalog = catalog
+
+    def completions(self, want: Want, user_ns: Mapping[str, Any]) -> list[SimpleCompletion]:
+        found = self._found(want, user_ns)
+        seen: set[str] = set()
+        out = []
+        for text, meta in found:
+            if text not in seen:  # the node's own name first, the live duplicate dropped
+                seen.add(text)
+                out.append(SimpleCompletion(text, type=meta))
+        return out
+
+    def _found(self, want: Want, user_ns: Mapping[str, Any]) -> list[tuple[str, str]]:
+        snap, frag, kind = self.graph.snapshot, want.fragment, want.kind
+        if kind in (TOPIC, OWN_TOPIC):
+            return self._topics(want, snap)
+        if kind == SERVICE:
+            return self._services(want, snap)
+        if kind == TIMER:
+            timers = want.model.timers if want.model else []
+            return sorted((t.name, TIMER) for t in timers if t.name.startswith(frag))
+        if kind == NODE:
+            return [(n, _stale(NODE, snap)) for n, _ in _relative_or_global(snap.nodes, frag, "/")]
+        if kind == DSL_NODE:
+            return sorted((k, type(v).__name__) for k, v in list(user_ns.items())
+                          if k.startswith(frag) and not k.startswith("_") and is_dsl_node(v))
+        if kind == FUNCTION:
+            return sorted((k, FUNCTION) for k, v in list(user_ns.items())
+                          if k.startswith(frag) and not k.startswith("_") and isinstance(v, types.FunctionType))
+        if kind == MSG_TYPE:
+            found = [(t, kind) for t in _types(self.catalog.message_types(), frag)]
+            live = snap.topics.get(_global(want.before[0])) if want.before else None
+            if live and live.startswith(frag):  # %pub TOPIC <TAB>: the type the topic carries, first
+                found = [(live, f"carried by {_global(want.before[0])}")] + [f for f in found if f[0] != live]
+            return found
+        if kind == MSG_TEMPLATE:
+            if frag or len(want.before) < 2:
+                return []  # a template replaces nothing: it is offered before anything is typed
+            try:
+                return [(self.catalog.templates(want.before[1]), f"{want.before[1]}, every field at its default")]
+            except Exception:  # an unknown type: %pub itself will say so, in one line
+                return []
+        if kind == REQUEST_TEMPLATE:
+            if frag or len(want.before) < 2:
+                return []
+            try:
+                return [(self.catalog.request_templates(want.before[1]), f"{want.before[1]} request, at its defaults")]
+            except Exception:  # an unknown type: %call itself will say so, in one line
+                return []
+        if kind == SRV_TYPE:
+            return [(t, kind) for t in _types(self.catalog.service_types(), frag)]
+        if kind == PACKAGE:
+            return [(p, kind) for p in names_with_prefix(self.catalog.packages(), frag)]
+        if kind == DEMO_ROBOT:
+            from ..tools.robot import ROBOTS
+
+            return [(n, kind) for n in ROBOTS if n.startswith(frag)]
+        if kind == EXECUTABLE and want.package:
+            return [(e, kind) for e in names_with_prefix(self.catalog.executables(want.package), frag)]
+        return []
+
+    def _topics(self, want: Want, snap: GraphSnapshot) -> list[tuple[str, str]]:
+        model, frag = want.model, want.fragment
+        namespace = model.namespace if model is not None else default_namespace()
+        own = _own(model.topics if model else [], want.direction, frag, namespace)
+        if want.kind == OWN_TOPIC and model is not None:
+            return own
+        live = _relative_or_global(snap.topic_names, frag, namespace)
+        return own + [(text, _stale(snap.topics[name] or TOPIC, snap)) for text, name in live]
+
+    def _services(self, want: Want, snap: GraphSnapshot) -> list[tuple[str, str]]:
+        model, frag = want.model, want.fragment
+        namespace = model.namespace if model is not None else default_namespace()
+        own = _own(model.services if model else [], None, frag, namespace)
+        return own + [(text, _stale(SERVICE, snap)) for text, _ in _relative_or_global(tuple(snap.services), frag,
+                                                                                        namespace)]
+
+
+def _stale(meta: str, snap: GraphSnapshot) -> str:
+    """A completion's description, saying so when it comes from the last graph of a master now down."""
+    if not snap.stale:
+        return meta
+    return f"{meta} (master down; as of {time.strftime('%H:%M:%S', time.localtime(snap.known_at))})"
+
+
+def _global(name: str) -> str:
+    return names.resolve(name, default_namespace(), "ipyros", "topic") if name else name
+
+
+def _own(declared: Sequence[Any], direction: Optional[str], fragment: str, namespace: str) -> list[tuple[str, str]]:
+    """The node's declared topics/services matching ``fragment``, sorted, with their types."""
+    found = []
+    for d in declared:
+        if direction is None or d.direction == direction:
+            text = _as_typed(d.name, d.resolved, fragment, namespace)
+            if text.startswith(fragment):
+                found.append((text, d.type))
+    return sorted(found)
+
+
+def _as_typed(name: str, resolved: str, fragment: str, namespace: str) -> str:
+    """How to offer a declared name: global if the user types a global name, else as declared."""
+    if fragment.startswith("/"):
+        return resolved
+    if fragment and not fragment.startswith("~") and name.startswith("/"):
+        ns = names.global_ns(namespace)
+        return resolved[len(ns):] if resolved.startswith(ns) else resolved
+    return name
+
+
+def _relative_or_global(sorted_names: Sequence[str], fragment: str, namespace: str) -> list[tuple[str, str]]:
+    """(text, global name) pairs: global names for ``""`` or ``/x``; for a relative ``x``,
+    the names in ``namespace`` that it starts, written relative to it."""
+    if not fragment or fragment.startswith("/"):
+        return [(n, n) for n in names_with_prefix(sorted_names, fragment)]
+    if fragment.startswith("~"):
+        return []  # private names only make sense for the node's own declarations
+    ns = names.global_ns(namespace)
+    return [(n[len(ns):], n) for n in names_with_prefix(sorted_names, ns + fragment)]
+
+
+_LONG_TYPE = re.compile(r"(\w+)/(msg|srv)/(.*)")
+
+
+def _types(known: Sequence[str], fragment: str) -> list[str]:
+    """``geometry_msgs/Tw`` by prefix; a bare ``Tw`` also finds ``geometry_msgs/Twist``; ROS 2's
+    long form ``geometry_msgs/msg/Tw`` is answered in that form (``known`` has the short one)."""
+    long_form = _LONG_TYPE.match(fragment)
+    if long_form:
+        package, kind, rest = long_form.groups()
+        return [t.replace("/", f"/{kind}/", 1) for t in names_with_prefix(known, f"{package}/{rest}")]
+    found = names_with_prefix(known, fragment)
+    if "/" not in fragment and fragment:
+        found += [t for t in known if t.partition("/")[2].startswith(fragment)]
+    return found
+
+
+# -- the IPython side -----------------------------------------------------------------
+#: The answer when the text is ours but nothing matches (see RosMatcher.__call__).
+NOTHING = SimpleCompletion("", type="no match")
+
+
+class RosMatcher:
+    """The matcher object: decides whether a completion is ours and answers it.
+
+    ``__call__`` takes what a Matcher API v2 matcher takes and returns what it returns;
+    :func:`install` wraps it in a ``context_matcher`` function for IPython.
+    """
+
+    def __init__(self, shell: Any, graph: GraphCache, catalog: Catalog):
+        self.shell = shell
+        self.answerer = Answerer(graph, catalog)
+        #: JupyterLab shows a completion's type in lower case (a message type would read
+        #: ``geometry_msgs/twist``, which is no type): in a kernel the type says the kind of name.
+        self.kinds_only = getattr(shell, "kernel", None) is not None
+
+    def want(self, context: CompletionContext) -> Optional[Want]:
+        """The decision for this context, or None when another matcher should answer."""
+        user_ns = self.shell.user_ns
+        line = context.text_until_cursor
+        manager = getattr(self.shell, "magics_manager", None)
+        # Without automagic a bare "topics /x" is Python, not a magic.
+        line_magics = manager.magics["line"] if manager is not None and getattr(self.shell, "automagic", False) else None
+        want = magic_want(line, user_ns, line_magics)
+        if want is None and ('"' in line or "'" in line):
+            lines = context.full_text.split("\n")[: context.cursor_line]
+            arg = string_argument("\n".join([*lines, line]))
+            want = call_want(arg, user_ns) if arg is not None else None
+        return want
+
+    def __call__(self, context: CompletionContext) -> SimpleMatcherResult:
+        try:
+            want = self.want(context)
+            if want is None:
+                return SimpleMatcherResult(completions=[], suppress=False)
+            completions = self.answerer.completions(want, self.shell.user_ns)
+            if self.kinds_only:
+                completions = [SimpleCompletion(c.text, type=want.kind) for c in completions]
+        except Exception:  # TAB must never show a traceback; say why at debug level
+            log.debug("ipyros completion failed", exc_info=True)
+            return SimpleMatcherResult(completions=[], suppress=False)
+        if not completions:
+            # IPython lets a matcher suppress the others only if it has a completion, so
+            # "no such topic" would bring in file names (``%topics /`` listing the disk
+            # when the master is down). One empty completion replacing nothing says
+            # "nothing" and keeps them out: the terminal skips empty texts.
+            return SimpleMatcherResult(completions=[NOTHING], matched_fragment="", suppress=True)
+        if context.limit is not None:
+            completions = completions[: context.limit]
+        return SimpleMatcherResult(
+            completions=completions, matched_fragment=want.fragment, suppress=True, ordered=True
+        )
+
+
+@dataclass(frozen=True)
+class Installed:
+    """What :func:`install` returns; give it to :func:`uninstall`."""
+
+    matcher: Callable[[CompletionContext], SimpleMatcherResult]  # the function in custom_matchers
+    ros: RosMatcher
+
+
+def install(shell: Any, graph: GraphCache, catalog: Optional[Catalog] = None) -> Installed:
+    """Add the ipyros matcher to ``shell``'s completer (the real catalog if none is given).
+
+    The catalog's disk scans start at once in a short-lived background thread.
+    """
+    catalog = catalog or default_catalog()
+    threading.Thread(target=catalog.warm, name="ipyros-catalog-warm", daemon=True).start()
+    ros = RosMatcher(shell, graph, catalog)
+
+    # A plain function: IPython reads __qualname__ and the attributes context_matcher sets.
+    @context_matcher(identifier=IDENTIFIER)
+    def ipyros_matcher(context: CompletionContext) -> SimpleMatcherResult:
+        return ros(context)
+
+    shell.Completer.custom_matchers.append(ipyros_matcher)
+    return Installed(ipyros_matcher, ros)
+
+
+def uninstall(shell: Any, handle: Installed) -> None:
+    """Remove the matcher that :func:`install` added; harmless if it is already gone."""
+    matchers = shell.Completer.custom_matchers
+    if handle.matcher in matchers:
+        matchers.remove(handle.matcher)

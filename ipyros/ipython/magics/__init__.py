@@ -1,0 +1,28 @@
+"""The IPython face of ipyros: one ``Magics`` class per concern.
+
+* :class:`RosMagics` (``config.py``): the settings, ``%config RosMagics``;
+* :class:`TopicMagics` (``graph.py``): ``%topics``, ``%echo``, ``%pub``;
+* :class:`RateMagics` (``rates.py``): ``%hz``, ``%bw``, ``%delay``, measured until Ctrl-C;
+* :class:`IntrospectMagics` (``introspect.py``): ``%services``, ``%call``, ``%params``, ``%param``,
+  ``%nodes``, ``%node``;
+* :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
+* :class:`WrapMagics` (``wrap.py``): ``%wrap``;
+* :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
+* :class:`PlotMagics` (``plot.py``): ``%plot``, topic fields drawn live;
+* :class:`RecordMagics` (``record.py``): ``%record``, topics written to a bag.
+
+:mod:`ipyros.ipython.extension` creates and registers them; ``%magic?`` shows each one's help.
+"""
+
+from .config import RosMagics
+from .demo import DemoMagics
+from .graph import TopicMagics
+from .introspect import IntrospectMagics
+from .nodes import NodeMagics
+from .plot import PlotMagics
+from .rates import RateMagics
+from .record import RecordMagics
+from .wrap import WrapMagics
+
+__all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics",
+           "RateMagics", "IntrospectMagics"]

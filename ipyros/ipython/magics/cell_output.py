@@ -1,0 +1,130 @@
+"""In Jupyter, what a node's handlers print stays below the cell that created the node.
+
+A handler runs on a ROS thread. What it prints goes to ``sys.stdout``, which the kernel
+sends to whichever cell runs at that moment (or ran last): a node created in cell 3
+would scatter its prints over cells 4, 5 and 6, and a node printing at 10 Hz would make
+every later cell unreadable. So, in a kernel only:
+
+* :func:`route` puts a :class:`RoutedStream` in front of ``sys.stdout`` and ``sys.stderr``:
+  text written by a thread that is running a handler goes to that handler's node's
+  :class:`OutputArea`; any other text passes through unchanged;
+* each node created from a cell gets an :class:`OutputArea`: an output of that cell with a
+  display id, redrawn in place (at most a few times a second) with the last lines written
+  to it. A front end updates a display by its id whichever cell runs now, so the text
+  stays with its node; ``%echo`` uses the same rolling view.
+
+:class:`NodeOutput` is the node's :class:`ipyros.core.slots.OutputScope`: the slot enters it
+around each handler call, so the handler's failure reports go to the same place.
+"""
+
+from __future__ import annotations
+
+import html
+import sys
+import threading
+from collections import deque
+from typing import Any, Optional
+
+#: The area of the handler the current thread is running, if any.
+_current = threading.local()
+
+
+class OutputArea:
+    """An output below the cell that made it, showing the last ``lines`` lines written to it."""
+
+    def __init__(self, lines: int = 200, interval: float = 0.25) -> None:
+        from IPython.display import display
+
+        self._lines: deque[str] = deque(maxlen=lines)
+        self._partial = ""  # a line not ended yet: print writes its text and its newline apart
+        self._interval = interval
+        self._lock = threading.Lock()
+        self._pending = False
+        self.written = 0  # lines so far, kept or not
+        self._handle = display(self._bundle(""), raw=True, display_id=True)
+
+    def write(self, text: str) -> int:
+        with self._lock:
+            *ended, self._partial = (self._partial + text).split("\n")
+            self._lines.extend(ended)
+            self.written += len(ended)
+            if self._pending:
+                return len(text)
+            self._pending = True
+        timer = threading.Timer(self._interval, self.flush)
+        timer.daemon = True
+        timer.start()
+        return len(text)
+
+    def flush(self) -> None:
+        """Redraw the area now with what it holds."""
+        with self._lock:
+            self._pending = False
+            lines = list(self._lines) + ([self._partial] if self._partial else [])
+            hidden = self.written - len(self._lines)
+        text = "\n".join(([f"... ({hidden} earlier lines not shown)"] if hidden else []) + lines)
+        self._handle.update(self._bundle(text), raw=True)
+
+    @staticmethod
+    def _bundle(text: str) -> dict[str, str]:
+        shown = f'<pre style="max-height:24em;overflow:auto">{html.escape(text)}</pre>' if text else ""
+        return {"text/plain": text, "text/html": shown}
+
+
+class NodeOutput:
+    """Where a node's handler calls write: entered by the slot around each call (``OutputScope``)."""
+
+    def __init__(self, area: OutputArea) -> None:
+        self.area = area
+
+    def enter(self) -> Any:
+        previous = getattr(_current, "area", None)
+        _current.area = self.area
+        return previous
+
+    def leave(self, previous: Any) -> None:
+        _current.area = previous
+
+
+class RoutedStream:
+    """Stands for ``sys.stdout`` or ``sys.stderr``: a handler's text to its node's area, the rest through."""
+
+    def __init__(self, original: Any) -> None:
+        self.original = original
+
+    def write(self, text: str) -> int:
+        area: Optional[OutputArea] = getattr(_current, "area", None)
+        if area is not None:
+            return area.write(text)
+        return self.original.write(text)
+
+    def flush(self) -> None:
+        if getattr(_current, "area", None) is None:
+            self.original.flush()
+
+    def __getattr__(self, name: str) -> Any:  # fileno, encoding, the kernel's own methods ...
+        return getattr(self.original, name)
+
+
+def in_kernel(shell: Any) -> bool:
+    """Whether ``shell`` is a Jupyter kernel's (its output goes to cells, not to a terminal)."""
+    return getattr(shell, "kernel", None) is not None
+
+
+def route() -> None:
+    """Put a :class:`RoutedStream` in front of ``sys.stdout`` and ``sys.stderr`` (once)."""
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if not isinstance(stream, RoutedStream):
+            setattr(sys, name, RoutedStream(stream))
+
+
+def unroute() -> None:
+    """Take the :class:`RoutedStream` away again, if nothing has replaced it since."""
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if isinstance(stream, RoutedStream):
+            setattr(sys, name, stream.original)
+
+
+__all__ = ["NodeOutput", "OutputArea", "RoutedStream", "in_kernel", "route", "unroute"]

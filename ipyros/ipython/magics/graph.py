@@ -1,0 +1,433 @@
+"""``%topics``, ``%echo``, ``%pub``: what ``rostopic list/echo/pub`` do, at the prompt.
+
+They read the graph from the master afresh (:meth:`GraphCache.refresh_now`, bounded by a
+short timeout), listen and publish through the small DSL nodes of :mod:`ipyros.tools.probe`,
+and print with rich (tables in a terminal or a notebook, plain text in a pipe).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import re
+import time
+from typing import Any, Optional
+
+from IPython.core.error import UsageError
+from IPython.core.magic import line_cell_magic, line_magic, magics_class, no_var_expand
+from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from rich.syntax import Syntax
+from rich.table import Table
+
+from ...core import msgtypes, plan as planning
+from ...core.errors import MasterError
+from ...core.msgbuild import build_message, fields_of, flat_fields, parse_data, to_yaml
+from ...tools.graph import GraphSnapshot, frozen
+from ...tools.probe import Echo, Rate, measure_rates
+from .cell_output import OutputArea, in_kernel
+from .common import ExtensionMagics, global_topic, split_head
+
+
+class Messages(list):
+    """What ``%echo`` heard: a list of messages that shows as one line, not as all of them again."""
+
+    def __init__(self, topic: str) -> None:
+        super().__init__()
+        self.topic = topic
+
+    def __repr__(self) -> str:
+        return f"<{len(self)} message{'s' * (len(self) != 1)} from {self.topic}: a list>"
+
+
+def _compile_filter(expression: str, namespace: dict) -> Any:
+    """``--filter EXPR`` compiled once; the returned test says for message ``m`` whether to keep it."""
+    expression = expression.strip()
+    if len(expression) > 1 and expression[0] == expression[-1] and expression[0] in "'\"":
+        expression = expression[1:-1]  # IPython's argument split keeps the quotes
+    try:
+        code = compile(expression, "<%echo --filter>", "eval")
+    except SyntaxError as error:
+        raise UsageError(f"--filter {expression!r} is not a Python expression ({error.msg}); "
+                         "write one over the message m, e.g. --filter 'm.linear.x > 0'") from None
+
+    def keep(msg: Any, number: int) -> bool:
+        try:
+            return bool(eval(code, namespace, {"m": msg}))  # noqa: S307 - the user's own expression
+        except Exception as error:  # noqa: BLE001 - said in one line, and the listening stops
+            raise UsageError(f"--filter {expression!r} raised {type(error).__name__}: {error} on message "
+                             f"{number}; fix the expression (the message is m)") from None
+
+    return keep
+
+
+def _fields_yaml(msg: Any, fields: list[str], type_name: str) -> str:
+    """The chosen fields of ``msg`` as YAML lines, ``linear.x: 1.0``, each read by its dotted path."""
+    lines = []
+    for path in fields:
+        value = msg
+        for part in path.split("."):
+            if part not in fields_of(value):
+                have = ", ".join(fields_of(value)) or "no fields"
+                raise UsageError(f"--field {path}: no field {part!r} in {getattr(value, '_type', type_name)} "
+                                 f"(it has {have})")
+            value = getattr(value, part)
+        text = to_yaml(value)
+        lines.append(f"{path}: {text}" if "\n" not in text else f"{path}:\n  " + text.replace("\n", "\n  "))
+    return "\n".join(lines)
+
+
+# "pkg/Type" or "pkg/msg/Type": how %pub tells a type from the message data after the topic.
+_TYPE_WORD = re.compile(r"[A-Za-z]\w*/(msg/)?[A-Za-z]\w*")
+
+
+@magics_class
+class TopicMagics(ExtensionMagics):
+    """Magics about the live topics of the ROS graph."""
+
+    # -- %topics -------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("pattern", nargs="?", default="",
+              help="only topics matching this glob (/turtle*/pose) or containing this text (cmd)")
+    @argument("-t", "--type", help="only topics of this message type (a glob works: geometry_msgs/*)")
+    @argument("-n", "--node", help="only topics this node publishes or subscribes to")
+    @argument("--hz", action="store_true",
+              help="also measure each topic's message rate, listening for c.RosMagics.hz_window seconds")
+    @argument("-v", "--verbose", action="store_true",
+              help="one row per publisher and subscription, with the type each uses and (ROS 2) the QoS each "
+                   "offers or asks for")
+    @line_magic
+    def topics(self, line: str) -> None:
+        """List the live topics: name, type, publishers and subscribers."""
+        args = parse_argstring(self.topics, line)
+        snap = self.live_graph()
+        node = _node_name(args.node) if args.node else None
+        if node and node not in snap.nodes:
+            raise UsageError(f"no node {node} in the ROS graph{_close(node, snap.nodes)}")
+        found = snap.topics_matching(args.pattern, type=args.type, node=node)
+        if not found:
+            if args.type and not any(c in args.type for c in "*?[") and args.type not in snap.topics.values():
+                msgtypes.resolve_message(args.type)  # a misspelt type: its error says so
+            what = " and ".join(filter(None, [
+                f"matching {args.pattern!r}" if args.pattern else "", f"of type {args.type}" if args.type else "",
+                f"of node {node}" if node else ""]))
+            print(f"no live topics {what}".rstrip() + (" (the master knows none)" if not snap.topics else ""))
+            return
+        if args.verbose:
+            self.ext.printer.show(_endpoints_table(snap, found, self.ext.session.backend.topic_endpoints,
+                                                   self.ext.graph.where))
+            return
+        window = self.ext.settings.hz_window
+        rates = measure_rates({t: snap.topics[t] for t in found}, window) if args.hz else None
+        self.ext.printer.show(_topics_table(_as_dsl_nodes(snap, self.ext.session), found, rates, window,
+                                            self.ext.graph.where))
+
+    # -- %echo ---------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("topic", help="the live topic to listen to")
+    @argument("-n", "--count", type=int, default=None,
+              help="stop after this many messages (default c.RosMagics.echo_count; 0: until Ctrl-C)")
+    @argument("--field", action="append", metavar="A.B",
+              help="print only this field (repeat for several), e.g. --field linear.x --field angular.z")
+    @argument("--filter", metavar="EXPR",
+              help="only messages for which this Python expression over m is true, e.g. 'm.linear.x > 0'; "
+                   "it sees your namespace")
+    @argument("--csv", action="store_true", help="one line per message, comma-separated, a header line first")
+    @argument("--table", action="store_true", help="a table of the messages when the listening ends")
+    @no_var_expand
+    @line_magic
+    def echo(self, line: str) -> "Messages":
+        """Print the messages arriving on TOPIC until Ctrl-C (or -n of them); return them.
+
+        The output is YAML that ``%pub`` takes back. ``msgs = %echo /x -n 20`` keeps the
+        messages (a list). Ctrl-C stops only the listening: nodes keep running. The
+        subscription made for listening is removed when it stops.
+        """
+        args = parse_argstring(self.echo, line)
+        count = self.ext.settings.echo_count if args.count is None else args.count
+        if count < 0:
+            raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {count}")
+        topic, field = self._topic_and_field(global_topic(args.topic))
+        keep = _compile_filter(args.filter, self.shell.user_ns) if args.filter else None
+        fields = [f.strip("'\"") for f in args.field or []] + ([field] if field else [])
+        seen = Messages(topic)
+        type_name = self._type_once_live(topic)
+        if type_name is None:  # Ctrl-C while waiting for it
+            return seen
+        if args.csv and args.table:
+            raise UsageError("give --csv or --table, not both (without either: YAML, which %pub takes back)")
+        printer = self.ext.printer
+        # In Jupyter, listening until interrupted would print past the front end's output limit:
+        # the last messages in one area redrawn in place instead.
+        endless = not count and not (args.csv or args.table)
+        rolling = OutputArea(lines=400) if endless and in_kernel(self.shell) else None
+        rows = _Rows(fields, type_name, csv=args.csv) if args.csv or args.table else None
+        with Echo(topic, type_name) as echo:
+            try:
+                while not count or len(seen) < count:
+                    msg = echo.get(timeout=0.1)  # short waits: Ctrl-C gets through between them
+                    # (no `continue` here: CPython 3.11 can raise Ctrl-C at that jump, outside this try)
+                    if msg is not None and (keep is None or keep(msg, len(seen) + 1)):
+                        seen.append(msg)
+                        if rows is not None:
+                            rows.add(msg)
+                        else:
+                            text = _fields_yaml(msg, fields, type_name) if fields else to_yaml(msg)
+                            if rolling is not None:
+                                rolling.write(f"{text}\n---\n")
+                            else:
+                                printer.show(Syntax(text, "yaml", background_color="default"), "---")
+            except KeyboardInterrupt:
+                print(f"stopped listening to {topic} after {len(seen)} message{'s' * (len(seen) != 1)}")
+            finally:
+                if rolling is not None:
+                    rolling.flush()
+        if rows is not None and args.table:
+            printer.show(rows.table(f"{len(seen)} message{'s' * (len(seen) != 1)} from {topic}"))
+        return seen
+
+    # -- %pub / %%pub ----------------------------------------------------------------------
+    @magic_arguments()
+    @argument("topic", help="the topic to publish on")
+    @argument("type", nargs="?", help="its message type, pkg/Type; may be left out for a live topic")
+    @argument("data", nargs="*", help="the message, the rest of the line (or the cell of %%%%pub): a Python "
+              "dict, a YAML mapping, a list of all fields in order, or one value for a one-field message; "
+              "fields left out keep their defaults, unknown or mistyped fields are errors")
+    @argument("-t", "--type", dest="type_option", metavar="TYPE", help="the message type, as an option")
+    @argument("-r", "--rate", type=float, help="publish again at this rate (Hz) until Ctrl-C")
+    @argument("--latch", action="store_true", help="keep the message for subscribers that come later too "
+              "(ROS 1 latched, ROS 2 transient local), until the extension is unloaded")
+    @argument("--nonfinite", action="store_true", help="let NaN and infinities through (refused otherwise: "
+              "typed by mistake they reach a controller as a command)")
+    @no_var_expand
+    @line_cell_magic
+    def pub(self, line: str, cell: Optional[str] = None) -> None:
+        """Publish one message on TOPIC, built and checked field by field.
+
+            %pub /chatter std_msgs/String hello
+            %pub /turtle1/cmd_vel geometry_msgs/Twist {linear: {x: 1.0}, angular: {z: 0.5}}
+            %pub /turtle1/cmd_vel {'linear': {'x': 1.0}}      # type taken from the live topic
+
+            %%pub /turtle1/cmd_vel geometry_msgs/Twist
+            linear: {x: 1.0}
+            angular: {z: 0.5}
+
+        Options may go before or after the message: everything else after TOPIC and TYPE is the message.
+        The message waits a moment for the subscribers the graph knows to connect, then goes
+        out once (as rostopic pub -1 / ros2 topic pub --once); --latch keeps it for later ones
+        too. A topic that one of your nodes already publishes is published through that node.
+        """
+        head, data = split_head(line, self.pub.parser,
+                                lambda index, word: index == 0 or (index == 1 and bool(_TYPE_WORD.fullmatch(word))))
+        args = parse_argstring(self.pub, head)
+        if cell is not None:
+            if data:
+                raise UsageError("give the message either on the line or in the cell of %%pub, not both")
+            data = cell
+        if args.type and args.type_option and args.type != args.type_option:
+            raise UsageError(f"two message types given ({args.type} and {args.type_option}); give one")
+        if args.rate is not None and not args.rate > 0:
+            raise UsageError(f"--rate must be a positive number of messages per second, not {args.rate}")
+        topic = global_topic(args.topic)
+        given = args.type or args.type_option
+        type_name = msgtypes.resolve_message(given)[0] if given else self.live_type(topic, for_pub=True)
+        msg = build_message(type_name, parse_data(data), nonfinite=args.nonfinite)
+        if args.rate is None:
+            sender, reached = self.ext.publisher.publish(topic, type_name, msg, latch=args.latch)
+            later = "; latched: subscribers that come later get it too" if args.latch else ""
+            print(f"published a {type_name} on {topic} (from {sender}) to {reached} subscriber"
+                  f"{'s' * (reached != 1)}{later}")
+            return
+        self._publish_at(args.rate, topic, type_name, msg, args.latch)
+
+    def _publish_at(self, rate: float, topic: str, type_name: str, msg: Any, latch: bool) -> None:
+        period, sent = 1.0 / rate, 0
+        print(f"publishing a {type_name} on {topic} at {rate:g} Hz; Ctrl-C to stop", flush=True)
+        start = time.monotonic()
+        try:
+            while True:
+                self.ext.publisher.publish(topic, type_name, msg, latch=latch, wait=sent == 0)
+                sent += 1
+                time.sleep(max(0.0, start + sent * period - time.monotonic()))
+        except KeyboardInterrupt:
+            print(f"published {sent} {type_name} message{'s' * (sent != 1)} on {topic} at {rate:g} Hz")
+
+    # -- shared ----------------------------------------------------------------------------
+    def live_graph(self) -> GraphSnapshot:
+        watch = self.ext.session.watch
+        if watch is not None:
+            watch.check_now()  # a master just restarted: the session registers again before it is read
+        snap = self.ext.graph.refresh_now()
+        if not snap.master_up:
+            raise MasterError(f"no ROS master answers at {self.ext.graph.master_uri}; start roscore, "
+                              "or check ROS_MASTER_URI (c.RosMagics.master_uri)")
+        return snap
+
+    def _topic_and_field(self, name: str) -> tuple[str, str]:
+        """``/turtle1/pose/position.x`` → ``("/turtle1/pose", "position.x")``, as rostopic echo reads a
+        field path; a name that is a live topic, or has no live topic in it, stays whole."""
+        snap = self.ext.graph.snapshot
+        if name in snap.topics:
+            return name, ""
+        parts = name.split("/")
+        for cut in range(len(parts) - 1, 1, -1):
+            topic = "/".join(parts[:cut])
+            if topic in snap.topics:
+                return topic, ".".join(parts[cut:])
+        return name, ""
+
+    def _type_once_live(self, topic: str, poll: float = 0.5) -> Optional[str]:
+        """The type of ``topic``, waiting (said once) while nobody publishes it, as rostopic echo
+        waits; None if Ctrl-C ends the wait."""
+        snap = self.live_graph()
+        if snap.topics.get(topic) not in (None, "", "*"):
+            return snap.topics[topic]
+        close = _close(topic, snap.topic_names)
+        print(f"ipyros: {topic} is not published yet{close}; waiting for it (Ctrl-C stops)", flush=True)
+        try:
+            while True:
+                time.sleep(poll)
+                found = self.ext.graph.refresh_now().topics.get(topic)
+                if found not in (None, "", "*"):
+                    return found
+        except KeyboardInterrupt:
+            print(f"stopped waiting for {topic}")
+            return None
+
+    def live_type(self, topic: str, for_pub: bool = False, snap: Optional[GraphSnapshot] = None) -> str:
+        """The type of the live ``topic`` from the graph read afresh (or from ``snap``, read once for
+        several topics); a one-line error if there is none."""
+        snap = snap if snap is not None else self.live_graph()
+        if topic not in snap.topics:
+            fix = f"; give its type: %pub {topic} pkg/Type ..." if for_pub else "; %topics lists them"
+            raise UsageError(f"no live topic {topic}{_close(topic, snap.topic_names)}{fix}")
+        type_name = snap.topics[topic]
+        if not type_name or type_name == "*":
+            raise UsageError(f"the master does not know the type of {topic} yet; try again in a moment")
+        return type_name
+
+
+def _as_dsl_nodes(snap: GraphSnapshot, session: Any) -> GraphSnapshot:
+    """``snap`` with this session's ROS 1 node replaced, topic by topic, by its DSL nodes that use the topic.
+
+    On ROS 1 every DSL node of the session lives in one ROS node, named after the first
+    one created: after ``nd.shutdown()`` the master still lists that name as publishing
+    what the session's other nodes (a ``%pub``) publish. Naming the DSL nodes says who.
+    """
+    process = session.process.name if session.backend.has_master else None
+    if not process:
+        return snap
+    uses: dict[tuple[str, str], list[str]] = {}
+    for node in list(session.nodes.values()):
+        for spec in planning.plan(node.model()):
+            if isinstance(spec, planning.PublishSpec):
+                ends = [(spec.topic, "publish")]
+            elif isinstance(spec, planning.SubscribeSpec):
+                ends = [(spec.topic, "subscribe")]
+            elif isinstance(spec, planning.RelaySpec):
+                ends = [(spec.source, "subscribe"), (spec.target, "publish")]
+            else:  # timers and services: no topic
+                ends = []
+            for end in ends:
+                uses.setdefault(end, []).append(node.fullname)
+
+    def named(mapping: Any, side: str) -> dict[str, tuple[str, ...]]:
+        return {topic: tuple(sorted({n for node in nodes for n in (uses.get((topic, side)) or [node]
+                                                                    if node == process else [node])}))
+                for topic, nodes in mapping.items()}
+
+    return dataclasses.replace(snap, publishers=frozen(named(snap.publishers, "publish")),
+                               subscribers=frozen(named(snap.subscribers, "subscribe")))
+
+
+def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
+                  window: float, where: str) -> Table:
+    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}", title_justify="left")
+    # Names stay whole (they are what you copy); the node lists give way when space runs out.
+    table.add_column("topic", overflow="fold", style="bold", min_width=min(60, max(map(len, found), default=5)))
+    table.add_column("type", overflow="fold", min_width=min(40, max((len(snap.topics[t] or "?") for t in found),
+                                                                   default=4)))
+    table.add_column("publishers", overflow="fold")
+    table.add_column("subscribers", overflow="fold")
+    if rates is not None:
+        table.add_column("rate Hz", justify="right")
+    for topic in found:
+        row = [topic, snap.topics[topic] or "?", _nodes(snap.publishers.get(topic, ())),
+               _nodes(snap.subscribers.get(topic, ()))]
+        if rates is not None:
+            rate = rates.get(topic)
+            row.append(rate.describe(window) if rate is not None else "? (type not installed)")
+        table.add_row(*row)
+    if rates is not None and any(r is not None and r.hz is None and r.count for r in rates.values()):
+        table.caption = f"< N: one message per publisher in {window:g} s; %hz TOPIC listens longer"
+        table.caption_justify = "left"
+    return table
+
+
+class _Rows:
+    """``%echo --csv`` (a line per message, as it arrives) and ``--table`` (a table when done)."""
+
+    def __init__(self, fields: list[str], type_name: str, csv: bool) -> None:
+        self.fields, self.type_name, self.csv = fields, type_name, csv
+        self.columns: Optional[list[str]] = None
+        self.rows: list[list[str]] = []
+
+    def add(self, msg: Any) -> None:
+        flat = flat_fields(msg)
+        if self.columns is None:
+            for path in self.fields:  # a wrong field: the same one-line error as --field's
+                _fields_yaml(msg, [path], self.type_name)
+            self.columns = [c for c in flat if not self.fields or any(
+                c == f or c.startswith(f + ".") for f in self.fields)]
+            if self.csv:
+                print(",".join(self.columns), flush=True)
+        row = [_cell(flat.get(c)) for c in self.columns]
+        if self.csv:
+            print(",".join(_csv_quoted(v) for v in row), flush=True)
+        else:
+            self.rows.append(row)
+
+    def table(self, title: str) -> Table:
+        table = Table(title=title, title_justify="left")
+        for column in self.columns or []:
+            table.add_column(column, justify="right")
+        for row in self.rows:
+            table.add_row(*row)
+        return table
+
+
+def _cell(value: Any) -> str:
+    return " ".join(map(str, value)) if isinstance(value, list) else "" if value is None else str(value)
+
+
+def _csv_quoted(text: str) -> str:
+    return '"' + text.replace('"', '""') + '"' if any(c in text for c in ',"\n') else text
+
+
+def _endpoints_table(snap: GraphSnapshot, found: list[str], endpoints: Any, where: str) -> Table:
+    """``%topics -v``: a row per publisher and subscription of each topic, with its QoS."""
+    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}, by endpoint",
+                  title_justify="left")
+    for column in ("topic", "node", "endpoint", "type", "QoS"):  # names and QoS whole; the type gives way
+        table.add_column(column, overflow="fold", no_wrap=column != "type", style="bold" if column == "topic" else None)
+    for topic in found:
+        rows = endpoints(topic) or [("", "", snap.topics[topic] or "?", "")]
+        types = {row[2] for row in rows if not row[2].startswith("?")}
+        for i, (node, kind, type_name, qos) in enumerate(rows):
+            if len(types) > 1:  # ROS connects no two types: say which endpoint hears nothing from which
+                type_name = f"[red]{type_name}[/] (not {' or '.join(sorted(types - {type_name}))}: nothing passes)"
+            table.add_row(topic if i == 0 else "", node, kind, type_name, qos)
+    return table
+
+
+def _nodes(nodes: tuple[str, ...], most: int = 3) -> str:
+    shown = ", ".join(nodes[:most])
+    return shown + (f" +{len(nodes) - most} more" if len(nodes) > most else "")
+
+
+def _node_name(name: str) -> str:
+    return name if name.startswith("/") else "/" + name
+
+
+def _close(name: str, known: Any) -> str:
+    close = difflib.get_close_matches(name, list(known), n=3)
+    return f" (did you mean {', '.join(close)}?)" if close else ""

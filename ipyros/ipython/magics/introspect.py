@@ -1,0 +1,210 @@
+"""``%services``, ``%call``, ``%params``, ``%param``, ``%nodes``, ``%node``: what ``rosservice``, ``rosparam``
+and ``rosnode`` (``ros2 service/param/node``) do, at the prompt, on either ROS.
+
+    %services /turtle*                      live services, their types and servers
+    %call /turtle1/teleport {x: 2.0, y: 1}  a request built field by field; the response as YAML
+    %params /turtle_sim                     parameters under a namespace (on ROS 2: of the nodes there)
+    %param /turtle_sim/speed 2.0            read or set one
+    %nodes                                  live nodes: what each publishes, subscribes, serves
+    %node /turtle_sim                       one node's interface, its pid (ROS 1)
+
+The graph comes from the same snapshot as ``%topics`` (read afresh); calls and parameter
+reads go out through the session's backend (:mod:`ipyros.ros1.introspect`,
+:mod:`ipyros.ros2.introspect`), with timeouts: a node that does not answer is said so.
+Names ipyros uses inside a wrapping (``/<wrapper>/base/...``) and its own tool nodes are
+marked as such, so they are not mistaken for the robot's.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from IPython.core.error import UsageError
+from IPython.core.magic import line_magic, magics_class, no_var_expand
+from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from rich.syntax import Syntax
+from rich.table import Table
+
+from ...core import msgtypes
+from ...core.msgbuild import build_message, parse_data, to_yaml
+from ...tools.graph import GraphSnapshot, name_matches
+from ...tools.probe import is_tool, tool_name
+from .common import ExtensionMagics, global_topic, split_head
+
+
+def internal(name: str, session_nodes: list[Any]) -> str:
+    """Why ``name`` (a node or topic) is ipyros's, not the robot's: "" when it is not."""
+    if is_tool(name):
+        return "ipyros tool"
+    for node in session_nodes:
+        if name.startswith(node.fullname.rstrip("/") + "/base/"):
+            return f"inside the wrapping of {node.name}"
+    return ""
+
+
+@magics_class
+class IntrospectMagics(ExtensionMagics):
+    """Services, parameters and nodes of the live graph."""
+
+    def _ready(self) -> Any:
+        """The backend, with the session's ROS node up (calls and reads go out from it)."""
+        session = self.ext.session
+        if not session.process.started:
+            session.start_process_node("/" + tool_name("tools"))
+        return session.backend
+
+    # -- %services / %call ------------------------------------------------------------------
+    @magic_arguments()
+    @argument("pattern", nargs="?", default="", help="only services matching this glob or containing this text")
+    @line_magic
+    def services(self, line: str) -> None:
+        """List the live services: name, type and the nodes that serve them."""
+        args = parse_argstring(self.services, line)
+        snap = self.ext.topic_magics.live_graph()
+        backend = self._ready()
+        found = [s for s in snap.services if name_matches(s, args.pattern)]
+        if not found:
+            print(f"no live services matching {args.pattern!r}" if args.pattern else "no live services")
+            return
+        table = Table(title=f"{len(found)} live service{'s' * (len(found) != 1)} at {self.ext.graph.where}",
+                      title_justify="left")
+        for column in ("service", "type", "served by"):
+            table.add_column(column, overflow="fold")
+        for name in found:
+            try:
+                type_name = backend.service_type(name)
+            except Exception as error:  # noqa: BLE001 - one dead server must not hide the others
+                type_name = f"? ({error})"
+            table.add_row(name, type_name, ", ".join(snap.services[name]))
+        self.ext.printer.show(table)
+
+    @magic_arguments()
+    @argument("service", help="the live service to call")
+    @argument("type", nargs="?", help="its type, pkg/Service; may be left out: asked of the live service")
+    @argument("request", nargs="*", help="the request, the rest of the line: a dict or YAML mapping, "
+              "fields left out keep their defaults")
+    @argument("-t", "--timeout", type=float, default=5.0, help="seconds to wait for the answer (default 5)")
+    @no_var_expand
+    @line_magic
+    def call(self, line: str) -> None:
+        """Call SERVICE with a request built field by field (as %pub builds a message) and show the response
+        as YAML. Unknown or mistyped fields are errors naming the field; a server that does not answer
+        within the timeout is said so."""
+        head, data = split_head(line, self.call.parser, lambda index, word: index < 1 or (
+            index == 1 and "/" in word and not word.startswith(("{", "[", "/"))))
+        args = parse_argstring(self.call, head)
+        name = global_topic(args.service)
+        backend = self._ready()
+        if name not in self.ext.topic_magics.live_graph().services:
+            raise UsageError(f"no live service {name}; %services lists them")
+        type_name, cls = msgtypes.resolve_service(args.type or backend.service_type(name))
+        request_class = cls._request_class if hasattr(cls, "_request_class") else cls.Request
+        request = build_message(request_class, parse_data(data))
+        response = backend.call(name, cls, request, args.timeout)
+        self.ext.printer.show(Syntax(to_yaml(response) or "{}", "yaml", background_color="default"))
+
+    # -- %params / %param -------------------------------------------------------------------
+    @magic_arguments()
+    @argument("namespace", nargs="?", default="/", help="only parameters under this namespace (default: all)")
+    @line_magic
+    def params(self, line: str) -> None:
+        """List the parameters under NAMESPACE with their values (ROS 2: the parameters of the nodes there)."""
+        args = parse_argstring(self.params, line)
+        namespace = global_topic(args.namespace)
+        values = self._ready().params_under(namespace)
+        if not values:
+            print(f"no parameters under {namespace}")
+            return
+        table = Table(title=f"{len(values)} parameter{'s' * (len(values) != 1)} under {namespace}",
+                      title_justify="left")
+        table.add_column("parameter", overflow="fold")
+        table.add_column("value", overflow="fold")
+        for name, value in values.items():
+            table.add_row(name, _short(value))
+        self.ext.printer.show(table)
+
+    @magic_arguments()
+    @argument("name", help="the parameter's global name (ROS 2: /node/key)")
+    @argument("value", nargs="*", help="a new value, the rest of the line (a Python literal or YAML); "
+              "none: show the value")
+    @no_var_expand
+    @line_magic
+    def param(self, line: str) -> None:
+        """Show the parameter NAME, or set it to VALUE (as rosparam get/set; ros2 param get/set)."""
+        head, data = split_head(line, self.param.parser, lambda index, word: index < 1)
+        args = parse_argstring(self.param, head)
+        name = global_topic(args.name)
+        backend = self._ready()
+        if not data.strip():
+            value = backend.read_param(name)
+            print(f"{name}: {_short(value)}")
+            return
+        value = parse_data(data)
+        backend.write_param(name, value)
+        print(f"ipyros: {name} = {_short(value)}")
+
+    # -- %nodes / %node ---------------------------------------------------------------------
+    @magic_arguments()
+    @argument("pattern", nargs="?", default="", help="only nodes matching this glob or containing this text")
+    @line_magic
+    def nodes(self, line: str) -> None:
+        """List the live nodes with how many topics each publishes and subscribes to and services it serves."""
+        args = parse_argstring(self.nodes, line)
+        snap = self.ext.topic_magics.live_graph()
+        found = [n for n in snap.nodes if name_matches(n, args.pattern)]
+        if not found:
+            print(f"no live nodes matching {args.pattern!r}" if args.pattern else "no live nodes")
+            return
+        mine = list(self.ext.session.nodes.values())
+        table = Table(title=f"{len(found)} live node{'s' * (len(found) != 1)} at {self.ext.graph.where}",
+                      title_justify="left")
+        for column, justify in (("node", "left"), ("publishes", "right"), ("subscribes", "right"),
+                                ("serves", "right"), ("note", "left")):
+            table.add_column(column, justify=justify, overflow="fold")  # type: ignore[arg-type]
+        for node in found:
+            pubs, subs, srvs = _interface(snap, node)
+            note = internal(node, mine) or ("this session" if node == self.ext.session.process.name else "")
+            table.add_row(node, str(len(pubs)), str(len(subs)), str(len(srvs)), note)
+        self.ext.printer.show(table)
+
+    @magic_arguments()
+    @argument("name", help="the live node")
+    @line_magic
+    def node(self, line: str) -> None:
+        """One live node: what it publishes, subscribes to and serves (with types), and its pid (ROS 1)."""
+        args = parse_argstring(self.node, line)
+        name = global_topic(args.name)
+        snap = self.ext.topic_magics.live_graph()
+        if name not in snap.nodes:
+            raise UsageError(f"no live node {name}; %nodes lists them")
+        pid = self._ready().node_pid(name)
+        mine = list(self.ext.session.nodes.values())
+        pubs, subs, srvs = _interface(snap, name)
+        why = internal(name, mine)
+        title = f"node {name}" + (f" (pid {pid})" if pid else "") + (f" ({why})" if why else "")
+        table = Table(title=title, title_justify="left")
+        for column in ("", "name", "type", "note"):
+            table.add_column(column, overflow="fold")
+        for kind, names in (("publishes", pubs), ("subscribes", subs)):
+            for topic in names:
+                table.add_row(kind, topic, snap.topics.get(topic) or "?", internal(topic, mine))
+        for service in srvs:
+            table.add_row("serves", service, "", internal(service, mine))
+        if not table.row_count:
+            table.add_row("", "nothing", "", "")
+        self.ext.printer.show(table)
+
+
+def _interface(snap: GraphSnapshot, node: str) -> tuple[list[str], list[str], list[str]]:
+    def of(mapping: Any) -> list[str]:
+        return [name for name, nodes in mapping.items() if node in nodes]
+
+    return of(snap.publishers), of(snap.subscribers), of(snap.services)
+
+
+def _short(value: Any, most: int = 200) -> str:
+    text = repr(value) if not isinstance(value, str) else value
+    return text if len(text) <= most else text[:most] + f"... ({len(text)} characters)"
+
+
+__all__ = ["IntrospectMagics", "internal"]

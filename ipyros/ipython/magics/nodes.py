@@ -1,0 +1,220 @@
+"""``%handler``, ``%%handler``, ``%try``, ``%versions``, ``%revert``, ``%save_nodes``, ``%load_nodes``, ``%status``.
+
+Working on the handlers of running nodes, and keeping them.
+
+NODE is the variable holding a rosNode (``nd``), or a node's name in this session.
+TOPIC is a subscribed topic as the node names it; a timer's name or a service also
+work for ``%handler``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+from IPython.core.error import UsageError
+from IPython.core.magic import line_cell_magic, line_magic, magics_class
+from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from rich.table import Table
+
+from ...core.errors import IpyrosError
+from ...files.savefile import restore, save_nodes
+from ...node.dsl import rosNode
+from ...node.session import current
+from ...tools.editing import (EditWatch, PendingEdit, current_handler, find_target, fresh_name, handler_source,
+                              lambda_as_def, new_functions, redeclare)
+from ...tools.probe import is_tool
+from ...tools.tryout import try_candidate
+from .common import ExtensionMagics, evaluate, find_node, split_head
+
+
+@magics_class
+class NodeMagics(ExtensionMagics):
+    """Magics that edit, try and watch the handlers of the session's nodes."""
+
+    def __init__(self, shell: Any, ext: Any) -> None:
+        super().__init__(shell, ext)
+        self.edits = EditWatch()
+
+    def after_cell(self, result: Any = None) -> None:
+        """``post_run_cell``: swap in the handlers whose edited source was just run."""
+        for news in self.edits.check(self.shell.user_ns):
+            print(f"ipyros: {news}")
+
+    # -- %handler / %%handler ----------------------------------------------------------------
+    @magic_arguments()
+    @argument("node", help="the variable holding the rosNode")
+    @argument("topic", help="the subscribed topic whose handler to edit (or a timer's name, or a service)")
+    @line_cell_magic
+    def handler(self, line: str, cell: Optional[str] = None) -> None:
+        """Edit the live handler of TOPIC on NODE.
+
+        %handler NODE TOPIC puts the source of the function now handling TOPIC in the next
+        input; edit it and run it, and the new function replaces the live one (no message
+        is lost). This needs the source: it works for handlers typed at the prompt or
+        imported from a file (a lambda comes as a def of a new name), not for functions made
+        by exec.
+
+        %%handler NODE TOPIC runs the cell, which defines the new handler (a def), and swaps
+        it in at once.
+        """
+        args = parse_argstring(self.handler, line)
+        node = find_node(self.shell, args.node)
+        target = find_target(node, args.topic)
+        old = current_handler(node, target)
+        if cell is None:
+            if getattr(old, "__name__", "") == "<lambda>" and (
+                    as_def := lambda_as_def(old, fresh_name(target, self.shell.user_ns))) is not None:
+                name = as_def.split("(", 1)[0][len("def "):]
+                self.edits.expect(PendingEdit(node, target, name, old))
+                self.shell.set_next_input(as_def.rstrip("\n"))
+                print(f"ipyros: the handler of {node.name} {target.label} is a lambda, here as def {name}: "
+                      "edit it and run it, and it replaces the lambda")
+                return
+            source = handler_source(old, args.node, target)
+            self.edits.expect(PendingEdit(node, target, old.__name__, old))
+            self.shell.set_next_input(source.rstrip("\n"))
+            print(f"ipyros: edit {old.__name__} and run it: it replaces the handler of {node.name} {target.label}")
+            return
+        self.edits.forget(node, target)
+        before = dict(self.shell.user_ns)
+        result = self.shell.run_cell(cell)
+        if not result.success:  # its error was shown; the cell magic fails too, in one line
+            raise IpyrosError(f"the cell failed, so {node.name} {target.label} keeps its handler {old.__name__}")
+        defined = new_functions(before, self.shell.user_ns)
+        if not defined:
+            raise UsageError(f"the cell defines no function; define the new handler of {target.label} "
+                             f"with def, e.g. def {old.__name__}(msg): ...")
+        name = old.__name__ if old.__name__ in defined else None
+        if name is None and len(defined) > 1:
+            raise UsageError(f"the cell defines {', '.join(sorted(defined))}; which is the handler? "
+                             f"name it {old.__name__}, like the one it replaces")
+        name = name or next(iter(defined))
+        redeclare(node, target, defined[name])
+        print(f"ipyros: {node.name} {target.label} is now handled by the new {name}")
+
+    # -- %try ------------------------------------------------------------------------------
+    @magic_arguments(name="try")
+    @argument("node", help="the variable holding the rosNode")
+    @argument("topic", help="the subscribed topic")
+    @argument("candidate", nargs="*", help="the candidate handler: a function's name, or any expression "
+              "giving a function (a lambda), the rest of the line")
+    @argument("-n", "--last", type=int, help="only the last N messages (default: all the node keeps, "
+              "c.RosMagics.try_history)")
+    @line_magic("try")
+    def try_handler(self, line: str) -> None:
+        """Run CANDIDATE on the last messages TOPIC brought to NODE, beside the live handler.
+
+        Nothing is swapped. Each handler gets its own copy of each message; what it prints
+        and what it writes through node.write() is captured and shown, not published.
+        Anything else it does (globals, parameters, its own publishers) happens for real.
+        """
+        head, expression = split_head(line, self.try_handler.parser, lambda index, word: index < 2)
+        args = parse_argstring(self.try_handler, head)
+        if not expression:
+            raise UsageError("give the candidate handler after NODE and TOPIC, e.g. %try nd /chatter new_handler")
+        if args.last is not None and args.last < 1:
+            raise UsageError(f"-n must be 1 or more, not {args.last}")
+        node = find_node(self.shell, args.node)
+        candidate = evaluate(self.shell, expression, "candidate handler")
+        self.ext.printer.show(try_candidate(node, args.topic, candidate, args.last))
+
+    # -- %versions / %revert -------------------------------------------------------------------
+    @magic_arguments()
+    @argument("node", help="the variable holding the rosNode")
+    @argument("topic", help="the subscribed topic (or a timer's name, or a service)")
+    @line_magic
+    def versions(self, line: str) -> None:
+        """Every function the handler of TOPIC on NODE was given, oldest first; (now) marks the live one.
+
+        %revert NODE TOPIC N brings version N back; nd.versions(TOPIC)[N - 1].source is its source.
+        """
+        args = parse_argstring(self.versions, line)
+        self.ext.printer.show(find_node(self.shell, args.node).versions(args.topic))
+
+    @magic_arguments()
+    @argument("node", help="the variable holding the rosNode")
+    @argument("topic", help="the subscribed topic (or a timer's name, or a service)")
+    @argument("version", type=int, help="the version number, as %%versions lists it")
+    @line_magic
+    def revert(self, line: str) -> None:
+        """Serve TOPIC on NODE with handler VERSION again, live (no message lost)."""
+        args = parse_argstring(self.revert, line)
+        node = find_node(self.shell, args.node)
+        node.revert(args.topic, args.version)
+        version = node.versions(args.topic)[args.version - 1]
+        print(f"ipyros: {node.name} {args.topic} is handled by version {args.version} ({version.name}) again")
+
+    # -- %save_nodes / %load_nodes ----------------------------------------------------------------
+    @magic_arguments()
+    @argument("path", help="the file to write: .py (runnable DSL code), or .yaml / .json (one node's model)")
+    @argument("node", nargs="*", help="the variables holding the rosNodes (default: every running node)")
+    @line_magic
+    def save_nodes(self, line: str) -> None:
+        """Save nodes to PATH: the DSL declarations and the source of every handler and helper.
+
+        Run the file to bring them back (python3 PATH, %run PATH, or %load_nodes PATH).
+        """
+        args = parse_argstring(self.save_nodes, line)
+        nodes = [find_node(self.shell, name) for name in args.node] or list(current().nodes.values())
+        if not nodes:
+            raise UsageError("no rosNode is running in this session; name the node to save: %save_nodes PATH nd")
+        if not args.path.endswith(".py"):
+            if len(nodes) != 1:
+                raise UsageError(f"{args.path}: a model file holds one node; name it, or save to a .py file")
+            written = nodes[0].save(args.path, self.shell.user_ns)
+        else:
+            written = save_nodes(nodes, args.path, self.shell.user_ns)
+        print(f"ipyros: saved {', '.join(n.fullname for n in nodes)} to {written}")
+
+    @magic_arguments()
+    @argument("path", help="a file written by %%save_nodes or nd.save()")
+    @argument("--trust", action="store_true",
+              help="run the code a model file (.yaml/.json) carries: its imports and handler sources")
+    @line_magic
+    def load_nodes(self, line: str) -> None:
+        """Bring back the nodes saved in PATH, running; their handlers land in this namespace (editable).
+
+        A .py file is Python and runs as %run would run it. A model file (.yaml/.json) looks
+        like data, so the code in it runs only with --trust.
+        """
+        args = parse_argstring(self.load_nodes, line)
+        if args.path.endswith(".py"):
+            nodes = restore(args.path, self.shell.user_ns)
+        else:
+            nodes = [rosNode.load(args.path, self.shell.user_ns, create=True, trust=args.trust)]
+        running = ", ".join(f"{n.fullname} ({'running' if n.created else 'declared'})" for n in nodes)
+        print(f"ipyros: loaded {running or 'no nodes'} from {args.path}")
+
+    # -- %status ------------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("node", nargs="?", help="the variable holding the rosNode; none: list the session's nodes")
+    @line_magic
+    def status(self, line: str) -> None:
+        """Per topic and timer of NODE: calls, message rate, handler time (mean, max), exceptions.
+
+        Without NODE: the rosNodes running in this session (created and not shut down).
+        """
+        args = parse_argstring(self.status, line)
+        if args.node:
+            self.ext.printer.show(find_node(self.shell, args.node).status())
+            return
+        # ipyros's own tool nodes (the %pub publisher, %echo's listener) are not the user's.
+        nodes = [node for node in current().nodes.values() if not is_tool(node.name)]
+        if not nodes:
+            print("no rosNode of yours is running in this session")
+            return
+        self.ext.printer.show(_nodes_table(nodes, self.shell.user_ns))
+
+
+def _nodes_table(nodes: list[rosNode], user_ns: dict[str, Any]) -> Table:
+    table = Table(title=f"rosNodes running in this session (hosted by ROS node {current().process.name})",
+                  title_justify="left")
+    for column in ("node", "topics", "timers", "services", "basenode", "variables"):
+        table.add_column(column, justify="right" if column in ("topics", "timers", "services") else "left")
+    for node in nodes:
+        model = node.model()
+        base = f"{model.base.package}/{model.base.executable}" if model.base else ""
+        names = ", ".join(sorted(k for k, v in user_ns.items() if v is node and not k.startswith("_")))
+        counts = (str(len(model.topics)), str(len(model.timers)), str(len(model.services)))
+        table.add_row(node.fullname, *counts, base, names)
+    return table

@@ -1,0 +1,60 @@
+"""``%record``: live topics written to a bag in the background, for a basenode to play back (``baseBag``).
+
+    %record run.bag /turtle1/pose /turtle1/cmd_vel --duration 20
+    %record --stop
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Optional
+
+from IPython.core.error import UsageError
+from IPython.core.magic import line_magic, magics_class
+from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+
+from ...tools.record import Recording
+from .common import ExtensionMagics, global_topic
+
+
+@magics_class
+class RecordMagics(ExtensionMagics):
+    """The magic that records topics to a bag; one recording at a time (``recording``)."""
+
+    def __init__(self, shell: Any, ext: Any) -> None:
+        super().__init__(shell, ext)
+        self.recording: Optional[Recording] = None
+
+    def stop(self) -> Optional[Recording]:
+        """Stop the recording, if any (``%record --stop``, and when the extension is unloaded)."""
+        stopped, self.recording = self.recording, None
+        return stopped.stop() if stopped is not None else None
+
+    @magic_arguments()
+    @argument("file", nargs="?", help="the bag to write (.bag)")
+    @argument("topics", nargs="*", help="the live topics to record")
+    @argument("--duration", type=float, default=None, help="stop after this many seconds (default: %%record --stop)")
+    @argument("--stop", action="store_true", help="stop recording and close the bag")
+    @line_magic
+    def record(self, line: str) -> Optional[Recording]:
+        """Record TOPICS to FILE in the background (the prompt stays free); return the Recording."""
+        args = parse_argstring(self.record, line)
+        if args.stop:
+            stopped = self.stop()
+            print(f"ipyros: recorded {stopped.count} messages of {', '.join(stopped.topics)} to {stopped.path}"
+                  if stopped else "ipyros: nothing is being recorded")
+            return stopped
+        if not args.file or not args.topics:
+            raise UsageError("give the bag to write and the topics: %record run.bag /turtle1/pose /turtle1/cmd_vel")
+        if args.duration is not None and not 0 < args.duration <= 86400:
+            raise UsageError(f"--duration is seconds, more than 0: not {args.duration}")
+        path = Path(args.file).expanduser()
+        if path.exists():
+            raise UsageError(f"{path} exists; give a new file name (a recording never overwrites one)")
+        snap = self.ext.topic_magics.live_graph()  # one read of the graph for every topic
+        topics = {topic: self.ext.topic_magics.live_type(topic, snap=snap) for topic in map(global_topic, args.topics)}
+        self.stop()
+        self.recording = Recording(path, topics, args.duration)
+        until = f"for {args.duration:g} s" if args.duration else "until %record --stop"
+        print(f"ipyros: recording {', '.join(topics)} to {path} {until}")
+        return self.recording

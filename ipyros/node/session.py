@@ -1,0 +1,334 @@
+"""The session: the master in use, the process node, and the DSL nodes living in it.
+
+There is one session per interpreter because rospy allows one node per process; it
+is created on first use (``current()``) and closed at interpreter exit, stopping
+everything ipyros started: nodes, basenodes, and the master if ipyros started it.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import signal
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Optional
+
+from ..core.errors import MasterError, NodeStateError
+from ..core.journal import Journal
+from ..core.slots import HandlerFailure, OutputScope
+from ..ros1 import master as master_mod
+from ..ros1.masterwatch import MasterWatch
+from .backend import Backend, choose as choose_backend
+
+if TYPE_CHECKING:
+    from .dsl import rosNode
+
+
+def print_notice(text: str) -> None:
+    """Default report of something that happened on its own: a line on stderr."""
+    sys.stderr.write(text.rstrip("\n") + "\n")
+    sys.stderr.flush()
+
+
+def print_failure(failure: HandlerFailure) -> None:
+    """Default report of a handler exception: the handler's traceback on stderr."""
+    more = f" ({failure.suppressed} more since the last report)" if failure.suppressed else ""
+    sys.stderr.write(f"ipyros: handler {failure.handler} failed on {failure.label}{more}; "
+                     f"the node keeps running\n{failure.traceback}")
+    sys.stderr.flush()
+
+
+@dataclass(frozen=True)
+class Change:
+    """One change a DSL node went through, as it would be typed (``new.subscribe /x [T] -> h``).
+
+    A change that gives a handler slot a new function also says which slot, the
+    version number it became, and the function's name and source (None if not found).
+    """
+
+    time: float
+    node: str
+    change: str
+    slot: Optional[str] = None
+    version: Optional[int] = None
+    handler: Optional[str] = None
+    source: Optional[str] = None
+
+
+@dataclass
+class SessionConfig:
+    """How the session finds its master and names its ROS node."""
+
+    master_uri: Optional[str] = None  # None: ROS_MASTER_URI, else http://localhost:11311
+    start_master: bool = True  # start one on localhost when none answers
+    process_node_name: Optional[str] = None  # None: the first node created names it
+    keep_recent: int = 20  # messages each subscription keeps for trying a handler on them
+    history_dir: Optional[str] = None  # None: $IPYROS_HISTORY_DIR, else ~/.ipyros/history
+    keep_history: bool = True  # write the history to a file of this session's own as it goes
+    restart_basenodes: bool = False  # restart basenodes that do not register with a restarted master
+    announce: Callable[[str], None] = field(default=lambda text: print(text, file=sys.stderr))
+
+
+class Session:
+    """Everything ipyros runs in this interpreter."""
+
+    def __init__(self, config: Optional[SessionConfig] = None) -> None:
+        self.config = config or SessionConfig()
+        self.master: Optional[master_mod.MasterHandle] = None
+        self.backend: Backend = choose_backend()
+        self.process = self.backend.process
+        self.nodes: dict[str, "rosNode"] = {}  # full name → node, in creation order
+        self.history: list[Change] = []  # every change of every node, in order
+        self._journal: Optional[Journal] = None
+        self._on_close: list[Callable[[], None]] = []
+        self.report: Callable[[HandlerFailure], None] = print_failure
+        self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
+        #: How advice names a node (``nd.base.restart()``): the extension finds the user's variable.
+        self.call_name: Callable[["rosNode"], str] = lambda node: node.name
+        #: Where a node created now has its handlers print (the extension gives Jupyter cells an area).
+        self.output_scope: Callable[["rosNode"], Optional[OutputScope]] = lambda node: None
+        self._lock = threading.RLock()
+        self.watch: Optional[MasterWatch] = None
+        self.closed = False
+        self._closes_at_exit = False
+
+    def record(self, node: str, change: str, **handler: Any) -> Change:
+        """Add a change to the session's history, and to its file (see :mod:`ipyros.core.journal`)."""
+        entry = Change(time.time(), node, change, **handler)
+        self.history.append(entry)
+        journal = self.journal
+        if journal is not None:
+            try:
+                journal.append(entry)
+            except OSError as error:
+                self.notify(f"ipyros: cannot write the history file in {journal.directory} ({error.strerror or error}); "
+                            "the history is kept in memory only: set SessionConfig.history_dir")
+        return entry
+
+    @property
+    def journal(self) -> Optional[Journal]:
+        """Where the history is written, or None if not kept (``keep_history=False``)."""
+        if self._journal is None and self.config.keep_history:
+            directory = self.config.history_dir
+            self._journal = Journal(Path(directory).expanduser() if directory else None)
+        return self._journal
+
+    def notify(self, text: str) -> None:
+        """Tell the user something that happened on its own (a basenode died, ...)."""
+        self.notice(text)
+
+    def attach_master(self) -> master_mod.MasterHandle:
+        """The master in use, found or started on first call."""
+        with self._lock:
+            if self.master is None:
+                self.master = master_mod.attach(self.config.master_uri, self.config.start_master)
+                if self.master.started:
+                    self.config.announce(f"ipyros: {self.master.describe()}")
+            return self.master
+
+    def start_process_node(self, fullname: str) -> str:
+        """Start the process's ROS node (named after the first node created) and return its name."""
+        with self._lock:
+            if self.closed:
+                raise NodeStateError("this ipyros session was closed; restart the interpreter")
+            if not self.backend.has_master:  # ROS 2: peers find each other, nothing to attach or watch
+                name = self.process.start(self.config.process_node_name or fullname)
+                self._close_before_ros_at_exit()
+                stop_on_termination()
+                return name
+            uri = self.attach_master().uri
+            name = self.process.start(self.config.process_node_name or fullname, uri)
+            self._close_before_ros_at_exit()
+            if fullname != name:  # a DSL node hosted in the process node: its name must be free too
+                self.backend.refuse_taken_name(uri, fullname)
+            stop_on_termination()
+            if self.watch is None:
+                self.watch = MasterWatch(uri, self._master_down, self.master_back).start()
+            return name
+
+    def _close_before_ros_at_exit(self) -> None:
+        """Close the session at exit before the ROS client library shuts itself down.
+
+        rospy (and rclpy) register their own exit hooks when they start, after this module's:
+        hooks run last-registered first, so theirs closed every publisher while the nodes'
+        timers still ran, and a timer's last write printed a traceback on the way out. This
+        hook, registered once the client library has started, runs before theirs.
+        """
+        if not self._closes_at_exit:
+            atexit.register(self.close)
+            self._closes_at_exit = True
+
+    # -- the master going away and coming back ------------------------------------------
+    def require_master(self, doing: str) -> None:
+        """Fail in a moment when the master does not answer, rather than hang.
+
+        rospy retries registering a new endpoint with an absent master forever, freezing the
+        prompt; so whatever would register something asks here first.
+        """
+        if self.master is None:
+            return
+        up = self.watch.check_now() if self.watch is not None else master_mod.answers(self.master.uri, 2.0)
+        if not up:
+            raise MasterError(f"the ROS master at {self.master.uri} does not answer, so {doing} was not done "
+                              "(nothing changed); do it again when the master is back (ipyros registers "
+                              "your running nodes with it again by itself)")
+
+    def _master_down(self) -> None:
+        self.notify(f"ipyros: the ROS master at {self.master.uri if self.master else '?'} does not answer; "
+                    "your nodes keep the connections they have, new declarations fail until it is back")
+
+    def master_back(self, restarted: bool) -> None:
+        """The master answers again: register every endpoint and parameter of the session with it again.
+
+        Basenodes (rospy and roscpp nodes do not register again by themselves) are checked a
+        moment later: restarted if ``restart_basenodes`` is set, else reported with the line
+        that restarts them.
+        """
+        uri = self.master.uri if self.master else "?"
+        try:
+            publications, subscriptions, services = self.process.register_again()
+            params = sum(node.register_params() for node in list(self.nodes.values()) if node.created)
+        except Exception as error:  # noqa: BLE001 - told, not raised: this runs on the watch thread
+            self.notify(f"ipyros: the ROS master at {uri} is back, but registering this session with it failed "
+                        f"({error}); restart the interpreter if topics stay missing")
+            return
+        self.notify(f"ipyros: the ROS master at {uri} is back{' (restarted)' if restarted else ''}: "
+                    f"registered {publications} publications, {subscriptions} subscriptions, {services} services "
+                    f"and {params} parameters of this session again")
+        check = threading.Timer(2.0, self._check_basenodes)
+        check.daemon = True
+        check.start()
+
+    def _check_basenodes(self) -> None:
+        """After a master restart: the basenodes that did not register again, restarted or reported."""
+        if self.master is None or self.closed:
+            return
+        for node in list(self.nodes.values()):
+            base, name = node.base, node.basenode_name
+            if base is None or not base.running or name is None or master_mod.is_registered(self.master.uri, name):
+                continue
+            if self.config.restart_basenodes:
+                base.restart()
+                self.notify(f"ipyros: basenode {name} of {node.name} did not register with the restarted master; "
+                            "restarted it")
+            else:
+                self.notify(f"ipyros: basenode {name} of {node.name} did not register with the restarted master "
+                            f"(ROS 1 nodes do not); restart it: {node.called}.base.restart()")
+
+    def add(self, node: "rosNode") -> None:
+        with self._lock:
+            other = self.nodes.get(node.fullname)
+            if other is not None and other is not node and other.created:
+                raise NodeStateError(f"a node named {node.fullname} is already running in this session; "
+                                     f"shut it down first ({node.fullname}.shutdown()) or pick another name")
+            self.nodes[node.fullname] = node
+
+    def remove(self, node: "rosNode") -> None:
+        with self._lock:
+            if self.nodes.get(node.fullname) is node:
+                del self.nodes[node.fullname]
+
+    def on_close(self, stop: Callable[[], None]) -> None:
+        """Have ``stop`` run first when the session closes (things started beside the nodes: the demo robot)."""
+        if stop not in self._on_close:
+            self._on_close.append(stop)
+
+    def close(self) -> None:
+        """Stop every node and basenode, the process node, and the master if we started it."""
+        with self._lock:
+            if self.closed:
+                return
+            self.closed = True
+            if self.watch is not None:
+                self.watch.stop()
+            if self.master is not None and self.process.started and not master_mod.answers(self.master.uri, 0.3):
+                self.process.master_gone()
+            for stop in reversed(self._on_close):
+                try:
+                    stop()
+                except Exception as error:  # keep closing the rest
+                    print(f"ipyros: error while closing: {error}", file=sys.stderr)
+            for node in list(self.nodes.values()):  # first all: one node's handler may write through another
+                node.quieten()
+            for node in reversed(list(self.nodes.values())):
+                try:
+                    node.shutdown()
+                except Exception as error:  # keep closing the rest
+                    print(f"ipyros: error while shutting down {node.fullname}: {error}", file=sys.stderr)
+            self.process.shutdown()
+            if self.master is not None:
+                self.master.stop()
+            if self._journal is not None:
+                self._journal.close()
+
+
+_current: Optional[Session] = None
+_current_lock = threading.Lock()
+
+
+def current() -> Session:
+    """The session of this interpreter, created on first use."""
+    global _current
+    with _current_lock:
+        if _current is None or _current.closed:
+            _current = Session()
+        return _current
+
+
+def started() -> bool:
+    """Whether this interpreter's session exists (it picks its ROS when it is made)."""
+    return _current is not None and not _current.closed
+
+
+def configure(config: SessionConfig) -> Session:
+    """Set how the session attaches, before anything has started."""
+    session = current()
+    if session.master is not None and config.master_uri not in (None, session.master.uri):
+        raise NodeStateError(f"this session already uses the master at {session.master.uri}; "
+                             "restart the interpreter to use another one")
+    session.config = config
+    return session
+
+
+@atexit.register
+def _close_at_exit() -> None:
+    if _current is not None:
+        _current.close()
+
+
+#: Signals that end the process without Python's exit: ``kill PID``, ``timeout``, a service
+#: manager (SIGTERM), the terminal closing (SIGHUP).
+TERMINATING = (signal.SIGTERM, signal.SIGHUP)
+
+
+def stop_on_termination() -> None:
+    """Make SIGTERM and SIGHUP stop the session as cleanly as Ctrl-C at exit does.
+
+    By default these signals end the process at once: no atexit, so the master keeps the
+    session's node and its basenodes as dead entries (``rosnode list`` shows them, ``rosnode
+    ping`` fails) and a C++ basenode, which dies on SIGTERM without unregistering, stays
+    listed too. Installed only from the main thread, and only over the default action: a
+    handler the program set itself is left alone.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for signum in TERMINATING:
+        if signal.getsignal(signum) is signal.SIG_DFL:
+            signal.signal(signum, _terminated)
+
+
+def _terminated(signum: int, frame: Any) -> None:
+    """Close the session (nodes unregistered, basenodes stopped with SIGINT), then die of ``signum``.
+
+    The closing runs on a thread of its own with a deadline: the main thread, interrupted
+    here, may hold a lock the closing needs.
+    """
+    closing = threading.Thread(target=_close_at_exit, name="ipyros-terminated", daemon=True)
+    closing.start()
+    closing.join(10.0)
+    signal.signal(signum, signal.SIG_DFL)
+    os.kill(os.getpid(), signum)

@@ -1,0 +1,437 @@
+"""Wrapping: the DSL side of a node that wraps a basenode (paper section III, figure 1).
+
+Which endpoints run is decided in :mod:`ipyros.core.plan`. This module resolves base topic
+names the way the basenode will (in its namespace, ``~`` under its name, then through
+its own remaps), checks the declarations that only make sense together, starts the
+basenode with its remaps, and offers black-box discovery: read a running basenode's
+interface from the master and declare it all as ``reuse`` in one call.
+
+A basenode may also come from a launch file (:func:`set_launch_base`, read by
+:mod:`ipyros.ros1.launchfile`): then ``create()`` runs the rest of that file too
+(:mod:`ipyros.ros1.launch_rest`), and ``nd.base`` stops both.
+
+**One remap per name.** ROS applies at most one remap to a name: no chains. If the
+basenode's own remaps (its launch file's ``<remap>``, or ``baseNode(remaps=...)``) send
+``cmd_vel`` to ``/robot1/base/cmd_vel`` and that is the topic wrapped, the basenode
+must be given ``cmd_vel:=<internal name>`` itself; :func:`basenode_remaps` composes
+the two so.
+"""
+
+from __future__ import annotations
+
+import re
+import threading
+from typing import TYPE_CHECKING, Any, Optional
+
+from ..core import names
+from ..core.errors import BaseNodeError, DeclarationError, TopicTypeConflict, cut
+from ..core.model import BaseModel, NodeModel
+from ..core.plan import internal_name, node_fullname
+
+if TYPE_CHECKING:
+    from ..tools.discovery import Interface
+    from .dsl import rosNode
+
+_BASE_OPTIONS = {"name": "node_name", "namespace": "namespace", "remaps": "remaps", "params": "params", "args": "args"}
+
+
+# -- names ---------------------------------------------------------------------------------
+
+def base_node_name(base: BaseModel) -> str:
+    """The basenode's ROS name: the one given, else the executable's (``move_base``)."""
+    if base.node_name:
+        return base.node_name.strip("/")
+    stem = re.sub(r"\W", "_", (base.executable or "base").rsplit("/", 1)[-1].split(".")[0])
+    return stem if stem[:1].isalpha() else "n" + stem
+
+
+def base_namespace(model: NodeModel) -> str:
+    base = model.base
+    return names.global_ns(base.namespace) if base and base.namespace else model.namespace
+
+
+def base_fullname(model: NodeModel) -> str:
+    assert model.base is not None
+    return names.join(base_namespace(model), base_node_name(model.base))
+
+
+def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
+    """``reuse`` names are the basenode's: resolve them as it does; ``new`` ones are the node's own.
+
+    A ``new`` declaration spelled like a ``reuse`` one (``~reset`` both times) means the
+    basenode's name: that is how a reused topic or service is intercepted.
+    """
+    if role == "new" and model.base is not None:
+        declared = model.topics if kind == "topic" else model.services
+        if any(d.role == "reuse" and d.name == name for d in declared):
+            role = "reuse"
+    if role == "reuse" and model.base is not None:
+        resolved = names.resolve(name, base_namespace(model), base_node_name(model.base), kind)
+        return own_remaps(model).get(resolved, resolved)  # the basenode's remaps apply: it talks there
+    return names.resolve(name, model.namespace, model.name, kind)
+
+
+def own_remaps(model: NodeModel) -> dict[str, str]:
+    """The basenode's own remaps (launch file or ``baseNode(remaps=...)``), both sides resolved as it resolves them."""
+    if model.base is None:
+        return {}
+    ns, node = base_namespace(model), base_node_name(model.base)
+    return {names.resolve(src, ns, node, "remapped"): names.resolve(dst, ns, node, "remapped")
+            for src, dst in model.base.remaps.items() if not src.startswith("__")}
+
+
+def basenode_remaps(model: NodeModel) -> dict[str, str]:
+    """Every ``from:=to`` the basenode is started with: its own remaps composed with the wrapping's.
+
+    A wrapped name ``T`` (resolved through the own remaps already) goes to its internal
+    name; an own remap ``S:=T`` becomes ``S:=internal(T)``, because ROS would not follow
+    ``S → T → internal(T)``; the other own remaps stay as they are.
+    """
+    wrapped = {t.resolved: internal_name(model, t.resolved) for t in model.topics if t.role == "reuse"}
+    wrapped.update({s.resolved: internal_name(model, s.resolved) for s in model.services if s.role == "reuse"})
+    remaps = {src: wrapped.get(dst, dst) for src, dst in own_remaps(model).items()}
+    for name, inner in wrapped.items():
+        remaps.setdefault(name, inner)
+    return remaps
+
+
+def _reresolve(model: NodeModel) -> None:
+    """After the basenode changed: base names may resolve elsewhere now."""
+    for t in model.topics:
+        t.resolved = resolve_for(model, t.role, t.name, "topic")
+    for s in model.services:
+        s.resolved = resolve_for(model, s.role, s.name, "service")
+
+
+# -- declarations --------------------------------------------------------------------------
+
+def set_base(node: "rosNode", **fields: Any) -> "rosNode":
+    """Record basenode fields (``executable``, ``package`` and the options) in the model."""
+    unknown = set(fields) - {"executable", "package", *_BASE_OPTIONS}
+    if unknown:
+        raise DeclarationError(f"baseNode() got unknown option(s) {', '.join(sorted(unknown))}; "
+                               f"known: {', '.join(_BASE_OPTIONS)}")
+    if node.created:
+        raise DeclarationError(f"{node.name} is already running; declare its basenode before create()")
+    for key in ("executable", "package"):
+        if key in fields and (not isinstance(fields[key], str) or not fields[key].strip()):
+            what = "basePackage('package')" if key == "package" else "baseNode('executable')"
+            raise DeclarationError(f"{what} needs a non-empty name")
+    if "package" in fields:
+        names.check_package_name(fields["package"])
+    if "executable" in fields:
+        _check_executable(fields["executable"])
+    if fields.get("name"):
+        names.check_node_name(fields["name"])
+    _check_base_options(fields, node.session.backend)
+
+    def edit(model: NodeModel) -> None:
+        base = model.base or BaseModel()
+        for key, value in fields.items():
+            setattr(base, _BASE_OPTIONS.get(key, key), value)
+        model.base = base
+        if fields.get("namespace") and not node.explicit_namespace:
+            model.namespace = names.global_ns(fields["namespace"])
+        _reresolve(model)
+
+    return node.apply(edit, "base " + ", ".join(f"{k}={v!r}" for k, v in fields.items()))
+
+
+def _check_base_options(fields: dict[str, Any], backend: Any) -> None:
+    """One line for a basenode option of the wrong shape, before anything is recorded."""
+    if fields.get("namespace") is not None:
+        names.check_namespace(fields["namespace"])
+    remaps = fields.get("remaps")
+    if remaps is not None and (not isinstance(remaps, dict)
+                               or not all(isinstance(k, str) and isinstance(v, str) for k, v in remaps.items())):
+        raise DeclarationError(f"baseNode(remaps={cut(remaps)}): give a dict of names, "
+                               "e.g. remaps={'scan': '/robot1/scan'}")
+    for source, target in (remaps or {}).items():
+        names.check_remap(source, target)
+    args = fields.get("args")
+    if args is not None and (isinstance(args, (str, bytes)) or not isinstance(args, (list, tuple))
+                             or not all(isinstance(a, str) for a in args)):
+        raise DeclarationError(f"baseNode(args={cut(args)}): give a list of strings, e.g. args=['--rate', '5']")
+    params = fields.get("params")
+    if params is not None:
+        if not isinstance(params, dict) or not all(isinstance(k, str) and k for k in params):
+            raise DeclarationError(f"baseNode(params={cut(params)}): give a dict of private parameters, "
+                                   "e.g. params={'rate': 5}")
+        for key, value in params.items():
+            names.check_param_key(key.lstrip("~_") if key[:1] in "~_" else key, f"baseNode(params={{{key!r}: ...}})")
+            backend.check_param(f"~{key.lstrip('~_')}", value)
+
+
+def _check_executable(executable: str) -> None:
+    """An executable name (or a path): no control characters, nothing a shell or a launch file would expand.
+
+    It is passed to ``exec`` as one argument, never to a shell; but it is also written into
+    exported scripts and launch files, where ``$(...)`` would be evaluated by roslaunch.
+    """
+    if any(ord(c) < 32 or c == "\x7f" for c in executable) or "$(" in executable:
+        raise DeclarationError(f"baseNode({executable[:80]!r}): an executable's name or path may hold neither "
+                               "control characters nor '$('; give the file's name or path as it is on disk")
+
+
+def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional[dict] = None) -> "rosNode":
+    """Wrap the node ``node_name`` that launch file ``launch`` starts, read with ``args`` (see :mod:`ipyros.ros1.launchfile`).
+
+    The whole basenode comes from the file: package, executable, name, namespace,
+    remaps, private params, args. Like ``baseNode``, the wrapping node lives in the
+    basenode's namespace unless it was given one. Raises :class:`BaseNodeError` for a
+    missing or broken file, a node it does not start, an ambiguous short name, or a
+    node ipyros cannot run as the file says (a remote ``machine=``, ``launch-prefix``).
+    """
+    from ..ros1.launchfile import read_base
+
+    if node.created:
+        raise DeclarationError(f"{node.name} is already running; declare its basenode before create()")
+    if args is not None and not (isinstance(args, dict) and all(isinstance(k, str) for k in args)):
+        raise DeclarationError(f"baseLaunch(args={cut(args)}): give a dict of the launch file's args, e.g. {{'rate': 5}}")
+    base, notes = read_base(launch, node_name, args)
+
+    def edit(model: NodeModel) -> None:
+        model.base = base
+        if not node.explicit_namespace:
+            model.namespace = base.namespace or "/"
+        _reresolve(model)
+
+    given = "".join(f", {name}={value!r}" for name, value in base.launch_args.items())
+    node.apply(edit, f"baseLaunch({launch!r}, {node_name!r}{given}): {base.package}/{base.executable} "
+                     f"as {base.launch_node}")
+    for note in notes:
+        node.session.notify(f"ipyros: {note}")
+    return node
+
+
+def check_reuse(model: NodeModel, resolved: str, direction: str, kind: str = "topic") -> None:
+    """A base topic is wrapped once: refuse reuse of it in both directions."""
+    if kind != "topic":
+        return
+    other = "subscribe" if direction == "publish" else "publish"
+    if model.topic(resolved, other, "reuse") is not None:  # type: ignore[arg-type]
+        raise DeclarationError(f"{resolved} is already wrapped as reuse.{other}; a base topic is wrapped once: "
+                               f"remove it first ({model.name}.remove({resolved!r}))")
+
+
+def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # type: ignore[assignment]
+    """Refuse to create a node whose wrapping declarations are incomplete or clash."""
+    reuses = [t.name for t in model.topics if t.role == "reuse"] + [s.name for s in model.services if s.role == "reuse"]
+    if model.base is None:
+        if reuses:
+            raise DeclarationError(f"{model.name} reuses {', '.join(reuses)} but has no basenode; declare it: "
+                                   f"{model.name}.baseNode('executable').basePackage('package')")
+        return
+    executable = model.base.executable
+    if not executable:
+        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .baseNode('executable')")
+    if not model.base.package and not model.base.launch and "/" not in executable and not executable.startswith("~"):
+        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .basePackage('package'), or give the "
+                               f"path of the file to run: baseNode('./{executable}')")
+    mine = base_fullname(model)
+    for other in others:
+        if other.base is None or base_fullname(other) != mine:
+            continue
+        raise DeclarationError(f"basenode {mine} is already wrapped by {node_fullname(other)}; "
+                               "wrap it once, or give this one another name: baseNode(..., name='other')")
+
+
+# -- the basenode process ------------------------------------------------------------------
+
+def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
+    """Launch the basenode remapped onto the wrapping node's internal names, and check its types.
+
+    A basenode from a launch file starts after the rest of its file
+    (:class:`~ipyros.ros1.launch_rest.LaunchBase`); ``node.base`` holds the one handle
+    whose ``stop()`` stops all of it, set before anything starts, so that the node's
+    shutdown after a failure half-way stops what did start.
+    """
+    from ..processes.basenode import BaseProcess, exit_reason
+
+    model = node.model()
+    if model.base is None:
+        return
+    session = node.session
+    from_launch = model.base.launch is not None
+    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
+                        "namespace": base_namespace(model), "remaps": basenode_remaps(model),
+                        # from a launch file, the params go on the parameter server as roslaunch puts them
+                        "params": {} if from_launch else model.base.params})
+
+    starting = threading.Event()  # while set, an exit is create()'s error to raise, not a notice
+    starting.set()
+
+    def died(proc: Any, returncode: int, last_lines: list[str]) -> None:
+        if starting.is_set():
+            return
+        tail = "\n    ".join(last_lines[-8:])
+        session.notify(f"ipyros: basenode {base_fullname(model)} of {node.called} {exit_reason(returncode)}; "
+                       f"restart it with {node.called}.base.restart()\n    {tail}")
+
+    uri = session.master.uri if session.master is not None else None  # ROS 2 has no master
+    process = BaseProcess.from_model(base, master_uri=uri, on_exit=died, ros2=not session.backend.has_master)
+    if base.package and session.backend.has_master:
+        from ..processes.basenode import link_outside
+
+        real = link_outside(base.package, process.executable)
+        if real is not None:
+            session.notify(f"ipyros: {base.package}/{base.executable} is a link to {real}, outside the package; "
+                           "that is what runs (as rosrun would run it)")
+    handle: Any = process
+    if from_launch:
+        from ..ros1.launch_rest import LaunchBase
+
+        launch = model.base.launch
+
+        def rest_died(proc: Any, returncode: int, last_lines: list[str]) -> None:
+            tail = "\n    ".join(last_lines[-8:])
+            session.notify(f"ipyros: the rest of {launch} (run for {node.name}) {exit_reason(returncode)}; "
+                           f"run it again with {node.called}.shutdown() and {node.called}.create()\n    {tail}")
+
+        handle = LaunchBase(model.base, process, node=base_fullname(model), master_uri=session.master.uri,
+                            on_rest_exit=rest_died)
+    node.base = handle
+    handle.start()
+    if getattr(handle, "not_started", None):
+        session.notify(f"ipyros: roslaunch could not start {', '.join(handle.not_started)} of {model.base.launch} "
+                       f"(the rest runs without); why: {node.called}.base.rest.tail()")
+    try:
+        interface = session.backend.wait_for_node(uri, base_fullname(model), timeout=settle_timeout,
+                                                  alive=lambda: process.running)
+        starting.clear()
+        if not process.running:  # it ended after settling, before a notice could be sent
+            raise BaseNodeError("ended")
+    except BaseNodeError:
+        if not process.running:
+            raise _ended_at_start(model, process, f" (nothing of {node.called} was left running)") from None
+        raise
+    check_base_types(model, interface)
+    report_unused_reuses(node, model, interface)
+
+
+def _ended_at_start(model: NodeModel, process: Any, what_now: str = "") -> BaseNodeError:
+    """The one line for a basenode that ended before it settled: how, and its last log lines."""
+    from ..processes.basenode import exit_reason
+
+    return BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(process.returncode or 0)} at start{what_now}; "
+                         f"last log lines: {' | '.join(process.tail(5)) or 'none'}")
+
+
+def check_base_types(model: NodeModel, interface: "Interface") -> None:
+    """Refuse a base topic declared with another type than the basenode uses."""
+    actual = {name: type_ for name, type_ in interface.publications + interface.subscriptions if type_}
+    for t in model.topics:
+        if t.role != "reuse":
+            continue
+        have = actual.get(internal_name(model, t.resolved))
+        if have and have != t.type:
+            raise TopicTypeConflict(f"basenode {base_fullname(model)} uses {t.resolved} as {have}, but {model.name} "
+                                    f"declares {t.type}; declare type={have!r}")
+
+
+def declare_interface(node: "rosNode", interface: "Interface") -> "Interface":
+    """Declare every topic and service of a basenode's interface as ``reuse`` on ``node``."""
+    model = node.model()
+    prefix = names.global_ns(base_namespace(model))
+    untyped = [name for name, type_ in interface.publications + interface.subscriptions + interface.services
+               if not type_]
+    for name, type_ in interface.publications:
+        if type_:
+            node.reuse.publish(_relative(name, prefix), type=type_)
+    for name, type_ in interface.subscriptions:
+        if type_:
+            node.reuse.subscribe(_relative(name, prefix), type=type_)
+    for name, type_ in interface.services:
+        if type_:
+            node.reuse.service(_relative(name, prefix), type=type_)
+    if untyped:
+        node.session.notify(f"ipyros: {', '.join(untyped)} of {interface.node} have no known type yet "
+                             "(nobody publishes them); declare them yourself with type=...")
+    return interface
+
+
+def _relative(name: str, prefix: str) -> str:
+    """Keep names in the basenode's namespace relative, so they follow its namespace."""
+    return name[len(prefix):] if prefix != "/" and name.startswith(prefix) else name
+
+
+def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
+    """Black-box discovery: run the basenode as it is, read its interface, declare it as reuse.
+
+    The basenode runs briefly without remaps (it is stopped before the wrapping node
+    starts it again, remapped). Returns the interface, which displays as a table.
+    """
+    from ..processes.basenode import BaseProcess
+
+    model = node.model()
+    if model.base is None:
+        raise DeclarationError(f"{node.name} wraps no basenode, so there is nothing to discover; declare one first: "
+                               f"{node.called}.baseNode('executable').basePackage('package')")
+    check_wrapping(model)
+    if node.created:
+        raise DeclarationError(f"{node.name} is already running; discover() its basenode before create()")
+    session = node.session
+    if session.backend.has_master:
+        uri: Optional[str] = session.attach_master().uri
+    else:  # ROS 2: the graph is read by a node of the session's own, so the session starts now
+        uri = None
+        session.start_process_node(node.fullname)
+    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),  # type: ignore[union-attr]
+                        "namespace": base_namespace(model)})
+    probe = BaseProcess.from_model(base, master_uri=uri, ros2=not session.backend.has_master).start()
+    try:
+        interface = session.backend.wait_for_node(uri, base_fullname(model), timeout=timeout,
+                                                  alive=lambda: probe.running)
+    except BaseNodeError:
+        if not probe.running:
+            raise _ended_at_start(model, probe) from None
+        raise
+    finally:
+        probe.stop()
+    # Without the wrapping remaps, the basenode used the public names themselves.
+    interface.not_seen = [f"{t.resolved} ({t.direction})" for t in model.topics
+                          if t.role == "reuse" and not _uses(interface, t.direction, t.resolved)]
+    if interface.not_seen:
+        node.session.notify(f"ipyros: {interface.node} did not use {', '.join(interface.not_seen)} while it was "
+                             f"discovered: {_LATE}; they stay declared")
+    elif not interface.publications and interface.subscriptions:
+        node.session.notify(f"ipyros: {interface.node} publishes nothing yet: {_LATE}; declare what it will "
+                             f"publish: {node.called}.reuse.publish('name', type=...)")
+    return declare_interface(node, interface)
+
+
+_LATE = "a node may advertise only after its first input (topic_tools throttle and mux do)"
+
+
+def _uses(interface: "Interface", direction: str, name: str) -> bool:
+    entries = interface.publications if direction == "publish" else interface.subscriptions
+    return any(entry == name for entry, _ in entries)
+
+
+def report_unused_reuses(node: "rosNode", model: NodeModel, interface: "Interface") -> None:
+    """Say, once per start, which ``reuse`` declarations of ``model`` the settled basenode does not use (yet)."""
+    unused = [f"reuse.{t.direction}({t.name!r})" for t in model.topics
+              if t.role == "reuse" and not _uses(interface, t.direction, internal_name(model, t.resolved))]
+    if unused:
+        node.session.notify(f"ipyros: basenode {interface.node} does not use {', '.join(unused)} of {node.called} "
+                             f"(yet): nothing is relayed there until it does ({_LATE}); if a name is wrong, "
+                             f"{node.called}.remove('name') and declare the right one")
+
+
+def wrap(package: str, executable: str, name: Optional[str] = None, *, node_name: Optional[str] = None,
+         namespace: Optional[str] = None, remaps: Optional[dict] = None, params: Optional[dict] = None,
+         args: Optional[list] = None, session: Any = None) -> "rosNode":
+    """Wrap ``package``/``executable`` in one call: discover its interface, reuse it all, create.
+
+    The wrapping node is named ``name`` (default ``<executable>_wrapper``).
+    """
+    from .dsl import rosNode
+
+    options = {k: v for k, v in dict(name=node_name, namespace=namespace, remaps=remaps, params=params,
+                                     args=args).items() if v}
+    node = rosNode(name or f"{base_node_name(BaseModel(executable=executable))}_wrapper", namespace=namespace,
+                   session=session)
+    node.baseNode(executable, **options).basePackage(package)
+    node.discover()
+    node.create()
+    return node

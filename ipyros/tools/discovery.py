@@ -1,0 +1,204 @@
+"""Black-box discovery: what a running node publishes, subscribes and serves (paper section IV-A).
+
+The paper wraps a node whose source you may not have by first asking ROS about it
+(``rosnode info``, ``rostopic info``). :func:`discover` does that in one call, from the
+master alone: ``getSystemState`` says which topics and services the node registered,
+``getTopicTypes`` gives the topics' types, and a service's type comes from probing the
+service itself (services do not tell the master their type), as ``rosservice`` does.
+
+What every node has, ROS's own plumbing, is not part of the interface and is listed
+in :attr:`Interface.left_out` instead: the ``/rosout`` log publication, ``/clock``
+(subscribed under simulated time) and the ``~get_loggers``/``~set_logger_level``
+services that rospy and roscpp give every node.
+
+A node registers its topics one by one while it starts, so reading it once right after
+launch can miss some: :func:`wait_for_node` waits until the node is there and its
+interface has stopped changing.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+from rich.table import Table
+
+from ..core.errors import BaseNodeError, MasterError
+from ..ros1.master import master_proxy
+from .graph import GraphSnapshot, fetch_snapshot
+
+CALLER_ID = "/ipyros_discovery"
+
+#: Topics every node has whatever it does: (name, direction) pairs left out of interfaces.
+PLUMBING_TOPICS = {("/rosout", "publishes"), ("/rosout_agg", "subscribes"), ("/clock", "subscribes")}
+#: Services every rospy and roscpp node offers, below its own name.
+PLUMBING_SERVICES = ("get_loggers", "set_logger_level")
+
+
+@dataclass
+class Interface:
+    """The publish/subscribe/service interface of one running node, as plain data.
+
+    Each entry is ``(global name, type)``; a type is ``""`` when it is not known: a
+    topic subscribed to as "any type" (rospy.AnyMsg, topic_tools' ShapeShifter: the
+    master records no type for those) that nobody publishes yet, or a service that did
+    not answer the probe. ``left_out`` names the ROS plumbing that was seen but is not
+    part of the interface (e.g. ``"/rosout (publishes)"``); ``not_seen`` the names
+    declared for it that it did not use while it was watched (some nodes advertise only
+    after their first input).
+    """
+
+    node: str
+    publications: list[tuple[str, str]] = field(default_factory=list)
+    subscriptions: list[tuple[str, str]] = field(default_factory=list)
+    services: list[tuple[str, str]] = field(default_factory=list)
+    left_out: list[str] = field(default_factory=list)
+    not_seen: list[str] = field(default_factory=list)
+
+    def __rich__(self) -> Table:
+        return interface_table(self)
+
+
+def global_node_name(node_name: str) -> str:
+    """``relay`` → ``/relay``: node names given without namespace live in the root namespace."""
+    if not node_name or not node_name.strip("/"):
+        raise BaseNodeError(f"node name {node_name!r} is empty; give the node's name, e.g. '/move_base'")
+    return node_name if node_name.startswith("/") else "/" + node_name
+
+
+def discover(master_uri: str, node_name: str, timeout: float = 5.0) -> Interface:
+    """The interface of the running node ``node_name``, read once from the master at ``master_uri``.
+
+    Waits up to ``timeout`` seconds for the node to be registered (it may just be
+    starting); raises :class:`BaseNodeError` if it never is, :class:`MasterError` if
+    the master does not answer.
+    """
+    node = global_node_name(node_name)
+    deadline = time.monotonic() + timeout
+    while True:
+        snapshot = _snapshot(master_uri)
+        if node in snapshot.nodes:
+            return _with_service_types(master_uri, _read(snapshot, node))
+        if time.monotonic() > deadline:
+            raise _not_registered(master_uri, node, snapshot, timeout)
+        time.sleep(0.05)
+
+
+def wait_for_node(master_uri: str, node_name: str, timeout: float = 10.0, settle: float = 0.5,
+                  alive: Optional[Callable[[], bool]] = None) -> Interface:
+    """Wait until ``node_name`` is registered and its interface has been unchanged for ``settle`` seconds.
+
+    Returns the interface then (with service types). A node still registering things
+    when ``timeout`` runs out is returned as it is at that moment; one that never
+    registered raises :class:`BaseNodeError`, at once when ``alive()`` (of the process
+    that should register it) turns False: a node that crashed at start is not waited for.
+    """
+    node = global_node_name(node_name)
+    deadline = time.monotonic() + timeout
+    last: Optional[Interface] = None
+    stable_since = time.monotonic()
+    while True:
+        snapshot = _snapshot(master_uri)
+        now = time.monotonic()
+        current = _read(snapshot, node) if node in snapshot.nodes else None
+        if current != last:
+            last, stable_since = current, now
+        elif current is not None and now - stable_since >= settle:
+            break
+        if alive is not None and not alive():
+            raise BaseNodeError(f"node {node} ended before it settled")
+        if now > deadline:
+            if current is None:
+                raise _not_registered(master_uri, node, snapshot, timeout)
+            break
+        time.sleep(0.05)
+    return _with_service_types(master_uri, last)
+
+
+def _snapshot(master_uri: str) -> GraphSnapshot:
+    snapshot = fetch_snapshot(master_uri, timeout=2.0)
+    if not snapshot.master_up:
+        raise MasterError(f"no ROS master answers at {master_uri}; start one (roscore) or check ROS_MASTER_URI")
+    return snapshot
+
+
+def _not_registered(master_uri: str, node: str, snapshot: GraphSnapshot, timeout: float) -> BaseNodeError:
+    nodes = ", ".join(n for n in snapshot.nodes if n != CALLER_ID) or "none"
+    return BaseNodeError(
+        f"node {node} is not registered with the master at {master_uri} after {timeout:g}s: "
+        f"start it first (registered nodes: {nodes})"
+    )
+
+
+def _read(snapshot: GraphSnapshot, node: str) -> Interface:
+    """The node's topics and service names from one snapshot (services still untyped)."""
+    interface = Interface(node)
+    for direction, registry, into in (
+        ("publishes", snapshot.publishers, interface.publications),
+        ("subscribes", snapshot.subscribers, interface.subscriptions),
+    ):
+        for topic, nodes in registry.items():
+            if node not in nodes:
+                continue
+            if (topic, direction) in PLUMBING_TOPICS:
+                interface.left_out.append(f"{topic} ({direction})")
+            else:
+                into.append((topic, snapshot.topics.get(topic, "")))
+    plumbing = {f"{node}/{name}" for name in PLUMBING_SERVICES}
+    for service, nodes in snapshot.services.items():
+        if node in nodes:
+            if service in plumbing:
+                interface.left_out.append(f"{service} (service)")
+            else:
+                interface.services.append((service, ""))
+    return interface
+
+
+def _with_service_types(master_uri: str, interface: Interface) -> Interface:
+    interface.services = [(name, service_type(master_uri, name)) for name, _ in interface.services]
+    return interface
+
+
+def service_type(master_uri: str, service: str, timeout: float = 2.0) -> str:
+    """The type of a live service, by asking the master where it is and probing it there; ``""`` if unknown.
+
+    The probe is a TCPROS connection header with ``probe=1``: the service answers with
+    its header (type, md5sum) and hangs up, without being called.
+    """
+    import rosservice  # imports rospy (the module only; no node is started)
+
+    try:
+        code, _, uri = master_proxy(master_uri, timeout).lookupService(CALLER_ID, service)
+        if code != 1:
+            return ""
+        return rosservice.get_service_headers(service, uri).get("type", "")
+    except (OSError, rosservice.ROSServiceException):
+        return ""
+
+
+def interface_table(interface: Interface) -> Table:
+    """A rich table of an interface: one row per topic or service, with its direction and type."""
+    table = Table(title=f"Interface of {interface.node}", title_justify="left", show_edge=False)
+    table.add_column("", style="bold")
+    table.add_column("name", style="cyan")
+    table.add_column("type", style="green")
+    for label, entries in (
+        ("publishes", interface.publications),
+        ("subscribes", interface.subscriptions),
+        ("service", interface.services),
+    ):
+        for name, type_ in entries:
+            table.add_row(label, name, type_ or "[dim]unknown[/]")
+    if not (interface.publications or interface.subscriptions or interface.services):
+        table.add_row("", "[dim]no topics or services[/]", "")
+    if interface.not_seen:
+        table.add_section()
+        table.add_row("[yellow]not seen[/]", ", ".join(interface.not_seen), "[dim]declared; may come after its first "
+                      "input[/]")
+    if interface.left_out:
+        node_prefix = interface.node + "/"
+        short = (entry.split(" ")[0].replace(node_prefix, "~", 1) for entry in interface.left_out)
+        table.add_section()
+        table.add_row("[dim]not shown[/]", f"[dim]{', '.join(short)}[/]", "[dim]ROS plumbing[/]")
+    return table

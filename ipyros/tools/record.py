@@ -1,0 +1,75 @@
+"""Recording live topics to a bag from the session: the data a basenode plays back later (``baseBag``).
+
+A :class:`Recording` subscribes to each topic through a small DSL node of its own (as
+``%echo`` does) and writes every message as it arrives; it runs in the background until
+:meth:`Recording.stop` or its duration is up. ROS 1 bags through Debian's python3-rosbag
+(:mod:`ipyros.ros1.bagfile`), ROS 2 bags through rosbags (:mod:`ipyros.ros2.bagfile`).
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+from typing import Any, Mapping, Optional
+
+from ..node.dsl import rosNode
+from ..node.session import current
+from .probe import tool_name
+
+__all__ = ["Recording", "bag_module"]
+
+
+def bag_module() -> Any:
+    """The session's ROS's bag files: ROS 1's (python3-rosbag) or ROS 2's (rosbags)."""
+    if current().backend.has_master:
+        from ..ros1 import bagfile
+    else:
+        from ..ros2 import bagfile  # type: ignore[no-redef]
+    return bagfile
+
+
+class Recording:
+    """``topics`` ({name: type}) written to the bag ``path`` from now on, for ``duration`` seconds or until stopped."""
+
+    def __init__(self, path: Path, topics: Mapping[str, str], duration: Optional[float] = None) -> None:
+        bagfile = bag_module()
+
+        self.path, self.topics = Path(path), dict(topics)
+        self._stopping = threading.Lock()
+        self._writer = bagfile.BagWriter(self.path)
+        self._node: Optional[rosNode] = rosNode(tool_name("record"))
+        for topic, type_name in self.topics.items():
+            self._node.new.subscribe(topic, handler=lambda msg, topic=topic: self._writer.write(topic, msg),
+                                     msgType=type_name)
+        try:
+            self._node.create()
+        except BaseException:
+            self._writer.close()
+            raise
+        self._timer = threading.Timer(duration, self.stop) if duration else None
+        if self._timer is not None:
+            self._timer.daemon = True
+            self._timer.start()
+
+    @property
+    def running(self) -> bool:
+        return self._node is not None
+
+    @property
+    def count(self) -> int:
+        return self._writer.count
+
+    def stop(self) -> "Recording":
+        """Stop and close the bag (twice does nothing)."""
+        if self._timer is not None:
+            self._timer.cancel()
+        with self._stopping:  # the timer's thread and the prompt may both stop it
+            if self._node is not None:
+                self._node.shutdown()
+                self._writer.close()
+                self._node = None  # running is False once it is all done
+        return self
+
+    def __repr__(self) -> str:
+        state = "recording" if self.running else "closed"
+        return f"<Recording of {', '.join(self.topics)} to {self.path} ({state}): {self.count} messages>"
