@@ -8,6 +8,8 @@ that is what it is, so generic code can still catch them the usual way.
 
 from __future__ import annotations
 
+from typing import Sequence
+
 
 class IpyrosError(Exception):
     """Base class: a one-line, actionable message about something the user asked for."""
@@ -63,6 +65,14 @@ def first_line(error: BaseException) -> str:
     """An exception of a library as one line: its first line (rclpy's name errors draw a caret below the name)."""
     lines = [line.strip() for line in str(error).splitlines() if line.strip()]
     return (lines[0].rstrip(":") if lines else type(error).__name__)[:300]
+
+
+def did_you_mean(word: str, candidates: "Sequence[str]") -> str:
+    """``did you mean a or b?`` for the candidates close to ``word``, else ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(word, candidates, n=3, cutoff=0.6)
+    return f"did you mean {' or '.join(close)}?" if close else ""
 
 
 def warn_user(message: str, category: type[Warning]) -> None:

@@ -10,7 +10,7 @@ ever overwrites another's history. A line looks like::
      "slot": "topic /cmd_vel", "version": 2, "handler": "clamp", "source": "def clamp(msg):\\n    ..."}
 
 ``slot``, ``version``, ``handler`` and ``source`` are there for handler changes only.
-:func:`read` turns a file back into :class:`~ipyros.node.session.Change` records.
+:func:`read` turns a file back into :class:`Change` records.
 """
 
 from __future__ import annotations
@@ -18,14 +18,30 @@ from __future__ import annotations
 import json
 import os
 import time
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Optional
+from typing import Optional
 
-if TYPE_CHECKING:
-    from ..node.session import Change
+__all__ = ["Change", "Journal", "default_dir", "read"]
 
 ENV_DIR = "IPYROS_HISTORY_DIR"
+
+
+@dataclass(frozen=True)
+class Change:
+    """One change a DSL node went through, as it would be typed (``new.subscribe /x [T] -> h``).
+
+    A change that gives a handler slot a new function also says which slot, the
+    version number it became, and the function's name and source (None if not found).
+    """
+
+    time: float
+    node: str
+    change: str
+    slot: Optional[str] = None
+    version: Optional[int] = None
+    handler: Optional[str] = None
+    source: Optional[str] = None
 
 
 def default_dir() -> Path:
@@ -46,7 +62,7 @@ class Journal:
         self.failed = False
         self._file = None
 
-    def append(self, change: "Change") -> None:
+    def append(self, change: Change) -> None:
         if self.failed:
             return
         try:
@@ -83,10 +99,8 @@ class Journal:
             self._file = None
 
 
-def read(path: "str | os.PathLike[str]") -> list["Change"]:
+def read(path: "str | os.PathLike[str]") -> list[Change]:
     """The changes recorded in a journal file, oldest first (a torn last line is skipped)."""
-    from ..node.session import Change
-
     changes = []
     for line in Path(path).read_text(encoding="utf-8").splitlines():
         try:

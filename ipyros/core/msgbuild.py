@@ -85,6 +85,11 @@ def to_yaml(msg: Any) -> str:
     return yaml.safe_dump(_as_data(msg), default_flow_style=False, width=1 << 20, sort_keys=False).strip()
 
 
+def flow_yaml(msg: Any) -> str:
+    """A message as one line of YAML (flow style), the same on both ROS: ``{linear: {x: 1.0, y: 0.0, z: 0.0}, ...}``."""
+    return yaml.safe_dump(_as_data(msg), default_flow_style=True, width=1 << 20, sort_keys=False).strip()
+
+
 def flat_fields(msg: Any) -> dict[str, Any]:
     """A message's leaf fields by dotted path (``linear.x``), in order: one row of a CSV or a table.
     Arrays stay whole (a list), so that a row keeps one column per field."""

@@ -9,6 +9,7 @@ from a saved file has only its source, compiled when it is brought back.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any, Callable, Optional
@@ -56,3 +57,14 @@ def compile_version(version: HandlerVersion, namespace: dict, label: str) -> Cal
     if version.source is None:
         raise IpyrosError(f"version {version.number} of {label} ({version.name}) has no source to run again")
     return define_function(version.name, version.source, namespace, f"version {version.number} of {label}")
+
+
+def defined_name(source: str) -> str:
+    """The name a handler's source defines: ``def name(...)``, else ``<lambda>``."""
+    match = re.match(r"\s*(?:async\s+)?def\s+(\w+)", source)
+    return match.group(1) if match else "<lambda>"
+
+
+def name_of(handler: Any) -> Optional[str]:
+    """A handler's name as the model keeps it (None for no handler)."""
+    return None if handler is None else getattr(handler, "__name__", type(handler).__name__)

@@ -1,8 +1,4 @@
-"""Keeping the work: save a DSL node to YAML, load it back, export it as a plain rospy script.
-
-The model (:mod:`ipyros.core.model`) is plain data, but handlers are live functions. A saved
-node is the model plus each handler's *source*, as ``inspect.getsource`` finds it (which
-works for functions typed at an IPython prompt: IPython keeps every cell in ``linecache``):
+"""The node model file: a DSL node as YAML or JSON (its model plus its handlers' sources), and loading it back.
 
     ipyros_node_format: 1
     node: {name: ..., topics: [...], timers: [...], services: [...], params: {...}}
@@ -13,36 +9,23 @@ works for functions typed at an IPython prompt: IPython keeps every cell in ``li
       source: |
         def showPose(data): ...
 
-:func:`load` runs each source in a namespace (IPython's ``user_ns``: the handlers see the
-user's globals and stay editable with ``%handler``) and replays the declarations through
-the public DSL, so every check applies as if typed. :func:`export` writes a standalone
-rospy script doing what the node does, by walking the same plan the runtime opens
-(:func:`ipyros.core.plan.plan`): so the script and the live node cannot disagree on wrapping.
+The format is in docs/model.md. :func:`load` runs each source in a namespace (IPython's
+``user_ns``: the handlers see the user's globals and stay editable with ``%handler``) and
+replays the declarations through the public DSL, so every check applies as if typed. A
+model file looks like data and travels like data: what it would run (handler code, a
+basenode) runs only with ``trust=True``.
 
 A saved file keeps code, not state: the values of the handlers' other globals (``speed``)
-and helper functions they call come from the namespace they are loaded into. An export
-has no such namespace later, so it copies them in: plain literals, helper sources, imports.
+and helper functions they call come from the namespace they are loaded into.
 """
 
 from __future__ import annotations
 
-import ast
-import builtins
-import contextlib
-import dis
-import inspect
 import json
-import linecache
 import os
-import re
 import shlex
-import sys
-import tempfile
-import textwrap
-import types
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Optional
+from typing import Any, Callable, Iterable, Iterator, Optional
 
 import yaml
 
@@ -50,217 +33,28 @@ from ..core import plan as planning
 from ..core.errors import DataError, IpyrosError
 from ..core.model import NodeModel
 from ..core.userdata import load_json, load_yaml
+from ..node.dsl import engine_of, rosNode
+from .atomic import write_atomic
+from .code import (
+    WRITER,
+    define_function,
+    global_names,
+    handler_slots,
+    handler_source,
+    import_of,
+    import_statement,
+    lookup,
+)
 
-if TYPE_CHECKING:
-    from ..node.dsl import rosNode
-    from ..node.session import Session
+__all__ = ["FORMAT", "FORMAT_KEY", "MODEL_SUFFIXES", "handler_sources", "load", "save"]
 
 FORMAT_KEY = "ipyros_node_format"
 FORMAT = 1
-_MISSING: Any = object()
-# A name the handlers call ``<name>.write(...)`` on: the node they were written for.
-_WRITER = re.compile(r"(?<![\w.])([A-Za-z_]\w*)\s*\.\s*write\s*\(")
 
 
 # -- handlers and their source --------------------------------------------------------------
 
-def handler_slots(model: NodeModel) -> Iterator[tuple[str, str]]:
-    """``(slot key, label)`` of every handler the model declares, in declaration order."""
-    for t in model.topics:
-        if t.role == "new" and t.direction == "subscribe":
-            yield planning.topic_slot(t.resolved), f"subscription {t.resolved}"
-    for timer in model.timers:
-        yield planning.timer_slot(timer.name), f"timer {timer.name}"
-    for s in model.services:
-        if s.role == "new":
-            yield planning.service_slot(s.resolved), f"service {s.resolved}"
-
-
-def handler_source(fn: Any, label: str) -> str:
-    """The source of handler ``fn``: a dedented ``def``, or the expression of a lambda."""
-    name = getattr(fn, "__name__", type(fn).__name__)
-    give_def = f"give the handler of {label} a def (def handler(msg): ...) and declare it again"
-    if not isinstance(fn, types.FunctionType):
-        raise IpyrosError(f"the handler of {label} is {type(fn).__name__} {name!r}, which has no source to keep; "
-                          + give_def)
-    try:
-        source = textwrap.dedent(inspect.getsource(fn))
-    except (OSError, TypeError):
-        raise IpyrosError(f"cannot find the source of handler {name} for {label} (defined in "
-                          f"{fn.__code__.co_filename}); {give_def}") from None
-    return source if name != "<lambda>" else _lambda_expression(fn, source, label, give_def)
-
-
-def _lambda_expression(fn: types.FunctionType, text: str, label: str, give_def: str) -> str:
-    """Cut the lambda out of the line(s) ``getsource`` gives for it (the whole statement around it).
-
-    Every ``lambda`` in the text is grown to the longest piece that parses as one lambda;
-    those taking the same arguments and reading the same names as ``fn`` are candidates.
-    """
-    code = fn.__code__
-    want = (code.co_varnames[:code.co_argcount], set(code.co_names) | set(code.co_freevars))
-    found = set()
-    for start in (m.start() for m in re.finditer(r"\blambda\b", text)):
-        for end in range(len(text), start, -1):
-            piece = text[start:end].strip()
-            try:
-                tree = ast.parse(f"(\n{piece}\n)", mode="eval")
-            except SyntaxError:
-                continue
-            if not isinstance(tree.body, ast.Lambda):  # e.g. "lambda m: f(m), other": a tuple, cut more
-                continue
-            inner = next(c for c in compile(tree, "<lambda>", "eval").co_consts if isinstance(c, types.CodeType))
-            if (inner.co_varnames[:inner.co_argcount], set(inner.co_names)) == want:
-                found.add(piece)
-            break
-    if len(found) != 1:
-        why = "cannot be cut out of its source line" if not found else "looks like other lambdas on its line"
-        raise IpyrosError(f"the handler of {label} is a lambda that {why}; {give_def}")
-    return found.pop() + "\n"
-
-
-def global_names(source: str) -> list[str]:
-    """The global names ``source`` reads, first use first: not builtins, not what it defines itself.
-
-    Compiled as a module, a handler's free names (its closure's too) all become globals,
-    so the bytecode's LOAD_GLOBAL/LOAD_NAME list them exactly (attributes are not among them).
-    """
-    top = compile(source, "<handler>", "exec")
-    defined = {i.argval for i in dis.get_instructions(top) if i.opname == "STORE_NAME"}
-    names: dict[str, None] = {}
-    stack = [top]
-    while stack:
-        code = stack.pop()
-        names.update((i.argval, None) for i in dis.get_instructions(code) if i.opname in ("LOAD_GLOBAL", "LOAD_NAME"))
-        stack.extend(reversed([c for c in code.co_consts if isinstance(c, types.CodeType)]))
-    return [n for n in names if n not in defined and not hasattr(builtins, n)]
-
-
-def _lookup(name: str, fn: types.FunctionType, namespace: Optional[dict]) -> Any:
-    """What ``name`` means to ``fn``: its closure, then ``namespace``, then its own globals."""
-    if name in fn.__code__.co_freevars:
-        cell = fn.__closure__[fn.__code__.co_freevars.index(name)]  # type: ignore[index]
-        with contextlib.suppress(ValueError):  # an empty cell: not assigned yet
-            return cell.cell_contents
-        return _MISSING
-    return next((scope[name] for scope in (namespace or {}, fn.__globals__) if name in scope), _MISSING)
-
-
-def import_of(value: Any, own_module: str) -> Optional[tuple[str, Optional[str]]]:
-    """``(module, attribute)`` to import ``value`` from (attribute None: the module itself), if any.
-
-    Things of the handler's own module (``__main__`` at the prompt) are the user's, not importable.
-    A class from a private submodule is imported from its package (``std_msgs.msg._String`` → ``std_msgs.msg``).
-    """
-    if isinstance(value, types.ModuleType):
-        return value.__name__, None
-    module, attr = getattr(value, "__module__", None), getattr(value, "__name__", None)
-    if not isinstance(module, str) or not isinstance(attr, str) or module in (own_module, "__main__"):
-        return None
-    parent, _, last = module.rpartition(".")
-    for candidate in ([parent] if parent and last.startswith("_") else []) + [module]:
-        if getattr(sys.modules.get(candidate), attr, None) is value:
-            return candidate, attr
-    return None
-
-
-def import_statement(name: str, origin: tuple[str, Optional[str]]) -> str:
-    module, attr = origin
-    if attr is None:
-        return f"import {module}" + (f" as {name}" if name != module else "")
-    return f"from {module} import {attr}" + (f" as {name}" if name != attr else "")
-
-
-def _is_literal(value: Any) -> bool:
-    """Plain data whose repr is Python source for an equal value."""
-    if value is None or type(value) in (bool, int, str):
-        return True
-    if type(value) is float:
-        return value == value and value not in (float("inf"), float("-inf"))
-    if type(value) in (list, tuple):
-        return all(_is_literal(v) for v in value)
-    return type(value) is dict and all(_is_literal(k) and _is_literal(v) for k, v in value.items())
-
-
-@dataclass
-class Bindings:
-    """What handlers need from outside their own source, sorted into what a file can hold.
-
-    For every global a handler reads (:func:`global_names`): an import if its value is
-    importable, an assignment if it is a plain literal, the source if it is a helper
-    function of the user's (whose own globals are bound in turn), else *unbound*, with
-    why, for the caller to report.
-    """
-
-    imports: dict[str, tuple[str, Optional[str]]] = field(default_factory=dict)
-    values: dict[str, str] = field(default_factory=dict)  # name → its assignment line
-    functions: dict[str, str] = field(default_factory=dict)  # name → source defining it
-    unbound: dict[str, str] = field(default_factory=dict)  # name → why it could not be bound
-
-    def has(self, name: str) -> bool:
-        return any(name in d for d in (self.imports, self.values, self.functions, self.unbound))
-
-    def bind(self, fn: types.FunctionType, source: str, namespace: Optional[dict],
-             skip: Callable[[str, Any], bool] = lambda name, value: False) -> None:
-        """Bind the globals of ``fn`` (whose source is ``source``); ``skip(name, value)`` leaves one out."""
-        for name in global_names(source):
-            if self.has(name):
-                continue
-            value = _lookup(name, fn, namespace)
-            if skip(name, value):
-                continue
-            origin = None if value is _MISSING else import_of(value, fn.__module__)
-            if origin is not None:
-                self.imports[name] = origin
-            elif isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
-                helper = handler_source(value, f"helper {name} of {fn.__name__}")
-                self.functions[name] = f"{name} = {helper}" if value.__name__ == "<lambda>" else \
-                    helper if value.__name__ == name else f"{helper}{name} = {value.__name__}\n"
-                self.bind(value, helper, namespace, skip)
-            elif value is not _MISSING and _is_literal(value):
-                self.values[name] = f"{name} = {value!r}"
-            else:
-                self.unbound[name] = (f"used by {fn.__name__}, not defined when saved" if value is _MISSING else
-                                      f"used by {fn.__name__}, a {type(value).__name__}: not a literal, not importable")
-
-    def import_lines(self, skip: Iterable[str] = ()) -> list[str]:
-        """``import m`` lines, then ``from m import a, b`` lines (one per module), sorted."""
-        lines, froms = [], {}
-        for name, (module, attr) in self.imports.items():
-            if name in skip:
-                continue
-            if attr == name:
-                froms.setdefault(module, []).append(name)
-            else:
-                lines.append(import_statement(name, (module, attr)))
-        lines += [f"from {module} import {', '.join(sorted(names))}" for module, names in froms.items()]
-        return sorted(lines, key=lambda line: (line.startswith("from"), line))
-
-
 # -- files ------------------------------------------------------------------------------------
-
-def _write_atomic(path: "str | os.PathLike[str]", text: str, mode: int = 0o644) -> Path:
-    """Write ``text`` to a temporary file beside ``path`` and rename it: readers never see half a file."""
-    path = Path(path).expanduser().absolute()
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    except OSError as error:
-        raise IpyrosError(f"cannot write {path}: {error.strerror}") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.write(text)
-            out.flush()
-            os.fsync(out.fileno())
-        os.chmod(tmp, mode)
-        os.replace(tmp, path)
-    except BaseException as error:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        if isinstance(error, OSError):  # a full disk, a quota: the file as it was stays
-            raise IpyrosError(f"cannot write {path}: {error.strerror or error}; nothing was changed there") from None
-        raise
-    return path
-
 
 class _Dumper(yaml.SafeDumper):
     """Multi-line strings (handler sources) as YAML literal blocks: readable, and diffs line by line."""
@@ -275,7 +69,7 @@ _Dumper.add_representer(str, lambda dumper, text: dumper.represent_scalar(
 MODEL_SUFFIXES = ("yaml", "yml", "json")
 
 
-def handler_sources(nodes: Iterable["rosNode"]) -> dict[tuple[int, str], str]:
+def handler_sources(nodes: Iterable[rosNode]) -> dict[tuple[int, str], str]:
     """``(id(node), slot) → source`` of every handler of ``nodes``.
 
     A handler without source fails it, and the error names every such handler, so
@@ -283,8 +77,9 @@ def handler_sources(nodes: Iterable["rosNode"]) -> dict[tuple[int, str], str]:
     """
     sources, missing = {}, []
     for node in nodes:
-        for slot, label in handler_slots(node.model()):
-            fn = node.handlers()[slot]
+        engine = engine_of(node)
+        for slot, label in handler_slots(engine.model()):
+            fn = engine.handlers()[slot]
             try:
                 sources[(id(node), slot)] = handler_source(fn, f"{node.name} {label}")
             except IpyrosError as error:
@@ -296,29 +91,30 @@ def handler_sources(nodes: Iterable["rosNode"]) -> dict[tuple[int, str], str]:
     return sources
 
 
-def save(node: "rosNode", path: "str | os.PathLike[str]") -> Path:
+def save(node: rosNode, path: "str | os.PathLike[str]") -> Path:
     """Save ``node``'s model and its handlers' sources to ``path`` (YAML, or JSON for ``.json``)."""
-    model = node.model()
+    engine = engine_of(node)
+    model = engine.model()
     sources = handler_sources([node])
     entries = []
     for slot, _ in handler_slots(model):
-        fn, source = node.handlers()[slot], sources[(id(node), slot)]
-        origins = {n: import_of(_lookup(n, fn, None), fn.__module__) for n in global_names(source)}
+        fn, source = engine.handlers()[slot], sources[(id(node), slot)]
+        origins = {n: import_of(lookup(n, fn, None), fn.__module__) for n in global_names(source)}
         entry: dict[str, Any] = {"slot": slot, "name": fn.__name__}
         imports = [import_statement(n, o) for n, o in origins.items() if o is not None]
         if imports:
             entry["imports"] = imports
         entries.append({**entry, "source": source})
-    data = {FORMAT_KEY: FORMAT, "ros": node.session.backend.name, "node": model.to_dict(), "handlers": entries}
+    data = {FORMAT_KEY: FORMAT, "ros": engine.session.backend.name, "node": model.to_dict(), "handlers": entries}
     if str(path).lower().endswith(".json"):
-        return _write_atomic(path, json.dumps(data, indent=2, ensure_ascii=False) + "\n")
-    return _write_atomic(path, yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100))
+        return write_atomic(path, json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+    return write_atomic(path, yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100))
 
 
 # -- load -------------------------------------------------------------------------------------
 
 def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
-         session: Optional["Session"] = None, trust: bool = False) -> "rosNode":
+         session: Any = None, trust: bool = False) -> rosNode:
     """Rebuild the node saved in ``path``, declared but not created.
 
     A model file looks like data and travels like data, so the code in it (imports and
@@ -331,8 +127,6 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
     ``user_ns`` so the handlers read the user's globals. Names the handlers call
     ``.write`` on (``nd.write(...)``) are bound to the new node if ``namespace`` lacks them.
     """
-    from ..node.dsl import rosNode
-
     path = Path(path).expanduser()
     namespace = {} if namespace is None else namespace
     data = _read(path)
@@ -351,7 +145,7 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
     except IpyrosError as error:
         raise type(error)(f"{path}: {error}") from None
     for entry in data["handlers"]:
-        for name in _WRITER.findall(entry["source"]):
+        for name in WRITER.findall(entry["source"]):
             namespace.setdefault(name, node)
     return node
 
@@ -393,7 +187,7 @@ def _command_of(base: Any) -> str:
     return line
 
 
-def _across_ros(path: Path, made_on: Optional[str], model: NodeModel, node: "rosNode") -> None:
+def _across_ros(path: Path, made_on: Optional[str], model: NodeModel, node: rosNode) -> None:
     """A model made on the other ROS: refuse what cannot run here, in one line; say what runs differently.
 
     The model itself is the same on both (names, types as ``pkg/Type``, QoS as data); what
@@ -401,16 +195,16 @@ def _across_ros(path: Path, made_on: Optional[str], model: NodeModel, node: "ros
     (their lookups say so, in one line, if they are not), and a launch-file basenode needs
     roslaunch, which is ROS 1's.
     """
-    here = node.session.backend.name
+    session = engine_of(node).session
+    here = session.backend.name
     if made_on in (None, here):
         return
-    if model.base is not None and model.base.launch and not node.session.backend.has_master:
-        raise IpyrosError(f"{path} was made on {made_on} and wraps a node of the launch file {model.base.launch}: "
-                          f"{here} has no roslaunch; declare the basenode with baseNode(...) instead")
     notes = [f"{path} was made on {made_on}; loading it on {here}"]
-    if node.session.backend.has_master and any(t.qos and set(t.qos) - {"durability"} for t in model.topics):
-        notes.append("its QoS depth and reliability mean nothing on ROS 1 (TCP is reliable) and are kept")
-    node.session.notify("ipyros: " + "; ".join(notes))
+    kept = set(session.backend.qos_fields)  # what a declaration's QoS means on this ROS
+    if any(t.qos and set(t.qos) - kept for t in model.topics):
+        notes.append(f"its QoS {', '.join(sorted({k for t in model.topics for k in (t.qos or {})} - kept))} mean "
+                     f"nothing on {here} and are kept")
+    session.notify("ipyros: " + "; ".join(notes))
 
 
 def _by_name(path: Path, model: NodeModel, functions: dict[str, Any], namespace: dict) -> dict[str, Any]:
@@ -473,27 +267,7 @@ def _define(path: Path, entry: dict, namespace: dict) -> Callable[..., Any]:
     return define_function(name, source, namespace, what, f"<ipyros {path.name}: {name}>")
 
 
-def define_function(name: str, source: str, namespace: dict, what: str,
-                    filename: Optional[str] = None) -> Callable[..., Any]:
-    """Run the ``def`` (or lambda expression) ``source`` in ``namespace``; return the function ``name``."""
-    filename = filename or f"<ipyros: {what}>"
-    # Kept in linecache like an IPython cell, so inspect.getsource (%handler, save) finds it again.
-    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
-    lambda_ = name == "<lambda>"
-    try:
-        code = compile(source, filename, "eval" if lambda_ else "exec")
-    except SyntaxError as error:
-        raise IpyrosError(f"{what} does not compile: {error.msg} at line {error.lineno}") from None
-    try:
-        fn = eval(code, namespace) if lambda_ else (exec(code, namespace), namespace.get(name))[1]  # noqa: S307
-    except Exception as error:  # noqa: BLE001
-        raise IpyrosError(f"{what}: running its definition failed: {error!r}") from None
-    if not callable(fn):
-        raise IpyrosError(f"{what}: its source does not define a function {name}")
-    return fn
-
-
-def _declare(node: "rosNode", model: NodeModel, functions: dict[str, Callable[..., Any]]) -> None:
+def _declare(node: rosNode, model: NodeModel, functions: dict[str, Callable[..., Any]]) -> None:
     """Replay ``model`` through the public DSL: base first, then topics, services, timers, params."""
     base = model.base
     if base is not None and base.launch:  # the launch file says the rest, as it does now

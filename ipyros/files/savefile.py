@@ -24,15 +24,18 @@ import sys
 import time
 import types
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable, Optional, Sequence
+from typing import Any, Iterable, Optional, Sequence
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError, warn_user
 from ..core.model import NodeModel
-from .modelfile import _WRITER, Bindings, _write_atomic, handler_slots, handler_sources
+from ..node.dsl import engine_of, rosNode
+from ..node.session import current
+from .atomic import write_atomic
+from .code import WRITER, Bindings, handler_slots
+from .modelfile import handler_sources
 
-if TYPE_CHECKING:
-    from ..node.dsl import rosNode
+__all__ = ["MARKER", "RestoreError", "SaveWarning", "restore", "restoring", "save_nodes", "save_session", "spin"]
 
 MARKER = "# ipyros saved nodes, format 1"
 _OWN_NAMES = {"rosNode", "restoring", "spin"}  # what the file imports from ipyros
@@ -48,7 +51,7 @@ class RestoreError(IpyrosError):
 
 # -- save -------------------------------------------------------------------------------------
 
-def save_nodes(nodes: Sequence["rosNode"], path: "str | os.PathLike[str]",
+def save_nodes(nodes: Sequence[rosNode], path: "str | os.PathLike[str]",
                namespace: Optional[dict] = None) -> Path:
     """Write ``nodes`` to the Python file ``path``; return its path.
 
@@ -61,20 +64,18 @@ def save_nodes(nodes: Sequence["rosNode"], path: "str | os.PathLike[str]",
         raise IpyrosError(f"{path}: a saved session is Python; give a path ending in .py")
     text = _SavedFile(nodes, namespace).render(Path(path).name)
     compile(text, str(path), "exec")  # a file that does not compile is ipyros's bug: fail before writing
-    return _write_atomic(path, text)
+    return write_atomic(path, text)
 
 
 def save_session(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:
     """Write every node running in this session to the Python file ``path``; return its path."""
-    from ..node.session import current
-
-    return save_nodes(list(current().nodes.values()), path, namespace)
+    return save_nodes([engine.dsl for engine in current().nodes.values()], path, namespace)
 
 
 class _SavedFile:
     """The text of a saved file, gathered node by node."""
 
-    def __init__(self, nodes: Sequence["rosNode"], namespace: Optional[dict]) -> None:
+    def __init__(self, nodes: Sequence[rosNode], namespace: Optional[dict]) -> None:
         self.nodes, self.namespace = list(nodes), namespace
         self.bindings = Bindings()
         self.handlers: dict[str, str] = {}  # function name in the file → source
@@ -84,7 +85,7 @@ class _SavedFile:
         for node in self.nodes:
             for slot, _ in handler_slots(node.model()):
                 self._handler(node, slot)
-                for version in node.slot_versions(slot)[0]:  # what an earlier version needs, to revert to it
+                for version in engine_of(node).slot_versions(slot)[0]:  # what an earlier version needs, to revert to it
                     if isinstance(version.function, types.FunctionType) and version.source:
                         self.bindings.bind(version.function, version.source, self.namespace, self._skip)
 
@@ -94,10 +95,10 @@ class _SavedFile:
         taken: set[str] = set(_OWN_NAMES)
         chosen: dict[int, str] = {}
         for node in self.nodes:
-            scopes = [self.namespace or {}] + [fn.__globals__ for fn in node.handlers().values()
+            scopes = [self.namespace or {}] + [fn.__globals__ for fn in engine_of(node).handlers().values()
                                                if isinstance(fn, types.FunctionType)]
             bound = [k for scope in scopes for k, v in scope.items() if v is node and not k.startswith("_")]
-            writers = [w for (owner, _), src in self.sources.items() if owner == id(node) for w in _WRITER.findall(src)]
+            writers = [w for (owner, _), src in self.sources.items() if owner == id(node) for w in WRITER.findall(src)]
             candidates = [w for w in writers if w in bound] + bound + [_identifier(node.name)]
             name = next((c for c in candidates if c not in taken), None) or _unique(_identifier(node.name), taken)
             chosen[id(node)] = name
@@ -109,8 +110,8 @@ class _SavedFile:
         return name in _OWN_NAMES or name in self.variables.values()
 
     # -- handlers ----------------------------------------------------------------------------
-    def _handler(self, node: "rosNode", slot: str) -> None:
-        fn, source = node.handlers()[slot], self.sources[(id(node), slot)]
+    def _handler(self, node: rosNode, slot: str) -> None:
+        fn, source = engine_of(node).handlers()[slot], self.sources[(id(node), slot)]
         name = fn.__name__
         if name == "<lambda>":  # a name of its own: on_cmd_vel, timer_tick, ...
             name = _identifier(re.sub(r"\W+", "_", slot.replace("topic ", "on ", 1)).strip("_"))
@@ -126,7 +127,7 @@ class _SavedFile:
     # -- the text ----------------------------------------------------------------------------
     def render(self, stem: str) -> str:
         names = ", ".join(n.fullname for n in self.nodes)
-        made_on = self.nodes[0].session.backend.name if self.nodes else "ROS"
+        made_on = engine_of(self.nodes[0]).session.backend.name if self.nodes else "ROS"
         parts = [f'"""Nodes saved by ipyros on {time.strftime("%Y-%m-%d %H:%M:%S")}: {names}.\n\n'
                  f"Made on {made_on}. The DSL is the same on ROS 1 and ROS 2: it runs on either where the\n"
                  f"message packages and basenodes it names are installed.\n\n"
@@ -151,7 +152,7 @@ class _SavedFile:
                                                          b.unbound.items()), SaveWarning)
         return "\n\n\n".join(parts) + "\n"
 
-    def _declarations(self, node: "rosNode") -> list[str]:
+    def _declarations(self, node: rosNode) -> list[str]:
         """The DSL calls that declare ``node`` as it is, then create it if it runs."""
         model, var = node.model(), self.variables[id(node)]
         ns = f", namespace={model.namespace!r}" if model.namespace != "/" else ""
@@ -180,11 +181,11 @@ class _SavedFile:
         lines.append(f"{var}.create()" if node.created else f"# {var}.create()  (it was not running when saved)")
         return lines + [""]
 
-    def _versions(self, node: "rosNode", var: str, model: NodeModel) -> list[str]:
+    def _versions(self, node: rosNode, var: str, model: NodeModel) -> list[str]:
         """``restore_versions`` calls for the handlers that had more than one version."""
         lines = []
         for slot, _ in handler_slots(model):
-            versions, current = node.slot_versions(slot)
+            versions, current = engine_of(node).slot_versions(slot)
             if len(versions) < 2 or any(v.source is None for v in versions):
                 continue
             what = _declared_name(model, slot)
@@ -243,8 +244,6 @@ class restoring:  # noqa: N801 - used as a statement: with restoring():
     """Stop what a saved file started if it fails halfway, and say where it failed in one line."""
 
     def __init__(self) -> None:
-        from ..node.session import current
-
         self.session = current()
         self.file = sys._getframe(1).f_code.co_filename  # the saved file running this block
         self.before: set[int] = set()
@@ -272,13 +271,11 @@ def _frames(tb: Any) -> Iterable[Any]:
         tb = tb.tb_next
 
 
-def restore(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> list["rosNode"]:
+def restore(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> list[rosNode]:
     """Run the saved file ``path`` in ``namespace`` (default: a fresh one); return the nodes it made.
 
     Its ``if __name__ == "__main__"`` part does not run (``__name__`` is not ``__main__``).
     """
-    from ..node.dsl import rosNode
-
     path = Path(path).expanduser()
     try:
         text = path.read_text(encoding="utf-8")
@@ -313,8 +310,6 @@ def restore(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) ->
 
 def spin() -> None:
     """Keep the nodes up until Ctrl-C when a saved file runs as a script; at a prompt, return at once."""
-    from ..node.session import current
-
     if sys.flags.interactive or _in_ipython():
         return
     session = current()

@@ -39,10 +39,12 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 
 from IPython.core.completer import CompletionContext, SimpleCompletion, SimpleMatcherResult, context_matcher
 
-from ..core import names
+from ..core import msgtypes, names
+from ..core.graph import GraphSnapshot, names_with_prefix
 from ..core.model import NodeModel
 from ..core.names import default_namespace
-from ..tools.graph import GraphCache, GraphSnapshot, names_with_prefix
+from ..node.session import current
+from ..tools.graph import GraphCache
 
 log = logging.getLogger(__name__)
 
@@ -124,18 +126,12 @@ def _sorted_once(source: Callable[[], Sequence[str]]) -> Callable[[], tuple[str,
 def default_catalog() -> Catalog:
     """The catalog of this machine: Python message modules on sys.path, and the ROS packages as
     the session's ROS runs them (``rosrun`` on ROS 1, ``ros2 run``'s ament index on ROS 2)."""
-    from ..core import msgtypes
-    from ..node.session import current
-
-    if current().backend.has_master:
-        from ..processes import basenode as lookup
-    else:
-        from ..ros2 import packages as lookup  # type: ignore[no-redef]
+    backend = current().backend
     return Catalog(
         message_types=msgtypes.known_message_types,
         service_types=msgtypes.known_service_types,
-        packages=lookup.list_packages,
-        executables=lookup.list_executables,
+        packages=backend.list_packages,
+        executables=backend.list_executables,
     )
 
 

@@ -1,29 +1,37 @@
-"""Rich renderables for nodes and their status, and how to print them anywhere.
+"""How ipyros's records look: rich tables, printed as text in a terminal and as HTML tables in Jupyter.
 
-Renderables are built from plain data (the model, slot figures) and never from rospy,
-so they look the same in a terminal, in a notebook (as HTML) and in plain text.
+The DSL and the tools return plain records (:mod:`ipyros.core.records`, a node, a demo
+robot, a ``%try`` report); this module is the one place that knows how they look. Each
+record type has a renderer here (:data:`RENDERERS`); :func:`renderable` finds it,
+:func:`render_text` and :func:`render_html` print through it, and :func:`register` gives
+them to IPython's display formatters while the extension is loaded, so that ``nd``,
+``nd.status()`` or ``nd.history()`` at the prompt shows a table.
 """
 
 from __future__ import annotations
 
 import html
 import io
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+import time
+from typing import Any, Callable
 
-from rich.console import Console
+from rich.console import Console, Group
 from rich.markup import escape
 from rich.protocol import rich_cast
 from rich.table import Table
 from rich.text import Text
 
 from ..core.qos import from_model as qos_of
+from ..core.records import History, Interface, NodeStatus, Versions
+from ..node.dsl import rosNode
+from ..tools.robot import DemoRobot
+from ..tools.tryout import TrialReport, one_line
 
-if TYPE_CHECKING:
-    from ..node.dsl import rosNode
+__all__ = ["RENDERERS", "interface_table", "node_table", "register", "render_html", "render_plain", "render_text",
+           "renderable", "session_table", "status_table", "table_html", "unregister"]
 
 
-def node_table(node: "rosNode") -> Table:
+def node_table(node: rosNode) -> Table:
     """The node's declared structure: one row per topic, timer, service and parameter."""
     model = node.model()
     state = "[green]running[/]" if node.created else "[yellow]declared[/]"
@@ -48,145 +56,131 @@ def node_table(node: "rosNode") -> Table:
     return table
 
 
-class Shown:
-    """Shows itself as its rich rendering: in a terminal as text, in Jupyter as HTML."""
-
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        # IPython's pretty printer takes the first class of the MRO that has _repr_pretty_ or
-        # __repr__ of its own; a dataclass has its own __repr__, so it gets _repr_pretty_ too.
-        cls._repr_pretty_ = Shown._repr_pretty_  # type: ignore[method-assign]
-
-    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
-        printer.text(render_text(self))
-
-    def _repr_html_(self) -> str:
-        return render_html(self)
+def session_table(nodes: list[Any], user_ns: dict[str, Any], host: str) -> Table:
+    """The rosNodes running in a session, one row each, with the variables that hold them."""
+    table = Table(title=f"rosNodes running in this session (hosted by ROS node {host})", title_justify="left")
+    for column in ("node", "topics", "timers", "services", "basenode", "variables"):
+        table.add_column(column, justify="right" if column in ("topics", "timers", "services") else "left")
+    for node in nodes:
+        model = node.model()
+        base = f"{model.base.package}/{model.base.executable}" if model.base else ""
+        names = ", ".join(sorted(k for k, v in user_ns.items() if v is node and not k.startswith("_")))
+        counts = (str(len(model.topics)), str(len(model.timers)), str(len(model.services)))
+        table.add_row(node.fullname, *counts, base, names)
+    return table
 
 
-class Rows(Shown):
-    """A sequence of records (``rows``) shown as a table."""
-
-    rows: tuple[Any, ...]
-
-    def __len__(self) -> int:
-        return len(self.rows)
-
-    def __iter__(self):  # type: ignore[no-untyped-def]
-        return iter(self.rows)
-
-    def __getitem__(self, index: int) -> Any:
-        return self.rows[index]
-
-
-@dataclass(frozen=True)
-class StatusRow:
-    """One line of a node's status: a handler (subscription, timer, service) or a topic it sends on.
-
-    For a handler ``calls`` counts its calls; for a publication or relay (no handler, no
-    timing) the messages sent, to ``connections`` subscribers, of which slow ones have
-    ``waiting`` messages queued and lost ``dropped`` so far.
-    """
-
-    kind: str
-    name: str
-    handler: str
-    calls: int
-    rate_hz: float = 0.0
-    mean_ms: float = 0.0
-    max_ms: float = 0.0
-    errors: int = 0
-    connections: int = 0
-    waiting: int = 0
-    dropped: int = 0
+def status_table(status: NodeStatus) -> Table:
+    """A node's status: one row per handler and per topic it sends on; its parameters under it."""
+    table = Table(title=f"status of {status.node}" + ("" if status.running else " (not running)"),
+                  title_justify="left")
+    for column, justify in (("kind", "left"), ("name", "left"), ("handler", "left"), ("calls", "right"),
+                            ("rate Hz", "right"), ("mean ms", "right"), ("max ms", "right"),
+                            ("errors", "right"), ("subscribers", "right"), ("dropped", "right")):
+        table.add_column(column, justify=justify)  # type: ignore[arg-type]
+    for r in status.rows:
+        errors = f"[red]{r.errors}[/]" if r.errors else "0"
+        if r.handler:
+            timing = (f"{r.rate_hz:.1f}", f"{r.mean_ms:.3f}", f"{r.max_ms:.3f}", errors, "", "")
+        else:  # a topic sent on: who gets it, and what slow subscribers lost
+            waiting = f" ({r.waiting} waiting)" if r.waiting else ""
+            dropped = f"[red]{r.dropped}[/]{waiting}" if r.dropped else f"0{waiting}"
+            timing = ("", "", "", "", str(r.connections), dropped)
+        table.add_row(r.kind, r.name, r.handler, str(r.calls), *timing)
+    for name, value in status.params:
+        table.add_row("param", name, value, *[""] * 7)
+    return table
 
 
-@dataclass(frozen=True)
-class NodeStatus(Shown):
-    """Per handler and per topic sent on: calls, rate, handler time, exceptions, drops; rich-renderable."""
-
-    node: str
-    running: bool
-    rows: tuple[StatusRow, ...]
-    params: tuple[tuple[str, str], ...] = ()  # the node's own parameters as they are now (set from outside too)
-
-    @classmethod
-    def of(cls, node: "rosNode") -> "NodeStatus":
-        rows = []
-        for key, slot in sorted(node.slots().items()):
-            kind, name = key.split(" ", 1)
-            f = slot.figures()
-            rows.append(StatusRow(kind, name, getattr(slot.handler, "__name__", "?"), f.calls, f.rate_hz,
-                                  f.mean_ms, f.max_ms, f.errors))
-        for sent in node.sent():
-            rows.append(StatusRow(sent.kind, sent.topic, "", sent.messages, connections=sent.connections,
-                                  waiting=sent.waiting, dropped=sent.dropped))
-        params = tuple((f"~{key}", repr(value)) for key, value in node.params.items()) if node.created else ()
-        return cls(node.fullname, node.created, tuple(rows), params)
-
-    def row(self, name: str) -> StatusRow:
-        return next(r for r in self.rows if r.name == name)
-
-    def __rich__(self) -> Table:
-        table = Table(title=f"status of {self.node}" + ("" if self.running else " (not running)"),
-                      title_justify="left")
-        for column, justify in (("kind", "left"), ("name", "left"), ("handler", "left"), ("calls", "right"),
-                                ("rate Hz", "right"), ("mean ms", "right"), ("max ms", "right"),
-                                ("errors", "right"), ("subscribers", "right"), ("dropped", "right")):
-            table.add_column(column, justify=justify)  # type: ignore[arg-type]
-        for r in self.rows:
-            errors = f"[red]{r.errors}[/]" if r.errors else "0"
-            if r.handler:
-                timing = (f"{r.rate_hz:.1f}", f"{r.mean_ms:.3f}", f"{r.max_ms:.3f}", errors, "", "")
-            else:  # a topic sent on: who gets it, and what slow subscribers lost
-                waiting = f" ({r.waiting} waiting)" if r.waiting else ""
-                dropped = f"[red]{r.dropped}[/]{waiting}" if r.dropped else f"0{waiting}"
-                timing = ("", "", "", "", str(r.connections), dropped)
-            table.add_row(r.kind, r.name, r.handler, str(r.calls), *timing)
-        for name, value in self.params:
-            table.add_row("param", name, value, *[""] * 7)
-        return table
+def history_table(history: History) -> Table:
+    """A node's changes, oldest first."""
+    kept = f" (kept in {history.path})" if history.path else ""
+    table = Table(title=f"history of {history.node}{kept}", title_justify="left")
+    table.add_column("#", justify="right")
+    table.add_column("time")
+    table.add_column("change", overflow="fold")
+    for i, change in enumerate(history.rows, 1):
+        table.add_row(str(i), time.strftime("%H:%M:%S", time.localtime(change.time)), change.change)
+    return table
 
 
-@dataclass(frozen=True)
-class History(Rows):
-    """A node's changes, oldest first (``ipyros.node.session.Change``); rich-renderable."""
-
-    node: str
-    rows: tuple[Any, ...]
-    path: Any = None  # the file the session writes its history to, if any
-
-    def __rich__(self) -> Table:
-        import time
-
-        kept = f" (kept in {self.path})" if self.path else ""
-        table = Table(title=f"history of {self.node}{kept}", title_justify="left")
-        table.add_column("#", justify="right")
-        table.add_column("time")
-        table.add_column("change", overflow="fold")
-        for i, change in enumerate(self.rows, 1):
-            table.add_row(str(i), time.strftime("%H:%M:%S", time.localtime(change.time)), change.change)
-        return table
+def robot_table(robot: DemoRobot) -> Table:
+    """A demo robot's nodes: what each runs, its remaps, its state now."""
+    state = "[green]running[/]" if robot.running else "[yellow]stopped[/]"
+    table = Table(title=f"demo robot [bold]{robot.kind}[/] ({state}) from {robot.spec.launch}", title_justify="left")
+    for column in ("node", "runs", "remaps", "state"):
+        table.add_column(column)
+    for row in robot.node_states():
+        table.add_row(*row)
+    return table
 
 
-def render_text(renderable: Any, width: int = 100) -> str:
+def trial_view(report: TrialReport) -> Group:
+    """``%try``: the live handler and the candidate side by side, one row per message, differences marked."""
+    summary = (f"{report.differing} of {len(report.rows)} messages give different results"
+               if report.differing else f"same results on all {len(report.rows)} messages")
+    heading = Text.assemble((f"{report.node} {report.topic}", "bold"), f": live {report.live_name} vs candidate "
+                            f"{report.candidate_name}: ", (summary, "yellow" if report.differing else "green"))
+    table = Table(show_lines=True)
+    table.add_column("#", justify="right")
+    table.add_column("message", overflow="fold", max_width=40)
+    table.add_column(f"live: {report.live_name}", overflow="fold")
+    table.add_column(f"candidate: {report.candidate_name}", overflow="fold")
+    for row in report.rows:
+        mark = Text(str(row.index), style="" if row.same else "bold yellow")
+        cells = [Text("\n".join(o.lines()) or "(nothing)", style="" if o.lines() else "dim")
+                 for o in (row.live, row.candidate)]
+        table.add_row(mark, one_line(row.message), *cells)
+    return Group(heading, table)
+
+
+def interface_table(interface: Interface) -> Table:
+    """A rich table of an interface: one row per topic or service, with its direction and type."""
+    table = Table(title=f"Interface of {interface.node}", title_justify="left", show_edge=False)
+    table.add_column("", style="bold")
+    table.add_column("name", style="cyan")
+    table.add_column("type", style="green")
+    for label, entries in (
+        ("publishes", interface.publications),
+        ("subscribes", interface.subscriptions),
+        ("service", interface.services),
+    ):
+        for name, type_ in entries:
+            table.add_row(label, name, type_ or "[dim]unknown[/]")
+    if not (interface.publications or interface.subscriptions or interface.services):
+        table.add_row("", "[dim]no topics or services[/]", "")
+    if interface.not_seen:
+        table.add_section()
+        table.add_row("[yellow]not seen[/]", ", ".join(interface.not_seen), "[dim]declared; may come after its first "
+                      "input[/]")
+    if interface.left_out:
+        node_prefix = interface.node + "/"
+        short = (entry.split(" ")[0].replace(node_prefix, "~", 1) for entry in interface.left_out)
+        table.add_section()
+        table.add_row("[dim]not shown[/]", f"[dim]{', '.join(short)}[/]", "[dim]ROS plumbing[/]")
+    return table
+
+
+def render_text(renderable_: Any, width: int = 100) -> str:
     """Render to a string: colours only when stdout is a terminal."""
     import sys
 
+    renderable_ = renderable(renderable_)
     buffer = io.StringIO()
     console = Console(file=buffer, width=_width(width), force_terminal=sys.stdout.isatty(), force_jupyter=False,
                       color_system="auto" if sys.stdout.isatty() else None)
-    console.print(renderable)
+    console.print(renderable_)
     return buffer.getvalue().rstrip("\n")
 
 
-def render_html(renderable: Any) -> str:
+def render_html(renderable_: Any) -> str:
     """Render as an HTML fragment for Jupyter: a table as an HTML table, anything else as coloured text."""
-    table = rich_cast(renderable)
+    renderable_ = renderable(renderable_)
+    table = rich_cast(renderable_)
     if isinstance(table, Table):
         return table_html(table)
     console = Console(record=True, file=io.StringIO(), width=120, force_jupyter=False)
-    console.print(renderable)
+    console.print(renderable_)
     return console.export_html(inline_styles=True, code_format="<pre style=\"font-family:monospace\">{code}</pre>")
 
 
@@ -222,10 +216,10 @@ def table_html(table: Table) -> str:
     return f'<table class="ipyros">{caption}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>{note}'
 
 
-def render_plain(renderable: Any) -> str:
-    """``renderable`` as plain text, without colour or width limit (e.g. inside a one-line message)."""
+def render_plain(renderable_: Any) -> str:
+    """``renderable_`` as plain text, without colour or width limit (e.g. inside a one-line message)."""
     buffer = io.StringIO()
-    Console(file=buffer, color_system=None, force_jupyter=False, width=10_000).print(renderable)
+    Console(file=buffer, color_system=None, force_jupyter=False, width=10_000).print(renderable(renderable_))
     return buffer.getvalue().rstrip("\n")
 
 
@@ -235,28 +229,58 @@ def _width(default: int) -> int:
     return max(60, shutil.get_terminal_size((default, 24)).columns)
 
 
-@dataclass(frozen=True)
-class Versions(Rows):
-    """The versions of one handler (``ipyros.core.versions.HandlerVersion``), oldest first; rich-renderable."""
-
-    label: str  # e.g. "kobuki /cmd_vel"
-    rows: tuple[Any, ...]
-    current: Any  # the number of the version serving now, or None
-
-    def __rich__(self) -> Table:
-        table = Table(title=f"versions of the handler of {self.label}", title_justify="left")
-        for column in ("#", "time", "handler", "lines", "first line of its body"):
-            table.add_column(column, justify="right" if column in ("#", "lines") else "left", overflow="fold")
-        for v in self.rows:
-            mark = " (now)" if v.number == self.current else ""
-            lines = [line.strip() for line in (v.source or "").splitlines() if line.strip()]
-            body = next((line for line in lines[1:] if not line.startswith(("#", '"""', "'''"))),
-                        lines[0] if lines else "no source")
-            table.add_row(f"{v.number}{mark}", v.when, v.name, str(len(lines)), escape(body))
-        if not self.rows:
-            table.add_row("", "", "no versions yet", "", "")
-        return table
+def versions_table(versions: Versions) -> Table:
+    """The versions of one handler, oldest first; (now) marks the live one."""
+    table = Table(title=f"versions of the handler of {versions.label}", title_justify="left")
+    for column in ("#", "time", "handler", "lines", "first line of its body"):
+        table.add_column(column, justify="right" if column in ("#", "lines") else "left", overflow="fold")
+    for v in versions.rows:
+        mark = " (now)" if v.number == versions.current else ""
+        lines = [line.strip() for line in (v.source or "").splitlines() if line.strip()]
+        body = next((line for line in lines[1:] if not line.startswith(("#", '"""', "'''"))),
+                    lines[0] if lines else "no source")
+        table.add_row(f"{v.number}{mark}", v.when, v.name, str(len(lines)), escape(body))
+    if not versions.rows:
+        table.add_row("", "", "no versions yet", "", "")
+    return table
 
 
-__all__ = ["History", "Versions", "NodeStatus", "StatusRow", "node_table", "render_text", "render_html",
-           "render_plain", "table_html"]
+#: How each record type looks (the most specific class of an object's MRO wins).
+RENDERERS: dict[type, Callable[[Any], Any]] = {
+    rosNode: node_table, NodeStatus: status_table, History: history_table, Versions: versions_table,
+    Interface: interface_table, DemoRobot: robot_table, TrialReport: trial_view,
+}
+
+
+def renderable(obj: Any) -> Any:
+    """What rich prints for ``obj``: its renderer's table if it is a record, else ``obj`` itself."""
+    for cls in type(obj).__mro__:
+        render = RENDERERS.get(cls)
+        if render is not None:
+            return render(obj)
+    return obj
+
+
+def register(shell: Any) -> list[tuple[Any, type, Any]]:
+    """Have ``shell`` show the records as tables (text in a terminal, HTML in Jupyter); what :func:`unregister`
+    takes to put things back as they were."""
+    formatters = shell.display_formatter.formatters
+    done = []
+    for cls in RENDERERS:
+        for mime, show in (("text/plain", _pretty), ("text/html", render_html)):
+            formatter = formatters[mime]
+            done.append((formatter, cls, formatter.for_type(cls, show)))
+    return done
+
+
+def unregister(done: list[tuple[Any, type, Any]]) -> None:
+    """Undo :func:`register`."""
+    for formatter, cls, previous in reversed(done):
+        if previous is None:
+            formatter.pop(cls, None)
+        else:
+            formatter.for_type(cls, previous)
+
+
+def _pretty(obj: Any, printer: Any, cycle: bool) -> None:
+    printer.text(repr(obj) if cycle else render_text(obj))

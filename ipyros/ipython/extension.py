@@ -13,7 +13,7 @@ Loading:
 The prompt never waits on the network: when a master answers a short local check
 (0.3 s at most) it is used at once; otherwise, if allowed, one is started on a
 background thread while the prompt comes back. A node's ``create()`` waits for that
-start, because both go through the session's lock (:meth:`Session.attach_master`).
+start, because both go through the backend's lock (the master connection, ROS 1).
 
 Unloading undoes each of these; nodes the user created keep running (they belong to
 the session, which stops them at exit), the ``%pub`` publisher is closed.
@@ -29,16 +29,25 @@ from collections import deque
 from typing import Any, Optional
 
 from ..core import plan as planning
-from ..core.errors import IpyrosError, MasterError
+from ..core.errors import IpyrosError
 from ..node.dsl import end_chains, rosNode
 from ..node.session import Session, configure, current, started as session_started
-from ..ros1 import master as master_mod
 from ..tools.graph import GraphCache
 from ..tools.probe import PromptPublisher, is_tool
-from . import completion
-from .magics import (DemoMagics, IntrospectMagics, NodeMagics, PlotMagics, RateMagics, RecordMagics, RosMagics,
-                     TopicMagics, WrapMagics, cell_output)
-from .magics.output import Printer, StderrLogHandler, failure_report, note, note_line
+from . import completion, display
+from .magics import (
+    DemoMagics,
+    IntrospectMagics,
+    NodeMagics,
+    PlotMagics,
+    RateMagics,
+    RecordMagics,
+    RosMagics,
+    TopicMagics,
+    WrapMagics,
+    cell_output,
+)
+from .magics.output import Printer, StderrLogHandler, failure_report, note_line
 
 log = logging.getLogger(__name__)
 
@@ -54,8 +63,9 @@ class Extension:
         self.settings = RosMagics(shell=shell)  # reads c.RosMagics.* from the shell's config
         self.printer = Printer(lambda: self.settings.rich_output)
         self.publisher = PromptPublisher()
-        self.graph = GraphCache(_slashed(self.settings.master_uri or master_mod.configured_uri()),
-                                period=self.settings.graph_period)
+        # The graph of whichever ROS the session runs: read through its backend (chosen when it is first needed).
+        self.graph = GraphCache(lambda timeout: self.session.backend.graph_snapshot(timeout),
+                                lambda: self.session.backend.where(), period=self.settings.graph_period)
         self.node_magics = NodeMagics(shell, self)
         self.topic_magics = TopicMagics(shell, self)  # %plot asks it for a live topic's type
         self.plot_magics = PlotMagics(shell, self)
@@ -97,12 +107,11 @@ class Extension:
             cell_output.route()
             self._saved["output_scope"] = self.session.output_scope
             self.session.output_scope = _output_below_the_cell
+        self._saved["display"] = display.register(shell)  # nd, nd.status(), ... at the prompt: tables
         self._whole_names_in_menus()
         self._start_logging()
         shell.events.register("post_run_cell", self._after_cell)
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
-        if not self.session.backend.has_master:  # ROS 2: the graph is what discovery found
-            self.graph.use(self.session.backend.graph_snapshot, self.session.backend.graph_where())
         self.graph.start()
         self._completion = completion.install(shell, self.graph)
         self._stop_nodes_before_namespace_goes()
@@ -143,34 +152,13 @@ class Extension:
             configure(config)
         except IpyrosError as error:  # already attached elsewhere: keep that master
             session.config = dataclasses.replace(session.config, announce=_quiet)
-            self.graph.master_uri = session.master.uri if session.master else self.graph.master_uri
             return f"{error}"
-        self.graph.master_uri = session.master.uri if session.master else _slashed(
-            config.master_uri or master_mod.configured_uri())
         return None
 
     def _attach(self) -> str:
-        """Attach at once if a master answers; else start one in the background if allowed.
-
-        Returns the line to print. The announcement the session would make when it starts
-        a master is silenced (``_quiet``): this line already says it.
-        """
-        session = self.session
-        if not session.backend.has_master:
-            return session.backend.describe()  # type: ignore[attr-defined]
-        if session.master is not None:
-            return session.master.describe()
-        uri = self.graph.master_uri
-        if master_mod.answers(uri, timeout=0.3):
-            try:
-                return session.attach_master().describe()
-            except MasterError as error:  # it went away between the two checks
-                return str(error)
-        if not session.config.start_master:
-            return (f"no ROS master answers at {uri}; start roscore there, "
-                    "or let ipyros start one: %config RosMagics.start_master = True")
-        threading.Thread(target=_start_master, args=(session,), name="ipyros-master", daemon=True).start()
-        return f"no ROS master answered at {uri}; starting one there (it stops when this session exits)"
+        """The load line: which ROS, and (ROS 1) the master, attached at once if one answers, else started in
+        the background if allowed (the announcement the session would make of it is silenced: this line says it)."""
+        return self.session.backend.connect(self.session, wait=False)
 
     def _whole_names_in_menus(self) -> None:
         """Show ROS names whole in the terminal's completion menu.
@@ -207,7 +195,7 @@ class Extension:
 
     def _keep_history(self, size: int) -> None:
         """Make every subscription of the session's nodes keep its last ``size`` messages (for %try)."""
-        for node in list(self.session.nodes.values()):
+        for node in list(self.session.nodes.values()):  # the nodes' engines
             for topic in node.model().subscriptions():
                 slot = node.slot(planning.topic_slot(topic.resolved))
                 if slot is not None and slot.recent.maxlen != size:
@@ -252,10 +240,12 @@ class Extension:
             session.output_scope = self._saved["output_scope"]
             cell_output.unroute()
         saved = self._saved["config"]
-        if session.master is None or saved.master_uri in (None, session.master.uri):
+        try:
+            session.backend.check_config(session, saved.master_uri)
             session.config = saved  # the master settings as they were before loading
-        else:
+        except IpyrosError:  # attached to another master meanwhile: keep it
             session.config = dataclasses.replace(session.config, announce=saved.announce)
+        display.unregister(self._saved.pop("display", []))
         if "min_elide" in self._saved and shell.min_elide == 0:
             shell.min_elide = self._saved["min_elide"]
         shell.custom_exceptions, shell.CustomTB = self._saved["custom_exc"]
@@ -282,20 +272,6 @@ def _global(name: str) -> Optional[str]:
 
 def _quiet(text: str) -> None:
     """The session's announcement, silenced while the extension is loaded (its load line says it)."""
-
-
-def _start_master(session: Session) -> None:
-    """Attach the session to its master, starting one; runs on a short-lived thread of its own.
-
-    The master process itself is forked by :func:`ipyros.processes.process.spawn` on its launcher
-    thread, so it does not die with this thread (``PR_SET_PDEATHSIG``).
-    """
-    try:
-        session.attach_master()
-    except IpyrosError as error:
-        note(f"{error}")
-    except Exception as error:  # a thread must not die silently
-        note(f"could not start the ROS master: {error}")
 
 
 def _show_error(shell: Any, previous: Any, etype: type, value: BaseException, tb: Any,

@@ -1,37 +1,52 @@
-"""The backend seam: what the DSL asks of a ROS, and nothing more.
+"""The backend seam: what the rest of ipyros asks of a ROS, so that nothing outside ``ros1/`` and ``ros2/`` knows
+which ROS runs.
 
-The DSL, the node model, the plan and the magics are the same on ROS 1 and ROS 2; a
-:class:`Backend` is what runs them on one ROS. A session holds exactly one, chosen when
-it starts (:func:`choose`). Each endpoint it makes has ``close()``; publications and
-relays also ``figures()`` (:class:`~ipyros.core.slots.SendFigures`), and publications
-``write(msg)``. ``host`` is the full name of the DSL node an endpoint belongs to: on ROS 2
-each DSL node is a ROS node of its own, on ROS 1 they share the process's.
+The DSL, the node model, the plan, keeping the work, the tools and the magics are the same
+on ROS 1 and ROS 2; a :class:`Backend` is what runs them on one ROS. A session holds
+exactly one, chosen when it starts (:func:`choose`). Each endpoint it makes has
+``close()``; publications and relays also ``figures()``
+(:class:`~ipyros.core.slots.SendFigures`), and publications ``write(msg)``. ``host`` is
+the full name of the DSL node an endpoint belongs to: on ROS 2 each DSL node is a ROS node
+of its own, on ROS 1 they share the process's.
 
-=====================  ===================================================================
-the DSL asks           what the backend gives
-=====================  ===================================================================
-a node process         ``process``: started once, named, registered again after a master
-                       restart, shut down (``ProcessNode`` on ROS 1); ``has_master``
-publish / write        ``publication(host, topic, cls, qos, complain)``
-subscribe(h)           ``subscription(host, topic, cls, slot, qos, complain)``: the slot calls
-                       the handler; ``complain(text)`` tells the session of a QoS mismatch
-reuse relay            ``relay(host, source, target, cls, on_wrong_type, complain)``: bytes, not
-                       objects, with the QoS of the source's publishers
-timer                  ``timer(host, period, slot, oneshot, complain)``
-service / reuse        ``service(host, name, cls, slot)``,
-                       ``service_relay(host, source, target, cls, complain)``
-a DSL node's life      ``open_host(host)`` at create(), ``close_host(host)`` at shutdown()
-params                 ``check_param``, ``get_param``, ``set_param``, ``has_param``,
-                       ``delete_param`` (by global name)
-a free node name       ``refuse_taken_name(uri, name)``
-a basenode's interface ``wait_for_node(master_uri, name, timeout, alive)``: an Interface once settled
-the graph (no master)  ``graph_snapshot()``, ``graph_where()``: ROS 2 only; ROS 1's graph is read
-                       from the master by :mod:`ipyros.tools.graph` itself
-%services, %call       ``service_type(name)``, ``call(name, cls, request, timeout)``
-%params, %param        ``params_under(namespace)``, ``read_param(name)``, ``write_param(name, value)``:
-                       any node's (ROS 2: ``/node/key``, through its parameter services)
-%node                  ``node_pid(name)``: None where the ROS does not say (ROS 2)
-=====================  ===================================================================
+=======================  =================================================================
+what is asked            what the backend gives
+=======================  =================================================================
+the session's ROS        ``process`` (its node(s): ``name``, ``started``); ``start(name,
+                         session)`` (ROS 1: the master found or started, watched);
+                         ``require_graph(doing)`` (fails in a moment if the master is
+                         gone); ``connect(session)`` (the load line); ``closing()`` and
+                         ``close()`` at the end; ``check_config(session, master_uri)``
+publish / write          ``publication(host, topic, cls, qos, complain)``
+subscribe(h)             ``subscription(host, topic, cls, slot, qos, complain)``: the slot
+                         calls the handler; ``complain(text)`` tells the session of what
+                         goes wrong after it opened (a QoS mismatch, a peer of another type)
+reuse relay              ``relay(host, source, target, cls, on_wrong_type, complain)``:
+                         bytes, not objects, with the QoS of the source's publishers
+timer                    ``timer(host, period, slot, oneshot, complain)``
+service / reuse          ``service(host, name, cls, slot)``,
+                         ``service_relay(host, source, target, cls, complain)``
+a DSL node's life        ``open_host(host)`` at create(), ``close_host(host)`` at shutdown()
+its params               ``check_param``, ``get_param``, ``set_param``, ``has_param``,
+                         ``delete_param`` (by global name)
+a free node name         ``refuse_taken_name(name)``
+the graph                ``graph_snapshot(timeout)`` (a :class:`~ipyros.core.graph.GraphSnapshot`),
+                         ``where()`` (its name for titles), ``live_types(topics)`` (the type
+                         each has, and whether only this session uses it), ``check_graph()``
+a basenode               ``basenode(base, log_path, on_exit)``: its process (lookup and
+                         command line as rosrun / ros2 run); ``wait_for_node(name, timeout,
+                         alive, settle)``: its :class:`~ipyros.core.records.Interface` once
+                         settled; ``launch_base(...)`` and ``read_launch(...)``: a node of
+                         a launch file; ``note_link(base, process)``
+packages                 ``list_packages()``, ``list_executables(package)``
+bags                     ``bags()``: reading, playing and writing bags of this ROS
+exports                  ``export_flavour()``: how a node is written as a script of this ROS
+%services, %call         ``service_type(name)``, ``call(name, cls, request, timeout)``
+%params, %param          ``params_under(namespace)``, ``read_param(name)``,
+                         ``write_param(name, value)``: any node's
+%topics -v               ``topic_endpoints(topic)``: each endpoint with its type and QoS
+%node                    ``node_pid(name)``: None where the ROS does not say (ROS 2)
+=======================  =================================================================
 """
 
 from __future__ import annotations
@@ -41,22 +56,35 @@ import os
 from typing import Any, Callable, Optional, Protocol
 
 from ..core.errors import IpyrosError
+from ..core.graph import GraphSnapshot
+from ..core.model import BaseModel
 from ..core.qos import Qos
+from ..core.records import Interface
 from ..core.slots import HandlerSlot
 
 #: Told, in one line, what went wrong with an endpoint after it opened (a QoS mismatch, ...).
 Complain = Callable[[str], None]
 
-__all__ = ["Backend", "choose"]
+__all__ = ["Backend", "Complain", "choose"]
 
 
 class Backend(Protocol):
-    """One ROS, as the DSL sees it (see the module's table)."""
+    """One ROS, as the rest of ipyros sees it (see the module's table)."""
 
     name: str  # "ROS 1", "ROS 2"
-    has_master: bool  # a ROS 1 master to find, start and watch; ROS 2 discovers peers itself
     process: Any
+    qos_fields: tuple[str, ...]  # the QoS fields that mean something here (ROS 1: durability)
 
+    # the session's ROS
+    def start(self, name: str, session: Any) -> str: ...
+    def connect(self, session: Any, wait: bool = True) -> str: ...
+    def require_graph(self, doing: str) -> None: ...
+    def check_config(self, session: Any, master_uri: Optional[str]) -> None: ...
+    def closing(self) -> None: ...
+    def close(self) -> None: ...
+    def describe(self) -> str: ...
+
+    # endpoints
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain) -> Any: ...
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Complain) -> Any: ...
@@ -66,27 +94,52 @@ class Backend(Protocol):
               complain: Optional[Complain] = None) -> Any: ...
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> Any: ...
     def service_relay(self, host: str, source: str, target: str, cls: type, complain: Complain) -> Any: ...
-    def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
-                      alive: Optional[Callable[[], bool]] = None) -> Any: ...
     def open_host(self, host: str) -> None: ...
     def close_host(self, host: str) -> None: ...
+
+    # params of the session's nodes, by global name
     def check_param(self, name: str, value: Any) -> None: ...
     def get_param(self, name: str) -> Any: ...
     def set_param(self, name: str, value: Any) -> None: ...
     def has_param(self, name: str) -> bool: ...
     def delete_param(self, name: str) -> None: ...
-    def refuse_taken_name(self, uri: str, name: str) -> None: ...
+    def refuse_taken_name(self, name: str) -> None: ...
+
+    # the graph
+    def graph_snapshot(self, timeout: float = 1.0) -> GraphSnapshot: ...
+    def where(self) -> str: ...
+    def live_types(self, topics: list[str]) -> dict[str, tuple[str, bool]]: ...
+    def check_graph(self) -> None: ...
+
+    # basenodes, packages, launch files, bags, exports
+    def basenode(self, base: BaseModel, *, log_path: Any = None, on_exit: Any = None) -> Any: ...
+    def note_link(self, base: BaseModel, process: Any) -> Optional[str]: ...
+    def wait_for_node(self, name: str, timeout: float = 10.0, alive: Optional[Callable[[], bool]] = None,
+                      settle: float = 0.5) -> Interface: ...
+    def read_launch(self, launch: Any, node: str, args: Optional[dict[str, Any]]) -> tuple[BaseModel, list[str]]: ...
+    def launch_base(self, base: BaseModel, process: Any, node: str, on_rest_exit: Any) -> Any: ...
+    def list_packages(self) -> list[str]: ...
+    def list_executables(self, package: str) -> list[str]: ...
+    def bags(self) -> Any: ...
+    def export_flavour(self) -> Any: ...
+
+    # any node's services, params and endpoints (the introspection magics)
     def service_type(self, name: str) -> str: ...
     def call(self, name: str, cls: type, request: Any, timeout: float) -> Any: ...
     def params_under(self, namespace: str) -> dict[str, Any]: ...
     def read_param(self, name: str) -> Any: ...
     def write_param(self, name: str, value: Any) -> None: ...
+    def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]: ...
     def node_pid(self, node: str) -> Optional[int]: ...
 
 
 def choose() -> Backend:
     """The backend of a new session: ``IPYROS_ROS`` (``1`` or ``2``) if set, else ``ROS_VERSION``
-    (what a sourced ROS install sets), else ROS 1 if rospy is importable, else ROS 2."""
+    (what a sourced ROS install sets), else ROS 1 if rospy is importable, else ROS 2.
+
+    The two backends are imported here, when the session chooses: the node layer knows
+    the seam, not which ROS answers it.
+    """
     wanted = os.environ.get("IPYROS_ROS") or os.environ.get("ROS_VERSION") or ""
     if wanted not in ("", "1", "2"):
         raise IpyrosError(f"IPYROS_ROS={wanted!r}: give 1 (ROS 1, rospy) or 2 (ROS 2, rclpy)")
@@ -94,10 +147,10 @@ def choose() -> Backend:
         wanted = "1" if importlib.util.find_spec("rospy") is not None else "2"
     try:
         if wanted == "2":
-            from ..ros2.backend import Ros2
+            from ..ros2.backend import Ros2  # noqa: PLC0415 - chosen at run time (see the docstring)
 
             return Ros2()
-        from ..ros1.backend import Ros1
+        from ..ros1.backend import Ros1  # noqa: PLC0415 - chosen at run time (see the docstring)
 
         return Ros1()
     except ImportError as error:

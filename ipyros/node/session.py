@@ -1,8 +1,10 @@
-"""The session: the master in use, the process node, and the DSL nodes living in it.
+"""The session: this interpreter's ROS (one backend), the DSL nodes living in it, and their history.
 
-There is one session per interpreter because rospy allows one node per process; it
-is created on first use (``current()``) and closed at interpreter exit, stopping
-everything ipyros started: nodes, basenodes, and the master if ipyros started it.
+There is one session per interpreter (rospy allows one node per process; on ROS 2 one
+context and one executor serve every node); it is created on first use (``current()``) and
+closed at interpreter exit, stopping everything ipyros started: nodes, basenodes, and on
+ROS 1 the master if ipyros started it. What differs between the two ROS (a master to find,
+start and watch) is the backend's: the session reads the same on both.
 """
 
 from __future__ import annotations
@@ -17,15 +19,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Optional
 
-from ..core.errors import MasterError, NodeStateError
-from ..core.journal import Journal
+from ..core.errors import NodeStateError
+from ..core.journal import Change, Journal
 from ..core.slots import HandlerFailure, OutputScope
-from ..ros1 import master as master_mod
-from ..ros1.masterwatch import MasterWatch
 from .backend import Backend, choose as choose_backend
 
 if TYPE_CHECKING:
-    from .dsl import rosNode
+    from .engine import NodeEngine
 
 
 def print_notice(text: str) -> None:
@@ -40,23 +40,6 @@ def print_failure(failure: HandlerFailure) -> None:
     sys.stderr.write(f"ipyros: handler {failure.handler} failed on {failure.label}{more}; "
                      f"the node keeps running\n{failure.traceback}")
     sys.stderr.flush()
-
-
-@dataclass(frozen=True)
-class Change:
-    """One change a DSL node went through, as it would be typed (``new.subscribe /x [T] -> h``).
-
-    A change that gives a handler slot a new function also says which slot, the
-    version number it became, and the function's name and source (None if not found).
-    """
-
-    time: float
-    node: str
-    change: str
-    slot: Optional[str] = None
-    version: Optional[int] = None
-    handler: Optional[str] = None
-    source: Optional[str] = None
 
 
 @dataclass
@@ -74,25 +57,23 @@ class SessionConfig:
 
 
 class Session:
-    """Everything ipyros runs in this interpreter."""
+    """Everything ipyros runs in this interpreter: one backend (one ROS), the DSL nodes, the history."""
 
     def __init__(self, config: Optional[SessionConfig] = None) -> None:
         self.config = config or SessionConfig()
-        self.master: Optional[master_mod.MasterHandle] = None
         self.backend: Backend = choose_backend()
         self.process = self.backend.process
-        self.nodes: dict[str, "rosNode"] = {}  # full name → node, in creation order
+        self.nodes: dict[str, "NodeEngine"] = {}  # full name → the engine of a DSL node, in creation order
         self.history: list[Change] = []  # every change of every node, in order
         self._journal: Optional[Journal] = None
         self._on_close: list[Callable[[], None]] = []
         self.report: Callable[[HandlerFailure], None] = print_failure
         self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
         #: How advice names a node (``nd.base.restart()``): the extension finds the user's variable.
-        self.call_name: Callable[["rosNode"], str] = lambda node: node.name
+        self.call_name: Callable[[Any], str] = lambda node: node.name
         #: Where a node created now has its handlers print (the extension gives Jupyter cells an area).
-        self.output_scope: Callable[["rosNode"], Optional[OutputScope]] = lambda node: None
+        self.output_scope: Callable[[Any], Optional[OutputScope]] = lambda node: None
         self._lock = threading.RLock()
-        self.watch: Optional[MasterWatch] = None
         self.closed = False
         self._closes_at_exit = False
 
@@ -121,34 +102,23 @@ class Session:
         """Tell the user something that happened on its own (a basenode died, ...)."""
         self.notice(text)
 
-    def attach_master(self) -> master_mod.MasterHandle:
-        """The master in use, found or started on first call."""
-        with self._lock:
-            if self.master is None:
-                self.master = master_mod.attach(self.config.master_uri, self.config.start_master)
-                if self.master.started:
-                    self.config.announce(f"ipyros: {self.master.describe()}")
-            return self.master
-
     def start_process_node(self, fullname: str) -> str:
-        """Start the process's ROS node (named after the first node created) and return its name."""
+        """Start this process's ROS side (on ROS 1 the master is found or started first) once; its node's name."""
         with self._lock:
             if self.closed:
                 raise NodeStateError("this ipyros session was closed; restart the interpreter")
-            if not self.backend.has_master:  # ROS 2: peers find each other, nothing to attach or watch
-                name = self.process.start(self.config.process_node_name or fullname)
-                self._close_before_ros_at_exit()
-                stop_on_termination()
-                return name
-            uri = self.attach_master().uri
-            name = self.process.start(self.config.process_node_name or fullname, uri)
+            name = self.backend.start(fullname, self)
             self._close_before_ros_at_exit()
-            if fullname != name:  # a DSL node hosted in the process node: its name must be free too
-                self.backend.refuse_taken_name(uri, fullname)
             stop_on_termination()
-            if self.watch is None:
-                self.watch = MasterWatch(uri, self._master_down, self.master_back).start()
             return name
+
+    def require_graph(self, doing: str) -> None:
+        """Fail in a moment when the graph cannot be reached (ROS 1: the master does not answer), rather than hang.
+
+        rospy retries registering a new endpoint with an absent master forever, freezing the
+        prompt; so whatever would register something asks here first.
+        """
+        self.backend.require_graph(doing)
 
     def _close_before_ros_at_exit(self) -> None:
         """Close the session at exit before the ROS client library shuts itself down.
@@ -162,72 +132,16 @@ class Session:
             atexit.register(self.close)
             self._closes_at_exit = True
 
-    # -- the master going away and coming back ------------------------------------------
-    def require_master(self, doing: str) -> None:
-        """Fail in a moment when the master does not answer, rather than hang.
-
-        rospy retries registering a new endpoint with an absent master forever, freezing the
-        prompt; so whatever would register something asks here first.
-        """
-        if self.master is None:
-            return
-        up = self.watch.check_now() if self.watch is not None else master_mod.answers(self.master.uri, 2.0)
-        if not up:
-            raise MasterError(f"the ROS master at {self.master.uri} does not answer, so {doing} was not done "
-                              "(nothing changed); do it again when the master is back (ipyros registers "
-                              "your running nodes with it again by itself)")
-
-    def _master_down(self) -> None:
-        self.notify(f"ipyros: the ROS master at {self.master.uri if self.master else '?'} does not answer; "
-                    "your nodes keep the connections they have, new declarations fail until it is back")
-
-    def master_back(self, restarted: bool) -> None:
-        """The master answers again: register every endpoint and parameter of the session with it again.
-
-        Basenodes (rospy and roscpp nodes do not register again by themselves) are checked a
-        moment later: restarted if ``restart_basenodes`` is set, else reported with the line
-        that restarts them.
-        """
-        uri = self.master.uri if self.master else "?"
-        try:
-            publications, subscriptions, services = self.process.register_again()
-            params = sum(node.register_params() for node in list(self.nodes.values()) if node.created)
-        except Exception as error:  # noqa: BLE001 - told, not raised: this runs on the watch thread
-            self.notify(f"ipyros: the ROS master at {uri} is back, but registering this session with it failed "
-                        f"({error}); restart the interpreter if topics stay missing")
-            return
-        self.notify(f"ipyros: the ROS master at {uri} is back{' (restarted)' if restarted else ''}: "
-                    f"registered {publications} publications, {subscriptions} subscriptions, {services} services "
-                    f"and {params} parameters of this session again")
-        check = threading.Timer(2.0, self._check_basenodes)
-        check.daemon = True
-        check.start()
-
-    def _check_basenodes(self) -> None:
-        """After a master restart: the basenodes that did not register again, restarted or reported."""
-        if self.master is None or self.closed:
-            return
-        for node in list(self.nodes.values()):
-            base, name = node.base, node.basenode_name
-            if base is None or not base.running or name is None or master_mod.is_registered(self.master.uri, name):
-                continue
-            if self.config.restart_basenodes:
-                base.restart()
-                self.notify(f"ipyros: basenode {name} of {node.name} did not register with the restarted master; "
-                            "restarted it")
-            else:
-                self.notify(f"ipyros: basenode {name} of {node.name} did not register with the restarted master "
-                            f"(ROS 1 nodes do not); restart it: {node.called}.base.restart()")
-
-    def add(self, node: "rosNode") -> None:
+    def add(self, node: "NodeEngine") -> None:
         with self._lock:
             other = self.nodes.get(node.fullname)
             if other is not None and other is not node and other.created:
-                raise NodeStateError(f"a node named {node.fullname} is already running in this session; "
-                                     f"shut it down first ({node.fullname}.shutdown()) or pick another name")
+                raise NodeStateError(f"a node named {node.fullname} is already running in this session "
+                                     f"({other.called}); shut it down first ({other.called}.shutdown()) or pick "
+                                     "another name")
             self.nodes[node.fullname] = node
 
-    def remove(self, node: "rosNode") -> None:
+    def remove(self, node: "NodeEngine") -> None:
         with self._lock:
             if self.nodes.get(node.fullname) is node:
                 del self.nodes[node.fullname]
@@ -238,15 +152,12 @@ class Session:
             self._on_close.append(stop)
 
     def close(self) -> None:
-        """Stop every node and basenode, the process node, and the master if we started it."""
+        """Stop every node and basenode, the ROS side of this process, and the master if ipyros started it."""
         with self._lock:
             if self.closed:
                 return
             self.closed = True
-            if self.watch is not None:
-                self.watch.stop()
-            if self.master is not None and self.process.started and not master_mod.answers(self.master.uri, 0.3):
-                self.process.master_gone()
+            self.backend.closing()
             for stop in reversed(self._on_close):
                 try:
                     stop()
@@ -259,9 +170,7 @@ class Session:
                     node.shutdown()
                 except Exception as error:  # keep closing the rest
                     print(f"ipyros: error while shutting down {node.fullname}: {error}", file=sys.stderr)
-            self.process.shutdown()
-            if self.master is not None:
-                self.master.stop()
+            self.backend.close()
             if self._journal is not None:
                 self._journal.close()
 
@@ -285,11 +194,9 @@ def started() -> bool:
 
 
 def configure(config: SessionConfig) -> Session:
-    """Set how the session attaches, before anything has started."""
+    """Set how the session attaches, before anything has started (another master than the one in use is refused)."""
     session = current()
-    if session.master is not None and config.master_uri not in (None, session.master.uri):
-        raise NodeStateError(f"this session already uses the master at {session.master.uri}; "
-                             "restart the interpreter to use another one")
+    session.backend.check_config(session, config.master_uri)
     session.config = config
     return session
 

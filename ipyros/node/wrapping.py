@@ -6,9 +6,10 @@ its own remaps), checks the declarations that only make sense together, starts t
 basenode with its remaps, and offers black-box discovery: read a running basenode's
 interface from the master and declare it all as ``reuse`` in one call.
 
-A basenode may also come from a launch file (:func:`set_launch_base`, read by
-:mod:`ipyros.ros1.launchfile`): then ``create()`` runs the rest of that file too
-(:mod:`ipyros.ros1.launch_rest`), and ``nd.base`` stops both.
+A basenode may also come from a launch file (:func:`set_launch_base`, read by the
+backend): then ``create()`` runs the rest of that file too, and ``nd.base`` stops both.
+Running it, reading its interface and finding its package are the backend's
+(``basenode``, ``wait_for_node``): the same here for both ROS.
 
 **One remap per name.** ROS applies at most one remap to a name: no chains. If the
 basenode's own remaps (its launch file's ``<remap>``, or ``baseNode(remaps=...)``) send
@@ -19,18 +20,34 @@ the two so.
 
 from __future__ import annotations
 
+import os
 import re
 import threading
-from typing import TYPE_CHECKING, Any, Optional
+from pathlib import Path
+from typing import Any, Callable, Optional, Protocol
 
 from ..core import names
 from ..core.errors import BaseNodeError, DeclarationError, TopicTypeConflict, cut
 from ..core.model import BaseModel, NodeModel
 from ..core.plan import internal_name, node_fullname
+from ..core.records import Interface
+from ..processes.basenode import exit_reason
 
-if TYPE_CHECKING:
-    from ..tools.discovery import Interface
-    from .dsl import rosNode
+
+class NodeEngine(Protocol):
+    """What wrapping needs of a node (its :class:`~ipyros.node.engine.NodeEngine` has it)."""
+
+    name: str
+    fullname: str
+    created: bool
+    called: str
+    explicit_namespace: bool
+    session: Any
+    base: Any
+    dsl: Any
+
+    def model(self) -> NodeModel: ...
+    def apply(self, edit: Callable[[NodeModel], None], change: str) -> None: ...
 
 _BASE_OPTIONS = {"name": "node_name", "namespace": "namespace", "remaps": "remaps", "params": "params", "args": "args"}
 
@@ -105,7 +122,7 @@ def _reresolve(model: NodeModel) -> None:
 
 # -- declarations --------------------------------------------------------------------------
 
-def set_base(node: "rosNode", **fields: Any) -> "rosNode":
+def set_base(node: "NodeEngine", **fields: Any) -> None:
     """Record basenode fields (``executable``, ``package`` and the options) in the model."""
     unknown = set(fields) - {"executable", "package", *_BASE_OPTIONS}
     if unknown:
@@ -134,7 +151,7 @@ def set_base(node: "rosNode", **fields: Any) -> "rosNode":
             model.namespace = names.global_ns(fields["namespace"])
         _reresolve(model)
 
-    return node.apply(edit, "base " + ", ".join(f"{k}={v!r}" for k, v in fields.items()))
+    node.apply(edit, "base " + ", ".join(f"{k}={cut(v)}" for k, v in fields.items()))
 
 
 def _check_base_options(fields: dict[str, Any], backend: Any) -> None:
@@ -173,8 +190,8 @@ def _check_executable(executable: str) -> None:
                                "control characters nor '$('; give the file's name or path as it is on disk")
 
 
-def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional[dict] = None) -> "rosNode":
-    """Wrap the node ``node_name`` that launch file ``launch`` starts, read with ``args`` (see :mod:`ipyros.ros1.launchfile`).
+def set_launch_base(node: "NodeEngine", launch: Any, node_name: str, args: Optional[dict] = None) -> None:
+    """Wrap the node ``node_name`` that launch file ``launch`` starts, read with ``args`` (by the backend).
 
     The whole basenode comes from the file: package, executable, name, namespace,
     remaps, private params, args. Like ``baseNode``, the wrapping node lives in the
@@ -182,13 +199,11 @@ def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional
     missing or broken file, a node it does not start, an ambiguous short name, or a
     node ipyros cannot run as the file says (a remote ``machine=``, ``launch-prefix``).
     """
-    from ..ros1.launchfile import read_base
-
     if node.created:
         raise DeclarationError(f"{node.name} is already running; declare its basenode before create()")
     if args is not None and not (isinstance(args, dict) and all(isinstance(k, str) for k in args)):
         raise DeclarationError(f"baseLaunch(args={cut(args)}): give a dict of the launch file's args, e.g. {{'rate': 5}}")
-    base, notes = read_base(launch, node_name, args)
+    base, notes = node.session.backend.read_launch(launch, node_name, args)
 
     def edit(model: NodeModel) -> None:
         model.base = base
@@ -201,7 +216,27 @@ def set_launch_base(node: "rosNode", launch: Any, node_name: str, args: Optional
                      f"as {base.launch_node}")
     for note in notes:
         node.session.notify(f"ipyros: {note}")
-    return node
+
+
+def set_bag(node: "NodeEngine", path: Any, rate: float, loop: bool, topics: Optional[list[str]],
+            delay: float) -> None:
+    """A recorded bag as the basenode: the backend's bag player, named ``bag_player`` (see ``rosNode.baseBag``)."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise DeclarationError(f"baseBag({cut(path)}): give the bag's path, e.g. baseBag('run1.bag')")
+    bagfile = node.session.backend.bags()
+    bag = Path(path).expanduser().absolute()
+    if not bag.exists():
+        raise DeclarationError(f"baseBag({str(path)!r}): no such file; record one with %record FILE TOPIC ...")
+    recorded = bagfile.bag_topics(bag)
+    missing = sorted(set(topics or ()) - set(recorded))
+    if missing:
+        raise DeclarationError(f"the bag {bag.name} has no topic {', '.join(missing)}; it has "
+                               f"{', '.join(sorted(recorded)) or 'none'}")
+    if not (isinstance(rate, (int, float)) and 0 < rate <= 1000 and 0 <= delay <= 60):
+        raise DeclarationError(f"baseBag(rate={rate!r}, delay={delay!r}): rate a speed factor above 0 "
+                               "(1.0 as recorded), delay seconds from 0 to 60")
+    set_base(node, executable=str(bagfile.PLAYER), name="bag_player",
+             args=bagfile.player_args(bag, float(rate), bool(loop), topics, float(delay)))
 
 
 def check_reuse(model: NodeModel, resolved: str, direction: str, kind: str = "topic") -> None:
@@ -238,20 +273,19 @@ def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # t
 
 # -- the basenode process ------------------------------------------------------------------
 
-def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
+def start_base(node: "NodeEngine", settle_timeout: float = 10.0) -> None:
     """Launch the basenode remapped onto the wrapping node's internal names, and check its types.
 
-    A basenode from a launch file starts after the rest of its file
-    (:class:`~ipyros.ros1.launch_rest.LaunchBase`); ``node.base`` holds the one handle
-    whose ``stop()`` stops all of it, set before anything starts, so that the node's
-    shutdown after a failure half-way stops what did start.
+    A basenode from a launch file starts after the rest of its file (the backend's
+    ``launch_base``); ``node.base`` holds the one handle whose ``stop()`` stops all of it,
+    set before anything starts, so that the node's shutdown after a failure half-way stops
+    what did start.
     """
-    from ..processes.basenode import BaseProcess, exit_reason
-
     model = node.model()
     if model.base is None:
         return
     session = node.session
+    backend = session.backend
     from_launch = model.base.launch is not None
     base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
                         "namespace": base_namespace(model), "remaps": basenode_remaps(model),
@@ -268,19 +302,13 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
         session.notify(f"ipyros: basenode {base_fullname(model)} of {node.called} {exit_reason(returncode)}; "
                        f"restart it with {node.called}.base.restart()\n    {tail}")
 
-    uri = session.master.uri if session.master is not None else None  # ROS 2 has no master
-    process = BaseProcess.from_model(base, master_uri=uri, on_exit=died, ros2=not session.backend.has_master)
-    if base.package and session.backend.has_master:
-        from ..processes.basenode import link_outside
-
-        real = link_outside(base.package, process.executable)
-        if real is not None:
-            session.notify(f"ipyros: {base.package}/{base.executable} is a link to {real}, outside the package; "
-                           "that is what runs (as rosrun would run it)")
+    process = backend.basenode(base, on_exit=died)
+    real = backend.note_link(base, process)
+    if real is not None:
+        session.notify(f"ipyros: {base.package}/{base.executable} is a link to {real}, outside the package; "
+                       "that is what runs (as rosrun would run it)")
     handle: Any = process
     if from_launch:
-        from ..ros1.launch_rest import LaunchBase
-
         launch = model.base.launch
 
         def rest_died(proc: Any, returncode: int, last_lines: list[str]) -> None:
@@ -288,16 +316,14 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
             session.notify(f"ipyros: the rest of {launch} (run for {node.name}) {exit_reason(returncode)}; "
                            f"run it again with {node.called}.shutdown() and {node.called}.create()\n    {tail}")
 
-        handle = LaunchBase(model.base, process, node=base_fullname(model), master_uri=session.master.uri,
-                            on_rest_exit=rest_died)
+        handle = backend.launch_base(model.base, process, base_fullname(model), rest_died)
     node.base = handle
     handle.start()
     if getattr(handle, "not_started", None):
         session.notify(f"ipyros: roslaunch could not start {', '.join(handle.not_started)} of {model.base.launch} "
                        f"(the rest runs without); why: {node.called}.base.rest.tail()")
     try:
-        interface = session.backend.wait_for_node(uri, base_fullname(model), timeout=settle_timeout,
-                                                  alive=lambda: process.running)
+        interface = backend.wait_for_node(base_fullname(model), timeout=settle_timeout, alive=lambda: process.running)
         starting.clear()
         if not process.running:  # it ended after settling, before a notice could be sent
             raise BaseNodeError("ended")
@@ -311,13 +337,11 @@ def start_base(node: "rosNode", settle_timeout: float = 10.0) -> None:
 
 def _ended_at_start(model: NodeModel, process: Any, what_now: str = "") -> BaseNodeError:
     """The one line for a basenode that ended before it settled: how, and its last log lines."""
-    from ..processes.basenode import exit_reason
-
     return BaseNodeError(f"basenode {base_fullname(model)} {exit_reason(process.returncode or 0)} at start{what_now}; "
                          f"last log lines: {' | '.join(process.tail(5)) or 'none'}")
 
 
-def check_base_types(model: NodeModel, interface: "Interface") -> None:
+def check_base_types(model: NodeModel, interface: Interface) -> None:
     """Refuse a base topic declared with another type than the basenode uses."""
     actual = {name: type_ for name, type_ in interface.publications + interface.subscriptions if type_}
     for t in model.topics:
@@ -329,21 +353,22 @@ def check_base_types(model: NodeModel, interface: "Interface") -> None:
                                     f"declares {t.type}; declare type={have!r}")
 
 
-def declare_interface(node: "rosNode", interface: "Interface") -> "Interface":
+def declare_interface(node: "NodeEngine", interface: Interface) -> Interface:
     """Declare every topic and service of a basenode's interface as ``reuse`` on ``node``."""
     model = node.model()
+    reuse = node.dsl.reuse
     prefix = names.global_ns(base_namespace(model))
     untyped = [name for name, type_ in interface.publications + interface.subscriptions + interface.services
                if not type_]
     for name, type_ in interface.publications:
         if type_:
-            node.reuse.publish(_relative(name, prefix), type=type_)
+            reuse.publish(_relative(name, prefix), type=type_)
     for name, type_ in interface.subscriptions:
         if type_:
-            node.reuse.subscribe(_relative(name, prefix), type=type_)
+            reuse.subscribe(_relative(name, prefix), type=type_)
     for name, type_ in interface.services:
         if type_:
-            node.reuse.service(_relative(name, prefix), type=type_)
+            reuse.service(_relative(name, prefix), type=type_)
     if untyped:
         node.session.notify(f"ipyros: {', '.join(untyped)} of {interface.node} have no known type yet "
                              "(nobody publishes them); declare them yourself with type=...")
@@ -355,14 +380,12 @@ def _relative(name: str, prefix: str) -> str:
     return name[len(prefix):] if prefix != "/" and name.startswith(prefix) else name
 
 
-def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
+def discover(node: "NodeEngine", timeout: float = 10.0) -> Interface:
     """Black-box discovery: run the basenode as it is, read its interface, declare it as reuse.
 
     The basenode runs briefly without remaps (it is stopped before the wrapping node
     starts it again, remapped). Returns the interface, which displays as a table.
     """
-    from ..processes.basenode import BaseProcess
-
     model = node.model()
     if model.base is None:
         raise DeclarationError(f"{node.name} wraps no basenode, so there is nothing to discover; declare one first: "
@@ -371,17 +394,12 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
     if node.created:
         raise DeclarationError(f"{node.name} is already running; discover() its basenode before create()")
     session = node.session
-    if session.backend.has_master:
-        uri: Optional[str] = session.attach_master().uri
-    else:  # ROS 2: the graph is read by a node of the session's own, so the session starts now
-        uri = None
-        session.start_process_node(node.fullname)
+    session.start_process_node(node.fullname)  # the graph is read by this session's own ROS side
     base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),  # type: ignore[union-attr]
                         "namespace": base_namespace(model)})
-    probe = BaseProcess.from_model(base, master_uri=uri, ros2=not session.backend.has_master).start()
+    probe = session.backend.basenode(base).start()
     try:
-        interface = session.backend.wait_for_node(uri, base_fullname(model), timeout=timeout,
-                                                  alive=lambda: probe.running)
+        interface = session.backend.wait_for_node(base_fullname(model), timeout=timeout, alive=lambda: probe.running)
     except BaseNodeError:
         if not probe.running:
             raise _ended_at_start(model, probe) from None
@@ -403,12 +421,12 @@ def discover(node: "rosNode", timeout: float = 10.0) -> "Interface":
 _LATE = "a node may advertise only after its first input (topic_tools throttle and mux do)"
 
 
-def _uses(interface: "Interface", direction: str, name: str) -> bool:
+def _uses(interface: Interface, direction: str, name: str) -> bool:
     entries = interface.publications if direction == "publish" else interface.subscriptions
     return any(entry == name for entry, _ in entries)
 
 
-def report_unused_reuses(node: "rosNode", model: NodeModel, interface: "Interface") -> None:
+def report_unused_reuses(node: "NodeEngine", model: NodeModel, interface: Interface) -> None:
     """Say, once per start, which ``reuse`` declarations of ``model`` the settled basenode does not use (yet)."""
     unused = [f"reuse.{t.direction}({t.name!r})" for t in model.topics
               if t.role == "reuse" and not _uses(interface, t.direction, internal_name(model, t.resolved))]
@@ -416,22 +434,3 @@ def report_unused_reuses(node: "rosNode", model: NodeModel, interface: "Interfac
         node.session.notify(f"ipyros: basenode {interface.node} does not use {', '.join(unused)} of {node.called} "
                              f"(yet): nothing is relayed there until it does ({_LATE}); if a name is wrong, "
                              f"{node.called}.remove('name') and declare the right one")
-
-
-def wrap(package: str, executable: str, name: Optional[str] = None, *, node_name: Optional[str] = None,
-         namespace: Optional[str] = None, remaps: Optional[dict] = None, params: Optional[dict] = None,
-         args: Optional[list] = None, session: Any = None) -> "rosNode":
-    """Wrap ``package``/``executable`` in one call: discover its interface, reuse it all, create.
-
-    The wrapping node is named ``name`` (default ``<executable>_wrapper``).
-    """
-    from .dsl import rosNode
-
-    options = {k: v for k, v in dict(name=node_name, namespace=namespace, remaps=remaps, params=params,
-                                     args=args).items() if v}
-    node = rosNode(name or f"{base_node_name(BaseModel(executable=executable))}_wrapper", namespace=namespace,
-                   session=session)
-    node.baseNode(executable, **options).basePackage(package)
-    node.discover()
-    node.create()
-    return node

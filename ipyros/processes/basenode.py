@@ -1,29 +1,16 @@
-"""The basenode: found as ``rosrun`` finds it, run as a managed child process.
+"""The basenode as a process: run as a managed child, logged, stopped as roslaunch stops a node, never orphaned.
 
 A wrapping node launches its basenode itself at ``create()``: no terminal window, no
-``rosrun`` shell script in between. This module does the two halves of that.
+``rosrun`` shell script in between. Which file runs and its command line (remaps, name,
+namespace, parameters) are each ROS's own (``ros1/nodes.py``: as rosrun finds it, with
+``from:=to``; ``ros2/nodes.py``: as ``ros2 run`` finds it, after ``--ros-args``); what is
+the same is here.
 
-**Lookup.** :func:`find_executable` answers ``rosrun PACKAGE EXECUTABLE``'s question in
-Python, without forking ``catkin_find`` and ``rospack``: a package's executables live
-anywhere below
-
-- its catkin *libexec* dir ``<workspace>/lib/<package>`` (Debian: ``/usr/lib/<package>``,
-  e.g. ``/usr/lib/topic_tools/relay``), for the first workspace of ``CMAKE_PREFIX_PATH``
-  that has the package (``/usr`` always counts, as Debian's catkin has it);
-- its package dir: the folder with a ``package.xml`` naming it, found by crawling
-  ``ROS_PACKAGE_PATH`` (as rospack does), else ``<workspace>/share/<package>``;
-- and ipyros's own demo package ``ipyros_demo`` (``ipyros/demo``), last.
-
-The package index is cached per ``(ROS_PACKAGE_PATH, CMAKE_PREFIX_PATH)`` so that tab
-completion answers at once; a lookup that misses drops the cache and looks once more,
-so a package or script created during the session is still found.
-
-**Process.** :class:`BaseProcess` runs the executable with ROS's command-line
-remappings (``__name:=``, ``__ns:=``, ``from:=to``, ``_param:=value``), writes its
-stdout and stderr to a log file the session can :meth:`~BaseProcess.tail`, and stops it
-the way roslaunch does (SIGINT, then SIGTERM, then SIGKILL, to its whole process group).
-A watcher thread per run blocks in ``wait()`` and reports an exit nobody asked for to
-``on_exit`` (exit code and last log lines), so a crashed basenode is news, not a hang.
+:class:`BaseProcess` runs a command line, writes its stdout and stderr to a log file the
+session can :meth:`~BaseProcess.tail`, and stops it the way roslaunch does (SIGINT, then
+SIGTERM, then SIGKILL, to its whole process group). A watcher thread per run blocks in
+``wait()`` and reports an exit nobody asked for to ``on_exit`` (exit code and last log
+lines), so a crashed basenode is news, not a hang.
 
 No orphans, in three layers: the wrapping node calls :meth:`~BaseProcess.stop` at its
 shutdown; an ``atexit`` hook stops every basenode still running when the interpreter
@@ -34,8 +21,6 @@ exits; and if the interpreter is SIGKILLed, the kernel sends the basenode SIGTER
 from __future__ import annotations
 
 import atexit
-import difflib
-import functools
 import os
 import re
 import shlex
@@ -43,178 +28,20 @@ import signal
 import sys
 import threading
 import time
-import xml.etree.ElementTree as ET
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping, Optional, Sequence
+from typing import Any, Callable, Mapping, Optional, Sequence
 
 import yaml
 
 from ..core.errors import BaseNodeError, NodeStateError
-from ..core.model import BaseModel
 from .process import spawn, stop_process
 
-#: ipyros's bundled ROS package (``ipyros_demo``): a small demo robot.
-DEMO_DIR = Path(__file__).resolve().parents[1] / "demo"
-
-_IGNORE_MARKERS = ("CATKIN_IGNORE", "COLCON_IGNORE", "AMENT_IGNORE")
+__all__ = ["BaseProcess", "OnExit", "exit_reason", "is_executable_file", "log_dir", "param_value", "plain",
+           "python_command", "refuse_path_with_package", "script_command", "stop_all", "temp_log"]
 
 
-# ---------------------------------------------------------------------------
-# Lookup: packages and their executables, as rosrun finds them
-# ---------------------------------------------------------------------------
-
-
-def _workspaces() -> list[Path]:
-    """Catkin workspaces in overlay order, as ``catkin.workspace.get_workspaces`` lists them."""
-    paths = [Path(p) for p in os.environ.get("CMAKE_PREFIX_PATH", "").split(os.pathsep) if p]
-    found = [p for p in paths if (p / ".catkin").is_file()]
-    return found + [Path("/usr")] if Path("/usr") not in found else found
-
-
-def _package_name(package_dir: Path) -> Optional[str]:
-    """The ``<name>`` in a package.xml (rosbuild's manifest.xml: the folder's name)."""
-    manifest = package_dir / "package.xml"
-    if not manifest.is_file():
-        return package_dir.name if (package_dir / "manifest.xml").is_file() else None
-    try:
-        name = ET.parse(manifest).getroot().findtext("name")
-    except (ET.ParseError, OSError):
-        return None
-    return name.strip() if name else None
-
-
-def _walk(top: Path, seen: set[str]) -> Iterable[tuple[Path, list[str], list[str]]]:
-    """``os.walk`` following symlinks (as ``find -L`` does), in sorted order, without hidden
-    folders, and visiting each real folder once (``seen``) so that symlink loops end.
-
-    Like ``os.walk``, the caller may prune the ``dirs`` list it is handed.
-    """
-    for current, dirs, files in os.walk(top, followlinks=True):
-        real = os.path.realpath(current)
-        if real in seen:
-            dirs.clear()
-            continue
-        seen.add(real)
-        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-        yield Path(current), dirs, sorted(files)
-
-
-def _crawl(root: Path) -> Iterable[tuple[str, Path]]:
-    """``(name, dir)`` of every package below ``root``, the way rospack crawls.
-
-    A package's own subfolders are not searched for more packages; folders marked
-    CATKIN_IGNORE are skipped, and ``rospack_nosubdirs`` stops the descent.
-    """
-    for here, dirs, _files in _walk(root, set()):
-        name = _package_name(here)
-        if name or any((here / m).exists() for m in (*_IGNORE_MARKERS, "rospack_nosubdirs")):
-            dirs.clear()
-            if name and not any((here / m).exists() for m in _IGNORE_MARKERS):
-                yield name, here
-
-
-def _is_ros_share_dir(share: Path) -> bool:
-    """Whether ``<ws>/share/<name>`` belongs to a ROS package (not just any /usr/share folder).
-
-    Debian's runtime-only packages (e.g. ``topic-tools``) ship no package.xml, only a
-    catkin env hook or cmake config next to their executables in ``/usr/lib/<name>``.
-    """
-    return any((share / m).exists() for m in ("package.xml", "catkin_env_hook", f"cmake/{share.name}Config.cmake"))
-
-
-@functools.lru_cache(maxsize=4)
-def _index(env_key: tuple[str, str]) -> dict[str, Path]:
-    """Package name → package dir (first found wins: ROS_PACKAGE_PATH, workspaces, demo).
-
-    ``env_key`` is only there to key the cache on the environment that shaped it.
-    Packages with only a libexec dir map to their ``<ws>/share/<name>`` marker folder.
-    """
-    found: dict[str, Path] = {}
-    for root in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep):
-        if root and Path(root).is_dir():
-            for name, path in _crawl(Path(root)):
-                found.setdefault(name, path)
-    for ws in _workspaces():
-        share = ws / "share"
-        for lib_dir in sorted((ws / "lib").glob("*/")):
-            if _is_ros_share_dir(share / lib_dir.name):
-                found.setdefault(_package_name(share / lib_dir.name) or lib_dir.name, share / lib_dir.name)
-        for manifest in sorted(share.glob("*/package.xml")):
-            name = _package_name(manifest.parent)
-            if name:
-                found.setdefault(name, manifest.parent)
-    found.setdefault(_package_name(DEMO_DIR) or "ipyros_demo", DEMO_DIR)
-    return found
-
-
-def _env_key() -> tuple[str, str]:
-    return os.environ.get("ROS_PACKAGE_PATH", ""), os.environ.get("CMAKE_PREFIX_PATH", "")
-
-
-def _search_dirs(package: str) -> list[Path]:
-    """Where rosrun looks for ``package``'s executables: catkin libexec/share dirs, then its package dir.
-
-    Like ``catkin_find --without-underlays --libexec --share``, only the first workspace
-    that has the package counts; a libexec dir counts even for a package rospack does not
-    know (Debian ships some, like ``roslib``, without any package.xml).
-    """
-    dirs: list[Path] = []
-    for ws in _workspaces():
-        dirs = [d for d in (ws / "lib" / package, ws / "share" / package) if d.is_dir()]
-        if dirs:
-            break
-    package_dir = _index(_env_key()).get(package)
-    if package_dir is not None and package_dir.is_dir():
-        dirs.append(package_dir)
-    unique: dict[str, Path] = {}
-    for d in dirs:
-        unique.setdefault(os.path.realpath(d), d)
-    return list(unique.values())
-
-
-def _is_executable_file(path: Path) -> bool:
+def is_executable_file(path: Path) -> bool:
     return path.is_file() and os.access(path, os.X_OK)
-
-
-@functools.lru_cache(maxsize=256)
-def _executables(package: str, env_key: tuple[str, str]) -> dict[str, tuple[Path, ...]]:
-    """Basename → executable files of ``package``, searched like rosrun's ``find -L``.
-
-    Folders named ``build`` right below a package dir (rosrun skips them) and hidden
-    folders are not searched; symlink loops are cut by remembering real paths.
-    """
-    found: dict[str, list[Path]] = {}
-    seen: set[str] = set()
-    for top in _search_dirs(package):
-        for here, dirs, files in _walk(top, seen):
-            if here == top and "build" in dirs:
-                dirs.remove("build")
-            for f in files:
-                if _is_executable_file(here / f):
-                    found.setdefault(f, []).append(here / f)
-    return {name: tuple(paths) for name, paths in sorted(found.items())}
-
-
-def refresh_packages() -> None:
-    """Forget the cached package index (e.g. after installing or creating a package)."""
-    _index.cache_clear()
-    _executables.cache_clear()
-
-
-def list_packages() -> list[str]:
-    """Names of the ROS packages rosrun could run something from (cached; for completion)."""
-    return sorted(_index(_env_key()))
-
-
-def list_executables(package: str) -> list[str]:
-    """Names of ``package``'s executables (cached; for completion); ``[]`` for an unknown package."""
-    return list(_executables(package, _env_key()))
-
-
-def did_you_mean(word: str, candidates: Sequence[str]) -> str:
-    """``did you mean a or b?`` for the candidates close to ``word``, else ``""``."""
-    close = difflib.get_close_matches(word, candidates, n=3, cutoff=0.6)
-    return f"did you mean {' or '.join(close)}?" if close else ""
 
 
 def refuse_path_with_package(executable: str) -> None:
@@ -222,92 +49,6 @@ def refuse_path_with_package(executable: str) -> None:
     if os.path.isabs(executable) or executable.startswith("~"):
         raise BaseNodeError(f"with a package, the executable is a name in it (e.g. 'talker'), not the path "
                             f"{executable!r}; to run a file by its path, give no package: baseNode({executable!r})")
-
-
-def find_executable(package: str, executable: str) -> Path:
-    """The file ``rosrun package executable`` would run.
-
-    ``executable`` may also be a path relative to the package dir (``scripts/talker``),
-    as rosrun allows. Raises :class:`BaseNodeError` naming close matches when the
-    package or executable is unknown, or when the name is ambiguous.
-    """
-    if not package or not executable:
-        raise BaseNodeError(
-            "a basenode needs a package and an executable, e.g. basePackage('topic_tools') and baseNode('relay')"
-        )
-    refuse_path_with_package(executable)
-    for fresh in (False, True):  # the second try forgets the caches: something new may have appeared
-        if fresh:
-            refresh_packages()
-        if "/" in executable:  # rosrun takes a path as relative to the package dir
-            package_dir = _index(_env_key()).get(package)
-            if package_dir is not None and _is_executable_file(package_dir / executable):
-                return _inside(package_dir, package_dir / executable, package, executable)
-            continue
-        candidates = _executables(package, _env_key()).get(executable)
-        if candidates:
-            return _pick(package, executable, candidates)
-    raise _lookup_error(package, executable)
-
-
-def _inside(package_dir: Path, path: Path, package: str, executable: str) -> Path:
-    """``path``, if it lies inside ``package_dir`` (after links and ``..``): a package runs only its own files."""
-    if not os.path.realpath(path).startswith(os.path.realpath(package_dir) + os.sep):
-        raise BaseNodeError(f"{executable!r} leads out of package {package!r} ({os.path.realpath(path)}); name an "
-                            f"executable inside it, or run a file by its path with no package: baseNode('/path/to/node')")
-    return path
-
-
-def _pick(package: str, executable: str, candidates: tuple[Path, ...]) -> Path:
-    """One of several same-named files: rosrun prefers a catkin libexec one over a share/source one."""
-    if len(candidates) == 1:
-        return candidates[0]
-    # links to one file are that file (ipyros_demo lists its scripts again in its ament prefix, demo/ament)
-    if len({os.path.realpath(p) for p in candidates}) == 1:
-        return next((p for p in candidates if not p.is_symlink()), candidates[0])
-    libexec = [p for p in candidates if any(p.is_relative_to(ws / "lib" / package) for ws in _workspaces())]
-    if len(libexec) == 1:
-        return libexec[0]
-    raise BaseNodeError(
-        f"package {package!r} has several executables named {executable!r} ({', '.join(map(str, candidates))}): "
-        "name one by its path relative to the package, e.g. 'scripts/" + executable + "'"
-    )
-
-
-def _lookup_error(package: str, executable: str) -> BaseNodeError:
-    if not _search_dirs(package):
-        hint = did_you_mean(package, list_packages())
-        return BaseNodeError(
-            f"unknown ROS package {package!r}: " + (hint or "check the name with `rospack list`")
-            + " (packages are searched in ROS_PACKAGE_PATH, the catkin workspaces and ipyros_demo)"
-        )
-    names = list_executables(package)
-    hint = did_you_mean(executable.rsplit("/", 1)[-1], names)
-    listing = f"its executables: {', '.join(names)}" if names else "it has no executable files"
-    return BaseNodeError(f"package {package!r} has no executable {executable!r}: {hint + ' ' if hint else ''}{listing}")
-
-
-def link_outside(package: str, path: Path) -> Optional[str]:
-    """Where ``path``, an executable found in ``package``, really is, if a link takes it out of the package.
-
-    rosrun follows such links (``find -L``), and so does ipyros: a package may well link to a
-    program installed elsewhere. But what runs is then not the package's own file, so it is
-    said.
-    """
-    real = os.path.realpath(path)
-    homes = [os.path.realpath(d) + os.sep for d in _search_dirs(package)]
-    if not homes or any(real.startswith(home) for home in homes):
-        return None
-    return real
-
-
-def package_executable(package: str, executable: str, ros2: bool) -> Path:
-    """The file ``rosrun`` (ROS 1) or ``ros2 run`` (ROS 2, the ament index) would run."""
-    if ros2:
-        from ..ros2.packages import find_executable as find_in_ament
-
-        return find_in_ament(package, executable)
-    return find_executable(package, executable)
 
 
 def python_command(path: Path, args: Sequence[str] = ()) -> tuple[Path, list[str]]:
@@ -338,7 +79,7 @@ def script_command(executable: str, args: Sequence[str] = ()) -> tuple[Path, lis
         raise BaseNodeError(f"basenode {executable!r} needs its package: add .basePackage('package'), "
                             f"or give the path of the file to run, e.g. baseNode('./{executable}')")
     path = Path(executable).expanduser().absolute()
-    if _is_executable_file(path):
+    if is_executable_file(path):
         return path, list(args)
     if path.is_file() and path.suffix == ".py":
         return Path(sys.executable), [str(path), *args]
@@ -359,14 +100,13 @@ _running: set["BaseProcess"] = set()  # strong refs: a running basenode is stopp
 _running_lock = threading.Lock()
 
 
-def param_arg(name: str, value: Any) -> str:
-    """A private parameter as a command-line argument: ``_name:=value``.
+def param_value(value: Any) -> str:
+    """A parameter's value as a command line gives it (ROS 1 ``_key:=value``, ROS 2 ``-p key:=value``).
 
-    rospy reads the value as YAML, roscpp as int, double, bool or else string; plain
-    strings are passed as they are so both read them alike, and only strings that
+    rospy and rclpy read the value as YAML, roscpp as int, double, bool or else string;
+    plain strings are passed as they are so all read them alike, and only strings that
     YAML would read as something else (``'5'``, ``'true'``) are quoted.
     """
-    key = name[1:] if name[:1] in ("~", "_") else name
     if isinstance(value, bool):
         text = "true" if value else "false"
     elif isinstance(value, (int, float)):
@@ -376,7 +116,7 @@ def param_arg(name: str, value: Any) -> str:
     else:
         text = yaml.safe_dump(value, default_flow_style=True, width=1 << 20).strip()
         text = text.removesuffix("...").strip()  # the end-of-document mark YAML puts after a bare scalar
-    return f"_{key}:={text}"
+    return text
 
 
 def _reads_back_as_itself(text: str) -> bool:
@@ -407,92 +147,29 @@ class _Run:
 class BaseProcess:
     """A basenode run as a managed child process.
 
-    ``executable`` is the file to run (see :func:`find_executable`, or
-    :meth:`from_model`); ``remaps`` maps resolved names to resolved names; ``params``
-    are the node's private parameters (``{"rate": 10}`` → ``_rate:=10``).
+    ``argv`` is the command line (the file to run first: see each ROS's ``nodes.py``, or a
+    backend's ``basenode()``); ``env`` adds to this process's environment.
     ``on_exit(proc, returncode, last_lines)`` is called, on a watcher thread, when the
     process ends without :meth:`stop` being asked, including a crash right at start.
 
-        >>> base = BaseProcess(find_executable("topic_tools", "relay"), ["/in", "/out"],
-        ...                    node_name="relay", remaps={"/in": "/w/base/in"}).start()
+        >>> base = BaseProcess(["/usr/lib/topic_tools/relay", "/in", "/out", "__name:=relay"],
+        ...                    node_name="relay").start()
         >>> base.tail(5)
-        ['[ipyros] ... starting: /usr/lib/topic_tools/relay /in /out __name:=relay /in:=/w/base/in']
+        ['[ipyros] ... starting: /usr/lib/topic_tools/relay /in /out __name:=relay']
         >>> base.stop()
     """
 
-    def __init__(
-        self,
-        executable: "str | os.PathLike[str]",
-        args: Sequence[str] = (),
-        *,
-        node_name: Optional[str] = None,
-        namespace: Optional[str] = None,
-        remaps: Optional[Mapping[str, str]] = None,
-        params: Optional[Mapping[str, Any]] = None,
-        master_uri: Optional[str] = None,
-        log_path: "str | os.PathLike[str] | None" = None,
-        on_exit: Optional[OnExit] = None,
-        env: Optional[Mapping[str, str]] = None,
-        ros2: bool = False,
-    ) -> None:
-        self.executable = Path(executable)
-        self.argv: list[str] = [str(self.executable), *map(str, args)]
-        if ros2:  # after --ros-args: -r for the name, namespace and remaps, -p for params
-            rules = ([f"__node:={node_name}"] if node_name else [])
-            rules += [f"__ns:={namespace.rstrip('/') or '/'}"] if namespace else []  # ROS 2: no trailing /
-            rules += [f"{src}:={dst}" for src, dst in (remaps or {}).items()]
-            settings = [param_arg(k, v)[1:] for k, v in (params or {}).items()]  # key:=value, no leading _
-            if rules or settings:
-                self.argv += ["--ros-args", *[w for r in rules for w in ("-r", r)],
-                              *[w for p in settings for w in ("-p", p)]]
-        else:
-            if node_name:
-                self.argv.append(f"__name:={node_name}")
-            if namespace:
-                self.argv.append(f"__ns:={namespace}")
-            self.argv += [f"{src}:={dst}" for src, dst in (remaps or {}).items()]
-            self.argv += [param_arg(k, v) for k, v in (params or {}).items()]
+    def __init__(self, argv: Sequence["str | os.PathLike[str]"], *, node_name: Optional[str] = None,
+                 env: Optional[Mapping[str, str]] = None, log_path: "str | os.PathLike[str] | None" = None,
+                 on_exit: Optional[OnExit] = None) -> None:
+        self.argv: list[str] = [str(word) for word in argv]
+        self.executable = Path(self.argv[0])
         self.node_name = node_name
         self.env = {**os.environ, **(env or {}), "PYTHONUNBUFFERED": "1"}  # a Python node's prints reach the log now
-        if master_uri:
-            self.env["ROS_MASTER_URI"] = master_uri
         self.log_path = Path(log_path) if log_path else temp_log(node_name or self.executable.name)
         self.on_exit = on_exit
         self._run: Optional[_Run] = None
         self._lifecycle = threading.RLock()  # start/stop/restart one at a time
-
-    @classmethod
-    def from_model(
-        cls,
-        base: BaseModel,
-        *,
-        remaps: Optional[Mapping[str, str]] = None,
-        master_uri: Optional[str] = None,
-        log_path: "str | os.PathLike[str] | None" = None,
-        on_exit: Optional[OnExit] = None,
-        ros2: bool = False,
-    ) -> "BaseProcess":
-        """The process for a declared basenode; ``remaps`` (the wrapping's) add to the model's own.
-
-        Without a package, ``base.executable`` must be a path to an executable file. ``ros2``:
-        name, namespace, remaps and params go after ``--ros-args``, as ROS 2 nodes read them.
-        """
-        if not base.executable:
-            raise BaseNodeError(
-                "no basenode executable declared: call baseNode('executable') and basePackage('package')"
-            )
-        args = list(base.args)
-        if base.package and ros2:
-            path, args = python_command(package_executable(base.package, base.executable, ros2=True), args)
-        elif base.package:
-            path = find_executable(base.package, base.executable)
-        else:
-            path, args = script_command(base.executable, args)
-        return cls(
-            path, args, node_name=base.node_name, namespace=base.namespace,
-            remaps={**base.remaps, **(remaps or {})}, params=base.params,
-            master_uri=master_uri, log_path=log_path, on_exit=on_exit, env=base.env, ros2=ros2,
-        )
 
     # -- state ---------------------------------------------------------------
     @property

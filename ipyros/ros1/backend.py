@@ -1,61 +1,131 @@
-"""ROS 1 as a :class:`~ipyros.node.backend.Backend`: the seam's calls, answered by :mod:`.runtime`."""
+"""ROS 1 as a :class:`~ipyros.node.backend.Backend`: the seam's calls, answered by this package's modules."""
 
 from __future__ import annotations
 
 from typing import Any, Callable, Optional
 
 from ..core.errors import MasterError
+from ..core.graph import GraphSnapshot
+from ..core.model import BaseModel
 from ..core.qos import Qos
+from ..core.records import Interface
 from ..core.slots import HandlerSlot
-from . import introspect, runtime
+from ..processes.basenode import BaseProcess
+from . import introspect, nodes, runtime
+from .connection import MasterConnection
 
 __all__ = ["Ros1"]
 
+Complain = Callable[[str], None]
+
 
 class Ros1:
-    """rospy behind the seam: one process node hosts every DSL node's endpoints.
+    """rospy behind the seam: one process node hosts every DSL node's endpoints; the master is found or started.
 
     ``host`` (the DSL node's full name) does not matter here: rospy allows one node per
     process, and the names are resolved already.
     """
 
     name = "ROS 1"
-    has_master = True
+    #: The QoS fields a declaration's ``qos=`` means something in here (TCP is reliable and ipyros's queues
+    #: unbounded: only durability, as latching).
+    qos_fields = ("durability",)
 
     def __init__(self) -> None:
         self.process = runtime.ProcessNode()
+        self.connection = MasterConnection(self.process)
 
+    @property
+    def master(self) -> Any:
+        """The master in use (a :class:`~ipyros.ros1.master.MasterHandle`), or None before one is needed."""
+        return self.connection.master
+
+    # -- the session's ROS ----------------------------------------------------------------
+    def start(self, name: str, session: Any) -> str:
+        """Attach to (or start) the master, start the process node as ``name``, watch the master."""
+        uri = self.connection.attach(session).uri
+        started = self.process.start(session.config.process_node_name or name, uri)
+        if name != started:  # a DSL node hosted in the process node: its name must be free too
+            runtime.refuse_taken_name(uri, name)
+        self.connection.start_watch(session)
+        return started
+
+    def connect(self, session: Any, wait: bool = True) -> str:
+        """The load line: the master in use; one that answers now is attached, else one is started when allowed
+        (in the background unless ``wait``)."""
+        from . import master as master_mod
+
+        connection = self.connection
+        if connection.master is not None:
+            return connection.master.describe()
+        connection.check_config(session, None)
+        uri = connection.uri
+        if master_mod.answers(uri, timeout=0.3):
+            try:
+                return connection.attach(session).describe()
+            except MasterError as error:  # it went away between the two checks
+                return str(error)
+        if not session.config.start_master:
+            return (f"no ROS master answers at {uri}; start roscore there, "
+                    "or let ipyros start one: %config RosMagics.start_master = True")
+        if wait:
+            return connection.attach(session).describe()
+        import threading
+
+        def start() -> None:
+            try:
+                connection.attach(session)
+            except Exception as error:  # noqa: BLE001 - a thread must not die silently
+                session.notify(f"ipyros: {error}")
+
+        threading.Thread(target=start, name="ipyros-master", daemon=True).start()
+        return f"no ROS master answered at {uri}; starting one there (it stops when this session exits)"
+
+    def require_graph(self, doing: str) -> None:
+        self.connection.require(doing)
+
+    def check_graph(self) -> None:
+        """A master that just restarted: the session registers again before a magic reads the graph."""
+        self.connection.check_now()
+
+    def check_config(self, session: Any, master_uri: Optional[str]) -> None:
+        self.connection.check_config(session, master_uri)
+
+    def closing(self) -> None:
+        self.connection.closing()
+
+    def close(self) -> None:
+        self.process.shutdown()
+        self.connection.stop()
+
+    def describe(self) -> str:
+        master = self.connection.master
+        return master.describe() if master is not None else f"ROS master {self.connection.uri} (not attached yet)"
+
+    # -- endpoints -----------------------------------------------------------------------
     # TCPROS is reliable and rospy queues are ipyros's own: of a QoS only durability
     # means something here (transient-local is latched); nothing can mismatch.
-    def publication(self, host: str, topic: str, cls: type, qos: Qos,
-                    complain: Callable[[str], None]) -> runtime.Publication:
+    def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain) -> runtime.Publication:
         return runtime.Publication(topic, cls, qos.latched)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
-                     complain: Callable[[str], None]) -> runtime.Subscription:
+                     complain: Complain) -> runtime.Subscription:
         return runtime.Subscription(topic, cls, slot, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]], complain: Callable[[str], None]) -> runtime.Relay:
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.Relay:
         return runtime.Relay(source, target, cls, on_wrong_type, complain)
 
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
-              complain: Optional[Callable[[str], None]] = None) -> runtime.Timer:
+              complain: Optional[Complain] = None) -> runtime.Timer:
         return runtime.Timer(period, slot, oneshot)  # rospy gives each timer a thread of its own
 
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
         return runtime.ServiceServer(name, cls, slot)
 
     def service_relay(self, host: str, source: str, target: str, cls: type,
-                      complain: Callable[[str], None]) -> runtime.ServiceRelay:
+                      complain: Complain) -> runtime.ServiceRelay:
         return runtime.ServiceRelay(source, target, cls)  # a basenode's failure reaches the caller as an error
-
-    def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
-                      alive: Optional[Callable[[], bool]] = None) -> Any:
-        """The interface of the running node ``name``, read from the master once it has settled."""
-        from ..tools.discovery import wait_for_node
-
-        return wait_for_node(master_uri or "", name, timeout=timeout, alive=alive)
 
     def open_host(self, host: str) -> None:
         """Nothing to do: the DSL node's endpoints live in the process node."""
@@ -63,41 +133,102 @@ class Ros1:
     def close_host(self, host: str) -> None:
         """Nothing to do: the process node stays for the session's other nodes."""
 
-    # The parameter server and the master, by global name.
+    # -- the parameter server, by global name --------------------------------------------------
     check_param = staticmethod(runtime.check_param)
     get_param = staticmethod(runtime.get_param)
     set_param = staticmethod(runtime.set_param)
     has_param = staticmethod(runtime.has_param)
     delete_param = staticmethod(runtime.delete_param)
-    refuse_taken_name = staticmethod(runtime.refuse_taken_name)
+
+    def refuse_taken_name(self, name: str) -> None:
+        runtime.refuse_taken_name(self.connection.uri, name)
+
+    # -- the graph -------------------------------------------------------------------------
+    def graph_snapshot(self, timeout: float = 1.0) -> GraphSnapshot:
+        from .graph import fetch_snapshot
+
+        return fetch_snapshot(self.connection.uri, timeout)  # never raises: a master down is a snapshot too
+
+    def where(self) -> str:
+        return self.connection.uri
+
+    def live_types(self, topics: list[str]) -> dict[str, tuple[str, bool]]:
+        """The type each of ``topics`` has on the master, and whether only this process uses it.
+
+        The master remembers a topic's type after everyone left it: only topics with a
+        publisher or subscriber now count.
+        """
+        if self.connection.master is None:
+            return {}
+        live = self.graph_snapshot(timeout=2.0)
+        me = self.process.name
+        found = {}
+        for topic in topics:
+            users = {*live.publishers.get(topic, ()), *live.subscribers.get(topic, ())}
+            if live.topics.get(topic):
+                found[topic] = (live.topics[topic], users == {me})
+        return found
+
+    # -- basenodes, packages, launch files, bags, exports -------------------------------------
+    def basenode(self, base: BaseModel, *, log_path: Any = None, on_exit: Any = None) -> BaseProcess:
+        """The process of the basenode ``base``: found as rosrun finds it, on the session's master."""
+        return BaseProcess(nodes.command(base), node_name=base.node_name, log_path=log_path, on_exit=on_exit,
+                           env={**base.env, "ROS_MASTER_URI": self.connection.uri})
+
+    def note_link(self, base: BaseModel, process: BaseProcess) -> Optional[str]:
+        """Where a package's executable really is, if a link takes it out of the package (rosrun follows it)."""
+        return nodes.link_outside(base.package, process.executable) if base.package else None
+
+    def wait_for_node(self, name: str, timeout: float = 10.0, alive: Optional[Callable[[], bool]] = None,
+                      settle: float = 0.5) -> Interface:
+        """The interface of the running node ``name``, read from the master once it has settled."""
+        from .discovery import wait_for_node
+
+        return wait_for_node(self.connection.uri, name, timeout=timeout, settle=settle, alive=alive)
+
+    def read_launch(self, launch: Any, node: str, args: Optional[dict[str, Any]]) -> tuple[BaseModel, list[str]]:
+        from .launchfile import read_base
+
+        return read_base(launch, node, args)
+
+    def launch_base(self, base: BaseModel, process: BaseProcess, node: str, on_rest_exit: Any) -> Any:
+        from .launch_rest import LaunchBase
+
+        return LaunchBase(base, process, node=node, master_uri=self.connection.uri, on_rest_exit=on_rest_exit)
+
+    list_packages = staticmethod(nodes.list_packages)
+    list_executables = staticmethod(nodes.list_executables)
+
+    def bags(self) -> Any:
+        from . import bagfile
+
+        return bagfile
+
+    def export_flavour(self) -> Any:
+        from .export import RospyScript
+
+        return RospyScript
 
     # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----
     def service_type(self, name: str) -> str:
-        return introspect.service_type(self._master(), name)
+        return introspect.service_type(self.connection.uri, name)
 
     def call(self, name: str, cls: type, request: Any, timeout: float) -> Any:
-        return introspect.call(self._master(), name, cls, request, timeout)
+        return introspect.call(self.connection.uri, name, cls, request, timeout)
 
     def params_under(self, namespace: str) -> dict[str, Any]:
         """Every parameter under ``namespace``, by global name."""
-        return introspect.params_under(self._master(), namespace)
+        return introspect.params_under(self.connection.uri, namespace)
 
     read_param = staticmethod(runtime.get_param)
     write_param = staticmethod(runtime.set_param)
 
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]:
         """Who publishes and subscribes to ``topic``, each with its type (``%topics -v``)."""
-        from .master import configured_uri
-
-        return introspect.topic_endpoints(self.process.master_uri or configured_uri(), topic)
+        return introspect.topic_endpoints(self.connection.uri, topic)
 
     def node_pid(self, node: str) -> Optional[int]:
-        return introspect.node_pid(self._master(), node)
-
-    def _master(self) -> str:
-        if self.process.master_uri is None:
-            raise MasterError("no ROS node of this session runs yet; create a node first")
-        return self.process.master_uri
+        return introspect.node_pid(self.connection.uri, node)
 
     def __repr__(self) -> str:
         return f"<ipyros backend {self.name}: {self.process.name or 'no node yet'}>"

@@ -73,10 +73,9 @@ class LaunchBase:
         self._up = False  # an exit during start() is raised by start(), not reported as well
         self.not_started: list[str] = []  # nodes of the rest that roslaunch could not start (it goes on without)
         self.rest = BaseProcess(
-            sys.executable, ["-m", "ipyros.ros1.launch_rest", base.launch,
-                             *[f"{name}:={value}" for name, value in base.launch_args.items()],
-                             "--exclude", base.launch_node],
-            master_uri=master_uri, on_exit=self._rest_exited,
+            [sys.executable, "-m", "ipyros.ros1.launch_rest", base.launch,
+             *[f"{name}:={value}" for name, value in base.launch_args.items()], "--exclude", base.launch_node],
+            env={"ROS_MASTER_URI": master_uri}, on_exit=self._rest_exited,
             log_path=temp_log(f"rest-of-{Path(base.launch).stem}"),
         )
 

@@ -58,6 +58,9 @@ _BUFF_SIZE = 127 * 1024
 class ProcessNode:
     """The rospy node of this process, started once and shared by every DSL node."""
 
+    #: Whether the session's DSL nodes share one ROS node, which the graph shows: here, yes.
+    shared = True
+
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self.name: Optional[str] = None  # global name, once started

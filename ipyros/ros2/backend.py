@@ -9,9 +9,13 @@ from rclpy._rclpy_pybind11 import RCLError
 from rclpy.exceptions import NameValidationException
 
 from ..core.errors import DeclarationError, IpyrosError, NodeStateError, first_line
+from ..core.graph import GraphSnapshot
+from ..core.model import BaseModel
 from ..core.qos import Qos
+from ..core.records import Interface
 from ..core.slots import HandlerSlot
-from . import fastdds, introspect, runtime
+from ..processes.basenode import BaseProcess
+from . import fastdds, introspect, nodes, runtime
 from .runtime import Complain
 
 __all__ = ["Ros2"]
@@ -21,12 +25,35 @@ class Ros2:
     """rclpy behind the seam: each DSL node (``host``) is a ROS 2 node of its own."""
 
     name = "ROS 2"
-    has_master = False
+    #: The QoS fields a declaration's ``qos=`` means something in: all of them.
+    qos_fields = ("depth", "reliability", "durability")
 
     def __init__(self) -> None:
         #: Which Fast DDS configuration this session (and what it starts) runs with, in words.
         self.transport = fastdds.prepare()  # before rclpy starts, and before any child is started
         self.process = runtime.ProcessNode()
+
+    # -- the session's ROS: no master; peers find each other in the DDS domain -------------
+    def start(self, name: str, session: Any) -> str:
+        return self.process.start(session.config.process_node_name or name)
+
+    def connect(self, session: Any, wait: bool = True) -> str:
+        return self.describe()
+
+    def require_graph(self, doing: str) -> None:
+        """Nothing to require: there is no master to be gone."""
+
+    def check_graph(self) -> None:
+        """Nothing to check: discovery keeps itself up to date."""
+
+    def check_config(self, session: Any, master_uri: Optional[str]) -> None:
+        """Nothing to check: a master URI means nothing on ROS 2."""
+
+    def closing(self) -> None:
+        """Nothing to do before the nodes shut down."""
+
+    def close(self) -> None:
+        self.process.shutdown()
 
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain) -> runtime.Publication:
         return runtime.Publication(self.process.host(host), topic, cls, qos, complain)
@@ -50,17 +77,17 @@ class Ros2:
                       complain: Complain) -> runtime.ServiceRelay:
         return runtime.ServiceRelay(self.process, self.process.host(host), source, target, cls, complain)
 
-    def wait_for_node(self, master_uri: Optional[str], name: str, timeout: float = 10.0,
-                      alive: Optional[Callable[[], bool]] = None) -> Any:
-        """The interface of the running node ``name`` once it has settled (``master_uri`` is ROS 1's)."""
-        return runtime.wait_for_node(self._graph(), name, timeout, alive=alive)
+    def wait_for_node(self, name: str, timeout: float = 10.0, alive: Optional[Callable[[], bool]] = None,
+                      settle: float = 0.5) -> Interface:
+        """The interface of the running node ``name`` once it has settled."""
+        return runtime.wait_for_node(self._graph(), name, timeout, settle=settle, alive=alive)
 
     def open_host(self, host: str) -> None:
         if any(token[:1].isdigit() for token in host.split("/")):  # before rclpy, which warns as it refuses
             raise DeclarationError(f"ROS 2 refuses the node {host}: a part of a ROS 2 name may not start with a "
                                    "digit; ROS 2 names are letters, digits and _, each part starting with a letter")
         if host not in self.process.hosted:  # a name of ours lingers in the graph for a while after shutdown
-            self.refuse_taken_name(None, host)
+            self.refuse_taken_name(host)
         try:
             self.process.host(host)
         except (ValueError, RCLError, NameValidationException) as error:  # rclpy's name rules (a namespace token
@@ -108,8 +135,8 @@ class Ros2:
         node, key = self._owner(name)
         node.undeclare_parameter(key)
 
-    def refuse_taken_name(self, uri: Optional[str], name: str) -> None:
-        """Refuse a node name that a node elsewhere in the graph has (``uri`` is ROS 1's).
+    def refuse_taken_name(self, name: str) -> None:
+        """Refuse a node name that a node elsewhere in the graph has.
 
         ROS 2 lets two nodes share a name and only warns, but tools then mix them up
         (parameters, ``ros2 node info``); as on ROS 1, the name is refused. What the graph
@@ -121,11 +148,52 @@ class Ros2:
                                  f"{runtime.domain_id()}); give this node another name")
 
     # -- the graph, for %topics and completion ----------------------------------------------
-    def graph_snapshot(self) -> Any:
-        """What discovery has found so far (:func:`.graph.snapshot`)."""
+    def graph_snapshot(self, timeout: float = 1.0) -> GraphSnapshot:
+        """What discovery has found so far (:func:`.graph.snapshot`): read locally, no round trip (but, just
+        after rclpy started, once discovery has had its moment: :meth:`ProcessNode.discovered`)."""
         from .graph import snapshot
 
-        return snapshot(self._graph())
+        graph = self._graph()
+        self.process.discovered(within=timeout)
+        return snapshot(graph)
+
+    def where(self) -> str:
+        return f"ROS_DOMAIN_ID {runtime.domain_id()}"
+
+    def live_types(self, topics: list[str]) -> dict[str, tuple[str, bool]]:
+        """Nothing is refused at the declaration on ROS 2: DDS keeps a type per endpoint and matches none of
+        another type, which the type watch tells of (:meth:`ProcessNode.watch_types <.runtime.ProcessNode>`)."""
+        return {}
+
+    # -- basenodes, packages, launch files, bags, exports -------------------------------------
+    def basenode(self, base: BaseModel, *, log_path: Any = None, on_exit: Any = None) -> BaseProcess:
+        """The process of the basenode ``base``: found as ``ros2 run`` finds it, its rules after ``--ros-args``."""
+        return BaseProcess(nodes.command(base), node_name=base.node_name, log_path=log_path, on_exit=on_exit,
+                           env=base.env)
+
+    def note_link(self, base: BaseModel, process: BaseProcess) -> Optional[str]:
+        """Nothing to say: an ament prefix's executables are links (the demo's are) or installed files."""
+        return None
+
+    def read_launch(self, launch: Any, node: str, args: Optional[dict[str, Any]]) -> tuple[BaseModel, list[str]]:
+        raise DeclarationError("baseLaunch reads ROS 1 launch files, and this session runs ROS 2; give the node "
+                               "itself: baseNode('/path/to/node', namespace=..., params=...)")
+
+    def launch_base(self, base: BaseModel, process: BaseProcess, node: str, on_rest_exit: Any) -> Any:
+        raise DeclarationError("a basenode from a launch file is ROS 1's here; declare the node with baseNode(...)")
+
+    list_packages = staticmethod(nodes.list_packages)
+    list_executables = staticmethod(nodes.list_executables)
+
+    def bags(self) -> Any:
+        from . import bagfile
+
+        return bagfile
+
+    def export_flavour(self) -> Any:
+        from .export import RclpyScript
+
+        return RclpyScript
 
     def _graph(self) -> Any:
         """The hidden node that reads the graph; rclpy is started for it if no node has started it yet."""
@@ -198,9 +266,6 @@ class Ros2:
 
     def node_pid(self, node: str) -> Optional[int]:
         return None  # ROS 2 discovery does not say
-
-    def graph_where(self) -> str:
-        return f"ROS_DOMAIN_ID {runtime.domain_id()}"
 
     def describe(self) -> str:
         """One line for ``%load_ext``: which ROS 2, which domain, which middleware, how far discovery reaches."""

@@ -1,4 +1,4 @@
-"""The ROS 2 graph as a :class:`~ipyros.tools.graph.GraphSnapshot`, for ``%topics`` and completion.
+"""The ROS 2 graph as a :class:`~ipyros.core.graph.GraphSnapshot`, for ``%topics`` and completion.
 
 ROS 2 has no master to ask: each process discovers its peers and keeps what it learnt
 (DDS discovery, here through the session's hidden graph node). Reading that is local and
@@ -13,7 +13,7 @@ from typing import Any
 
 from rclpy.node import NodeNameNonExistentError
 
-from ..tools.graph import GraphSnapshot, frozen
+from ..core.graph import GraphSnapshot, frozen
 
 __all__ = ["snapshot"]
 

@@ -128,12 +128,16 @@ def _mismatch_report(node: Node, topic: str, mine: Qos, what: str, complain: Opt
 class ProcessNode:
     """rclpy in this process: one context, one executor thread, one ROS 2 node per DSL node."""
 
+    #: Whether the session's DSL nodes share one ROS node, which the graph shows: no, each is a node of its own.
+    shared = False
+
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self.name: Optional[str] = None  # the first node's name, for messages (there is no one process node)
         self._context: Any = None
         self._executor: Any = None
         self._spinner: Optional[threading.Thread] = None
+        self._started_at = 0.0  # when rclpy started: discovery needs a moment after it
         self._hosts: dict[str, Node] = {}
         self.hosted: set[str] = set()  # every name this process has had a node at (the graph lags behind)
         self._watchers: list[Callable[[], None]] = []
@@ -160,7 +164,22 @@ class ProcessNode:
             self._spinner = threading.Thread(target=self._spin, args=(executor,), name="ipyros-rclpy", daemon=True)
             self._spinner.start()
             self._context, self._executor, self.name = context, executor, name
+            self._started_at = time.monotonic()
             return name
+
+    #: How long a new participant takes to hear from its peers on this host (s): discovery
+    #: announces itself at start and peers answer at once, well within this even on a loaded machine.
+    DISCOVERY_SETTLE = 1.0
+
+    def discovered(self, within: float) -> None:
+        """Return once discovery has had its time to find the peers already running (at most ``within`` s).
+
+        A graph read right after rclpy starts knows no peer yet: ``%pub`` would see no subscriber
+        to wait for and send into the void. Later reads return at once.
+        """
+        left = self._started_at + self.DISCOVERY_SETTLE - time.monotonic()
+        if left > 0:
+            time.sleep(min(left, within))
 
     @staticmethod
     def _spin(executor: Any) -> None:
@@ -747,7 +766,7 @@ def _short(type_name: str) -> str:
 
 def node_interface(graph: Node, fullname: str) -> Any:
     """The publications, subscriptions and services of the running node ``fullname``, or None if unseen."""
-    from ..tools.discovery import Interface
+    from ..core.records import Interface
 
     namespace, name = fullname.rsplit("/", 1)
     namespace = namespace or "/"

@@ -2,14 +2,14 @@
 
 The flow behind ``%handler nd /turtle1/pose``:
 
-1. :func:`find_target` says what ``/turtle1/pose`` is on ``nd`` (a subscription with a
-   handler, a timer or a service) and :func:`handler_source` gets the source of the
-   function serving it. ``inspect.getsource`` works for functions typed at an IPython
+1. the node's engine says what ``/turtle1/pose`` is on ``nd`` (``find_target``: a
+   subscription with a handler, a timer or a service) and :func:`handler_source` gets the
+   source of the function serving it. ``inspect.getsource`` works for functions typed at an IPython
    prompt, because IPython keeps every cell in ``linecache``; it fails for lambdas
    (whose "source" is the whole line around them), builtins, and code made by ``exec``.
 2. The user edits that source and runs it, which rebinds the function's name. An
    :class:`EditWatch`, checked after every cell, sees the name bound to a new function
-   and :func:`redeclare` declares the handler again with it: for a subscription that is
+   and the engine's ``redeclare`` declares the handler again with it: for a subscription that is
    ``nd.new.subscribe(topic, handler=new, msgType=<declared type>)``, the DSL's own
    live swap (one attribute assignment in the handler slot, no message lost).
 
@@ -24,64 +24,13 @@ import re
 import textwrap
 import types
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, Mapping, Optional
+from typing import Any, Callable, Mapping, Optional
 
-from ..core import plan as planning
-from ..core.errors import IpyrosError, NotDeclaredError, TopicNameError
+from ..core.errors import IpyrosError
+from ..node.dsl import engine_of, rosNode
+from ..node.engine import HandlerTarget
 
-if TYPE_CHECKING:
-    from ..node.dsl import rosNode
-
-
-@dataclass(frozen=True)
-class HandlerTarget:
-    """Something on a node that calls a handler: a subscription, a timer or a service."""
-
-    kind: str  # "topic", "timer" or "service"
-    name: str  # as declared: the topic/service name as typed, or the timer's name
-    slot: str  # the node's handler slot key (see ipyros.core.plan): where its versions are kept
-
-    @property
-    def label(self) -> str:
-        return self.name if self.kind == "topic" else f"{self.kind} {self.name}"
-
-
-def find_target(node: "rosNode", name: str) -> HandlerTarget:
-    """What ``name`` (a topic, a timer name or a service) is on ``node``, if it has a handler."""
-    model = node.model()
-    try:
-        resolved: Optional[str] = node.resolve(name)
-    except TopicNameError:  # not a graph name: only a timer can be called that
-        resolved = None
-    if resolved is not None:
-        topic = model.topic(resolved, "subscribe", "new")
-        if topic is not None:
-            return HandlerTarget("topic", topic.name, planning.topic_slot(resolved))
-        service = next((s for s in model.services if s.resolved == resolved and s.role == "new"), None)
-        if service is not None:
-            return HandlerTarget("service", service.name, planning.service_slot(resolved))
-    timer = model.timer(name)
-    if timer is not None:
-        return HandlerTarget("timer", timer.name, planning.timer_slot(timer.name))
-    handlers = [f"{t.resolved} ({t.handler})" for t in model.subscriptions() if t.role == "new"]
-    handlers += [f"timer {t.name} ({t.handler})" for t in model.timers]
-    handlers += [f"service {s.resolved} ({s.handler})" for s in model.services if s.role == "new"]
-    relayed = next((t for t in model.topics if t.resolved == resolved and t.role == "reuse"), None)
-    if relayed is not None:  # a wrapped topic passed on unchanged: a handler is declared with new
-        raise NotDeclaredError(
-            f"{node.name} relays {resolved} unchanged (reuse), with no handler to edit; to handle it, "
-            f"declare one: {node.name}.new.subscribe({relayed.name!r}, handler, msgType={relayed.type!r})")
-    known = "; its handlers: " + ", ".join(handlers) if handlers else (
-        f"; it has no handlers yet: declare one, e.g. {node.name}.new.subscribe(TOPIC, handler, msgType=...)")
-    raise NotDeclaredError(f"{node.name} has no handler for {resolved or name}{known}")
-
-
-def current_handler(node: "rosNode", target: HandlerTarget) -> Callable[..., Any]:
-    """The function that serves ``target`` now."""
-    handler = node.handler(target.name)
-    if handler is None:  # the node changed since find_target
-        raise NotDeclaredError(f"{node.name} has no handler for {target.label} any more")
-    return handler
+__all__ = ["EditWatch", "PendingEdit", "handler_source", "lambda_as_def", "new_functions"]
 
 
 def handler_source(handler: Any, node_name: str, target: HandlerTarget) -> str:
@@ -142,27 +91,6 @@ def fresh_name(target: HandlerTarget, taken: Mapping[str, Any]) -> str:
     return name
 
 
-def redeclare(node: "rosNode", target: HandlerTarget, handler: Callable[..., Any]) -> None:
-    """Declare ``target`` again exactly as it is, but served by ``handler`` (a live swap)."""
-    model = node.model()
-    if target.kind == "topic":
-        topic = model.topic(node.resolve(target.name), "subscribe", "new")
-        if topic is None:
-            raise NotDeclaredError(f"{node.name} no longer subscribes to {target.name}")
-        node.new.subscribe(topic.name, handler=handler, msgType=topic.type)
-    elif target.kind == "timer":
-        timer = model.timer(target.name)
-        if timer is None:
-            raise NotDeclaredError(f"{node.name} no longer has the timer {target.name}")
-        node.timer(timer.period, handler, name=timer.name, oneshot=timer.oneshot)
-    else:
-        resolved = node.resolve(target.name)
-        service = next((s for s in model.services if s.resolved == resolved and s.role == "new"), None)
-        if service is None:
-            raise NotDeclaredError(f"{node.name} no longer serves {target.name}")
-        node.new.service(service.name, srvType=service.type, handler=handler)
-
-
 def new_functions(before: Mapping[str, Any], after: Mapping[str, Any]) -> dict[str, types.FunctionType]:
     """The names ``after`` binds to a function they were not bound to in ``before``."""
     return {name: value for name, value in after.items()
@@ -173,7 +101,7 @@ def new_functions(before: Mapping[str, Any], after: Mapping[str, Any]) -> dict[s
 class PendingEdit:
     """A handler shown for editing; swapped when ``name`` is bound to another function."""
 
-    node: "rosNode"
+    node: rosNode
     target: HandlerTarget
     name: str
     old: Callable[..., Any]
@@ -190,7 +118,7 @@ class EditWatch:
         self.forget(edit.node, edit.target)
         self.pending.append(edit)
 
-    def forget(self, node: "rosNode", target: HandlerTarget) -> None:
+    def forget(self, node: rosNode, target: HandlerTarget) -> None:
         self.pending = [e for e in self.pending if not (e.node is node and e.target == target)]
 
     def check(self, user_ns: Mapping[str, Any]) -> list[str]:
@@ -213,7 +141,7 @@ class EditWatch:
                             f"{where} keeps its handler")
                 continue
             try:
-                redeclare(edit.node, edit.target, new)
+                engine_of(edit.node).redeclare(edit.target, new)
             except IpyrosError as error:
                 news.append(f"{where} keeps its handler: {error}")
                 continue

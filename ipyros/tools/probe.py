@@ -29,7 +29,7 @@ from typing import Any, Mapping, Optional
 from ..core import msgtypes
 from ..core.errors import MessageTypeError
 from ..core.slots import arrival
-from ..node.dsl import rosNode
+from ..node.dsl import engine_of, rosNode
 from ..node.session import current
 
 
@@ -235,13 +235,12 @@ class PromptPublisher:
 
     def _owner(self, topic: str, type_name: str) -> Optional[rosNode]:
         """A running node of the session (not ours) that publishes ``topic`` with that type."""
-        for node in list(current().nodes.values()):
-            if node is self._node or not node.created:
+        for engine in list(current().nodes.values()):
+            if engine.dsl is self._node or not engine.created:
                 continue
-            model = node.model()
-            declared = model.topic(topic, "publish", "new")
+            declared = engine.model().topic(topic, "publish", "new")
             if declared is not None and declared.type == type_name:
-                return node
+                return engine.dsl
         return None
 
     def close(self) -> None:
@@ -253,19 +252,13 @@ class PromptPublisher:
 
 def _connections(node: rosNode, topic: str) -> int:
     """How many subscribers ``node``'s publication of ``topic`` is connected to now."""
-    return sum(sent.connections for sent in node.sent() if sent.topic == topic)
+    return sum(sent.connections for sent in engine_of(node).sent() if sent.topic == topic)
 
 
 def _subscribers(topic: str) -> tuple[str, ...]:
     """The nodes the graph says subscribe to ``topic`` now (read once, from the master or discovery)."""
-    session = current()
     try:
-        if session.backend.has_master:
-            from .graph import fetch_snapshot
-
-            snap = fetch_snapshot(session.master.uri if session.master else session.process.master_uri, 2.0)
-        else:
-            snap = session.backend.graph_snapshot()
+        snap = current().backend.graph_snapshot(timeout=2.0)
     except Exception:  # noqa: BLE001 - no graph to read: send without waiting, as before
         return ()
     return snap.subscribers.get(topic, ())

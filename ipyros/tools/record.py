@@ -20,12 +20,8 @@ __all__ = ["Recording", "bag_module"]
 
 
 def bag_module() -> Any:
-    """The session's ROS's bag files: ROS 1's (python3-rosbag) or ROS 2's (rosbags)."""
-    if current().backend.has_master:
-        from ..ros1 import bagfile
-    else:
-        from ..ros2 import bagfile  # type: ignore[no-redef]
-    return bagfile
+    """The session's ROS's bag files: ROS 1's (python3-rosbag) or ROS 2's (rosbags), as its backend gives them."""
+    return current().backend.bags()
 
 
 class Recording:

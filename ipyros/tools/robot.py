@@ -9,15 +9,14 @@ launch files, started in one line::
     robot.stop()                    # %demo --stop
 
 The launch file says what runs (``ipyros/demo/launch/<robot>.launch``, also usable with
-``roslaunch``); it is read with roslaunch's own loader, so ``<arg>``, ``if=``, ``<remap>``
-and ``<param>`` mean what they mean to roslaunch. ipyros then sets the parameters on
-the master and runs each node itself, as a child process of the session
-(:class:`~ipyros.processes.basenode.BaseProcess`: a log of its own, stopped by :meth:`DemoRobot.stop`
-and at exit, and killed by the kernel if the interpreter is killed), rather than through
-``roslaunch``, which would start a master of its own when none answers, and hide which
-node of the set failed. Python nodes run with the session's own interpreter, which can
-import rospy wherever ipyros runs (Debian, a RoboStack environment), whatever their
-``#!`` line says.
+``roslaunch``); it uses ``<arg>``, ``$(arg)``, ``if=``/``unless=``, ``<node>``, ``<remap>``
+and ``<param>``, read here as roslaunch reads them, the same on both ROS. ipyros then runs
+each node itself, as a basenode of the session's ROS (the backend's ``basenode``: found
+as rosrun or ros2 run finds it, its params on its command line, a log of its own, stopped
+by :meth:`DemoRobot.stop` and at exit, and killed by the kernel if the interpreter is
+killed), rather than through ``roslaunch``, which would start a master of its own when
+none answers, and hide which node of the set failed. Python nodes run with the session's
+own interpreter, which imports the session's ROS, whatever their ``#!`` line says.
 
 One demo robot runs at a time (they share topic names): starting another stops the
 first. Launch arguments are keywords: ``demo_robot("kobuki", planner=True, max_speed=3)``.
@@ -31,22 +30,17 @@ import re
 import shlex
 import threading
 import xml.etree.ElementTree as ET
-import xmlrpc.client
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Optional
 
 import yaml
-from rich.table import Table
 
-from ..core.errors import BaseNodeError, IpyrosError
-from ..ipython.display import Shown
+from ..core.errors import BaseNodeError, IpyrosError, NodeStateError
+from ..core.model import BaseModel
+from ..demo import LAUNCH_DIR
 from ..node.session import Session, current
-from ..processes.basenode import DEMO_DIR, BaseProcess, exit_reason, package_executable, python_command
-from ..ros1.launchfile import fullname, one_line
-from ..ros1.master import master_proxy
-
-LAUNCH_DIR = DEMO_DIR / "launch"
+from ..processes.basenode import BaseProcess, exit_reason
 
 #: The turtle circle of the paper's section III-B, in five lines (the README's first lines too).
 TURTLE_CIRCLE = (
@@ -128,10 +122,11 @@ def launch_args(path: Path) -> list[LaunchArg]:
 
 
 def read_launch(path: Path, args: Optional[dict[str, Any]] = None) -> tuple[list[LaunchNode], dict[str, Any]]:
-    """The nodes and the parameters (full name → value) of a launch file, with ``args`` set.
+    """The nodes and the parameters (full name → value) of a demo launch file, with ``args`` set.
 
-    Read by roslaunch's own XML loader: ``$(arg)``, ``if=``/``unless=``, ``<remap>`` and
-    ``<param>`` work as in roslaunch. Unknown argument names are refused, naming the known ones.
+    The demo's launch files use ``<arg>``, ``$(arg)``, ``if=``/``unless=``, ``<node>``,
+    ``<remap>`` and ``<param>`` only, read here as roslaunch reads them (no roslaunch needed:
+    the same on both ROS). Unknown argument names are refused, naming the known ones.
     """
     known = {a.name for a in launch_args(path)}
     for name in args or {}:
@@ -139,42 +134,22 @@ def read_launch(path: Path, args: Optional[dict[str, Any]] = None) -> tuple[list
             close = difflib.get_close_matches(name, sorted(known), n=1)
             hint = f"did you mean {close[0]}? " if close else ""
             raise DemoRobotError(f"{path.name} has no argument {name!r}; {hint}its arguments: {', '.join(sorted(known))}")
-    if not current().backend.has_master:
-        return _read_launch_alone(path, args or {})
-    from roslaunch.config import ROSLaunchConfig
-    from roslaunch.core import RLException
-    from roslaunch.xmlloader import XmlLoader
-
-    words = [f"{name}:={_launch_value(value)}" for name, value in (args or {}).items()]
-    config = ROSLaunchConfig()
-    try:
-        XmlLoader().load(str(path), config, argv=words, verbose=False)
-    except (RLException, ValueError) as error:  # a broken file; a value an if= or a <param> type refuses
-        raise DemoRobotError(f"{path.name}: {one_line(error)}; see its arguments with %demo --list") \
-            from None
-    nodes = [LaunchNode(package=n.package, executable=n.type, name=fullname(n), namespace=n.namespace,
-                        args=tuple(shlex.split(n.args or "")), remaps=dict(n.remap_args))
-             for n in config.nodes]
-    return nodes, {name: param.value for name, param in config.params.items()}
-
-
-_ARG = re.compile(r"\$\(arg ([\w-]+)\)")
-
-
-def _read_launch_alone(path: Path, args: dict[str, Any]) -> tuple[list[LaunchNode], dict[str, Any]]:
-    """:func:`read_launch` where roslaunch is not installed (ROS 2): the demo's launch files use
-    ``<arg>``, ``$(arg)``, ``if=``/``unless=``, ``<node>``, ``<remap>`` and ``<param>`` only,
-    and those are read here as roslaunch reads them."""
     root = ET.parse(path).getroot()
     values = {a.get("name", ""): a.get("value", a.get("default", "")) for a in root.findall("arg")}
-    values.update({k: _launch_value(v) for k, v in args.items()})
+    values.update({k: _launch_value(v) for k, v in (args or {}).items()})
 
     def text(element: ET.Element, attribute: str) -> str:
         return _ARG.sub(lambda m: values[m[1]], element.get(attribute) or "")
 
+    def truth(element: ET.Element, attribute: str) -> bool:
+        value = text(element, attribute)
+        if value.lower() not in ("true", "1", "false", "0"):  # as roslaunch refuses it
+            raise DemoRobotError(f"{path.name}: {value} is not a 'bool' type; give true or false")
+        return value.lower() in ("true", "1")
+
     def wanted(element: ET.Element) -> bool:
-        return ((element.get("if") is None or text(element, "if") in ("true", "1"))
-                and (element.get("unless") is None or text(element, "unless") not in ("true", "1")))
+        return ((element.get("if") is None or truth(element, "if"))
+                and (element.get("unless") is None or not truth(element, "unless")))
 
     nodes, params = [], {}
     for element in filter(wanted, root.findall("node")):
@@ -186,6 +161,9 @@ def _read_launch_alone(path: Path, args: dict[str, Any]) -> tuple[list[LaunchNod
         params.update({f"{name}/{text(p, 'name')}": _typed(text(p, "value"))
                        for p in element.findall("param") if wanted(p)})
     return nodes, params
+
+
+_ARG = re.compile(r"\$\(arg ([\w-]+)\)")
 
 
 def _typed(text: str) -> Any:
@@ -203,7 +181,7 @@ def _launch_value(value: Any) -> str:
 
 # -- the robot ------------------------------------------------------------------------------
 
-class DemoRobot(Shown):
+class DemoRobot:
     """A demo robot's nodes, running as child processes of the session.
 
     ``processes`` maps each node's global name (``/turtle_sim``) to its
@@ -218,7 +196,6 @@ class DemoRobot(Shown):
         self.nodes, self.params = read_launch(self.spec.path, self.args)
         self.session = session or current()
         self.processes: dict[str, BaseProcess] = {}
-        self.master_uri: Optional[str] = None
         self._lock = threading.RLock()
 
     @property
@@ -227,53 +204,40 @@ class DemoRobot(Shown):
         return bool(self.processes) and all(p.running for p in self.processes.values())
 
     def start(self, timeout: float = 20.0) -> "DemoRobot":
-        """Set the parameters, start every node, and return once each is registered with the master.
+        """Start every node (its params on its command line) and return once each is in the graph.
 
         Raises :class:`~ipyros.core.errors.BaseNodeError` if a node of the same name already
         runs elsewhere or a node does not come up; what did start is stopped again.
         """
-        from .discovery import wait_for_node
-
         with self._lock:
             if self.processes:
                 return self
             backend = self.session.backend
-            ros2 = not backend.has_master  # no master: parameters go to each node, as --ros-args -p
-            uri = None if ros2 else self.session.attach_master().uri
-            self.master_uri = uri
-            commands = {node.name: python_command(package_executable(node.package, node.executable, ros2))
-                        for node in self.nodes}
+            backend.connect(self.session)  # ROS 1: the master, found or started
             for node in self.nodes:
-                if ros2:
-                    backend.refuse_taken_name(None, node.name)
-                else:
-                    _refuse_live_node(uri, node.name, self.kind)
-            if uri is not None:
-                master = master_proxy(uri)
-                for name, value in self.params.items():
-                    master.setParam("/ipyros", name, value)
+                try:
+                    backend.refuse_taken_name(node.name)
+                except NodeStateError:
+                    raise BaseNodeError(f"node {node.name} already runs at {backend.where()} (another session's "
+                                        f"demo robot?); stop it there, or use it as it is instead of starting the "
+                                        f"{self.kind} demo robot here") from None
             try:
                 for node in self.nodes:
-                    executable, first = commands[node.name]
-                    own = {k[len(node.name) + 1:]: v for k, v in self.params.items()
-                           if k.startswith(node.name + "/")} if ros2 else {}
-                    process = BaseProcess(executable, [*first, *node.args], node_name=node.name.rsplit("/", 1)[1],
-                                          namespace=node.namespace if node.namespace != "/" else None,
-                                          remaps=node.remaps, params=own, master_uri=uri, on_exit=self._died,
-                                          ros2=ros2)
-                    self.processes[node.name] = process.start()
+                    own = {k[len(node.name) + 1:]: v for k, v in self.params.items() if k.startswith(node.name + "/")}
+                    base = BaseModel(executable=node.executable, package=node.package,
+                                     node_name=node.name.rsplit("/", 1)[1],
+                                     namespace=node.namespace if node.namespace != "/" else None,
+                                     remaps=dict(node.remaps), params=own, args=list(node.args))
+                    self.processes[node.name] = backend.basenode(base, on_exit=self._died).start()
                 for node in self.nodes:
-                    if ros2:
-                        backend.wait_for_node(None, node.name, timeout=timeout)
-                    else:
-                        wait_for_node(uri or "", node.name, timeout=timeout, settle=0.1)
+                    backend.wait_for_node(node.name, timeout=timeout, settle=0.1)
             except BaseException:
                 self.stop()
                 raise
             return self
 
     def stop(self) -> None:
-        """Stop every node of the robot and remove the parameters it set. Stopping twice does nothing."""
+        """Stop every node of the robot. Stopping twice does nothing."""
         with self._lock:
             processes, self.processes = self.processes, {}
             # All at once: each takes a moment to shut down on SIGINT, and none depends on another.
@@ -282,13 +246,6 @@ class DemoRobot(Shown):
                 thread.start()
             for thread in stoppers:
                 thread.join()
-            if processes and self.master_uri:
-                master = master_proxy(self.master_uri)
-                for name in self.params:
-                    try:
-                        master.deleteParam("/ipyros", name)
-                    except (OSError, xmlrpc.client.Error):  # the master is gone: nothing left to clean
-                        break
 
     def _died(self, process: BaseProcess, returncode: int, last_lines: list[str]) -> None:
         """A node of the robot ended without being asked: say so, with its last log lines."""
@@ -300,15 +257,9 @@ class DemoRobot(Shown):
         """What to try with this robot, as lines to print."""
         return "\n".join(self.spec.hint)
 
-    def __repr__(self) -> str:
-        state = "running" if self.running else ("stopped" if not self.processes else "partly running")
-        return f"<DemoRobot {self.kind} ({state}): {', '.join(n.name for n in self.nodes)}>"
-
-    def __rich__(self) -> Table:
-        state = "[green]running[/]" if self.running else "[yellow]stopped[/]"
-        table = Table(title=f"demo robot [bold]{self.kind}[/] ({state}) from {self.spec.launch}", title_justify="left")
-        for column in ("node", "runs", "remaps", "state"):
-            table.add_column(column)
+    def node_states(self) -> list[tuple[str, str, str, str]]:
+        """Per node: its name, what runs (``pkg/executable``), its remaps, and its state now."""
+        rows = []
         for node in self.nodes:
             process = self.processes.get(node.name)
             if process is None:
@@ -318,8 +269,12 @@ class DemoRobot(Shown):
             else:
                 how = exit_reason(process.returncode or 0)
             remaps = ", ".join(f"{a} → {b}" for a, b in node.remaps.items())
-            table.add_row(node.name, f"{node.package}/{node.executable}", remaps, how)
-        return table
+            rows.append((node.name, f"{node.package}/{node.executable}", remaps, how))
+        return rows
+
+    def __repr__(self) -> str:
+        state = "running" if self.running else ("stopped" if not self.processes else "partly running")
+        return f"<DemoRobot {self.kind} ({state}): {', '.join(n.name for n in self.nodes)}>"
 
 
 def robot_kind(kind: str) -> RobotKind:
@@ -330,19 +285,6 @@ def robot_kind(kind: str) -> RobotKind:
         hint = f"did you mean {close[0]}? " if close else ""
         raise DemoRobotError(f"there is no demo robot {kind!r}; {hint}the demo robots: {', '.join(ROBOTS)}")
     return spec
-
-
-def _refuse_live_node(uri: str, name: str, kind: str) -> None:
-    """Refuse to start a node whose name a live node has: the master would shut that one down."""
-    try:
-        code, _, node_uri = master_proxy(uri).lookupNode("/ipyros", name)
-        if code != 1:
-            return
-        xmlrpc.client.ServerProxy(node_uri).getPid("/ipyros")  # a stale registration does not answer
-    except (OSError, xmlrpc.client.Error):
-        return
-    raise BaseNodeError(f"node {name} already runs on the master at {uri} (another session's demo robot?); "
-                        f"stop it there, or use it as it is instead of starting the {kind} demo robot here")
 
 
 # -- the one running robot -----------------------------------------------------------------
@@ -361,11 +303,7 @@ def demo_robot(kind: str = "turtle", *, session: Optional[Session] = None, **arg
     global _running
     robot_kind(kind)  # a wrong name is an error at once, even without a master
     session = session or current()
-    # The master first: extension loading may be starting it on a thread of its own right now.
-    # Reading the launch file imports roslaunch, and a first import while that thread forks can
-    # deadlock (the fork's at-fork hooks against the import lock), so the import waits until it is done.
-    if session.backend.has_master:
-        session.attach_master()
+    session.backend.connect(session)  # ROS 1: the master first (the extension may be starting it right now)
     robot = DemoRobot(kind, args, session=session)
     with _running_lock:
         previous = _running

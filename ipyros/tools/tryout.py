@@ -29,14 +29,11 @@ import traceback
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
-from rich.console import Group
-from rich.table import Table
-from rich.text import Text
-
-from ..core import plan as planning
+from ..core import msgtypes, plan as planning
 from ..core.errors import IpyrosError, NotDeclaredError
+from ..core.msgbuild import flow_yaml
 from ..core.slots import call_arity
-from ..node.dsl import rosNode
+from ..node.dsl import engine_of, rosNode
 
 
 @dataclass(frozen=True)
@@ -101,33 +98,6 @@ class TrialReport:
     def differing(self) -> int:
         return sum(not r.same for r in self.rows)
 
-    def __rich__(self) -> Group:
-        summary = (f"{self.differing} of {len(self.rows)} messages give different results"
-                   if self.differing else f"same results on all {len(self.rows)} messages")
-        heading = Text.assemble((f"{self.node} {self.topic}", "bold"), f": live {self.live_name} vs candidate "
-                                f"{self.candidate_name}: ", (summary, "yellow" if self.differing else "green"))
-        table = Table(show_lines=True)
-        table.add_column("#", justify="right")
-        table.add_column("message", overflow="fold", max_width=40)
-        table.add_column(f"live: {self.live_name}", overflow="fold")
-        table.add_column(f"candidate: {self.candidate_name}", overflow="fold")
-        for row in self.rows:
-            mark = Text(str(row.index), style="" if row.same else "bold yellow")
-            cells = [Text("\n".join(o.lines()) or "(nothing)", style="" if o.lines() else "dim")
-                     for o in (row.live, row.candidate)]
-            table.add_row(mark, one_line(row.message), *cells)
-        return Group(heading, table)
-
-    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
-        from ..ipython.display import render_text
-
-        printer.text(render_text(self))
-
-    def _repr_html_(self) -> str:
-        from ..ipython.display import render_html
-
-        return render_html(self)
-
 
 def try_candidate(node: rosNode, topic: str, candidate: Callable[..., Any],
                   last: Optional[int] = None) -> TrialReport:
@@ -137,7 +107,7 @@ def try_candidate(node: rosNode, topic: str, candidate: Callable[..., Any],
     """
     resolved = node.resolve(topic)
     live = node.handler(topic)
-    slot = node.slot(planning.topic_slot(resolved))
+    slot = engine_of(node).slot(planning.topic_slot(resolved))
     if live is None or node.model().topic(resolved, "subscribe", "new") is None:
         raise NotDeclaredError(f"{node.name} has no handler for {resolved}; %try compares subscription handlers")
     call_arity(candidate, "subscribe", f"{node.name} {resolved}")
@@ -200,7 +170,7 @@ def _write_problem(node: rosNode, topic: str, msg: Any) -> Optional[str]:
     if planning.write_target(model, resolved) is None:
         return f"{node.name} does not publish {resolved}"
     declared = next(t.type for t in model.topics if t.resolved == resolved)
-    got = getattr(msg, "_type", None) or type(msg).__name__
+    got = msgtypes.type_name(msg) or type(msg).__name__  # pkg/Type on both ROS (ROS 2 classes have no _type)
     return None if got == declared else f"{resolved} carries {declared}, not {got}"
 
 
@@ -243,8 +213,11 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
 
 
 def one_line(msg: Any, width: int = 80) -> str:
-    """A message as one short line of YAML-ish text."""
-    text = " ".join(str(msg).split())
+    """A message as one short line of YAML (the same on both ROS: ``{linear: {x: 1.0, ...}, ...}``)."""
+    try:
+        text = flow_yaml(msg)
+    except Exception:  # noqa: BLE001 - not a message: its text
+        text = " ".join(str(msg).split())
     return text if len(text) <= width else text[: width - 1] + "…"
 
 

@@ -9,7 +9,7 @@ import pytest
 from std_srvs.srv import SetBool
 
 from shell import error_of, ip, ok  # noqa: F401 - the ip fixture
-from support import response_of, wait_for
+from support import response_of
 
 
 @pytest.fixture

@@ -7,6 +7,7 @@ from std_msgs.msg import String
 
 from ipyros.core import errors
 from ipyros import rosNode
+from ipyros.node.dsl import engine_of
 
 
 def one_line(error: BaseException) -> str:
@@ -39,7 +40,7 @@ def test_one_line_for_what_used_to_be_a_traceback(make_node, tmp_path):
     nd = make_node("one_line_node")
     nd.new.publish("/one_line/out", msgType=String)
     cases = [
-        (lambda: rosNode("one_line_x", session=nd.session).discover(), errors.DeclarationError,
+        (lambda: rosNode("one_line_x", session=engine_of(nd).session).discover(), errors.DeclarationError,
          "wraps no basenode, so there is nothing to discover"),
         (lambda: nd.baseBag(5), errors.DeclarationError, "baseBag(5): give the bag's path"),
         (lambda: nd.export(5), errors.DeclarationError, "export(5): give a path"),

@@ -12,6 +12,7 @@ from std_srvs.srv import SetBool
 from support import request_of, response_of, wait_for
 
 from ipyros.core import errors
+from ipyros.node.dsl import engine_of
 
 
 def counting(make_node, name: str, topic: str):
@@ -19,7 +20,7 @@ def counting(make_node, name: str, topic: str):
     seen: list[int] = []
     make_node(f"{name}_listener").new.subscribe(topic, handler=lambda m: seen.append(m.data), msgType=UInt32).create()
     talker = make_node(f"{name}_talker").new.publish(topic, msgType=UInt32).create()
-    wait_for(lambda: any(f.connections for f in talker.sent()), timeout=20, what="the talker to connect")
+    wait_for(lambda: any(f.connections for f in engine_of(talker).sent()), timeout=20, what="the talker to connect")
     return seen, talker
 
 
@@ -84,7 +85,7 @@ def test_a_slow_handler_holds_up_no_other_handler(make_node, notices, session):
 
     make_node("slow_sub").new.subscribe("/resilience/slow_in", handler=slow, msgType=UInt32).create()
     feeder = make_node("slow_feeder").new.publish("/resilience/slow_in", msgType=UInt32).create()
-    wait_for(lambda: feeder.sent()[0].connections, timeout=20, what="the slow subscription to connect")
+    wait_for(lambda: engine_of(feeder).sent()[0].connections, timeout=20, what="the slow subscription to connect")
     try:
         feeder.write("/resilience/slow_in", UInt32(data=1))  # blocks until the gate opens or 5 s pass
         wait_for(lambda: slow_calls, what="the slow handler to start")

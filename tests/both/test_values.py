@@ -15,9 +15,10 @@ from std_msgs.msg import Int32, String
 from std_srvs.srv import SetBool
 
 from shell import ip, ok  # noqa: F401 - the ip fixture
-from support import request_of, response_of, wait_for
+from support import graph_knows, request_of, response_of, wait_for
 
 from ipyros.core import errors
+from ipyros.node.dsl import engine_of
 
 
 def one_line(error: BaseException) -> str:
@@ -26,7 +27,7 @@ def one_line(error: BaseException) -> str:
 
 
 def connected(nd, topic: str) -> bool:
-    return any(f.topic.endswith(topic) and f.connections for f in nd.sent())
+    return any(f.topic.endswith(topic) and f.connections for f in engine_of(nd).sent())
 
 
 def test_an_int_in_a_float_field_arrives_as_that_float(make_node, peer):
@@ -99,5 +100,6 @@ def test_a_service_answer_that_does_not_fit_is_reported_naming_the_field(make_no
 def test_pub_converts_an_int_for_a_float_field(ip, peer):  # noqa: F811 - the ip fixture
     listener = peer("listen.py", "/values/pub", "geometry_msgs/Twist", "linear.x")
     listener.wait_line("ready")
+    graph_knows("/values/pub")
     ok(ip, "%pub /values/pub geometry_msgs/Twist {linear: {x: 1}}")
     assert listener.wait_line("heard") == "heard 1.0"

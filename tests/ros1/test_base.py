@@ -18,12 +18,12 @@ from pathlib import Path
 import pytest
 import rosgraph
 
-from ros1_fixtures import master_state, wait_for
+from ros1_fixtures import master_state, ros1_process, wait_for
 from helpers import TEST_NODES, pid_alive, use_test_nodes
-from ipyros.processes.basenode import (BaseProcess, exit_reason, find_executable, list_executables, list_packages,
-                                       param_arg)
 from ipyros.core.errors import BaseNodeError, NodeStateError
 from ipyros.core.model import BaseModel
+from ipyros.processes.basenode import BaseProcess, exit_reason, param_value
+from ipyros.ros1.nodes import command, find_executable, list_executables, list_packages
 from peer import Peer
 
 
@@ -145,33 +145,35 @@ def test_a_package_runs_only_its_own_files():
 def test_a_basenode_given_by_its_path_runs_as_a_script(tmp_path):
     script = tmp_path / "node.py"
     script.write_text(echo_node().read_text())  # a .py file, not executable: run with this interpreter
-    proc = BaseProcess.from_model(BaseModel(executable=str(script), node_name="scripted"))
-    assert proc.argv[:2] == [sys.executable, str(script)] and "__name:=scripted" in proc.argv
-    assert BaseProcess.from_model(BaseModel(executable=str(echo_node()))).argv[0] == str(echo_node())
+    argv = command(BaseModel(executable=str(script), node_name="scripted"))
+    assert argv[:2] == [sys.executable, str(script)] and "__name:=scripted" in argv
+    assert command(BaseModel(executable=str(echo_node())))[0] == str(echo_node())
     with pytest.raises(BaseNodeError, match=r"basenode 'echo_node' needs its package: add .basePackage"):
-        BaseProcess.from_model(BaseModel(executable="echo_node"))
+        command(BaseModel(executable="echo_node"))
 
 
-def test_from_model_looks_the_executable_up_and_adds_the_wrapping_remaps():
+def test_the_command_line_looks_the_executable_up_and_adds_the_remaps_and_params():
     model = BaseModel(executable="echo_node", package="ipyros_test_nodes", node_name="b", namespace="/ns",
-                      remaps={"/ns/x": "/y"}, params={"rate": 2.5, "label": "5"}, args=["--prefix", "P"])
-    proc = BaseProcess.from_model(model, remaps={"/ns/in": "/w/base/in"}, master_uri="http://127.0.0.1:1/")
-    assert proc.argv == [str(echo_node()), "--prefix", "P", "__name:=b", "__ns:=/ns", "/ns/x:=/y",
-                         "/ns/in:=/w/base/in", "_rate:=2.5", "_label:='5'"]
-    assert proc.env["ROS_MASTER_URI"] == "http://127.0.0.1:1/"
+                      remaps={"/ns/x": "/y", "/ns/in": "/w/base/in"}, params={"rate": 2.5, "label": "5"},
+                      args=["--prefix", "P"])
+    assert command(model) == [str(echo_node()), "--prefix", "P", "__name:=b", "__ns:=/ns", "/ns/x:=/y",
+                              "/ns/in:=/w/base/in", "_rate:=2.5", "_label:='5'"]
     with pytest.raises(BaseNodeError, match="no executable 'echo'"):
-        BaseProcess.from_model(BaseModel(executable="echo", package="ipyros_test_nodes"))
+        command(BaseModel(executable="echo", package="ipyros_test_nodes"))
     with pytest.raises(BaseNodeError, match="not an executable file"):
-        BaseProcess.from_model(BaseModel(executable="/nonexistent/node"))
+        command(BaseModel(executable="/nonexistent/node"))
 
 
 def test_private_params_become_command_line_args_ros_reads_back():
+    def param_arg(name, value):
+        return command(BaseModel(executable=str(echo_node()), params={name: value}))[-1]
+
     assert param_arg("rate", 10) == "_rate:=10"
     assert param_arg("~gain", 0.5) == "_gain:=0.5"
     assert param_arg("flag", True) == "_flag:=true"
     assert param_arg("frame", "map") == "_frame:=map"
     assert param_arg("text", "two words") == "_text:=two words"
-    assert param_arg("id", "007") == "_id:='007'"  # would otherwise be read as the int 7
+    assert param_value("007") == "'007'"  # would otherwise be read as the int 7
     assert param_arg("xs", [1, 2]) == "_xs:=[1, 2]"
     assert exit_reason(3) == "exited with code 3" and exit_reason(-9) == "killed by SIGKILL"
 
@@ -180,7 +182,7 @@ def test_private_params_become_command_line_args_ros_reads_back():
 
 def test_python_basenode_output_goes_to_the_log(ros_master, tmp_path, stopper):
     log = tmp_path / "echo.log"
-    proc = BaseProcess(echo_node(), ["--prefix", ">"], node_name="logged", master_uri=ros_master, log_path=log)
+    proc = ros1_process(echo_node(), ["--prefix", ">"], node_name="logged", master_uri=ros_master, log_path=log)
     stopper(proc)
     proc.start()
     assert proc.running and proc.pid and proc.returncode is None
@@ -197,7 +199,7 @@ def test_python_basenode_output_goes_to_the_log(ros_master, tmp_path, stopper):
 
 def test_debian_relay_runs_remapped_and_restart_keeps_the_remaps(ros_master, stopper):
     remaps = {"/in": "/w/base/in", "/out": "/w/base/out"}
-    proc = BaseProcess(find_executable("topic_tools", "relay"), ["/in", "/out"], node_name="relay_r",
+    proc = ros1_process(find_executable("topic_tools", "relay"), ["/in", "/out"], node_name="relay_r",
                        remaps=remaps, master_uri=ros_master)
     stopper(proc)
     master = rosgraph.Master("/test_base", master_uri=ros_master)
@@ -224,7 +226,7 @@ def test_debian_relay_runs_remapped_and_restart_keeps_the_remaps(ros_master, sto
 
 
 def test_python_basenode_remapped_relays_through_its_internal_names(ros_master, stopper):
-    proc = BaseProcess(echo_node(), node_name="echo_remap", master_uri=ros_master,
+    proc = ros1_process(echo_node(), node_name="echo_remap", master_uri=ros_master,
                        remaps={"/in": "/w/base/in", "/out": "/w/base/out"})
     stopper(proc.start())
     log_has(proc, "echo_node ready")
@@ -238,7 +240,7 @@ def test_python_basenode_remapped_relays_through_its_internal_names(ros_master, 
 
 def test_crash_after_start_is_reported_with_exit_code_and_last_lines(ros_master, stopper):
     exits = Exits()
-    proc = BaseProcess(echo_node(), ["--spawn-child"], node_name="crasher", params={"exit_after": 0.5},
+    proc = ros1_process(echo_node(), ["--spawn-child"], node_name="crasher", params={"exit_after": 0.5},
                        master_uri=ros_master, on_exit=exits)
     stopper(proc.start())
     child = int(log_has(proc, "child pid").split()[-1])
@@ -254,7 +256,7 @@ def test_crash_after_start_is_reported_with_exit_code_and_last_lines(ros_master,
 
 def test_crash_on_command_is_reported(ros_master, stopper):
     exits = Exits()
-    proc = BaseProcess(echo_node(), node_name="commanded", master_uri=ros_master, on_exit=exits)
+    proc = ros1_process(echo_node(), node_name="commanded", master_uri=ros_master, on_exit=exits)
     stopper(proc.start())
     log_has(proc, "echo_node ready")
     with Peer("publish_type.py", "/crash", "std_msgs/Int32") as pub:  # a latched Int32 0: "exit with code 0"
@@ -265,7 +267,7 @@ def test_crash_on_command_is_reported(ros_master, stopper):
 
 def test_crash_right_at_start_is_reported(ros_master, stopper):
     exits = Exits()
-    proc = BaseProcess(echo_node(), ["--no-such-option"], master_uri=ros_master, on_exit=exits)
+    proc = ros1_process(echo_node(), ["--no-such-option"], master_uri=ros_master, on_exit=exits)
     stopper(proc.start())
     _, returncode, last_lines = exits.wait()
     assert returncode == 2
@@ -276,12 +278,12 @@ def test_a_file_that_cannot_be_executed_fails_at_start(tmp_path):
     script = tmp_path / "not_a_program"
     script.write_text("no shebang, not executable")
     with pytest.raises(BaseNodeError, match="cannot run basenode .*not_a_program"):
-        BaseProcess(script).start()
+        BaseProcess([script]).start()
 
 
 def test_stop_ends_the_whole_process_group_and_is_not_reported(ros_master, stopper):
     exits = Exits()
-    proc = BaseProcess(echo_node(), ["--spawn-child"], node_name="parent", master_uri=ros_master, on_exit=exits)
+    proc = ros1_process(echo_node(), ["--spawn-child"], node_name="parent", master_uri=ros_master, on_exit=exits)
     stopper(proc.start())
     child = int(log_has(proc, "child pid").split()[-1])
     log_has(proc, "echo_node ready")
@@ -295,7 +297,7 @@ def test_stop_ends_the_whole_process_group_and_is_not_reported(ros_master, stopp
 
 
 def test_stop_escalates_to_sigkill_when_sigint_and_sigterm_are_ignored(stopper):
-    proc = BaseProcess("/bin/sh", ["-c", "trap '' INT TERM; echo up; while :; do sleep 0.05; done"])
+    proc = BaseProcess(["/bin/sh", "-c", "trap '' INT TERM; echo up; while :; do sleep 0.05; done"])
     stopper(proc.start())
     log_has(proc, "up")
     assert proc.stop(timeout=1.0) == -signal.SIGKILL
@@ -306,7 +308,7 @@ def test_a_basenode_started_from_a_short_lived_thread_outlives_the_thread(ros_ma
     # PR_SET_PDEATHSIG fires when the forking *thread* exits: ipyros forks from a launcher thread.
     procs = []
     starter = threading.Thread(target=lambda: procs.append(
-        BaseProcess(echo_node(), node_name="from_thread", master_uri=ros_master).start()))
+        ros1_process(echo_node(), node_name="from_thread", master_uri=ros_master).start()))
     starter.start()
     starter.join()
     proc = procs[0]
@@ -324,7 +326,7 @@ def test_restart_is_possible_from_on_exit(ros_master, stopper):
         if len(exits.calls) == 1:  # the restarted run fails the same way: restart once only
             proc.restart()
 
-    proc = BaseProcess(echo_node(), ["--bad-arg"], master_uri=ros_master, on_exit=on_exit)
+    proc = ros1_process(echo_node(), ["--bad-arg"], master_uri=ros_master, on_exit=on_exit)
     stopper(proc)
     proc.start()
     wait_for(lambda: len(exits.calls) == 2, 20, what="the restarted run to fail too")
@@ -335,8 +337,11 @@ def test_restart_is_possible_from_on_exit(ros_master, stopper):
 
 INTERPRETER = textwrap.dedent("""
     import sys, time
-    from ipyros.processes.basenode import BaseProcess, find_executable
-    proc = BaseProcess(find_executable("ipyros_test_nodes", "echo_node"), node_name=sys.argv[1]).start()
+    from ipyros.core.model import BaseModel
+    from ipyros.processes.basenode import BaseProcess
+    from ipyros.ros1.nodes import command
+    node = BaseModel(executable="echo_node", package="ipyros_test_nodes", node_name=sys.argv[1])
+    proc = BaseProcess(command(node), node_name=sys.argv[1]).start()
     while not any("echo_node ready" in line for line in proc.tail()):
         time.sleep(0.02)
     print(proc.pid, flush=True)
@@ -373,18 +378,18 @@ def test_sigkilled_interpreter_takes_the_basenode_with_it(ros_master):
 # -- the bundled demo robot --------------------------------------------------------
 
 def test_demo_move_base_drives_turtle_sim_to_a_goal_and_the_speed_guard_trips(ros_master, stopper):
-    sim = BaseProcess(find_executable("ipyros_demo", "turtle_sim"), master_uri=ros_master, params={"max_speed": 2.0})
-    nav = BaseProcess(find_executable("ipyros_demo", "move_base"), master_uri=ros_master,
-                      remaps={"/cmd_vel": "/turtle1/cmd_vel"}, params={"speed": 1.5})
+    sim = ros1_process(find_executable("ipyros_demo", "turtle_sim"), master_uri=ros_master, params={"max_speed": 2.0})
+    nav = ros1_process(find_executable("ipyros_demo", "move_base"), master_uri=ros_master,
+                       remaps={"/cmd_vel": "/turtle1/cmd_vel"}, params={"speed": 1.5})
     stopper(sim.start())
     stopper(nav.start())
     log_has(sim, "turtle_sim ready")
     log_has(nav, "move_base ready")
     with Peer("echo_topic.py", "/turtle1/pose", "geometry_msgs/Pose") as poses:
         poses.wait_line("position")
-        goal = BaseProcess("/usr/bin/rostopic", ["pub", "-r", "2", "/move_base_simple/goal",
-                                                 "geometry_msgs/PoseStamped", "{pose: {position: {x: 1.0, y: 1.0}}}"],
-                           master_uri=ros_master)
+        goal = BaseProcess(["/usr/bin/rostopic", "pub", "-r", "2", "/move_base_simple/goal",
+                            "geometry_msgs/PoseStamped", "{pose: {position: {x: 1.0, y: 1.0}}}"],
+                           env={"ROS_MASTER_URI": ros_master})
         stopper(goal.start())
         log_has(nav, "goal reached", timeout=30)
         goal.stop()
@@ -392,8 +397,8 @@ def test_demo_move_base_drives_turtle_sim_to_a_goal_and_the_speed_guard_trips(ro
         assert abs(x - 1.0) < 0.15 and abs(y - 1.0) < 0.15
     with Peer("echo_topic.py", "/turtle1/speed_exceeded", "std_msgs/Bool") as exceeded:
         exceeded.wait_line("data: False")  # latched: known at once
-        fast = BaseProcess("/usr/bin/rostopic", ["pub", "-r", "5", "/turtle1/cmd_vel", "geometry_msgs/Twist",
-                                                 "{linear: {x: 9.0}}"], master_uri=ros_master)
+        fast = BaseProcess(["/usr/bin/rostopic", "pub", "-r", "5", "/turtle1/cmd_vel", "geometry_msgs/Twist",
+                            "{linear: {x: 9.0}}"], env={"ROS_MASTER_URI": ros_master})
         stopper(fast.start())
         exceeded.wait_line("data: True")
         log_has(sim, "above max_speed 2.00 m/s")

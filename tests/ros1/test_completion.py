@@ -11,7 +11,7 @@ import time
 import warnings
 
 import pytest
-from ros1_fixtures import free_port, wait_for
+from ros1_fixtures import free_port, master_graph, wait_for
 from IPython.core.completer import CompletionContext, provisionalcompleter
 from IPython.core.interactiveshell import InteractiveShell
 from topic_nodes import many_topics
@@ -19,7 +19,6 @@ from traitlets.config import Config
 
 from ipyros.ipython.completion import (IDENTIFIER, Catalog, RosMatcher, default_catalog, install, string_argument,
                                        uninstall)
-from ipyros.tools.graph import GraphCache
 from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
 
 LIVE = {
@@ -70,7 +69,7 @@ def wrapping_model() -> NodeModel:
 @pytest.fixture(scope="module")
 def graph(ros_master):
     with many_topics("compl_sim", 0, topics=LIVE, subscribe=("/ct/tf",)):
-        cache = GraphCache(ros_master, period=0.2).start()
+        cache = master_graph(ros_master, period=0.2).start()
         wait_for(lambda: set(LIVE) | {"/ct/tf"} <= set(cache.snapshot.topics), timeout=20,
                  what="the test node's topics in the graph")
         yield cache
@@ -276,7 +275,7 @@ def test_completion_evaluates_nothing(matcher, ip):
 
 
 def test_master_down_answers_instantly_from_local_data(ip):
-    dead = GraphCache(f"http://127.0.0.1:{free_port()}/", period=0.05).start()
+    dead = master_graph(f"http://127.0.0.1:{free_port()}/", period=0.05).start()
     try:
         assert dead.wait_first(2) and not dead.snapshot.master_up
         down = RosMatcher(ip, dead, CATALOG)
@@ -299,7 +298,7 @@ def test_master_gone_completion_offers_the_last_graph_marked_stale(ip, ros_home)
     uri = f"http://127.0.0.1:{free_port()}/"
     master = subprocess.Popen(["rosmaster", "--core", "-p", uri.rsplit(":", 1)[1].strip("/"), "-w", "3"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    cache = GraphCache(uri, period=0.05, timeout=0.3)
+    cache = master_graph(uri, period=0.05, timeout=0.3)
     try:
         wait_for(lambda: _registered(uri), timeout=20, what="the master to answer")
         cache.start()

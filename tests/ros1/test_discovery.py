@@ -5,11 +5,14 @@ from __future__ import annotations
 import pytest
 from rich.console import Console
 
-from ros1_fixtures import free_port
+from ros1_fixtures import free_port, ros1_process
 from helpers import use_test_nodes
-from ipyros.processes.basenode import BaseProcess, find_executable
-from ipyros.tools.discovery import Interface, discover, interface_table, wait_for_node
 from ipyros.core.errors import BaseNodeError, MasterError
+from ipyros.core.records import Interface
+from ipyros.ipython.display import interface_table, renderable
+from ipyros.processes.basenode import BaseProcess
+from ipyros.ros1.discovery import discover, wait_for_node
+from ipyros.ros1.nodes import find_executable
 
 
 @pytest.fixture(autouse=True)
@@ -23,7 +26,7 @@ def launch(ros_master):
     procs: list[BaseProcess] = []
 
     def start(package: str, executable: str, *args: str, **options) -> BaseProcess:
-        proc = BaseProcess(find_executable(package, executable), args, master_uri=ros_master, **options)
+        proc = ros1_process(find_executable(package, executable), args, master_uri=ros_master, **options)
         procs.append(proc)
         return proc.start()
 
@@ -70,7 +73,7 @@ def test_the_demo_robot_as_the_paper_session_would_discover_it(ros_master, launc
     assert "publishes" in text and "/cmd_vel" in text and "geometry_msgs/Twist" in text
     assert "service" in text and "/move_base/clear_goal" in text and "std_srvs/Empty" in text
     assert "not shown" in text and "/rosout, ~get_loggers, ~set_logger_level" in text and "ROS plumbing" in text
-    assert render(nav) == text  # an Interface renders itself as its table
+    assert render(renderable(nav)) == text  # an Interface is shown as its table
 
 
 def test_cpp_relay_subscribes_with_any_type_so_the_type_is_unknown(ros_master, launch):
@@ -79,7 +82,7 @@ def test_cpp_relay_subscribes_with_any_type_so_the_type_is_unknown(ros_master, l
     # topic_tools relay subscribes as "any type" and advertises its output only at the first message.
     assert interface.subscriptions == [("/relay_in", "")]
     assert interface.publications == []
-    assert "unknown" in render(interface)
+    assert "unknown" in render(interface_table(interface))
 
 
 def test_a_node_that_is_not_running_is_reported_with_the_nodes_that_are(ros_master, launch):
@@ -98,5 +101,5 @@ def test_no_master_is_a_master_error():
 
 
 def test_an_empty_interface_renders_as_such():
-    text = render(Interface(node="/quiet"))
+    text = render(interface_table(Interface(node="/quiet")))
     assert "Interface of /quiet" in text and "no topics or services" in text

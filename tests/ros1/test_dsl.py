@@ -13,6 +13,7 @@ from ros1_fixtures import master_state, wait_for
 from peer import Peer
 
 from ipyros.core import errors
+from ipyros.node.dsl import engine_of
 
 
 def test_two_nodes_share_the_process_node(make_node, ros_master):
@@ -54,7 +55,7 @@ def test_messages_flow_between_two_nodes_through_the_master(make_node):
     talker = make_node("dsl_talker")
     talker.new.publish(topic="/dsl_flow", msgType="std_msgs/String")
     talker.create()
-    wait_for(lambda: talker._live and next(iter(talker._live.values())).connections(), what="connection")
+    wait_for(lambda: engine_of(talker).writer("/dsl_flow")[0].connections(), what="connection")
     talker.write("/dsl_flow", String("hello"))
     wait_for(lambda: seen, what="message")
     assert seen[0].data == "hello"
@@ -100,7 +101,7 @@ def test_handlers_read_globals_at_call_time(make_node):
     nd.new.subscribe(topic="/dsl_globals", handler=scaled, msgType=UInt32)
     nd.new.publish(topic="/dsl_globals", msgType=UInt32)
     nd.create()
-    wait_for(lambda: nd._writer("/dsl_globals")[0].connections(), what="self connection")
+    wait_for(lambda: engine_of(nd).writer("/dsl_globals")[0].connections(), what="self connection")
     nd.write("/dsl_globals", UInt32(2))
     wait_for(lambda: seen == [2.0], what="first message")
     speed = 6.0
@@ -204,8 +205,8 @@ def test_a_raising_handler_is_reported_counted_and_the_node_keeps_serving(make_n
     nd.new.subscribe("/dsl_crash/good", handler=good.append, msgType=UInt32)
     nd.new.publish("/dsl_crash/bad", msgType=UInt32).publish("/dsl_crash/good", msgType=UInt32)
     nd.create()
-    wait_for(lambda: nd._writer("/dsl_crash/bad")[0].connections()
-             and nd._writer("/dsl_crash/good")[0].connections(), what="connections")
+    wait_for(lambda: engine_of(nd).writer("/dsl_crash/bad")[0].connections()
+             and engine_of(nd).writer("/dsl_crash/good")[0].connections(), what="connections")
     for i in range(20):
         nd.write("/dsl_crash/bad", UInt32(i))
         nd.write("/dsl_crash/good", UInt32(i))
@@ -239,11 +240,11 @@ def test_names_resolve_in_the_node_namespace(make_node):
 
 
 def test_the_node_displays_as_a_table(make_node):
-    from ipyros.ipython.display import render_text
+    from ipyros.ipython.display import render_text, renderable
 
     nd = make_node("dsl_show")
     nd.new.publish("/dsl_show", msgType=Twist)
-    text = render_text(nd.__rich__())
+    text = render_text(renderable(nd))
     assert "rosNode /dsl_show (declared)" in text and "geometry_msgs/Twist" in text and "publish" in text
 
 

@@ -10,6 +10,7 @@ from ros1_fixtures import wait_for
 from peer import Peer
 
 from ipyros.core import errors
+from ipyros.node.dsl import engine_of
 
 
 @pytest.mark.parametrize("spec, message", [
@@ -105,6 +106,6 @@ def test_a_rejected_declaration_leaves_the_running_node_alone(make_node):
         with pytest.raises(errors.IpyrosError):
             bad()
     assert nd.model() == before
-    wait_for(lambda: nd._writer("/err_keep")[0].connections(), what="connection")
+    wait_for(lambda: engine_of(nd).writer("/err_keep")[0].connections(), what="connection")
     nd.write("/err_keep", UInt32(7))
     wait_for(lambda: [m.data for m in seen] == [7], what="the old handler to still run")

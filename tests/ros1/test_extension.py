@@ -114,7 +114,7 @@ def test_settings_come_from_the_shell_config(ros_session, ros_master):
         extension = _loaded[id(shell)]
         settings = extension.settings
         assert (settings.hz_window, settings.echo_count, settings.rich_output) == (0.25, 3, False)
-        assert extension.graph.period == 0.2 and extension.graph.master_uri == ros_master
+        assert extension.graph.period == 0.2 and extension.graph.where == ros_master
         assert logging.getLogger("ipyros").level == logging.DEBUG
         assert ros_session.config.master_uri == ros_master
     assert logging.getLogger("ipyros").level == logging.NOTSET
@@ -193,7 +193,8 @@ def test_no_master_and_no_start_returns_at_once_and_says_so(ros_session, capsys)
     config = Config()
     config.RosMagics.start_master = False
     previous = ros_session.config
-    ros_session.master, attached = None, ros_session.master  # as if nothing was attached yet
+    connection = ros_session.backend.connection
+    connection.master, attached = None, connection.master  # as if nothing was attached yet
     try:
         config.RosMagics.master_uri = uri
         start = time.monotonic()
@@ -201,7 +202,7 @@ def test_no_master_and_no_start_returns_at_once_and_says_so(ros_session, capsys)
             took = time.monotonic() - start
             out = capsys.readouterr().out
     finally:
-        ros_session.master, ros_session.config = attached, previous
+        connection.master, ros_session.config = attached, previous
     assert f"ipyros: no ROS master answers at {uri}; start roscore there" in out
     assert took < 5
 

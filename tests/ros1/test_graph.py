@@ -7,15 +7,16 @@ import threading
 import time
 
 import pytest
-from ros1_fixtures import free_port, wait_for
+from ros1_fixtures import free_port, master_graph, wait_for
 from topic_nodes import many_topics, stop
 
-from ipyros.tools.graph import GraphCache, GraphSnapshot, fetch_snapshot
+from ipyros.core.graph import GraphSnapshot
+from ipyros.ros1.graph import fetch_snapshot
 
 
 @pytest.fixture
 def graph(ros_master):
-    cache = GraphCache(ros_master, period=0.1).start()
+    cache = master_graph(ros_master, period=0.1).start()
     assert cache.wait_first(5)
     yield cache
     cache.stop()
@@ -56,7 +57,7 @@ def test_snapshot_is_immutable_and_sorted(graph):
 def test_topics_matching_glob_substring_type_node(ros_master):
     with many_topics("match_a", 2, "/m/a/cmd", type="geometry_msgs/Twist"), \
             many_topics("match_b", 2, "/m/b/pose", type="geometry_msgs/Pose", subscribe=("/m/a/cmd0000",)):
-        graph = GraphCache(ros_master)
+        graph = master_graph(ros_master)
         snap = wait_for(lambda: (s := graph.refresh_now(2)) and len(s.topics_with_prefix("/m/")) == 4
                         and "/m/a/cmd0000" in s.subscribers and s, timeout=20, what="4 topics under /m/")
         assert graph.topics_matching("/m/*/cmd*") == ["/m/a/cmd0000", "/m/a/cmd0001"]
@@ -72,7 +73,7 @@ def test_topics_matching_glob_substring_type_node(ros_master):
 def test_master_down_is_empty_fast_and_quiet():
     uri = f"http://127.0.0.1:{free_port()}/"  # nothing listens there
     started = time.monotonic()
-    with GraphCache(uri, period=0.05) as graph:
+    with master_graph(uri, period=0.05) as graph:
         assert graph.wait_first(1)
         snap = graph.refresh_now()
         assert snap.master_up is False and not snap.topics and not snap.nodes and not snap.services
@@ -91,7 +92,7 @@ def test_silent_master_is_bounded_by_the_socket_timeout():
         snap = fetch_snapshot(uri, timeout=0.3)
         assert snap.master_up is False
         assert 0.25 < time.monotonic() - started < 2
-        graph = GraphCache(uri, period=0.05, timeout=0.2).start()
+        graph = master_graph(uri, period=0.05, timeout=0.2).start()
         assert graph.wait_first(2)
         started = time.monotonic()
         graph.stop()  # joins the thread, which may be mid-call: bounded by the timeout
@@ -99,7 +100,7 @@ def test_silent_master_is_bounded_by_the_socket_timeout():
 
 
 def test_start_stop_leave_no_thread(ros_master):
-    graph = GraphCache(ros_master, period=0.05)
+    graph = master_graph(ros_master, period=0.05)
     assert graph.start() is graph and graph.start() is graph  # idempotent
     assert graph.wait_first(5) and graph.snapshot.master_up
     graph.stop()
@@ -113,6 +114,6 @@ def test_start_stop_leave_no_thread(ros_master):
 
 
 def test_empty_snapshot_before_first_refresh():
-    snap = GraphCache("http://127.0.0.1:1/").snapshot
+    snap = master_graph("http://127.0.0.1:1/").snapshot
     assert snap == GraphSnapshot() and snap.master_up is False and snap.taken_at == 0.0
     assert snap.topics_with_prefix("/") == [] and snap.topics_matching("*") == []

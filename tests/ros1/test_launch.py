@@ -25,6 +25,7 @@ from helpers import pid_alive
 from ipyros.core import errors
 from ipyros.core.model import NodeModel
 from ipyros.node.wrapping import basenode_remaps
+from ipyros.node.dsl import engine_of
 
 LAUNCH = Path(__file__).resolve().parents[1] / "launch"
 ROBOT = str(LAUNCH / "robot.launch")
@@ -95,7 +96,7 @@ def test_one_remap_per_name_composes_the_launch_remaps_with_the_wrapping(make_no
     nd.reuse.subscribe("odom", type=String)  # the basenode's own name, remapped
     internal = "/robot1/remap_wrap/base"
     assert [t.resolved for t in nd.model().topics] == ["/robot1/base/cmd_vel", "/odom_raw"]
-    assert basenode_remaps(nd._model) == {
+    assert basenode_remaps(nd.model()) == {
         "/robot1/cmd_vel": internal + "/robot1/base/cmd_vel",
         "/robot1/odom": internal + "/odom_raw",
         "/robot1/scan": "/scan_front",  # not wrapped: as declared
@@ -227,7 +228,7 @@ def test_launch_args_are_given_like_roslaunch_file_name_value(make_node, ros_mas
         wait_for(lambda: feeder.write("/in", String("x")) or out, timeout=20, what="a message through it")
     finally:
         nd.shutdown()
-    again = rosNode.load(tmp_path / "r2.yaml", session=nd._session, trust=True)
+    again = rosNode.load(tmp_path / "r2.yaml", session=engine_of(nd).session, trust=True)
     assert again.model().base.launch_args == {"robot": "r2"} and again.basenode_name == "/r2_planner"
 
 
@@ -316,4 +317,4 @@ def test_discovery_of_a_launch_node_finds_its_names_after_the_launch_remaps(make
     nd.discover()
     declared = {(t.name, t.resolved, t.direction) for t in nd.model().topics}
     assert {("in", "/robot1/in", "subscribe"), ("plan", "/robot1/plan", "publish")} <= declared
-    assert basenode_remaps(nd._model)["/robot1/out"] == "/robot1/planner_disc_wrap/base/robot1/plan"
+    assert basenode_remaps(nd.model())["/robot1/out"] == "/robot1/planner_disc_wrap/base/robot1/plan"

@@ -11,6 +11,7 @@ from peer import Peer
 
 from ipyros.core.errors import MessageTypeError, TopicTypeConflict
 from ipyros.ipython.extension import _loaded
+from ipyros.node.dsl import engine_of
 from shell import ctrl_c_after, error_of, ip, ok  # noqa: F401
 
 
@@ -56,7 +57,7 @@ def test_topics_hz_measures_the_rate(ip, capsys, rate_peer):
     row = next(line for line in capsys.readouterr().out.splitlines() if "/mg/rate" in line and "│" in line)
     rate = float(row.rstrip(" │").split()[-1])
     assert 40 < rate < 60, row
-    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "the listener is gone"
+    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"], "the listener is gone"
 
 
 def _rows(out: str, prefix: str = "/mg/") -> dict[str, list[str]]:
@@ -128,7 +129,7 @@ def test_echo_prints_n_messages_and_leaves_no_subscription(ip, capsys, rate_peer
     assert out.count("---") == 3 and out.count("data: ") == 3
     values = [int(line.split()[1]) for line in out.splitlines() if line.startswith("data: ")]
     assert values == sorted(values) and len(set(values)) == 3
-    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"]
 
 
 def test_echo_stops_on_ctrl_c_without_killing_anything(ip, capsys, make_node):
@@ -142,7 +143,7 @@ def test_echo_stops_on_ctrl_c_without_killing_anything(ip, capsys, make_node):
         assert out.count("---") == 1, "the latched message, then nothing until Ctrl-C"
         assert "stopped listening to /mg/latched after 1 message" in out
         assert peer.proc.poll() is None
-        assert "/mg/latched" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+        assert "/mg/latched" not in master_state(_loaded[id(ip)].graph.where)["sub"]
 
 
 def test_echo_waits_for_a_topic_not_published_yet_and_reads_field_paths(ip, capsys):
@@ -210,7 +211,7 @@ def test_pub_through_a_node_that_publishes_the_topic_and_type_conflicts(ip, caps
         with Peer("echo_topic.py", "/mg/talk", "std_msgs/String") as listener:
             listener.wait_line("ready")
             talker = ip.user_ns["talker"]  # a message written before the connection is up is lost: wait for it
-            wait_for(lambda: talker._writer("/mg/talk")[0].connections(), what="the listener to connect")
+            wait_for(lambda: engine_of(talker).writer("/mg/talk")[0].connections(), what="the listener to connect")
             capsys.readouterr()
             ok(ip, "%pub /mg/talk std_msgs/String 'via the talker'")
             assert "(from mg_talker)" in capsys.readouterr().out
@@ -258,7 +259,7 @@ def test_echo_fields_filter_and_the_messages_kept(ip, capsys, rate_peer):
     assert len(values) == 3 and all(v % 2 == 1 for v in values), out
     kept = ip.user_ns["kept"]
     assert [m.data for m in kept] == values and repr(kept) == "<3 messages from /mg/rate: a list>"
-    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"]
 
     error = error_of(ip, "%echo /mg/rate -n 1 --filter 'm.data >'")
     assert isinstance(error, UsageError) and "--filter 'm.data >' is not a Python expression" in str(error)
@@ -266,7 +267,7 @@ def test_echo_fields_filter_and_the_messages_kept(ip, capsys, rate_peer):
     assert isinstance(error, UsageError) and "raised AttributeError" in str(error) and "on message 1" in str(error)
     error = error_of(ip, "%echo /mg/rate -n 1 --field dta")
     assert isinstance(error, UsageError) and "--field dta: no field 'dta' in std_msgs/UInt32 (it has data)" in str(error)
-    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "nothing left listening"
+    assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"], "nothing left listening"
 
 
 def test_echo_output_is_yaml_that_pub_takes_back(ip, capsys):
@@ -312,7 +313,7 @@ def test_echo_as_csv_and_as_a_table_and_hz_of_two_topics_at_once(ip, capsys, rat
         assert set(rows) == {"/mg/rate", "/mg/slow"}, rows
         assert 40 < float(rows["/mg/rate"][2]) < 60 and 7 < float(rows["/mg/slow"][2]) < 13, rows
         assert 0 <= float(rows["/mg/rate"][3]) <= float(rows["/mg/rate"][4]) < 0.5, "min and max intervals"
-        assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"], "the listener is gone"
+        assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"], "the listener is gone"
         assert "no live topic /mg/nothing" in str(error_of(ip, "%hz /mg/rate /mg/nothing"))
 
 
@@ -328,7 +329,7 @@ def test_plot_in_the_terminal_until_ctrl_c_and_to_a_png(ip, capsys, rate_peer, t
     assert "/mg/rate: * data" in out and "┌" in out and "time (s)" in out, out  # the chart of characters
     values = p.data["data"]
     assert len(values) > 30 and list(values) == sorted(values) and len(p.data["t"]) == len(values)
-    assert not p.running and "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+    assert not p.running and "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"]
 
     with ctrl_c_after(1.0):  # no --duration: until Ctrl-C
         p = ok(ip, "%plot /mg/rate data").result
@@ -353,7 +354,7 @@ def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, cap
     ok(ip, f"rec = %record {bag} /mg/rate --duration 1")
     assert f"ipyros: recording /mg/rate to {bag} for 1 s" in capsys.readouterr().out
     wait_for(lambda: not ip.user_ns["rec"].running, timeout=10, what="the recording to end by itself")
-    assert ip.user_ns["rec"].count >= 30 and "/mg/rate" not in master_state(_loaded[id(ip)].graph.master_uri)["sub"]
+    assert ip.user_ns["rec"].count >= 30 and "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"]
     assert "exists; give a new file name" in str(error_of(ip, f"%record {bag} /mg/rate"))
 
     ok(ip, "from std_msgs.msg import UInt32\nouts = []\n"

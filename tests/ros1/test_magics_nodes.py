@@ -11,6 +11,7 @@ from peer import Peer
 
 from ipyros.core.errors import HandlerError, IpyrosError, NotDeclaredError
 from ipyros.ipython.extension import _loaded
+from ipyros.node.dsl import engine_of
 from shell import error_of, ip, ok  # noqa: F401
 
 LISTENER = textwrap.dedent("""\
@@ -165,7 +166,7 @@ def test_try_runs_a_candidate_beside_the_live_handler_without_publishing(node_ip
         assert "mn_node /mn/numbers: live on_number vs candidate candidate: 4 of 4 messages give different" in out
         for i in range(4):
             assert f"live {i}" in out and f"cand {i * 10}" in out
-        assert "→ write /mn/out: data: \"cand 3\"" in out
+        assert "→ write /mn/out: {data: cand 3}" in out
         assert "→ write /mn/nowhere would fail: mn_node does not publish /mn/nowhere" in out
         ok(ip, "%try -n 2 nd /mn/numbers lambda m: print('lam', m.data)")
         out = capsys.readouterr().out
@@ -244,7 +245,7 @@ def test_try_history_setting_resizes_what_subscriptions_keep(node_ip):
     ip = node_ip
     from ipyros.core.plan import topic_slot
 
-    slot = ip.user_ns["nd"].slot(topic_slot("/mn/numbers"))
+    slot = engine_of(ip.user_ns["nd"]).slot(topic_slot("/mn/numbers"))
     assert slot.recent.maxlen == 20
     ok(ip, "%config RosMagics.try_history = 3")
     assert slot.recent.maxlen == 3

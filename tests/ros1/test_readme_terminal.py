@@ -17,7 +17,7 @@ import pytest
 from ros1_fixtures import free_port, wait_for
 from helpers import pid_alive
 from readme import ROOT, readme_lines, watch_the_turtle_go_round
-from terminal import Terminal, descendants, prompt, prompt_reads, run
+from terminal import Terminal, descendants, prompt, run
 
 from ipyros.tools.robot import TURTLE_CIRCLE
 

@@ -22,6 +22,8 @@ from ipyros.core import journal
 from ipyros import rosNode
 from ipyros.files import savefile
 from ipyros.core.errors import IpyrosError
+from ipyros.ipython.display import renderable
+from ipyros.node.dsl import engine_of
 
 SETUP = '''
 from std_msgs.msg import String
@@ -101,7 +103,7 @@ def test_every_handler_version_is_kept_and_revert_brings_one_back(sf):
 def test_the_history_is_written_to_a_file_of_its_own_as_it_goes(sf):
     ip = sf
     ok(ip, V2)
-    session = ip.user_ns["nd"]._session
+    session = engine_of(ip.user_ns["nd"]).session
     path = session.journal.path
     assert path is not None and Path(path).parent == Path(os.environ["IPYROS_HISTORY_DIR"])
     lines = [json.loads(line) for line in Path(path).read_text().splitlines()]
@@ -112,7 +114,7 @@ def test_the_history_is_written_to_a_file_of_its_own_as_it_goes(sf):
     assert "v2 " in shouts[-1]["source"] and shouts[-1]["handler"] == "shout"
     assert any(entry["change"] == "params['volume'] = 11" for entry in mine)
     assert journal.read(path)[-1].change == mine[-1]["change"]  # read back as Change records
-    assert f"kept in {path}" in str(ip.user_ns["nd"].history().__rich__().title)
+    assert f"kept in {path}" in str(renderable(ip.user_ns["nd"].history()).title)
 
 
 def test_history_files_are_the_users_alone(tmp_path):
@@ -214,7 +216,7 @@ def test_a_file_failing_halfway_leaves_nothing_running(sf, tmp_path):
         "    nd.create()\n",
         "    nd.create()\n    late = rosNode('sf_late')\n    late.new.publish('/sf/late', msgType='no_such/Type')\n")
     target.write_text(text)
-    session = ip.user_ns["nd"]._session
+    session = engine_of(ip.user_ns["nd"]).session
     before = set(session.nodes)
     error = error_of(ip, f"%load_nodes {target}")
     assert "restoring half.py, line" in str(error) and "no_such/Type" in str(error)

@@ -68,7 +68,7 @@ def test_an_embedded_master_and_what_it_starts_listen_on_loopback_only(ros_home)
         w = rosNode("loopback_wrapper")
         w.baseNode("echo_node").basePackage("ipyros_test_nodes").reuse.publish("out", type=String)
         w.create()
-        pids = [os.getpid(), w.base.pid] + [p.pid for p in current().master.processes]
+        pids = [os.getpid(), w.base.pid] + [p.pid for p in current().backend.connection.master.processes]
         print("PIDS", *pids, flush=True)
         sys.stdin.read()
     """)

@@ -13,6 +13,7 @@ from ros1_fixtures import master_state, wait_for
 
 from ipyros.core import errors
 from ipyros import rosNode
+from ipyros.node.dsl import engine_of
 
 speed = 4.5
 
@@ -274,8 +275,8 @@ def test_a_reuse_relay_keeps_latching(make_node):
     w.baseNode("turtle_sim", namespace="latch").basePackage("ipyros_demo")
     w.reuse.publish("turtle1/speed_exceeded", type=Bool)
     w.create()
-    relay = next(ep for ep in w._live.values() if getattr(ep, "target", None) == "/latch/turtle1/speed_exceeded")
-    wait_for(lambda: relay.count >= 1, timeout=20, what="the latched message to pass the relay")
+    wait_for(lambda: any(f.topic == "/latch/turtle1/speed_exceeded" and f.messages >= 1 for f in engine_of(w).sent()),
+             timeout=20, what="the latched message to pass the relay")
     late = listen(make_node, "latch_late", "/latch/turtle1/speed_exceeded", Bool)
     wait_for(lambda: late, timeout=20, what="the latched message for a late subscriber")
     assert late[0].data is False and late[0]._connection_header["latching"] == "1"

@@ -10,6 +10,7 @@ from std_msgs.msg import String, UInt32
 from std_srvs.srv import SetBool
 
 from ipyros.core import errors
+from ipyros.node.dsl import engine_of
 
 
 def test_each_dsl_node_is_a_ros2_node_and_talks_to_other_processes(make_node):
@@ -21,11 +22,17 @@ def test_each_dsl_node_is_a_ros2_node_and_talks_to_other_processes(make_node):
                                             msgType="std_msgs/msg/String").create()
         wait_for(lambda: talker.write("chatter", String(data="hi")) or any("heard: hi" in x for x in peer.lines),
                  timeout=20, interval=0.1, what="the peer to hear the DSL node")
-        peer.proc.stdin.write("nodes\n")
-        peer.proc.stdin.flush()
-        listing = peer.wait_line("nodes: ")
-        assert "/r2/talker" in listing.split() and "/listener" in listing.split(), listing
-        assert talker.ros_name == talker.session.process.name  # the session's first node names it
+
+        def peer_lists_both() -> bool:  # node names travel apart from endpoints: the peer may learn them later
+            asked = len(peer.lines)
+            peer.proc.stdin.write("nodes\n")
+            peer.proc.stdin.flush()
+            listing = wait_for(lambda: next((x for x in peer.lines[asked:] if x.startswith("nodes: ")), None),
+                               timeout=10, what="the peer's node list")
+            return {"/r2/talker", "/listener"} <= set(listing.split())
+
+        wait_for(peer_lists_both, timeout=20, interval=0.2, what="the peer to list both DSL nodes")
+        assert talker.ros_name == engine_of(talker).session.process.name  # the session's first node names it
         with pytest.raises(errors.MessageTypeError, match="chatter carries std_msgs/String, not std_msgs/UInt32"):
             talker.write("chatter", UInt32(data=1))
         # The peer's name is taken: a DSL node of that name is refused, and nothing of it runs.
@@ -33,7 +40,7 @@ def test_each_dsl_node_is_a_ros2_node_and_talks_to_other_processes(make_node):
         taker.new.publish("/r2/taken", msgType=String)
         with pytest.raises(errors.NodeStateError, match="a node named /echo_peer is already running in the ROS 2 graph"):
             taker.create()
-        assert not taker.created and "/echo_peer" not in talker.session.process.hosts()
+        assert not taker.created and "/echo_peer" not in engine_of(talker).session.process.hosts()
 
 
 def test_a_handler_swapped_under_a_200_hz_stream_loses_none_and_doubles_none(make_node):

@@ -12,6 +12,7 @@ from pathlib import Path
 from sensor_msgs.msg import Image
 
 from ros2_fixtures import wait_for
+from ipyros.node.dsl import engine_of
 
 
 def receiving_sockets(pid: int) -> list[tuple[str, int]]:
@@ -71,7 +72,7 @@ def test_a_large_best_effort_topic_is_delivered(make_node, peer):
     listener = peer("listen.py", "/fastdds/image", "sensor_msgs/Image", "header.frame_id", "--best-effort")
     listener.wait_line("ready")
     nd = make_node("fastdds_camera").new.publish("/fastdds/image", msgType=Image, qos="sensor_data").create()
-    wait_for(lambda: nd.sent()[0].connections, timeout=20, what="the listener")
+    wait_for(lambda: engine_of(nd).sent()[0].connections, timeout=20, what="the listener")
     image = Image(height=1024, width=1024, encoding="mono8", step=1024, data=bytes(1 << 20))
     for i in range(30):
         image.header.frame_id = str(i)

@@ -160,6 +160,6 @@ def test_a_model_made_on_ros1_loads_on_ros2_and_says_so(tmp_path, ros2_session, 
     launch = tmp_path / "launched.yaml"
     launch.write_text(ROS1_MODEL.replace("base: null", "base: {executable: turtle_sim, package: ipyros_demo, "
                                                       "launch: /opt/robot.launch, launch_node: /turtle_sim}"))
-    with pytest.raises(errors.IpyrosError, match="was made on ROS 1 and wraps a node of the launch file "
-                                                 "/opt/robot.launch: ROS 2 has no roslaunch"):
+    with pytest.raises(errors.IpyrosError, match="launched.yaml: baseLaunch reads ROS 1 launch files, and this "
+                                                 "session runs ROS 2"):
         rosNode.load(str(launch), {"heard": heard}, trust=True)

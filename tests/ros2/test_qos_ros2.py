@@ -10,6 +10,7 @@ from std_msgs.msg import String
 
 from ipyros.core import errors
 from ipyros.ipython.display import node_table
+from ipyros.node.dsl import engine_of
 
 ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
 
@@ -81,6 +82,6 @@ def test_a_relay_takes_the_qos_of_a_best_effort_basenode(make_node, notices):
     wait_for(lambda: feeder.write("/robot7/in", String(data="x")) or heard, timeout=20, interval=0.2,
              what="the best-effort output through the relay")
     assert heard[0] == "S:x"
-    relay = next(f for f in w.sent() if f.topic == "/robot7/out")
+    relay = next(f for f in engine_of(w).sent() if f.topic == "/robot7/out")
     assert relay.messages >= 1
     assert not [n for n in notices if "incompatible" in n], notices

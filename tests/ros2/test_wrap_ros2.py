@@ -8,6 +8,8 @@ import pytest
 from ros2_fixtures import wait_for
 from std_msgs.msg import String
 
+from ipyros.node.dsl import engine_of
+
 ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
 
 
@@ -67,11 +69,12 @@ def test_a_latched_output_stays_latched_through_the_wrapper(make_node):
     w.baseNode(ECHO_NODE, namespace="robot6", params={"prefix": "L"})
     w.reuse.publish("status", type=String)
     w.create()
-    wait_for(lambda: w.sent() and w.sent()[0].messages >= 1, timeout=20, what="the relay to forward the status")
+    wait_for(lambda: engine_of(w).sent() and engine_of(w).sent()[0].messages >= 1, timeout=20,
+             what="the relay to forward the status")
     time.sleep(0.5)  # the subscriber below comes after the message went by: only latching brings it
     late: list[str] = []
     listener = make_node("w2_late_listener").create()
-    graph_node = listener.session.process.host(listener.fullname)
+    graph_node = engine_of(listener).session.process.host(listener.fullname)
     graph_node.create_subscription(String, "/robot6/status", lambda m: late.append(m.data),
                                    QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
     wait_for(lambda: late == ["L up"], timeout=10, what="the latched status for a late subscriber")
@@ -177,6 +180,7 @@ def _gone(pid: int) -> bool:
 _INTERPRETER = """
 import sys
 from ipyros import rosNode
+from ipyros.node.dsl import engine_of
 from std_msgs.msg import String
 w = rosNode("orphan_wrapper")
 w.baseNode(sys.argv[2], namespace="orphans")

@@ -20,6 +20,11 @@ import pytest
 
 TESTS = Path(__file__).resolve().parents[1]
 
+from ipyros.core.model import BaseModel  # noqa: E402
+from ipyros.processes.basenode import BaseProcess  # noqa: E402
+from ipyros.ros1.graph import fetch_snapshot  # noqa: E402
+from ipyros.ros1.nodes import command  # noqa: E402
+from ipyros.tools.graph import GraphCache  # noqa: E402
 from peer import Peer as SharedPeer  # noqa: E402
 from support import SESSION_PIDS, node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
 
@@ -30,6 +35,20 @@ os.environ.setdefault("IPYROS_ROS", "1")
 
 #: The ROS this plugin is for (the tests in both/ ask).
 ROS = 1
+
+
+def ros1_process(executable, args=(), *, master_uri=None, node_name=None, namespace=None, remaps=None, params=None,
+                 **options):
+    """A ROS 1 node's process, its command line written as the backend writes it (ros1/nodes.py)."""
+    model = BaseModel(executable=str(executable), args=list(args), node_name=node_name,
+                      namespace=namespace, remaps=dict(remaps or {}), params=dict(params or {}))
+    env = {"ROS_MASTER_URI": master_uri} if master_uri else {}
+    return BaseProcess(command(model), node_name=node_name, env=env, **options)
+
+
+def master_graph(uri: str, **options) -> GraphCache:
+    """A graph cache reading the master at ``uri``, as the ROS 1 backend gives it."""
+    return GraphCache(lambda timeout: fetch_snapshot(uri, timeout), lambda: uri, **options)
 
 
 class Peer(SharedPeer):

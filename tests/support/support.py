@@ -20,6 +20,19 @@ def wait_for(predicate: Callable[[], Any], timeout: float = 10.0, interval: floa
         time.sleep(interval)
 
 
+def graph_knows(topic: str, side: str = "subscribers", timeout: float = 20.0) -> tuple[str, ...]:
+    """Wait until the session's graph lists a node on ``side`` (``"subscribers"``, ``"publishers"``) of ``topic``.
+
+    A peer that just said "ready" is not yet in the graph (ROS 2 discovery may take its 3 s
+    announcement period to hear of it): a test wait here, as a user would look at %topics.
+    """
+    from ipyros.node.session import current
+
+    backend = current().backend
+    return wait_for(lambda: getattr(backend.graph_snapshot(timeout=2.0), side).get(topic), timeout,
+                    what=f"the graph to list {side} of {topic}")
+
+
 def node_maker(session: Any) -> Iterator[Callable[..., Any]]:
     """The body of a ``make_node`` fixture: build rosNodes in ``session``, shut down when the test ends."""
     from ipyros import rosNode

@@ -1,4 +1,4 @@
-"""How a basenode is started: its command line on each ROS (no process is run here)."""
+"""How a basenode is started: its command line on each ROS (no process is run, no ROS imported here)."""
 
 from __future__ import annotations
 
@@ -8,44 +8,65 @@ from pathlib import Path
 
 import pytest
 
-from ipyros.processes.basenode import BaseProcess, exit_reason, param_arg, plain, python_command, script_command
 from ipyros.core.errors import BaseNodeError
+from ipyros.core.model import BaseModel
+from ipyros.processes.basenode import BaseProcess, exit_reason, param_value, plain, python_command, script_command
+from ipyros.ros1 import nodes as ros1_nodes
+from ipyros.ros2 import nodes as ros2_nodes
 
 
-def argv(ros2: bool, **options) -> list[str]:
-    return BaseProcess("/opt/ws/lib/pkg/node", ["--verbose"], log_path=os.devnull, ros2=ros2, **options).argv[1:]
+@pytest.fixture
+def node_file(tmp_path: Path) -> str:
+    path = tmp_path / "node"
+    path.write_bytes(b"\x7fELF...")  # a binary: run as it is
+    path.chmod(0o755)
+    return str(path)
 
 
-def test_ros1_argv_has_name_namespace_remaps_and_params():
-    assert argv(False, node_name="planner", namespace="/robot1/", remaps={"/scan": "/w/base/scan"},
+def argv(ros2: bool, executable: str, **options) -> list[str]:
+    base = BaseModel(executable=executable, args=["--verbose"], **options)
+    return (ros2_nodes if ros2 else ros1_nodes).command(base)[1:]
+
+
+def test_ros1_argv_has_name_namespace_remaps_and_params(node_file):
+    assert argv(False, node_file, node_name="planner", namespace="/robot1/", remaps={"/scan": "/w/base/scan"},
                 params={"rate": 5, "frame": "map"}) == [
         "--verbose", "__name:=planner", "__ns:=/robot1/", "/scan:=/w/base/scan", "_rate:=5", "_frame:=map"]
 
 
-def test_ros2_argv_puts_them_after_ros_args():
-    assert argv(True, node_name="planner", namespace="/robot1/", remaps={"/scan": "/w/base/scan"},
+def test_ros2_argv_puts_them_after_ros_args(node_file):
+    assert argv(True, node_file, node_name="planner", namespace="/robot1/", remaps={"/scan": "/w/base/scan"},
                 params={"rate": 5.0}) == [
         "--verbose", "--ros-args", "-r", "__node:=planner", "-r", "__ns:=/robot1", "-r", "/scan:=/w/base/scan",
         "-p", "rate:=5.0"]
 
 
-def test_ros2_argv_without_rules_has_no_ros_args():
-    assert argv(True) == ["--verbose"]
+def test_ros2_argv_without_rules_has_no_ros_args(node_file):
+    assert argv(True, node_file) == ["--verbose"]
 
 
-@pytest.mark.parametrize("name, value, arg", [
-    ("rate", 5, "_rate:=5"), ("~gain", 2.5, "_gain:=2.5"), ("on", True, "_on:=true"),
-    ("frame", "map", "_frame:=map"), ("code", "5", "_code:='5'"), ("flag", "true", "_flag:='true'"),
-    ("list", [1, 2], "_list:=[1, 2]"), ("empty", "", "_empty:=''"),
+def test_a_package_executable_needs_a_package_lookup_no_path():
+    with pytest.raises(BaseNodeError, match="with a package, the executable is a name in it"):
+        ros1_nodes.command(BaseModel(executable="/bin/sh", package="topic_tools"))
+
+
+@pytest.mark.parametrize("value, text", [
+    (5, "5"), (2.5, "2.5"), (True, "true"), ("map", "map"), ("5", "'5'"), ("true", "'true'"),
+    ([1, 2], "[1, 2]"), ("", "''"),
 ])
-def test_params_on_the_command_line_read_back_as_given(name, value, arg):
-    assert param_arg(name, value) == arg
+def test_params_on_the_command_line_read_back_as_given(value, text):
+    assert param_value(value) == text
 
 
-def test_the_environment_and_master_uri(monkeypatch):
-    process = BaseProcess("/bin/true", log_path=os.devnull, master_uri="http://127.0.0.1:1/", env={"X": "1"})
-    assert process.env["ROS_MASTER_URI"] == "http://127.0.0.1:1/"
+def test_a_private_param_of_either_spelling(node_file):
+    assert argv(False, node_file, params={"~gain": 2.5, "_rate": 5})[-2:] == ["_gain:=2.5", "_rate:=5"]
+    assert argv(True, node_file, params={"~gain": 2.5})[-2:] == ["-p", "gain:=2.5"]
+
+
+def test_the_environment(monkeypatch):
+    process = BaseProcess(["/bin/true"], log_path=os.devnull, env={"X": "1"})
     assert process.env["X"] == "1" and process.env["PYTHONUNBUFFERED"] == "1"
+    assert process.argv == ["/bin/true"] and process.executable == Path("/bin/true")
 
 
 def test_python_scripts_run_with_this_interpreter(tmp_path: Path):

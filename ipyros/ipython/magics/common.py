@@ -32,11 +32,10 @@ def find_node(shell: Any, name: str) -> rosNode:
     if value is not None:
         raise UsageError(f"{name} is a {type(value).__name__}, not a rosNode; "
                          f"give the variable that holds the node ({_node_variables(shell)})")
-    session_nodes = current().nodes
     wanted = name if name.startswith("/") else None
-    for node in session_nodes.values():
-        if node.fullname == wanted or node.name == name:
-            return node
+    for engine in current().nodes.values():
+        if engine.fullname == wanted or engine.name == name:
+            return engine.dsl
     raise UsageError(f"no rosNode called {name!r}; give the variable that holds the node "
                      f"({_node_variables(shell)})")
 

@@ -21,8 +21,8 @@ from rich.table import Table
 
 from ...core import msgtypes, plan as planning
 from ...core.errors import MasterError
+from ...core.graph import GraphSnapshot, frozen
 from ...core.msgbuild import build_message, fields_of, flat_fields, parse_data, to_yaml
-from ...tools.graph import GraphSnapshot, frozen
 from ...tools.probe import Echo, Rate, measure_rates
 from .cell_output import OutputArea, in_kernel
 from .common import ExtensionMagics, global_topic, split_head
@@ -253,12 +253,10 @@ class TopicMagics(ExtensionMagics):
 
     # -- shared ----------------------------------------------------------------------------
     def live_graph(self) -> GraphSnapshot:
-        watch = self.ext.session.watch
-        if watch is not None:
-            watch.check_now()  # a master just restarted: the session registers again before it is read
+        self.ext.session.backend.check_graph()  # a master just restarted: the session registers again first
         snap = self.ext.graph.refresh_now()
         if not snap.master_up:
-            raise MasterError(f"no ROS master answers at {self.ext.graph.master_uri}; start roscore, "
+            raise MasterError(f"no ROS master answers at {self.ext.graph.where}; start roscore, "
                               "or check ROS_MASTER_URI (c.RosMagics.master_uri)")
         return snap
 
@@ -313,7 +311,7 @@ def _as_dsl_nodes(snap: GraphSnapshot, session: Any) -> GraphSnapshot:
     one created: after ``nd.shutdown()`` the master still lists that name as publishing
     what the session's other nodes (a ``%pub``) publish. Naming the DSL nodes says who.
     """
-    process = session.process.name if session.backend.has_master else None
+    process = session.process.name if session.process.shared else None
     if not process:
         return snap
     uses: dict[tuple[str, str], list[str]] = {}

@@ -26,8 +26,8 @@ from rich.syntax import Syntax
 from rich.table import Table
 
 from ...core import msgtypes
+from ...core.graph import GraphSnapshot, name_matches
 from ...core.msgbuild import build_message, parse_data, to_yaml
-from ...tools.graph import GraphSnapshot, name_matches
 from ...tools.probe import is_tool, tool_name
 from .common import ExtensionMagics, global_topic, split_head
 

@@ -14,16 +14,15 @@ from typing import Any, Optional
 from IPython.core.error import UsageError
 from IPython.core.magic import line_cell_magic, line_magic, magics_class
 from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
-from rich.table import Table
 
 from ...core.errors import IpyrosError
 from ...files.savefile import restore, save_nodes
-from ...node.dsl import rosNode
+from ...node.dsl import engine_of, rosNode
 from ...node.session import current
-from ...tools.editing import (EditWatch, PendingEdit, current_handler, find_target, fresh_name, handler_source,
-                              lambda_as_def, new_functions, redeclare)
+from ...tools.editing import EditWatch, PendingEdit, fresh_name, handler_source, lambda_as_def, new_functions
 from ...tools.probe import is_tool
 from ...tools.tryout import try_candidate
+from ..display import session_table
 from .common import ExtensionMagics, evaluate, find_node, split_head
 
 
@@ -59,8 +58,9 @@ class NodeMagics(ExtensionMagics):
         """
         args = parse_argstring(self.handler, line)
         node = find_node(self.shell, args.node)
-        target = find_target(node, args.topic)
-        old = current_handler(node, target)
+        engine = engine_of(node)
+        target = engine.find_target(args.topic)
+        old = engine.current_handler(target)
         if cell is None:
             if getattr(old, "__name__", "") == "<lambda>" and (
                     as_def := lambda_as_def(old, fresh_name(target, self.shell.user_ns))) is not None:
@@ -89,7 +89,7 @@ class NodeMagics(ExtensionMagics):
             raise UsageError(f"the cell defines {', '.join(sorted(defined))}; which is the handler? "
                              f"name it {old.__name__}, like the one it replaces")
         name = name or next(iter(defined))
-        redeclare(node, target, defined[name])
+        engine_of(node).redeclare(target, defined[name])
         print(f"ipyros: {node.name} {target.label} is now handled by the new {name}")
 
     # -- %try ------------------------------------------------------------------------------
@@ -155,7 +155,7 @@ class NodeMagics(ExtensionMagics):
         Run the file to bring them back (python3 PATH, %run PATH, or %load_nodes PATH).
         """
         args = parse_argstring(self.save_nodes, line)
-        nodes = [find_node(self.shell, name) for name in args.node] or list(current().nodes.values())
+        nodes = [find_node(self.shell, name) for name in args.node] or [engine.dsl for engine in current().nodes.values()]
         if not nodes:
             raise UsageError("no rosNode is running in this session; name the node to save: %save_nodes PATH nd")
         if not args.path.endswith(".py"):
@@ -199,22 +199,9 @@ class NodeMagics(ExtensionMagics):
             self.ext.printer.show(find_node(self.shell, args.node).status())
             return
         # ipyros's own tool nodes (the %pub publisher, %echo's listener) are not the user's.
-        nodes = [node for node in current().nodes.values() if not is_tool(node.name)]
+        session = current()
+        nodes = [engine.dsl for engine in session.nodes.values() if not is_tool(engine.name)]
         if not nodes:
             print("no rosNode of yours is running in this session")
             return
-        self.ext.printer.show(_nodes_table(nodes, self.shell.user_ns))
-
-
-def _nodes_table(nodes: list[rosNode], user_ns: dict[str, Any]) -> Table:
-    table = Table(title=f"rosNodes running in this session (hosted by ROS node {current().process.name})",
-                  title_justify="left")
-    for column in ("node", "topics", "timers", "services", "basenode", "variables"):
-        table.add_column(column, justify="right" if column in ("topics", "timers", "services") else "left")
-    for node in nodes:
-        model = node.model()
-        base = f"{model.base.package}/{model.base.executable}" if model.base else ""
-        names = ", ".join(sorted(k for k, v in user_ns.items() if v is node and not k.startswith("_")))
-        counts = (str(len(model.topics)), str(len(model.timers)), str(len(model.services)))
-        table.add_row(node.fullname, *counts, base, names)
-    return table
+        self.ext.printer.show(session_table(nodes, self.shell.user_ns, session.process.name))

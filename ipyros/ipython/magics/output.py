@@ -25,7 +25,7 @@ from rich.protocol import rich_cast
 from rich.table import Table
 
 from ...core.slots import HandlerFailure
-from ..display import render_html, render_plain
+from ..display import render_html, render_plain, renderable
 
 
 class Printer:
@@ -42,13 +42,14 @@ class Printer:
     def show(self, *renderables: Any) -> None:
         """Print tables, rich markup strings or anything rich can render; in Jupyter a table as HTML."""
         console = self.console()
-        for renderable in renderables:
-            if console.is_jupyter and isinstance(rich_cast(renderable), Table):
+        for shown in renderables:
+            shown = renderable(shown)  # a record's table (see ipyros.ipython.display)
+            if console.is_jupyter and isinstance(rich_cast(shown), Table):
                 from IPython.display import display
 
-                display(mime_bundle(renderable), raw=True)
+                display(mime_bundle(shown), raw=True)
             else:
-                console.print(renderable)
+                console.print(shown)
 
     def repeat(self, render: Callable[[float], Any], period: float, times: int = 0) -> None:
         """Show ``render(seconds so far)`` every ``period`` seconds, ``times`` times (0: until Ctrl-C).

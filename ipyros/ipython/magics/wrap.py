@@ -48,7 +48,8 @@ class WrapMagics(ExtensionMagics):
             raise UsageError(f"--as {args.var}: give a Python variable name, e.g. --as turtle")
         remaps, params, extra_args = rosrun_words(args.extra)
         from ...core.model import BaseModel
-        from ...node.wrapping import base_node_name, wrap
+        from ...node.wrapping import base_node_name
+        from ...tools.wrap import wrap
 
         default = f"{base_node_name(BaseModel(executable=args.executable))}_wrapper"
         self._refuse_running_variable(args.var or _variable_for(default), "--as" if args.var else "")

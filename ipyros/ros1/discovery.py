@@ -7,7 +7,7 @@ master alone: ``getSystemState`` says which topics and services the node registe
 service itself (services do not tell the master their type), as ``rosservice`` does.
 
 What every node has, ROS's own plumbing, is not part of the interface and is listed
-in :attr:`Interface.left_out` instead: the ``/rosout`` log publication, ``/clock``
+in :attr:`~ipyros.core.records.Interface.left_out` instead: the ``/rosout`` log publication, ``/clock``
 (subscribed under simulated time) and the ``~get_loggers``/``~set_logger_level``
 services that rospy and roscpp give every node.
 
@@ -19,14 +19,15 @@ interface has stopped changing.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 from typing import Callable, Optional
 
-from rich.table import Table
-
 from ..core.errors import BaseNodeError, MasterError
-from ..ros1.master import master_proxy
-from .graph import GraphSnapshot, fetch_snapshot
+from ..core.graph import GraphSnapshot
+from ..core.records import Interface
+from .graph import fetch_snapshot
+from .master import master_proxy
+
+__all__ = ["discover", "global_node_name", "service_type", "wait_for_node"]
 
 CALLER_ID = "/ipyros_discovery"
 
@@ -34,30 +35,6 @@ CALLER_ID = "/ipyros_discovery"
 PLUMBING_TOPICS = {("/rosout", "publishes"), ("/rosout_agg", "subscribes"), ("/clock", "subscribes")}
 #: Services every rospy and roscpp node offers, below its own name.
 PLUMBING_SERVICES = ("get_loggers", "set_logger_level")
-
-
-@dataclass
-class Interface:
-    """The publish/subscribe/service interface of one running node, as plain data.
-
-    Each entry is ``(global name, type)``; a type is ``""`` when it is not known: a
-    topic subscribed to as "any type" (rospy.AnyMsg, topic_tools' ShapeShifter: the
-    master records no type for those) that nobody publishes yet, or a service that did
-    not answer the probe. ``left_out`` names the ROS plumbing that was seen but is not
-    part of the interface (e.g. ``"/rosout (publishes)"``); ``not_seen`` the names
-    declared for it that it did not use while it was watched (some nodes advertise only
-    after their first input).
-    """
-
-    node: str
-    publications: list[tuple[str, str]] = field(default_factory=list)
-    subscriptions: list[tuple[str, str]] = field(default_factory=list)
-    services: list[tuple[str, str]] = field(default_factory=list)
-    left_out: list[str] = field(default_factory=list)
-    not_seen: list[str] = field(default_factory=list)
-
-    def __rich__(self) -> Table:
-        return interface_table(self)
 
 
 def global_node_name(node_name: str) -> str:
@@ -175,30 +152,3 @@ def service_type(master_uri: str, service: str, timeout: float = 2.0) -> str:
         return rosservice.get_service_headers(service, uri).get("type", "")
     except (OSError, rosservice.ROSServiceException):
         return ""
-
-
-def interface_table(interface: Interface) -> Table:
-    """A rich table of an interface: one row per topic or service, with its direction and type."""
-    table = Table(title=f"Interface of {interface.node}", title_justify="left", show_edge=False)
-    table.add_column("", style="bold")
-    table.add_column("name", style="cyan")
-    table.add_column("type", style="green")
-    for label, entries in (
-        ("publishes", interface.publications),
-        ("subscribes", interface.subscriptions),
-        ("service", interface.services),
-    ):
-        for name, type_ in entries:
-            table.add_row(label, name, type_ or "[dim]unknown[/]")
-    if not (interface.publications or interface.subscriptions or interface.services):
-        table.add_row("", "[dim]no topics or services[/]", "")
-    if interface.not_seen:
-        table.add_section()
-        table.add_row("[yellow]not seen[/]", ", ".join(interface.not_seen), "[dim]declared; may come after its first "
-                      "input[/]")
-    if interface.left_out:
-        node_prefix = interface.node + "/"
-        short = (entry.split(" ")[0].replace(node_prefix, "~", 1) for entry in interface.left_out)
-        table.add_section()
-        table.add_row("[dim]not shown[/]", f"[dim]{', '.join(short)}[/]", "[dim]ROS plumbing[/]")
-    return table

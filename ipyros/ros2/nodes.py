@@ -1,9 +1,13 @@
-"""Finding a ROS 2 package's executable as ``ros2 run PACKAGE EXECUTABLE`` does: the ament index.
+"""How ROS 2 runs a node: its executable found as ``ros2 run`` finds it, its command line after ``--ros-args``.
 
-Each prefix on ``AMENT_PREFIX_PATH`` (a PyPI venv has none set: ipyros uses the venv's own
-prefix, where the wheels install) lists its packages as files under
+**Lookup.** Each prefix on ``AMENT_PREFIX_PATH`` (a PyPI venv has none set: ipyros uses
+the venv's own prefix, where the wheels install) lists its packages as files under
 ``share/ament_index/resource_index/packages/``; a package's executables are the
-executable files in ``<prefix>/lib/<package>/``. No ROS package is imported for this.
+executable files in ``<prefix>/lib/<package>/``.
+
+**Command line.** :func:`command`: the file (a Python script with this interpreter, which
+imports rclpy), its arguments, then ``--ros-args`` with ``-r`` for the name, namespace and
+remaps and ``-p`` for parameters. No ROS package is imported here.
 """
 
 from __future__ import annotations
@@ -12,15 +16,30 @@ import os
 import sys
 from pathlib import Path
 
-from ..core.errors import BaseNodeError
-from ..processes.basenode import DEMO_DIR, did_you_mean, refuse_path_with_package
+from ..core.errors import BaseNodeError, did_you_mean
+from ..core.model import BaseModel
+from ..demo import AMENT_PREFIX as DEMO_PREFIX
+from ..processes.basenode import param_value, python_command, refuse_path_with_package, script_command
 
-__all__ = ["find_executable", "list_executables", "list_packages", "prefixes"]
+__all__ = ["command", "find_executable", "list_executables", "list_packages", "prefixes"]
 
 
-#: The demo robot's package, ``ipyros_demo``, as an ament prefix of its own (its executables
-#: are the ROS 1 ones: they run on either ROS, see ipyros/demo/demonode.py).
-DEMO_PREFIX = DEMO_DIR / "ament"
+def command(base: BaseModel) -> list[str]:
+    """The command line of the basenode ``base`` (its name, namespace, remaps and params after ``--ros-args``)."""
+    if not base.executable:
+        raise BaseNodeError("no basenode executable declared: call baseNode('executable') and basePackage('package')")
+    if base.package:
+        path, args = python_command(find_executable(base.package, base.executable), list(base.args))
+    else:
+        path, args = script_command(base.executable, list(base.args))
+    rules = [f"__node:={base.node_name}"] if base.node_name else []
+    rules += [f"__ns:={base.namespace.rstrip('/') or '/'}"] if base.namespace else []  # ROS 2: no trailing /
+    rules += [f"{source}:={target}" for source, target in base.remaps.items()]
+    settings = [f"{name.lstrip('~_')}:={param_value(value)}" for name, value in base.params.items()]
+    argv = [str(path), *args]
+    if rules or settings:
+        argv += ["--ros-args", *[w for r in rules for w in ("-r", r)], *[w for p in settings for w in ("-p", p)]]
+    return argv
 
 
 def prefixes() -> list[Path]:

@@ -1,0 +1,103 @@
+"""The ROS graph as plain data: which topics (with types), publishers, subscribers, services and nodes there are.
+
+A :class:`GraphSnapshot` is immutable and sorted: readers (completion, ``%topics``, the
+DSL's type checks) take one and never wait. Where snapshots come from is each backend's
+business (ROS 1: the master, :mod:`ipyros.ros1.graph`; ROS 2: discovery,
+:mod:`ipyros.ros2.graph`); :class:`ipyros.tools.graph.GraphCache` keeps one fresh.
+"""
+
+from __future__ import annotations
+
+import bisect
+import fnmatch
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Iterable, Mapping, Optional, Sequence
+
+__all__ = ["EMPTY", "GraphSnapshot", "frozen", "name_matches", "names_with_prefix"]
+
+
+def frozen(mapping: dict) -> Mapping:
+    """A read-only view of ``mapping`` with its keys in sorted order."""
+    return MappingProxyType({k: mapping[k] for k in sorted(mapping)})
+
+
+@dataclass(frozen=True)
+class GraphSnapshot:
+    """The ROS graph as the master (ROS 1) or discovery (ROS 2) described it at ``taken_at`` (``time.time()``).
+
+    All mappings are read-only and sorted by key; node lists are sorted tuples.
+    ``topics`` holds every topic somebody publishes or subscribes to, with its type
+    (``""`` when the master does not know it yet). With the master down ``master_up`` is
+    False, and everything is empty unless :class:`GraphCache` kept the last graph (``stale``).
+    """
+
+    topics: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
+    publishers: Mapping[str, tuple[str, ...]] = field(default_factory=lambda: MappingProxyType({}))
+    subscribers: Mapping[str, tuple[str, ...]] = field(default_factory=lambda: MappingProxyType({}))
+    services: Mapping[str, tuple[str, ...]] = field(default_factory=lambda: MappingProxyType({}))
+    nodes: tuple[str, ...] = ()
+    taken_at: float = 0.0
+    master_up: bool = False
+    #: The master is down and this is the last graph it described (``known_at``): still good to
+    #: complete names from, not to act on.
+    stale: bool = False
+    known_at: float = 0.0
+    #: ``topics``' keys as a sorted tuple: prefix searches bisect it (1,000 topics or 100,000).
+    topic_names: tuple[str, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "topic_names", tuple(sorted(self.topics)))
+
+    # -- queries --------------------------------------------------------------
+    def topics_with_prefix(self, prefix: str) -> list[str]:
+        """Topic names starting with ``prefix``, sorted; O(log n + matches)."""
+        return names_with_prefix(self.topic_names, prefix)
+
+    def nodes_with_prefix(self, prefix: str) -> list[str]:
+        """Node names starting with ``prefix``, sorted."""
+        return names_with_prefix(self.nodes, prefix)
+
+    def topics_matching(self, pattern: str = "", type: Optional[str] = None, node: Optional[str] = None) -> list[str]:
+        """Topic names that match all the filters given, sorted.
+
+        ``pattern`` is a glob (``/turtle*/pose``) when it has ``*?[``, else a substring
+        (``"cmd"`` finds ``/turtle1/cmd_vel``); empty matches everything. ``type`` is an
+        exact type name or a glob (``geometry_msgs/*``). ``node`` keeps the topics that
+        node publishes or subscribes to.
+        """
+        names: Iterable[str] = self.topic_names
+        if pattern:
+            names = (n for n in names if name_matches(n, pattern))
+        if type:
+            names = (n for n in names if _matches_exactly(self.topics[n], type))
+        if node:
+            names = (n for n in names if node in self.publishers.get(n, ()) or node in self.subscribers.get(n, ()))
+        return list(names)
+
+
+def names_with_prefix(sorted_names: Sequence[str], prefix: str) -> list[str]:
+    """The names in ``sorted_names`` (sorted!) that start with ``prefix``; a bisection, not a scan."""
+    start = bisect.bisect_left(sorted_names, prefix)
+    # Every string with the prefix sorts before prefix + the largest code point.
+    end = bisect.bisect_left(sorted_names, prefix + "\U0010ffff", start)
+    return list(sorted_names[start:end])
+
+
+def _is_glob(pattern: str) -> bool:
+    return any(c in pattern for c in "*?[")
+
+
+def name_matches(name: str, pattern: str) -> bool:
+    """``pattern`` as ``%topics`` reads it: a glob when it has ``*?[``, else a substring; empty matches all."""
+    return fnmatch.fnmatchcase(name, pattern) if _is_glob(pattern) else pattern in name
+
+
+def _matches_exactly(name: str, pattern: str) -> bool:
+    """A type matches its name or glob; a ROS 2 type (``pkg/msg/Type``) matches ``pkg/Type`` too."""
+    if _is_glob(pattern):
+        return fnmatch.fnmatchcase(name, pattern) or fnmatch.fnmatchcase(name.replace("/msg/", "/"), pattern)
+    return name == pattern or name.replace("/msg/", "/") == pattern.replace("/msg/", "/")
+
+
+EMPTY = GraphSnapshot()

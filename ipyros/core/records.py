@@ -1,0 +1,103 @@
+"""What ipyros reports, as plain records: a node's status, history and handler versions, a node's interface.
+
+Records are data and nothing else: the DSL and the tools return them, tests read their
+fields, files save them. How they look (a table in a terminal, an HTML table in Jupyter)
+is the IPython face's business (:mod:`ipyros.ipython.display`), which registers itself
+for these types when the extension loads.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Iterator, Optional
+
+__all__ = ["History", "Interface", "NodeStatus", "Rows", "StatusRow", "Versions"]
+
+
+class Rows:
+    """A sequence of records (``rows``): ``len``, iteration and indexing go to the rows."""
+
+    rows: tuple[Any, ...]
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self.rows)
+
+    def __getitem__(self, index: int) -> Any:
+        return self.rows[index]
+
+
+@dataclass(frozen=True)
+class StatusRow:
+    """One line of a node's status: a handler (subscription, timer, service) or a topic it sends on.
+
+    For a handler ``calls`` counts its calls; for a publication or relay (no handler, no
+    timing) the messages sent, to ``connections`` subscribers, of which slow ones have
+    ``waiting`` messages queued and lost ``dropped`` so far.
+    """
+
+    kind: str
+    name: str
+    handler: str
+    calls: int
+    rate_hz: float = 0.0
+    mean_ms: float = 0.0
+    max_ms: float = 0.0
+    errors: int = 0
+    connections: int = 0
+    waiting: int = 0
+    dropped: int = 0
+
+
+@dataclass(frozen=True)
+class NodeStatus(Rows):
+    """Per handler and per topic sent on: calls, rate, handler time, exceptions, drops."""
+
+    node: str
+    running: bool
+    rows: tuple[StatusRow, ...]
+    params: tuple[tuple[str, str], ...] = ()  # the node's own parameters as they are now (set from outside too)
+
+    def row(self, name: str) -> StatusRow:
+        return next(r for r in self.rows if r.name == name)
+
+
+@dataclass(frozen=True)
+class History(Rows):
+    """A node's changes, oldest first (:class:`ipyros.core.journal.Change`)."""
+
+    node: str
+    rows: tuple[Any, ...]
+    path: Any = None  # the file the session writes its history to, if any
+
+
+@dataclass(frozen=True)
+class Versions(Rows):
+    """The versions of one handler (:class:`ipyros.core.versions.HandlerVersion`), oldest first."""
+
+    label: str  # e.g. "kobuki /cmd_vel"
+    rows: tuple[Any, ...]
+    current: Optional[int]  # the number of the version serving now, or None
+
+
+@dataclass
+class Interface:
+    """The publish/subscribe/service interface of one running node, as plain data.
+
+    Each entry is ``(global name, type)``; a type is ``""`` when it is not known: a
+    topic subscribed to as "any type" (rospy.AnyMsg, topic_tools' ShapeShifter: the
+    master records no type for those) that nobody publishes yet, or a service that did
+    not answer the probe. ``left_out`` names the ROS plumbing that was seen but is not
+    part of the interface (e.g. ``"/rosout (publishes)"``); ``not_seen`` the names
+    declared for it that it did not use while it was watched (some nodes advertise only
+    after their first input).
+    """
+
+    node: str
+    publications: list[tuple[str, str]] = field(default_factory=list)
+    subscriptions: list[tuple[str, str]] = field(default_factory=list)
+    services: list[tuple[str, str]] = field(default_factory=list)
+    left_out: list[str] = field(default_factory=list)
+    not_seen: list[str] = field(default_factory=list)

@@ -1,0 +1,310 @@
+"""How a node is exported on ROS 1: a rospy script, and a catkin package with a launch file.
+
+The flavour that :func:`ipyros.files.export.export` writes with (``backend.export_flavour()``):
+the rospy calls of the script's ``main()``, its helpers (a byte relay as ``rospy.AnyMsg``
+in and a typed publisher out), and for the package form ``package.xml``, ``CMakeLists.txt``
+and ``launch/<node>.launch``, every name in them written by an XML library. No ROS
+package is imported here: this writes text.
+"""
+
+from __future__ import annotations
+
+import getpass
+import json
+import re
+import shlex
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any, Iterable, Optional
+
+import yaml
+
+from ..core import plan as planning
+from ..core.errors import IpyrosError
+from .nodes import list_packages
+
+__all__ = ["RospyScript"]
+
+_HANDLE = '''
+class NodeHandle:
+    """Stands in for the ipyros node the handlers were written for: write(topic, msg) publishes."""
+
+    def __init__(self):
+        self.publishers = {}  # resolved topic name -> rospy.Publisher, filled in by main()
+
+    def write(self, topic, msg):
+        self.publishers[rospy.resolve_name(topic)].publish(msg)
+'''
+
+_RELAY = '''
+def relay(source, target, msg_class):
+    """Forward source to target unchanged: read as bytes (AnyMsg), written as bytes, never parsed."""
+    pub = rospy.Publisher(target, msg_class, queue_size=10)  # advertised now: nothing lost at start
+
+    def forward(raw):
+        if raw._connection_header.get("latching") == "1" and not pub.impl.is_latch:
+            pub.impl.enable_latch()  # latching follows the source
+        pub.impl.acquire()
+        try:
+            pub.impl.publish(raw)  # Publisher.publish would type-check; the impl writes the bytes
+        finally:
+            pub.impl.release()
+
+    return rospy.Subscriber(source, rospy.AnyMsg, forward)
+'''
+
+
+class RospyScript:
+    """The rospy flavour of an exported script (see :class:`ipyros.files.export.Script`, which asks it)."""
+
+    LIBRARY = "rospy"
+    #: Names the generated script defines itself; a handler global with one of them would clash.
+    SCRIPT_NAMES = {"rospy", "os", "signal", "subprocess", "NodeHandle", "relay", "main", "BASENODE",
+                    "BASENODE_ENV", "start_basenode", "stop_basenode"}
+
+    @staticmethod
+    def shebang() -> str:
+        return "#!/usr/bin/python3"
+
+    @staticmethod
+    def about(script: Any) -> str:
+        model = script.model
+        run = f"rosrun {script.package} {model.name}" if script.package else f"./{Path(script.path).name}"
+        lines = [f"{model.name}: a rospy node exported by ipyros from the DSL node {planning.node_fullname(model)}.",
+                 "", f"It needs no ipyros: {run} [from:=to ...] [_param:=value ...]"]
+        if model.base is not None:
+            wrapped = f"{model.base.package}/{model.base.executable}"
+            lines.append(f"It runs its basenode {wrapped} itself, remapped as ipyros ran it, and stops it on exit."
+                         if script.starts_base else
+                         f"Its basenode {wrapped} is started next to it, remapped as ipyros ran it, by\n"
+                         f"roslaunch {script.package} {model.name}.launch (which starts this node too).")
+        return "\n".join(lines)
+
+    @staticmethod
+    def stdlib(script: Any, starts_base: bool) -> list[str]:
+        return ["os", "signal", "subprocess"] if starts_base else ["os"] if script.model.namespace != "/" else []
+
+    @staticmethod
+    def before_imports(script: Any) -> list[str]:
+        """The namespace rospy reads at import time, set before it is imported."""
+        namespace = script.model.namespace
+        if namespace == "/":
+            return []
+        if script.package is None:
+            return ["", "# Before rospy is imported: it reads its namespace then. The names below are resolved in it.",
+                    f"os.environ[\"ROS_NAMESPACE\"] = {namespace!r}"]
+        # roslaunch's ns= sets ROS_NAMESPACE; rosrun's __ns:= wins over it
+        return ["", "# Before rospy is imported: it reads its namespace then. The names below are global.",
+                f"os.environ.setdefault(\"ROS_NAMESPACE\", {namespace!r})"]
+
+    @staticmethod
+    def imports(script: Any) -> list[str]:
+        return []
+
+    @staticmethod
+    def handle(script: Any) -> list[str]:
+        """What the handlers' ``nd.write`` stands on."""
+        return [_HANDLE.strip("\n")]
+
+    @staticmethod
+    def helpers(script: Any) -> list[str]:
+        """The helpers the plan's relays need."""
+        return [_RELAY.strip("\n")] if any(isinstance(s, planning.RelaySpec) for s in script.plan()) else []
+
+    @staticmethod
+    def main(script: Any) -> list[str]:
+        """The body of main(): the endpoints of the plan, the basenode, spin."""
+        model, handle = script.model, script.writers[0]
+        lines = [f"rospy.init_node({model.name!r})"]
+        if model.params:
+            lines += [f"for key, value in {model.params!r}.items():  # _key:=value on the command line wins",
+                      '    if not rospy.has_param("~" + key):', '        rospy.set_param("~" + key, value)']
+        writes_to = script.writes_to()
+        for spec in script.plan():
+            if isinstance(spec, planning.PublishSpec):
+                latch = ", latch=True" if spec.latch else ""
+                lines.append(f"{handle}.publishers[{writes_to[spec.topic]!r}] = rospy.Publisher("
+                             f"{spec.topic!r}, {script.cls(spec.type)}, queue_size=10{latch})")
+            elif isinstance(spec, planning.SubscribeSpec):
+                lines.append(f"rospy.Subscriber({spec.topic!r}, {script.cls(spec.type)}, {script.names[spec.slot]})")
+            elif isinstance(spec, planning.RelaySpec):
+                lines.append(f"relay({spec.source!r}, {spec.target!r}, {script.cls(spec.type)})")
+            elif isinstance(spec, planning.TimerSpec):
+                name = script.names[spec.slot]
+                call = name if script.takes_event(spec.slot) else f"lambda event: {name}()"
+                oneshot = ", oneshot=True" if spec.oneshot else ""
+                lines.append(f"rospy.Timer(rospy.Duration({spec.period!r}), {call}{oneshot})")
+            elif isinstance(spec, planning.ServiceSpec):
+                lines.append(f"rospy.Service({spec.name!r}, {script.cls(spec.type, 'srv')}, {script.names[spec.slot]})")
+            else:  # ServiceRelaySpec: answer with the basenode's own service
+                srv = script.cls(spec.type, "srv")
+                lines.append(f"rospy.Service({spec.target!r}, {srv}, rospy.ServiceProxy({spec.source!r}, {srv}))")
+        if not script.starts_base:
+            return lines + ["rospy.spin()"]
+        return lines + ["basenode = start_basenode()", "try:", "    rospy.spin()", "finally:",
+                        "    stop_basenode(basenode)"]
+
+    # -- the package form -----------------------------------------------------------------------
+    @staticmethod
+    def check_package_name(name: str) -> str:
+        return _check_package_name(name)
+
+    @staticmethod
+    def package_files(script: Any, package: str) -> dict[str, tuple[str, int]]:
+        """The package's files besides the script and package.xml: its launch file and CMakeLists.txt."""
+        model = script.model
+        return {f"launch/{model.name}.launch": (_launch_xml(script, package), 0o644),
+                "CMakeLists.txt": (_CMAKE.format(package=package, node=model.name), 0o644)}
+
+    @staticmethod
+    def manifest(script: Any, package: str, files: Iterable[str], mark: str) -> str:
+        return _package_xml(script, package, files, mark)
+
+
+# REP 144: lower case letters, digits and single underscores, starting with a letter.
+_PACKAGE_NAME = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
+
+_CMAKE = """\
+cmake_minimum_required(VERSION 3.0.2)
+project({package})
+
+find_package(catkin REQUIRED)
+catkin_package()
+
+# The node is a Python script: installed with its #! line pointing at the workspace's Python.
+catkin_install_python(PROGRAMS scripts/{node}
+  DESTINATION ${{CATKIN_PACKAGE_BIN_DESTINATION}})
+install(DIRECTORY launch
+  DESTINATION ${{CATKIN_PACKAGE_SHARE_DESTINATION}})
+"""
+
+
+def _check_package_name(name: str) -> str:
+    """``name`` if it is a valid ROS package name (REP 144), else a one-line :class:`IpyrosError`."""
+    if len(name) < 2 or not _PACKAGE_NAME.fullmatch(name):
+        raise IpyrosError(f"{name!r} is not a valid ROS package name (lower case letters, digits and single "
+                          "underscores, starting with a letter): export to a directory named like my_robot_node")
+    return name
+
+
+def _dependencies(script: Any, package: str) -> list[str]:
+    """The ROS packages the exported node needs at run time: rospy, the message and service packages
+    it imports (``pkg.msg``/``pkg.srv``), other imports that are ROS packages, and the basenode's."""
+    known = set(list_packages())
+    needs = {"rospy"}
+    for module, _attr in script.imports.values():
+        top, _, sub = module.partition(".")
+        if sub in ("msg", "srv") or top in known:
+            needs.add(top)
+    if script.model.base is not None and script.model.base.package:
+        needs.add(script.model.base.package)
+    return sorted(needs - {package})
+
+
+def _maintainer() -> tuple[str, str]:
+    """Who maintains the package: the user, with catkin_create_pkg's placeholder address (``user@todo.todo``)."""
+    try:
+        user = getpass.getuser()
+    except (KeyError, OSError):  # no name for this uid (e.g. in a container)
+        user = "ipyros"
+    return user, re.sub(r"[^-a-zA-Z0-9_%+]", "_", user) + "@todo.todo"
+
+
+def _package_xml(script: Any, package: str, files: Iterable[str], mark_text: str) -> str:
+    """package.xml, written by an XML library (every name escaped), with the comment that marks it as ipyros's."""
+    model = script.model
+    user, email = _maintainer()
+    what = f"{model.name}: a rospy node exported by ipyros from the DSL node {planning.node_fullname(model)}"
+    if model.base is not None:
+        what += f", and a launch file that starts it next to its basenode {model.base.package}/{model.base.executable}"
+    root = ET.Element("package", format="2")
+    for tag, text in (("name", package), ("version", "0.0.0"), ("description", what + ".")):
+        ET.SubElement(root, tag).text = text
+    ET.SubElement(root, "maintainer", email=email).text = user
+    ET.SubElement(root, "license").text = "TODO"
+    ET.SubElement(root, "buildtool_depend").text = "catkin"
+    for dependency in _dependencies(script, package):
+        ET.SubElement(root, "exec_depend").text = dependency
+    ET.indent(root, space="  ")
+    mark = ET.Comment(f" {mark_text} from the DSL node {planning.node_fullname(model)}.\n"
+                      "     Exporting again replaces the package: this file and the files listed here (and only these).\n"
+                      f"     files: {' '.join(sorted(files))}\n")
+    return ('<?xml version="1.0"?>\n' + ET.tostring(mark, encoding="unicode") + "\n"
+            + ET.tostring(root, encoding="unicode") + "\n")
+
+
+def _add_params(node: ET.Element, params: dict[str, Any]) -> None:
+    """Private parameters as ``<param>`` (plain scalars) or ``<rosparam>`` (YAML: lists, dicts, and strings
+    that ``<param>`` would change: it strips them and expands ``$(...)`` in them)."""
+    for key, value in params.items():
+        name = key[1:] if key[:1] in ("~", "_") else key  # basenode params may be spelled ~rate or _rate
+        kind = {bool: "bool", int: "int", float: "double", str: "str"}.get(type(value))
+        if kind == "str" and (value != value.strip() or "$(" in value or "\n" in value):
+            kind = None
+        if kind is None:  # a string as JSON: YAML too, and on one line ("a\\nb")
+            text = json.dumps(value) if isinstance(value, str) else \
+                yaml.safe_dump(value, default_flow_style=True, width=1 << 20).strip()
+            ET.SubElement(node, "rosparam", param=name).text = text
+        else:
+            text = ("true" if value else "false") if kind == "bool" else str(value) if kind == "str" else repr(value)
+            ET.SubElement(node, "param", name=name, type=kind, value=text)
+
+
+def _node_element(parent: ET.Element, package: str, executable: str, name: str, namespace: Optional[str],
+                  **attributes: str) -> ET.Element:
+    placed = {"ns": namespace} if namespace and namespace != "/" else {}
+    return ET.SubElement(parent, "node", pkg=package, type=executable, name=name, **placed, output="screen",
+                         **attributes)
+
+
+def _launch_xml(script: Any, package: str) -> str:
+    """The launch file: the exported node with its params, and for a wrapping node its basenode placed and
+    remapped as ipyros runs it (so it talks only to the exported node on the topics it wraps)."""
+    model = script.model
+    root = ET.Element("launch")
+    wrapping = model.base is not None
+    root.append(_comment(f"{model.name}, exported by ipyros from the DSL node {planning.node_fullname(model)}.",
+                         f"roslaunch {package} {model.name}.launch starts it" +
+                         (" and its basenode, which stops with it (required), as under ipyros." if wrapping else ".")))
+    node = _node_element(root, package, model.name, model.name, model.namespace,
+                         **({"required": "true"} if wrapping else {}))
+    _add_params(node, model.params)
+    if model.base is None:
+        return _xml(root)
+    base = script.placed_base()
+    if not base.package or not base.executable:
+        raise IpyrosError(f"{model.name}'s basenode has no package, and roslaunch starts nodes by package: "
+                          f"declare it with .basePackage('package') and export again")
+    about = [f"The basenode {base.package}/{base.executable}, remapped onto {model.name}'s internal names:",
+             f"it talks to the rest of the graph only through {model.name}, on the names it wraps."]
+    if base.launch:
+        given = " ".join(f"{name}:={value}" for name, value in base.launch_args.items())
+        about += [f"It is {base.launch_node} of {base.launch}" + (f" (with {given})" if given else "") +
+                  ", as ipyros wrapped it there.",
+                  "Start the rest of that launch file separately, without this node: roslaunch",
+                  "cannot leave one node of an included file out."]
+    root.append(_comment(*about))
+    bad = next((arg for arg in base.args if "$(" in arg), None)
+    if bad is not None:
+        raise IpyrosError(f"basenode argument {bad!r} holds '$(', which roslaunch would expand: "
+                          "export to a .py script instead, or change the argument")
+    extra = {"args": shlex.join(base.args)} if base.args else {}
+    base_node = _node_element(root, base.package, base.executable, base.node_name, base.namespace, **extra)
+    for name, value in base.env.items():
+        ET.SubElement(base_node, "env", name=name, value=value)
+    for source, target in base.remaps.items():
+        ET.SubElement(base_node, "remap", {"from": source, "to": target})
+    _add_params(base_node, base.params)
+    return _xml(root)
+
+
+def _comment(*lines: str) -> ET.Element:
+    """A comment of the launch file's top level, one line each (``--`` may not stand in a comment)."""
+    return ET.Comment(" " + "\n       ".join(lines).replace("--", "- -") + " ")
+
+
+def _xml(root: ET.Element) -> str:
+    ET.indent(root, space="  ")
+    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+

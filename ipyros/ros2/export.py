@@ -1,0 +1,189 @@
+"""How a node is exported on ROS 2: one rclpy script that needs no ipyros.
+
+The flavour that :func:`ipyros.files.export.export` writes with (``backend.export_flavour()``):
+an rclpy node (``#!`` this Python, which has rclpy), its endpoints with the QoS they were
+declared with, byte relays (``raw=True``), service relays that call out from a caller node
+of their own, and the basenode started with ``--ros-args``. A ROS 2 package (ament_python)
+is not made yet: the package form is refused in one line. No ROS package is imported here.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..core import plan as planning
+from ..core.errors import IpyrosError
+
+__all__ = ["RclpyScript"]
+
+_HANDLE_ROS2 = '''
+class NodeHandle:
+    """Stands in for the ipyros node the handlers were written for: write(topic, msg) publishes."""
+
+    def __init__(self):
+        self.node = None  # the rclpy node, made by main()
+        self.publishers = {}  # resolved topic name -> rclpy publisher, filled in by main()
+
+    def write(self, topic, msg):
+        self.publishers[self.node.resolve_topic_name(topic)].publish(msg)
+
+    @property
+    def params(self):
+        """The node's parameters by name, as nd.params gave them (read-only here)."""
+        return {name: p.value for name, p in self.node.get_parameters_by_prefix("").items()}
+'''
+
+_RELAY_ROS2 = '''
+def relay(node, source, target, msg_class):
+    """Forward source to target unchanged: serialized bytes, never parsed (reliable, volatile)."""
+    pub = node.create_publisher(msg_class, target, qos())  # made now: nothing lost at start
+    return node.create_subscription(msg_class, source, pub.publish, qos(), raw=True)
+'''
+
+_SERVICE_RELAY_ROS2 = '''
+def service_relay(node, caller, source, target, srv_class):
+    """Serve target by calling source, from the caller node (spun on a thread of its own, so the
+    answer is taken while this callback waits for it); a caller gets the empty response after 10 s."""
+    client = caller.create_client(srv_class, source)
+
+    def answer(request, response):
+        done = threading.Event()
+        future = client.call_async(request)
+        future.add_done_callback(lambda _: done.set())
+        return future.result() if done.wait(10.0) and future.result() is not None else response
+
+    return node.create_service(srv_class, target, answer)
+'''
+
+_QOS_ROS2 = '''
+def qos(depth=1000, best_effort=False, transient_local=False):
+    """As ipyros declares endpoints: reliable, volatile, 1000 deep, unless the node said otherwise."""
+    return QoSProfile(depth=depth,
+                      reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if transient_local else DurabilityPolicy.VOLATILE)
+'''
+
+
+class RclpyScript:
+    """The rclpy flavour of an exported script (see :class:`ipyros.files.export.Script`, which asks it)."""
+
+    LIBRARY = "rclpy"
+    SCRIPT_NAMES = {"rclpy", "os", "signal", "subprocess", "sys", "threading", "NodeHandle", "relay", "qos",
+                    "service_relay", "main", "BASENODE", "BASENODE_ENV", "start_basenode", "stop_basenode",
+                    "QoSProfile", "ReliabilityPolicy", "DurabilityPolicy", "SingleThreadedExecutor"}
+
+    @staticmethod
+    def shebang() -> str:
+        return f"#!{sys.executable}"
+
+    @staticmethod
+    def about(script: Any) -> str:
+        model = script.model
+        lines = [f"{model.name}: an rclpy node exported by ipyros from the DSL node {planning.node_fullname(model)}.",
+                 "", f"It needs no ipyros: ./{Path(script.path).name} [--ros-args -r from:=to -p param:=value ...]"]
+        if model.base is not None:
+            lines.append(f"It runs its basenode {model.base.package or model.base.executable} itself, remapped as "
+                         "ipyros ran it, and stops it on exit.")
+        return "\n".join(lines)
+
+    @staticmethod
+    def stdlib(script: Any, starts_base: bool) -> list[str]:
+        return ["os", "signal", "subprocess", "sys", "threading"] if starts_base else ["sys", "threading"]
+
+    @staticmethod
+    def before_imports(script: Any) -> list[str]:
+        return []
+
+    @staticmethod
+    def imports(script: Any) -> list[str]:
+        return ["from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor",
+                "from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy"]
+
+    @staticmethod
+    def handle(script: Any) -> list[str]:
+        return [_QOS_ROS2.strip("\n"), _HANDLE_ROS2.strip("\n")]
+
+    @staticmethod
+    def helpers(script: Any) -> list[str]:
+        plan = script.plan()
+        found = [_RELAY_ROS2] if any(isinstance(s, planning.RelaySpec) for s in plan) else []
+        if any(isinstance(s, planning.ServiceRelaySpec) for s in plan):
+            found.append(_SERVICE_RELAY_ROS2)
+        return [h.strip("\n") for h in found]
+
+    @staticmethod
+    def main(script: Any) -> list[str]:
+        model, handle = script.model, script.writers[0]
+        specs = script.plan()
+        relays_services = any(isinstance(s, planning.ServiceRelaySpec) for s in specs)
+        lines = ["rclpy.init(args=sys.argv)  # --ros-args: remaps, -p key:=value",
+                 f"node = {handle}.node = rclpy.create_node({model.name!r}, "
+                 f"namespace={model.namespace.rstrip('/') or '/'!r})"]
+        lines += [f"node.declare_parameter({key!r}, {value!r})  # -p {key}:=... on the command line wins"
+                  for key, value in model.params.items()]
+        writes_to = script.writes_to()
+        if relays_services:
+            lines += ["caller = rclpy.create_node(f'_{node.get_name()}_caller', namespace=node.get_namespace())",
+                      "calls = SingleThreadedExecutor()", "calls.add_node(caller)",
+                      "threading.Thread(target=calls.spin, daemon=True).start()"]
+        for spec in specs:
+            if isinstance(spec, planning.PublishSpec):
+                lines.append(f"{handle}.publishers[node.resolve_topic_name({writes_to[spec.topic]!r})] = "
+                             f"node.create_publisher({script.cls(spec.type)}, {spec.topic!r}, "
+                             f"{_qos_call(spec.qos, spec.latch)})")
+            elif isinstance(spec, planning.SubscribeSpec):
+                lines.append(f"node.create_subscription({script.cls(spec.type)}, {spec.topic!r}, "
+                             f"{script.names[spec.slot]}, {_qos_call(spec.qos)})")
+            elif isinstance(spec, planning.RelaySpec):
+                lines.append(f"relay(node, {spec.source!r}, {spec.target!r}, {script.cls(spec.type)})")
+            elif isinstance(spec, planning.TimerSpec):
+                name = script.names[spec.slot]
+                call = f"lambda: {name}(None)" if script.takes_event(spec.slot) else name
+                if spec.oneshot:
+                    lines += [f"once = node.create_timer({spec.period!r}, lambda: (once.cancel(), ({call})()))"]
+                else:
+                    lines.append(f"node.create_timer({spec.period!r}, {call})")
+            elif isinstance(spec, planning.ServiceSpec):
+                lines.append(f"node.create_service({script.cls(spec.type, 'srv')}, {spec.name!r}, "
+                             f"lambda request, response: {script.names[spec.slot]}(request))")
+            else:  # ServiceRelaySpec
+                lines.append(f"service_relay(node, caller, {spec.source!r}, {spec.target!r}, "
+                             f"{script.cls(spec.type, 'srv')})")
+        lines += ["executor = SingleThreadedExecutor()", "executor.add_node(node)"]
+        if script.starts_base:
+            lines.append("basenode = start_basenode()")
+        lines += ["try:", "    executor.spin()", "except (KeyboardInterrupt, ExternalShutdownException):",
+                  "    pass", "finally:"]
+        if script.starts_base:
+            lines.append("    stop_basenode(basenode)")
+        return lines + ["    rclpy.try_shutdown()"]
+
+    # -- the package form: not made on ROS 2 yet ---------------------------------------------------
+    @staticmethod
+    def check_package_name(name: str) -> str:
+        raise IpyrosError(f"on ROS 2 a node exports to one script: give a path ending in .py, not {name!r} "
+                          "(a ROS 2 package is not made yet)")
+
+    @staticmethod
+    def package_files(script: Any, package: str) -> dict[str, tuple[str, int]]:
+        raise IpyrosError("a ROS 2 package is not made yet; export to a .py script")
+
+    @staticmethod
+    def manifest(script: Any, package: str, files: Iterable[str], mark: str) -> str:
+        raise IpyrosError("a ROS 2 package is not made yet; export to a .py script")
+
+
+def _qos_call(qos: Any, latch: bool = False) -> str:
+    """The script's ``qos(...)`` call for a declaration's QoS (see :mod:`ipyros.core.qos`)."""
+    words = []
+    if qos.depth is not None or latch or qos.latched:
+        words.append(f"depth={qos.depth or (1 if latch or qos.latched else 1000)}")
+    if qos.reliability == "best_effort":
+        words.append("best_effort=True")
+    if latch or qos.latched:
+        words.append("transient_local=True")
+    return f"qos({', '.join(words)})"
+
+
