@@ -9,8 +9,7 @@ from __future__ import annotations
 __version__ = "0.1.0"
 
 from .core.errors import IpyrosError  # noqa: E402
-from .files.savefile import restore, restoring, save_session, spin  # noqa: E402
-from .node.dsl import rosNode  # noqa: E402
+from .dsl import restore, restoring, rosNode, save_session, spin  # noqa: E402
 from .tools.robot import demo_robot, stop_demo_robot  # noqa: E402
 
 __all__ = ["rosNode", "IpyrosError", "save_session", "restore", "restoring", "spin", "demo_robot", "stop_demo_robot",
@@ -18,12 +17,13 @@ __all__ = ["rosNode", "IpyrosError", "save_session", "restore", "restoring", "sp
 
 
 def load_ipython_extension(ipython):  # noqa: D103 - documented in ipyros.ipython.extension
-    from .ipython.extension import load_ipython_extension as load
+    # Imported here, not above: a saved node run by plain python3 imports ipyros, not IPython.
+    from .ipython.extension import load_ipython_extension as load  # noqa: PLC0415
 
     load(ipython)
 
 
 def unload_ipython_extension(ipython):  # noqa: D103
-    from .ipython.extension import unload_ipython_extension as unload
+    from .ipython.extension import unload_ipython_extension as unload  # noqa: PLC0415 - as above
 
     unload(ipython)

@@ -42,10 +42,11 @@ def _ros_here() -> int | None:
 ROS = _ros_here()
 collect_ignore = [layer for layer, runs in (("ros1", ROS == 1), ("ros2", ROS == 2), ("both", ROS is not None))
                   if not runs]
+# Fixtures by name in every test that may use them (``ip``: an IPython shell with ipyros loaded).
 if ROS == 1:
-    pytest_plugins = ["ros1_fixtures"]
+    pytest_plugins = ["ros1_fixtures", "shell", "kernels"]
 elif ROS == 2:
-    pytest_plugins = ["ros2_fixtures"]
+    pytest_plugins = ["ros2_fixtures", "shell"]
 
 # The session history files of the run go to a directory of its own, removed at the end.
 HISTORY_DIR = tempfile.mkdtemp(prefix="ipyros-test-history-")

@@ -17,17 +17,13 @@ no ROS node, no network.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 import time
 from typing import Any
 
 import yaml
-
-try:
-    import genpy
-except ImportError:  # ROS 2: no genpy; its classes say their fields (get_fields_and_field_types)
-    genpy = None
 
 from . import msgtypes
 from .errors import DataError, MessageTypeError
@@ -80,7 +76,7 @@ def template(msg_type: Any) -> str:
 
 def to_yaml(msg: Any) -> str:
     """A message as the block YAML ``rostopic echo`` and ``ros2 topic echo`` print (``%pub`` reads it back)."""
-    if not _is_message(msg) or genpy is not None and isinstance(msg, genpy.Message):
+    if not _is_message(msg) or _is_ros1_message(msg):
         return str(msg)  # a field's value; or genpy's own YAML, as rostopic prints it
     return yaml.safe_dump(_as_data(msg), default_flow_style=False, width=1 << 20, sort_keys=False).strip()
 
@@ -114,15 +110,34 @@ def fields_of(msg: Any) -> list[str]:
 
 
 def _is_message(value: Any) -> bool:
-    return hasattr(type(value), "get_fields_and_field_types") or (
-        genpy is not None and isinstance(value, genpy.Message))
+    """A message of either ROS: ROS 2's classes list their fields; ROS 1's (genpy's) their slots' types."""
+    return hasattr(type(value), "get_fields_and_field_types") or _is_ros1_message(value)
+
+
+def _is_ros1_message(value: Any) -> bool:
+    # By its shape, not isinstance(genpy.Message): the core imports no ROS library.
+    return hasattr(type(value), "_slot_types") and hasattr(type(value), "_md5sum")
+
+
+def _is_ros1_stamp(value: Any) -> bool:
+    """A ROS 1 time or duration (genpy's ``TVal``: secs and nsecs)."""
+    return hasattr(value, "nsecs") and hasattr(value, "to_sec")
+
+
+@functools.cache
+def _stamp_class(field_type: str) -> type:
+    """ROS 1's Time or Duration class, as its std_msgs make them (the core imports no ROS library;
+    ``time`` and ``duration`` fields are ROS 1's only, and std_msgs is there wherever they are)."""
+    if field_type == "time":
+        return type(msgtypes.resolve_message("std_msgs/Header")[1]().stamp)
+    return type(msgtypes.resolve_message("std_msgs/Duration")[1]().data)
 
 
 def _as_data(value: Any) -> Any:
     """A message as plain data: dicts of fields, times as {secs, nsecs}, byte arrays as lists."""
     if _is_message(value):
         return {name: _as_data(getattr(value, name)) for name in fields_of(value)}
-    if genpy is not None and isinstance(value, (genpy.Time, genpy.Duration)):
+    if _is_ros1_stamp(value):
         return {"secs": value.secs, "nsecs": value.nsecs}
     if isinstance(value, (bytes, bytearray)):
         return list(value)
@@ -256,11 +271,11 @@ def _integer(field_type: str, value: Any, path: str) -> int:
 
 
 def _stamp(field_type: str, value: Any, path: str) -> Any:
-    cls = genpy.Time if field_type == "time" else genpy.Duration
+    cls = _stamp_class(field_type)
     if isinstance(value, cls):
         return value
     if field_type == "time" and value == "now":
-        return genpy.Time.from_sec(time.time())  # wall clock: sim time needs the ROS node
+        return cls.from_sec(time.time())  # wall clock: sim time needs the ROS node
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         if field_type == "time" and value < 0:
             raise _FieldError(path, f"a time cannot be negative, got {value}")

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any, Callable, Optional
 
+from .code import define_function, handler_source
 from .errors import IpyrosError
 
 
@@ -33,9 +34,7 @@ class HandlerVersion:
 
 
 def source_of(fn: Any) -> Optional[str]:
-    """``fn``'s source as :mod:`ipyros.files.modelfile` saves it, or None where there is none."""
-    from ..files.modelfile import handler_source
-
+    """``fn``'s source as a saved file keeps it, or None where there is none."""
     try:
         return handler_source(fn, "version")
     except IpyrosError:
@@ -52,8 +51,6 @@ def parse_time(text: str) -> float:
 
 def compile_version(version: HandlerVersion, namespace: dict, label: str) -> Callable[..., Any]:
     """The function of ``version``, defined from its source in ``namespace`` (its globals)."""
-    from ..files.modelfile import define_function
-
     if version.source is None:
         raise IpyrosError(f"version {version.number} of {label} ({version.name}) has no source to run again")
     return define_function(version.name, version.source, namespace, f"version {version.number} of {label}")

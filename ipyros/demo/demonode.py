@@ -42,7 +42,8 @@ class DemoNode:
             self._node = rclpy.create_node(name)
             self._executor = SingleThreadedExecutor()
             self._executor.add_node(self._node)
-            threading.Thread(target=self._spin, daemon=True).start()
+            self._spinner = threading.Thread(target=self._spin, daemon=True)
+            self._spinner.start()
         else:
             import rospy
 
@@ -68,15 +69,16 @@ class DemoNode:
         # any type: a launch file's "5" for a float parameter is a number all the same
         return self._node.declare_parameter(name, default, ParameterDescriptor(dynamic_typing=True)).value
 
-    def publisher(self, topic: str, cls: type, latch: bool = False) -> Any:
-        """A publisher (``publish(msg)``); ``latch``: a late subscriber still gets the last message."""
+    def publisher(self, topic: str, cls: type, latch: bool = False, depth: int = 10) -> Any:
+        """A publisher (``publish(msg)``); ``latch``: a late subscriber still gets the last message;
+        ``depth``: how many messages wait for a slow subscriber."""
         if not self.ros2:
             import rospy
 
-            return rospy.Publisher(topic, cls, queue_size=1 if latch else 10, latch=latch)
+            return rospy.Publisher(topic, cls, queue_size=1 if latch else depth, latch=latch)
         from rclpy.qos import DurabilityPolicy, QoSProfile
 
-        qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL) if latch else QoSProfile(depth=10)
+        qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL) if latch else QoSProfile(depth=depth)
         return self._node.create_publisher(cls, topic, qos)
 
     def subscribe(self, topic: str, cls: type, callback: Callable[[Any], None], depth: int = 10,
@@ -160,6 +162,9 @@ class DemoNode:
         except KeyboardInterrupt:
             pass
         finally:
-            self._executor.shutdown()
-            self._node.destroy_node()
+            # The spinning thread must be gone before the interpreter is: rclpy aborts the process
+            # (SIGABRT) if it finds it still waiting, and Fast DDS's shared memory is then never freed.
             rclpy.try_shutdown()
+            self._executor.shutdown()
+            self._spinner.join(timeout=5.0)
+            self._node.destroy_node()

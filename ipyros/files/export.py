@@ -9,11 +9,11 @@ What is the same on both ROS is here: which handlers and globals go in and under
 names (:class:`Script`), the module's layout, the docstring (escaped: a name holding
 ``\"\"\"`` stays a name), writing the files (only inside the folder an export owns). What
 each ROS writes differently (rospy or rclpy calls, a catkin package) is its backend's
-*flavour* (``ros1/export.py``, ``ros2/export.py``), handed over by
-``backend.export_flavour()``.
+*flavour* (``ros1/export.py``, ``ros2/export.py``), which the caller hands over (the DSL
+asks the session's backend: ``backend.export_flavour()``).
 
 A wrapping node's basenode runs remapped as ipyros runs it
-(:func:`ipyros.node.wrapping.basenode_remaps`): started and stopped by the script itself in
+(:func:`ipyros.core.remapping.basenode_remaps`): started and stopped by the script itself in
 the one-file form (``nd.export("node.py")``), or by roslaunch next to the node in the
 package form (``nd.export("my_node_pkg")``).
 """
@@ -29,13 +29,13 @@ from pathlib import Path
 from typing import Any, Callable, Optional
 
 from ..core import plan as planning
+from ..core.code import WRITER, Bindings, handler_slots, handler_source, import_of
 from ..core.errors import IpyrosError, warn_user
 from ..core.model import BaseModel, NodeModel
+from ..core.remapping import base_namespace, base_node_name, basenode_remaps
 from ..core.slots import call_arity
-from ..node.dsl import engine_of
-from ..node.wrapping import base_namespace, base_node_name, basenode_remaps
 from .atomic import write_atomic
-from .code import WRITER, Bindings, handler_slots, handler_source, import_of
+from .kept import KeptNode
 
 __all__ = ["ExportWarning", "Script", "docstring", "export"]
 
@@ -89,18 +89,17 @@ class Script:
     ``writers`` (the variables the handlers ``write`` through).
     """
 
-    def __init__(self, node: Any, flavour: Any, path: "str | os.PathLike[str]", namespace: Optional[dict],
+    def __init__(self, node: KeptNode, flavour: Any, path: "str | os.PathLike[str]", namespace: Optional[dict],
                  package: Optional[str] = None) -> None:
-        engine = engine_of(node)
-        self.flavour, self.engine, self.path, self.package = flavour, engine, path, package
-        self.model: NodeModel = engine.model()
-        self.handlers: dict[str, Callable[..., Any]] = engine.handlers()
+        self.flavour, self.node, self.path, self.package = flavour, node, path, package
+        self.model: NodeModel = node.model()
+        self.handlers: dict[str, Callable[..., Any]] = node.handlers()
         # The handlers' sources go in with their globals: a global named like a handler is that handler.
         self.bindings = Bindings(imports={flavour.LIBRARY: (flavour.LIBRARY, None)})
         self.imports = self.bindings.imports  # message classes join the handlers' imports
         self.names: dict[str, str] = {}  # slot → the handler's name in the script
         self.unset: dict[str, str] = {}  # global name → its "set me" line
-        sources = {slot: self._handler(slot, f"{engine.name} {label}") for slot, label in handler_slots(self.model)}
+        sources = {slot: self._handler(slot, f"{node.name} {label}") for slot, label in handler_slots(self.model)}
         self.writers = sorted({w for src in sources.values() for w in WRITER.findall(src)}) or ["this_node"]
         for slot, _label in handler_slots(self.model):
             fn = self.handlers[slot]
@@ -161,7 +160,7 @@ class Script:
 
     def placed_base(self) -> BaseModel:
         """The basenode as ipyros runs it: its name and namespace filled in, its own remaps composed with the
-        wrapping's (:func:`ipyros.node.wrapping.basenode_remaps`, one remap per name)."""
+        wrapping's (:func:`ipyros.core.remapping.basenode_remaps`, one remap per name)."""
         model = self.model
         assert model.base is not None
         return dataclasses.replace(model.base, node_name=base_node_name(model.base), namespace=base_namespace(model),
@@ -169,7 +168,7 @@ class Script:
 
     def _base_argv(self) -> list[str]:
         """The basenode's command line as ipyros launches it (its executable found now, as the backend finds it)."""
-        return self.engine.session.backend.basenode(self.placed_base(), log_path=os.devnull).argv
+        return self.flavour.base_command(self.placed_base())
 
     # -- collecting -----------------------------------------------------------------------------
     def _handler(self, slot: str, label: str) -> str:
@@ -181,7 +180,7 @@ class Script:
             source = f"{name} = {source}"
         functions = self.bindings.functions
         if functions.get(name, source) != source:
-            raise IpyrosError(f"two different handlers of {self.engine.name} are named {name}; "
+            raise IpyrosError(f"two different handlers of {self.node.name} are named {name}; "
                               "rename one (def another_name(msg): ...) and declare it again")
         functions[name], self.names[slot] = source, name
         return source
@@ -242,10 +241,10 @@ def _inside(directory: Path, name: str) -> bool:
         os.path.realpath(target).startswith(os.path.realpath(directory) + os.sep)
 
 
-def _export_package(node: Any, flavour: Any, directory: Path, namespace: Optional[dict]) -> Path:
+def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Optional[dict]) -> Path:
     """Write the package ``directory`` (named after it): the flavour says which files, this writes them."""
     package = flavour.check_package_name(directory.name)
-    model = engine_of(node).model()
+    model = node.model()
     script_path = directory / "scripts" / model.name
     script = Script(node, flavour, script_path, namespace, package=package)
     text = script.render()
@@ -270,10 +269,10 @@ def _export_package(node: Any, flavour: Any, directory: Path, namespace: Optiona
     return directory
 
 
-def export(node: Any, path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:
-    """Export ``node`` (a rosNode) to run without ipyros; return what was written.
+def export(node: KeptNode, path: "str | os.PathLike[str]", flavour: Any, namespace: Optional[dict] = None) -> Path:
+    """Export ``node`` to run without ipyros, written for ``flavour``'s ROS; return what was written.
 
-    ``path`` ending in ``.py``: one standalone script of the session's ROS (rospy or rclpy)
+    ``path`` ending in ``.py``: one standalone script of that ROS (rospy or rclpy)
     that does everything, for a wrapping node starting and stopping its basenode itself.
 
     Any other ``path`` (ROS 1): a directory, made a ROS package named after it (drop it into
@@ -292,7 +291,6 @@ def export(node: Any, path: "str | os.PathLike[str]", namespace: Optional[dict] 
     assignments, the user's helper functions are copied; anything else becomes
     ``NAME = None  # set me`` and an :class:`ExportWarning` lists them.
     """
-    flavour = engine_of(node).session.backend.export_flavour()
     if Path(path).suffix != ".py":
         return _export_package(node, flavour, Path(os.path.abspath(Path(path).expanduser())), namespace)
     script = Script(node, flavour, path, namespace)

@@ -9,11 +9,13 @@
       source: |
         def showPose(data): ...
 
-The format is in docs/model.md. :func:`load` runs each source in a namespace (IPython's
-``user_ns``: the handlers see the user's globals and stay editable with ``%handler``) and
-replays the declarations through the public DSL, so every check applies as if typed. A
-model file looks like data and travels like data: what it would run (handler code, a
-basenode) runs only with ``trust=True``.
+The format is in docs/model.md. Here: writing it (:func:`save`), reading it back checked
+for shape (:func:`read`), refusing what it would run unless trusted, and defining its
+handlers in a namespace (:func:`handlers_of`: IPython's ``user_ns``, so the handlers see
+the user's globals and stay editable with ``%handler``). The DSL replays the declarations
+(:mod:`ipyros.dsl.keeping`), so that every check applies as if typed. A model file looks
+like data and travels like data: what it would run (handler code, a basenode) runs only
+with ``trust=True``.
 
 A saved file keeps code, not state: the values of the handlers' other globals (``speed``)
 and helper functions they call come from the namespace they are loaded into.
@@ -24,18 +26,14 @@ from __future__ import annotations
 import json
 import os
 import shlex
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Optional
 
 import yaml
 
 from ..core import plan as planning
-from ..core.errors import DataError, IpyrosError
-from ..core.model import NodeModel
-from ..core.userdata import load_json, load_yaml
-from ..node.dsl import engine_of, rosNode
-from .atomic import write_atomic
-from .code import (
+from ..core.code import (
     WRITER,
     define_function,
     global_names,
@@ -45,8 +43,13 @@ from .code import (
     import_statement,
     lookup,
 )
+from ..core.errors import DataError, IpyrosError
+from ..core.model import NodeModel
+from ..core.userdata import load_json, load_yaml
+from .atomic import write_atomic
+from .kept import KeptNode
 
-__all__ = ["FORMAT", "FORMAT_KEY", "MODEL_SUFFIXES", "handler_sources", "load", "save"]
+__all__ = ["FORMAT", "FORMAT_KEY", "MODEL_SUFFIXES", "ModelFile", "handler_sources", "handlers_of", "read", "save"]
 
 FORMAT_KEY = "ipyros_node_format"
 FORMAT = 1
@@ -69,7 +72,7 @@ _Dumper.add_representer(str, lambda dumper, text: dumper.represent_scalar(
 MODEL_SUFFIXES = ("yaml", "yml", "json")
 
 
-def handler_sources(nodes: Iterable[rosNode]) -> dict[tuple[int, str], str]:
+def handler_sources(nodes: Iterable[KeptNode]) -> dict[tuple[int, str], str]:
     """``(id(node), slot) → source`` of every handler of ``nodes``.
 
     A handler without source fails it, and the error names every such handler, so
@@ -77,9 +80,8 @@ def handler_sources(nodes: Iterable[rosNode]) -> dict[tuple[int, str], str]:
     """
     sources, missing = {}, []
     for node in nodes:
-        engine = engine_of(node)
-        for slot, label in handler_slots(engine.model()):
-            fn = engine.handlers()[slot]
+        for slot, label in handler_slots(node.model()):
+            fn = node.handlers()[slot]
             try:
                 sources[(id(node), slot)] = handler_source(fn, f"{node.name} {label}")
             except IpyrosError as error:
@@ -91,21 +93,21 @@ def handler_sources(nodes: Iterable[rosNode]) -> dict[tuple[int, str], str]:
     return sources
 
 
-def save(node: rosNode, path: "str | os.PathLike[str]") -> Path:
-    """Save ``node``'s model and its handlers' sources to ``path`` (YAML, or JSON for ``.json``)."""
-    engine = engine_of(node)
-    model = engine.model()
+def save(node: KeptNode, path: "str | os.PathLike[str]", ros: str) -> Path:
+    """Save ``node``'s model and its handlers' sources to ``path`` (YAML, or JSON for ``.json``); ``ros`` says
+    which ROS made it (``"ROS 1"``), so that loading it on the other can say what differs."""
+    model = node.model()
     sources = handler_sources([node])
     entries = []
     for slot, _ in handler_slots(model):
-        fn, source = engine.handlers()[slot], sources[(id(node), slot)]
+        fn, source = node.handlers()[slot], sources[(id(node), slot)]
         origins = {n: import_of(lookup(n, fn, None), fn.__module__) for n in global_names(source)}
         entry: dict[str, Any] = {"slot": slot, "name": fn.__name__}
         imports = [import_statement(n, o) for n, o in origins.items() if o is not None]
         if imports:
             entry["imports"] = imports
         entries.append({**entry, "source": source})
-    data = {FORMAT_KEY: FORMAT, "ros": engine.session.backend.name, "node": model.to_dict(), "handlers": entries}
+    data = {FORMAT_KEY: FORMAT, "ros": ros, "node": model.to_dict(), "handlers": entries}
     if str(path).lower().endswith(".json"):
         return write_atomic(path, json.dumps(data, indent=2, ensure_ascii=False) + "\n")
     return write_atomic(path, yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100))
@@ -113,22 +115,31 @@ def save(node: rosNode, path: "str | os.PathLike[str]") -> Path:
 
 # -- load -------------------------------------------------------------------------------------
 
-def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
-         session: Any = None, trust: bool = False) -> rosNode:
-    """Rebuild the node saved in ``path``, declared but not created.
+@dataclass(frozen=True)
+class ModelFile:
+    """A model file read back: the node's model, its handlers' entries (slot, name, imports, source), and the
+    ROS that made it (None in files older than that key)."""
+
+    path: Path
+    model: NodeModel
+    handlers: list[dict]
+    made_on: Optional[str]
+
+    @property
+    def writers(self) -> set[str]:
+        """The names the handlers call ``.write`` on (``nd.write(...)``): the node they were written for."""
+        return {name for entry in self.handlers for name in WRITER.findall(entry["source"])}
+
+
+def read(path: "str | os.PathLike[str]", trust: bool = False) -> ModelFile:
+    """The model file ``path``, checked for shape; refused, in one line, if it would run anything untrusted.
 
     A model file looks like data and travels like data, so the code in it (imports and
-    handler sources) runs only when asked: ``trust=True``. Without it, a file that carries
-    code is refused, in one line naming what would run; a model without code (its handlers
-    taken by name from ``namespace``) loads as it is. A saved ``.py`` file is code, and runs
-    as Python files do (:func:`ipyros.files.savefile.restore`).
-
-    Handler sources run in ``namespace`` (default: a fresh dict); pass IPython's
-    ``user_ns`` so the handlers read the user's globals. Names the handlers call
-    ``.write`` on (``nd.write(...)``) are bound to the new node if ``namespace`` lacks them.
+    handler sources) and the basenode it names run only when asked: ``trust=True``.
+    Without it, a file that carries either is refused, naming what would run; a model
+    without code (its handlers taken by name from the namespace) loads as it is.
     """
     path = Path(path).expanduser()
-    namespace = {} if namespace is None else namespace
     data = _read(path)
     if not trust:
         _refuse_untrusted(path, data)
@@ -136,18 +147,15 @@ def load(path: "str | os.PathLike[str]", namespace: Optional[dict] = None, *,
         model = NodeModel.from_dict(data["node"])
     except (TypeError, ValueError, AttributeError) as error:
         raise IpyrosError(f"{path}: the node is malformed: {error}") from None
-    functions = {entry["slot"]: _define(path, entry, namespace) for entry in data["handlers"]}
-    functions.update(_by_name(path, model, functions, namespace))
-    node = rosNode(model.name, namespace=model.namespace, session=session)
-    _across_ros(path, data.get("ros"), model, node)
-    try:
-        _declare(node, model, functions)
-    except IpyrosError as error:
-        raise type(error)(f"{path}: {error}") from None
-    for entry in data["handlers"]:
-        for name in WRITER.findall(entry["source"]):
-            namespace.setdefault(name, node)
-    return node
+    return ModelFile(path, model, data["handlers"], data.get("ros"))
+
+
+def handlers_of(file: ModelFile, namespace: dict) -> dict[str, Callable[..., Any]]:
+    """Slot → function: each handler's imports and source run in ``namespace``, and the handlers the file
+    names without source found there by name."""
+    functions = {entry["slot"]: _define(file.path, entry, namespace) for entry in file.handlers}
+    functions.update(_by_name(file.path, file.model, functions, namespace))
+    return functions
 
 
 def _refuse_untrusted(path: Path, data: dict) -> None:
@@ -185,26 +193,6 @@ def _command_of(base: Any) -> str:
     if base.get("package"):
         return f"{line} of package {base['package']}"
     return line
-
-
-def _across_ros(path: Path, made_on: Optional[str], model: NodeModel, node: rosNode) -> None:
-    """A model made on the other ROS: refuse what cannot run here, in one line; say what runs differently.
-
-    The model itself is the same on both (names, types as ``pkg/Type``, QoS as data); what
-    can differ is what it names: message packages and basenodes must be installed here
-    (their lookups say so, in one line, if they are not), and a launch-file basenode needs
-    roslaunch, which is ROS 1's.
-    """
-    session = engine_of(node).session
-    here = session.backend.name
-    if made_on in (None, here):
-        return
-    notes = [f"{path} was made on {made_on}; loading it on {here}"]
-    kept = set(session.backend.qos_fields)  # what a declaration's QoS means on this ROS
-    if any(t.qos and set(t.qos) - kept for t in model.topics):
-        notes.append(f"its QoS {', '.join(sorted({k for t in model.topics for k in (t.qos or {})} - kept))} mean "
-                     f"nothing on {here} and are kept")
-    session.notify("ipyros: " + "; ".join(notes))
 
 
 def _by_name(path: Path, model: NodeModel, functions: dict[str, Any], namespace: dict) -> dict[str, Any]:
@@ -265,30 +253,3 @@ def _define(path: Path, entry: dict, namespace: dict) -> Callable[..., Any]:
             except Exception as error:  # noqa: BLE001 - any failure is the file's problem, told in one line
                 raise IpyrosError(f"{what} needs `{statement}`, which fails: {error}") from None
     return define_function(name, source, namespace, what, f"<ipyros {path.name}: {name}>")
-
-
-def _declare(node: rosNode, model: NodeModel, functions: dict[str, Callable[..., Any]]) -> None:
-    """Replay ``model`` through the public DSL: base first, then topics, services, timers, params."""
-    base = model.base
-    if base is not None and base.launch:  # the launch file says the rest, as it does now
-        node.baseLaunch(base.launch, base.launch_node or base.node_name or "", args=base.launch_args)
-        base = None
-    if base is not None and base.executable:
-        node.baseNode(base.executable, name=base.node_name, namespace=base.namespace, remaps=base.remaps,
-                      params=base.params, args=base.args)
-    if base is not None and base.package:
-        node.basePackage(base.package)
-    for t in model.topics:
-        role = getattr(node, t.role)
-        if t.direction == "publish":
-            role.publish(t.name, type=t.type, latch=t.latch, qos=t.qos)
-        else:
-            role.subscribe(t.name, handler=functions.get(planning.topic_slot(t.resolved)), type=t.type, qos=t.qos)
-    for s in model.services:  # a reuse relays and takes no handler: the slot is the intercepting new's
-        handler = functions.get(planning.service_slot(s.resolved)) if s.role == "new" else None
-        getattr(node, s.role).service(s.name, type=s.type, handler=handler)
-    for timer in model.timers:
-        node.timer(timer.period, functions.get(planning.timer_slot(timer.name)), name=timer.name,
-                   oneshot=timer.oneshot)
-    for key, value in model.params.items():
-        node.params[key] = value

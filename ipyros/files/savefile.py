@@ -7,8 +7,9 @@ The file holds, in this order: imports, the plain-literal globals the handlers r
 the handlers' and their helpers' sources (current versions), then the declarations
 inside ``with restoring():`` ending with ``create()``; earlier handler versions come as
 ``nd.restore_versions(...)`` so ``nd.revert`` still reaches them. Restoring is running it:
-``python3 kobuki.py`` (:func:`spin` keeps the nodes up until Ctrl-C), ``%run kobuki.py``,
-or :func:`restore` (``rosNode.load``, ``%load_nodes``). No pickle: text and code only.
+``python3 kobuki.py`` (``spin()`` keeps the nodes up until Ctrl-C), ``%run kobuki.py``,
+or ``ipyros.restore`` (``rosNode.load``, ``%load_nodes``): see :mod:`ipyros.dsl.keeping`.
+No pickle: text and code only.
 
 Nothing is dropped silently: a handler without source fails the save, naming every such
 handler; a global that is neither importable nor a literal is listed in the file and in
@@ -20,22 +21,20 @@ from __future__ import annotations
 import keyword
 import os
 import re
-import sys
 import time
 import types
 from pathlib import Path
 from typing import Any, Iterable, Optional, Sequence
 
 from ..core import plan as planning
+from ..core.code import WRITER, Bindings, handler_slots
 from ..core.errors import IpyrosError, warn_user
 from ..core.model import NodeModel
-from ..node.dsl import engine_of, rosNode
-from ..node.session import current
 from .atomic import write_atomic
-from .code import WRITER, Bindings, handler_slots
+from .kept import KeptNode
 from .modelfile import handler_sources
 
-__all__ = ["MARKER", "RestoreError", "SaveWarning", "restore", "restoring", "save_nodes", "save_session", "spin"]
+__all__ = ["MARKER", "SaveWarning", "save_nodes"]
 
 MARKER = "# ipyros saved nodes, format 1"
 _OWN_NAMES = {"rosNode", "restoring", "spin"}  # what the file imports from ipyros
@@ -45,37 +44,28 @@ class SaveWarning(UserWarning):
     """A saved file needs globals it could not hold; they are listed at its top."""
 
 
-class RestoreError(IpyrosError):
-    """Running a saved file failed; what it had started was stopped again."""
-
-
 # -- save -------------------------------------------------------------------------------------
 
-def save_nodes(nodes: Sequence[rosNode], path: "str | os.PathLike[str]",
-               namespace: Optional[dict] = None) -> Path:
+def save_nodes(nodes: Sequence[KeptNode], path: "str | os.PathLike[str]", namespace: Optional[dict] = None,
+               ros: str = "ROS") -> Path:
     """Write ``nodes`` to the Python file ``path``; return its path.
 
     ``namespace`` (IPython's ``user_ns``) is where the handlers' globals and the nodes'
-    variable names are looked up first.
+    variable names are looked up first; ``ros`` names the ROS that made them, for the reader.
     """
     if not nodes:
         raise IpyrosError("there is no node to save; create one first (nd = rosNode('name'))")
     if Path(path).suffix != ".py":
         raise IpyrosError(f"{path}: a saved session is Python; give a path ending in .py")
-    text = _SavedFile(nodes, namespace).render(Path(path).name)
+    text = _SavedFile(nodes, namespace).render(Path(path).name, ros)
     compile(text, str(path), "exec")  # a file that does not compile is ipyros's bug: fail before writing
     return write_atomic(path, text)
-
-
-def save_session(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:
-    """Write every node running in this session to the Python file ``path``; return its path."""
-    return save_nodes([engine.dsl for engine in current().nodes.values()], path, namespace)
 
 
 class _SavedFile:
     """The text of a saved file, gathered node by node."""
 
-    def __init__(self, nodes: Sequence[rosNode], namespace: Optional[dict]) -> None:
+    def __init__(self, nodes: Sequence[KeptNode], namespace: Optional[dict]) -> None:
         self.nodes, self.namespace = list(nodes), namespace
         self.bindings = Bindings()
         self.handlers: dict[str, str] = {}  # function name in the file → source
@@ -85,7 +75,7 @@ class _SavedFile:
         for node in self.nodes:
             for slot, _ in handler_slots(node.model()):
                 self._handler(node, slot)
-                for version in engine_of(node).slot_versions(slot)[0]:  # what an earlier version needs, to revert to it
+                for version in node.slot_versions(slot)[0]:  # what an earlier version needs, to revert to it
                     if isinstance(version.function, types.FunctionType) and version.source:
                         self.bindings.bind(version.function, version.source, self.namespace, self._skip)
 
@@ -95,9 +85,9 @@ class _SavedFile:
         taken: set[str] = set(_OWN_NAMES)
         chosen: dict[int, str] = {}
         for node in self.nodes:
-            scopes = [self.namespace or {}] + [fn.__globals__ for fn in engine_of(node).handlers().values()
+            scopes = [self.namespace or {}] + [fn.__globals__ for fn in node.handlers().values()
                                                if isinstance(fn, types.FunctionType)]
-            bound = [k for scope in scopes for k, v in scope.items() if v is node and not k.startswith("_")]
+            bound = [k for scope in scopes for k, v in scope.items() if v is node.dsl and not k.startswith("_")]
             writers = [w for (owner, _), src in self.sources.items() if owner == id(node) for w in WRITER.findall(src)]
             candidates = [w for w in writers if w in bound] + bound + [_identifier(node.name)]
             name = next((c for c in candidates if c not in taken), None) or _unique(_identifier(node.name), taken)
@@ -110,8 +100,8 @@ class _SavedFile:
         return name in _OWN_NAMES or name in self.variables.values()
 
     # -- handlers ----------------------------------------------------------------------------
-    def _handler(self, node: rosNode, slot: str) -> None:
-        fn, source = engine_of(node).handlers()[slot], self.sources[(id(node), slot)]
+    def _handler(self, node: KeptNode, slot: str) -> None:
+        fn, source = node.handlers()[slot], self.sources[(id(node), slot)]
         name = fn.__name__
         if name == "<lambda>":  # a name of its own: on_cmd_vel, timer_tick, ...
             name = _identifier(re.sub(r"\W+", "_", slot.replace("topic ", "on ", 1)).strip("_"))
@@ -125,9 +115,8 @@ class _SavedFile:
             self.bindings.bind(fn, source, self.namespace, self._skip)
 
     # -- the text ----------------------------------------------------------------------------
-    def render(self, stem: str) -> str:
+    def render(self, stem: str, made_on: str) -> str:
         names = ", ".join(n.fullname for n in self.nodes)
-        made_on = engine_of(self.nodes[0]).session.backend.name if self.nodes else "ROS"
         parts = [f'"""Nodes saved by ipyros on {time.strftime("%Y-%m-%d %H:%M:%S")}: {names}.\n\n'
                  f"Made on {made_on}. The DSL is the same on ROS 1 and ROS 2: it runs on either where the\n"
                  f"message packages and basenodes it names are installed.\n\n"
@@ -152,7 +141,7 @@ class _SavedFile:
                                                          b.unbound.items()), SaveWarning)
         return "\n\n\n".join(parts) + "\n"
 
-    def _declarations(self, node: rosNode) -> list[str]:
+    def _declarations(self, node: KeptNode) -> list[str]:
         """The DSL calls that declare ``node`` as it is, then create it if it runs."""
         model, var = node.model(), self.variables[id(node)]
         ns = f", namespace={model.namespace!r}" if model.namespace != "/" else ""
@@ -181,11 +170,11 @@ class _SavedFile:
         lines.append(f"{var}.create()" if node.created else f"# {var}.create()  (it was not running when saved)")
         return lines + [""]
 
-    def _versions(self, node: rosNode, var: str, model: NodeModel) -> list[str]:
+    def _versions(self, node: KeptNode, var: str, model: NodeModel) -> list[str]:
         """``restore_versions`` calls for the handlers that had more than one version."""
         lines = []
         for slot, _ in handler_slots(model):
-            versions, current = engine_of(node).slot_versions(slot)
+            versions, current = node.slot_versions(slot)
             if len(versions) < 2 or any(v.source is None for v in versions):
                 continue
             what = _declared_name(model, slot)
@@ -236,94 +225,3 @@ def _identifier(text: str) -> str:
 def _unique(name: str, taken: Iterable[str]) -> str:
     taken = set(taken)
     return next(f"{name}_{i}" for i in range(2, 10_000) if f"{name}_{i}" not in taken)
-
-
-# -- restore ----------------------------------------------------------------------------------
-
-class restoring:  # noqa: N801 - used as a statement: with restoring():
-    """Stop what a saved file started if it fails halfway, and say where it failed in one line."""
-
-    def __init__(self) -> None:
-        self.session = current()
-        self.file = sys._getframe(1).f_code.co_filename  # the saved file running this block
-        self.before: set[int] = set()
-
-    def __enter__(self) -> "restoring":
-        self.before = {id(n) for n in self.session.nodes.values()}
-        return self
-
-    def __exit__(self, kind: Any, error: Any, tb: Any) -> bool:
-        if error is None:
-            return False
-        started = [n for n in self.session.nodes.values() if id(n) not in self.before]
-        for node in reversed(started):
-            node.shutdown()
-        line = next((frame.tb_lineno for frame in _frames(tb) if frame.tb_frame.f_code.co_filename == self.file), None)
-        where = f"{Path(self.file).name}, line {line}" if line else Path(self.file).name
-        stopped = f"; stopped {', '.join(n.fullname for n in started)} again" if started else ""
-        message = str(error) if isinstance(error, IpyrosError) else f"{type(error).__name__}: {error}"
-        raise RestoreError(f"restoring {where} failed: {message}{stopped}") from None
-
-
-def _frames(tb: Any) -> Iterable[Any]:
-    while tb is not None:
-        yield tb
-        tb = tb.tb_next
-
-
-def restore(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> list[rosNode]:
-    """Run the saved file ``path`` in ``namespace`` (default: a fresh one); return the nodes it made.
-
-    Its ``if __name__ == "__main__"`` part does not run (``__name__`` is not ``__main__``).
-    """
-    path = Path(path).expanduser()
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
-        raise IpyrosError(f"cannot read {path}: {error.strerror}") from None
-    if MARKER not in text.splitlines()[:12]:
-        raise IpyrosError(f"{path} is not a file saved by ipyros (no '{MARKER}' line at its top); "
-                          "save nodes with nd.save('file.py') or %save_nodes file.py")
-    namespace = {} if namespace is None else namespace
-    before = {id(v) for v in namespace.values() if isinstance(v, rosNode)}
-    saved = {k: namespace[k] for k in ("__name__", "__file__") if k in namespace}
-    namespace.update(__name__="__ipyros_restore__", __file__=str(path))
-    try:
-        code = compile(text, str(path), "exec")
-        exec(code, namespace)  # noqa: S102 - the user's own saved file, as %run would
-    except SyntaxError as error:
-        raise RestoreError(f"{path} does not compile: {error.msg} at line {error.lineno}") from None
-    except RestoreError:
-        raise
-    except Exception as error:  # before the with block: an import, a global
-        line = next((f.tb_lineno for f in _frames(error.__traceback__) if f.tb_frame.f_code.co_filename == str(path)),
-                    None)
-        raise RestoreError(f"restoring {path.name}{f', line {line}' if line else ''} failed: "
-                           f"{type(error).__name__}: {error}") from None
-    finally:
-        for key in ("__name__", "__file__"):
-            namespace.pop(key, None)
-        namespace.update(saved)
-    return [v for v in dict.fromkeys(v for v in namespace.values() if isinstance(v, rosNode))
-            if id(v) not in before]
-
-
-def spin() -> None:
-    """Keep the nodes up until Ctrl-C when a saved file runs as a script; at a prompt, return at once."""
-    if sys.flags.interactive or _in_ipython():
-        return
-    session = current()
-    running = ", ".join(session.nodes) or "no nodes"
-    print(f"ipyros: running {running}; Ctrl-C stops {'them' if len(session.nodes) > 1 else 'it'}", flush=True)
-    try:
-        while session.nodes and not session.closed:
-            time.sleep(0.2)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        session.close()
-
-
-def _in_ipython() -> bool:
-    shell = sys.modules.get("IPython")
-    return shell is not None and shell.get_ipython() is not None

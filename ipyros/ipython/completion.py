@@ -3,8 +3,8 @@
 One IPython matcher (Matcher API v2, identifier ``"ipyros"``) answers in two places:
 
 * magic lines, e.g. ``%topics /tur<TAB>``, ``%topics --type geometry_msgs/Tw<TAB>``,
-  ``%handler nd <TAB>``, ``%wrap turtle<TAB>`` (see :data:`MAGICS` for which argument
-  is what);
+  ``%handler nd <TAB>``, ``%wrap turtle<TAB>``: each magic's own ``@argument`` decorators say what
+  each word is (:mod:`.arguments`), read back from the parser IPython made of them;
 * string arguments of DSL calls, e.g. ``nd.new.subscribe(topic="/tur<TAB>``,
   ``.publish(topic='/tu<TAB>`` on a continuation line, ``nd.write("<TAB>``,
   ``msgType="geometry_msgs/Tw<TAB>`` (see :data:`CALLS`).
@@ -42,31 +42,33 @@ from IPython.core.completer import CompletionContext, SimpleCompletion, SimpleMa
 from ..core import msgtypes, names
 from ..core.graph import GraphSnapshot, names_with_prefix
 from ..core.model import NodeModel
+from ..core.msgbuild import template
 from ..core.names import default_namespace
 from ..node.session import current
 from ..tools.graph import GraphCache
+from ..tools.robot import ROBOTS
+from .arguments import (
+    DEMO_ROBOT,
+    DSL_NODE,
+    EXECUTABLE,
+    FUNCTION,
+    MSG_TEMPLATE,
+    MSG_TYPE,
+    NODE,
+    OWN_TOPIC,
+    PACKAGE,
+    REQUEST_TEMPLATE,
+    SERVICE,
+    SRV_TYPE,
+    TIMER,
+    TOPIC,
+    grammar_of,
+)
 
 log = logging.getLogger(__name__)
 
 #: The matcher's identifier: ``%config IPCompleter.disable_matchers = ["ipyros"]`` turns it off.
 IDENTIFIER = "ipyros"
-
-# What an argument is, i.e. where its completions come from.
-TOPIC = "topic"              # live topics (+ the node's own first, when a node is known)
-OWN_TOPIC = "own topic"      # the node's own topics only (live ones if no node is known)
-SERVICE = "service"          # live services + the node's own
-MSG_TYPE = "message type"
-SRV_TYPE = "service type"
-NODE = "node"                # live ROS node names
-DSL_NODE = "DSL node"        # variables in user_ns holding a DSL node
-FUNCTION = "function"        # the user's functions (a candidate handler for %try)
-TIMER = "timer"              # the node's timer names
-PACKAGE = "package"
-EXECUTABLE = "executable"    # executables of the package named by the argument before
-DEMO_ROBOT = "demo robot"    # the robots %demo starts
-MSG_TEMPLATE = "template"    # a message of the type before it, every field at its default
-REQUEST_TEMPLATE = "request template"  # the request of the service type before it, at its defaults
-
 
 # -- the catalog of installed things ------------------------------------------------
 @dataclass
@@ -110,9 +112,6 @@ class Catalog:
 
 def _template(type_name: str, request: bool = False) -> str:
     """A message of ``type_name`` (or the request of the service ``type_name``) at its defaults, one line."""
-    from ..core import msgtypes
-    from ..core.msgbuild import template
-
     if not request:
         return template(type_name)
     _, cls = msgtypes.resolve_service(type_name)
@@ -153,49 +152,6 @@ class Want:
     direction: Optional[str] = None
     package: Optional[str] = None
     before: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class MagicSpec:
-    """What the words of a line magic are: positional kinds, and option → value kind.
-
-    An option mapped to None takes a value that is not completed; an option missing
-    from ``options`` is a flag, unless ``other_options`` gives the kind of its value.
-    """
-
-    positional: tuple[Optional[str], ...] = ()  # None: a word not completed (a path)
-    options: Mapping[str, Optional[str]] = field(default_factory=dict)
-    other_options: Optional[str] = None
-    #: For a positional OWN_TOPIC: which of the node's topics (None: all of them).
-    direction: Optional[str] = None
-
-
-_TYPE_OPTIONS = {"--type": MSG_TYPE, "-t": MSG_TYPE}
-
-#: The line magics whose arguments are completed. Keep in step with ipyros/magics/.
-MAGICS: dict[str, MagicSpec] = {
-    "topics": MagicSpec((TOPIC,), {**_TYPE_OPTIONS, "--node": NODE, "-n": NODE}),
-    "echo": MagicSpec((TOPIC,), {"-n": None, "--count": None}),
-    "handler": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
-    "pub": MagicSpec((TOPIC, MSG_TYPE, MSG_TEMPLATE), {**_TYPE_OPTIONS, "-r": None, "--rate": None}),
-    "try": MagicSpec((DSL_NODE, OWN_TOPIC, FUNCTION), {"-n": None, "--last": None}, direction="subscribe"),
-    "status": MagicSpec((DSL_NODE,)),
-    "versions": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
-    "revert": MagicSpec((DSL_NODE, OWN_TOPIC), direction="subscribe"),
-    "save_nodes": MagicSpec((None, DSL_NODE, DSL_NODE, DSL_NODE)),
-    "demo": MagicSpec((DEMO_ROBOT,)),
-    "hz": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
-    "bw": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
-    "delay": MagicSpec((TOPIC,) * 8, {"-w": None, "--window": None, "-n": None, "--count": None}),
-    "services": MagicSpec((SERVICE,)),
-    "call": MagicSpec((SERVICE, SRV_TYPE, REQUEST_TEMPLATE), {"-t": None, "--timeout": None}),
-    "params": MagicSpec((NODE,)),
-    "param": MagicSpec((NODE,)),
-    "nodes": MagicSpec((NODE,)),
-    "node": MagicSpec((NODE,)),
-    "wrap": MagicSpec((PACKAGE, EXECUTABLE), {"--as": None, "--name": None, "--namespace": None, "--ns": None},
-                      other_options=TOPIC),
-}
 
 
 @dataclass(frozen=True)
@@ -241,58 +197,35 @@ _ROS_KEYWORDS = {"msgType": MSG_TYPE, "msg_type": MSG_TYPE, "srvType": SRV_TYPE,
 _MAGIC_LINE = re.compile(r"^\s*(%?)([A-Za-z_]\w*)\s+(.*)$", re.S)
 
 
-def magic_want(line: str, user_ns: Mapping[str, Any], line_magics: Optional[Mapping[str, Any]] = None) -> Optional[Want]:
-    """What to complete at the end of ``line`` if it is one of :data:`MAGICS`, else None.
+def magic_want(line: str, user_ns: Mapping[str, Any], line_magics: Mapping[str, Any],
+               automagic: bool = True) -> Optional[Want]:
+    """What to complete at the end of ``line`` if it calls one of ``line_magics`` (the shell's) whose arguments
+    say what they complete (:mod:`.arguments`), else None.
 
-    Without ``%`` the line counts only when automagic would run it: ``line_magics``
-    (the shell's registered line magics) has the name and no variable shadows it.
+    Without ``%`` the line counts only when automagic would run it: the name is a magic
+    and no variable shadows it.
     """
     m = _MAGIC_LINE.match(line)
     if not m:
         return None
     percent, name, args = m.groups()
-    spec = MAGICS.get(name)
-    if spec is None or (not percent and (line_magics is None or name not in line_magics or name in user_ns)):
+    if not percent and (not automagic or name in user_ns):
+        return None
+    magic = line_magics.get(name)
+    grammar = grammar_of(magic) if magic is not None else None
+    if grammar is None:
         return None
     words = args.split()
     current = "" if not args or args[-1].isspace() else words.pop()
-    kind, positionals = _classify(spec, words, current)
-    if kind is None:
+    word, positionals = grammar.classify(words, current)
+    if word is None or word.kind is None:
         return None
+    kind = word.kind
     # The value of --opt=value or a remap from:=to: only the part after the last = or :.
     fragment = re.split(r"[=:]", current)[-1] if current.startswith("-") or ":=" in current else current
     model = _model_of(user_ns, positionals[0]) if kind == OWN_TOPIC and positionals else None
     package = positionals[0] if kind == EXECUTABLE and positionals else None
-    return Want(kind, fragment, model, spec.direction, package, tuple(positionals))
-
-
-def _classify(spec: MagicSpec, words: list[str], current: str) -> tuple[Optional[str], list[str]]:
-    """The kind of the word being typed, given the words before it; and the positionals seen."""
-    positionals: list[str] = []
-    pending: Optional[str] = "none"  # "none": the next word is not an option value
-    for word in words:
-        if pending != "none":
-            pending = "none"
-        elif word.startswith("-") and len(word) > 1:
-            if "=" not in word and _takes_value(spec, word):
-                pending = _option_kind(spec, word)
-        else:
-            positionals.append(word)
-    if pending != "none":
-        return pending, positionals
-    if current.startswith("-"):
-        option, eq, _ = current.partition("=")
-        return (_option_kind(spec, option) if eq and _takes_value(spec, option) else None), positionals
-    index = len(positionals)
-    return (spec.positional[index] if index < len(spec.positional) else None), positionals
-
-
-def _takes_value(spec: MagicSpec, option: str) -> bool:
-    return option in spec.options or spec.other_options is not None
-
-
-def _option_kind(spec: MagicSpec, option: str) -> Optional[str]:
-    return spec.options[option] if option in spec.options else spec.other_options
+    return Want(kind, fragment, model, word.direction, package, tuple(positionals))
 
 
 # -- reading DSL calls ----------------------------------------------------------------
@@ -511,8 +444,6 @@ class Answerer:
         if kind == PACKAGE:
             return [(p, kind) for p in names_with_prefix(self.catalog.packages(), frag)]
         if kind == DEMO_ROBOT:
-            from ..tools.robot import ROBOTS
-
             return [(n, kind) for n in ROBOTS if n.startswith(frag)]
         if kind == EXECUTABLE and want.package:
             return [(e, kind) for e in names_with_prefix(self.catalog.executables(want.package), frag)]
@@ -618,9 +549,9 @@ class RosMatcher:
         user_ns = self.shell.user_ns
         line = context.text_until_cursor
         manager = getattr(self.shell, "magics_manager", None)
+        line_magics = manager.magics["line"] if manager is not None else {}
         # Without automagic a bare "topics /x" is Python, not a magic.
-        line_magics = manager.magics["line"] if manager is not None and getattr(self.shell, "automagic", False) else None
-        want = magic_want(line, user_ns, line_magics)
+        want = magic_want(line, user_ns, line_magics, automagic=bool(getattr(self.shell, "automagic", False)))
         if want is None and ('"' in line or "'" in line):
             lines = context.full_text.split("\n")[: context.cursor_line]
             arg = string_argument("\n".join([*lines, line]))

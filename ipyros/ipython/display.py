@@ -13,7 +13,7 @@ from __future__ import annotations
 import html
 import io
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Optional
 
 from rich.console import Console, Group
 from rich.markup import escape
@@ -21,14 +21,16 @@ from rich.protocol import rich_cast
 from rich.table import Table
 from rich.text import Text
 
+from ..core.graph import GraphSnapshot
 from ..core.qos import from_model as qos_of
 from ..core.records import History, Interface, NodeStatus, Versions
-from ..node.dsl import rosNode
+from ..dsl import rosNode
+from ..tools.probe import Rate
 from ..tools.robot import DemoRobot
 from ..tools.tryout import TrialReport, one_line
 
 __all__ = ["RENDERERS", "interface_table", "node_table", "register", "render_html", "render_plain", "render_text",
-           "renderable", "session_table", "status_table", "table_html", "unregister"]
+           "renderable", "session_table", "status_table", "topics_table", "endpoints_table", "table_html", "unregister"]
 
 
 def node_table(node: rosNode) -> Table:
@@ -159,6 +161,51 @@ def interface_table(interface: Interface) -> Table:
         table.add_section()
         table.add_row("[dim]not shown[/]", f"[dim]{', '.join(short)}[/]", "[dim]ROS plumbing[/]")
     return table
+
+
+def topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
+                  window: float, where: str) -> Table:
+    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}", title_justify="left")
+    # Names stay whole (they are what you copy); the node lists give way when space runs out.
+    table.add_column("topic", overflow="fold", style="bold", min_width=min(60, max(map(len, found), default=5)))
+    table.add_column("type", overflow="fold", min_width=min(40, max((len(snap.topics[t] or "?") for t in found),
+                                                                   default=4)))
+    table.add_column("publishers", overflow="fold")
+    table.add_column("subscribers", overflow="fold")
+    if rates is not None:
+        table.add_column("rate Hz", justify="right")
+    for topic in found:
+        row = [topic, snap.topics[topic] or "?", _few_nodes(snap.publishers.get(topic, ())),
+               _few_nodes(snap.subscribers.get(topic, ()))]
+        if rates is not None:
+            rate = rates.get(topic)
+            row.append(rate.describe(window) if rate is not None else "? (type not installed)")
+        table.add_row(*row)
+    if rates is not None and any(r is not None and r.hz is None and r.count for r in rates.values()):
+        table.caption = f"< N: one message per publisher in {window:g} s; %hz TOPIC listens longer"
+        table.caption_justify = "left"
+    return table
+
+
+def endpoints_table(snap: GraphSnapshot, found: list[str], endpoints: Any, where: str) -> Table:
+    """``%topics -v``: a row per publisher and subscription of each topic, with its QoS."""
+    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}, by endpoint",
+                  title_justify="left")
+    for column in ("topic", "node", "endpoint", "type", "QoS"):  # names and QoS whole; the type gives way
+        table.add_column(column, overflow="fold", no_wrap=column != "type", style="bold" if column == "topic" else None)
+    for topic in found:
+        rows = endpoints(topic) or [("", "", snap.topics[topic] or "?", "")]
+        types = {row[2] for row in rows if not row[2].startswith("?")}
+        for i, (node, kind, type_name, qos) in enumerate(rows):
+            if len(types) > 1:  # ROS connects no two types: say which endpoint hears nothing from which
+                type_name = f"[red]{type_name}[/] (not {' or '.join(sorted(types - {type_name}))}: nothing passes)"
+            table.add_row(topic if i == 0 else "", node, kind, type_name, qos)
+    return table
+
+
+def _few_nodes(nodes: tuple[str, ...], most: int = 3) -> str:
+    shown = ", ".join(nodes[:most])
+    return shown + (f" +{len(nodes) - most} more" if len(nodes) > most else "")
 
 
 def render_text(renderable_: Any, width: int = 100) -> str:

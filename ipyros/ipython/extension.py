@@ -30,7 +30,7 @@ from typing import Any, Optional
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError
-from ..node.dsl import end_chains, rosNode
+from ..dsl import end_chains, rosNode
 from ..node.session import Session, configure, current, started as session_started
 from ..tools.graph import GraphCache
 from ..tools.probe import PromptPublisher, is_tool
@@ -67,10 +67,9 @@ class Extension:
         self.graph = GraphCache(lambda timeout: self.session.backend.graph_snapshot(timeout),
                                 lambda: self.session.backend.where(), period=self.settings.graph_period)
         self.node_magics = NodeMagics(shell, self)
-        self.topic_magics = TopicMagics(shell, self)  # %plot asks it for a live topic's type
         self.plot_magics = PlotMagics(shell, self)
         self.record_magics = RecordMagics(shell, self)
-        self.magics = [self.settings, self.topic_magics, RateMagics(shell, self), IntrospectMagics(shell, self),
+        self.magics = [self.settings, TopicMagics(shell, self), RateMagics(shell, self), IntrospectMagics(shell, self),
                        self.node_magics, WrapMagics(shell, self), self.plot_magics, self.record_magics,
                        DemoMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None

@@ -28,7 +28,8 @@ service / reuse          ``service(host, name, cls, slot)``,
                          ``service_relay(host, source, target, cls, complain)``
 a DSL node's life        ``open_host(host)`` at create(), ``close_host(host)`` at shutdown()
 its params               ``check_param``, ``get_param``, ``set_param``, ``has_param``,
-                         ``delete_param`` (by global name)
+                         ``delete_param`` (by global name); ``forget_params(names)``: what
+                         ended nodes left on a parameter server (ROS 1)
 a free node name         ``refuse_taken_name(name)``
 the graph                ``graph_snapshot(timeout)`` (a :class:`~ipyros.core.graph.GraphSnapshot`),
                          ``where()`` (its name for titles), ``live_types(topics)`` (the type
@@ -103,6 +104,7 @@ class Backend(Protocol):
     def set_param(self, name: str, value: Any) -> None: ...
     def has_param(self, name: str) -> bool: ...
     def delete_param(self, name: str) -> None: ...
+    def forget_params(self, names: list[str]) -> None: ...
     def refuse_taken_name(self, name: str) -> None: ...
 
     # the graph

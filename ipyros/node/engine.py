@@ -1,6 +1,6 @@
 """What makes a DSL node live: its model, its handlers and their versions, its slots, its open endpoints.
 
-A :class:`~ipyros.node.dsl.rosNode` is the user's DSL and nothing else (``nd.<TAB>`` shows
+A :class:`~ipyros.dsl.rosnode.rosNode` is the user's DSL and nothing else (``nd.<TAB>`` shows
 the paper's methods); each one owns a :class:`NodeEngine`, which holds its state and is the
 one place where the model and the running node change: :meth:`NodeEngine.change` edits a
 copy of the model, and if the node runs, reconciles the live endpoints with the plan of
@@ -8,7 +8,7 @@ the new model (:mod:`ipyros.core.plan`) through the session's backend, then comm
 rejected change leaves model and running node as they were.
 
 ipyros's own modules (wrapping, saving and exporting, the tools and the magics) use a node
-through its engine (:func:`ipyros.node.dsl.engine_of`), never through private fields.
+through its engine (:func:`ipyros.dsl.engine_of`), never through private fields.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import copy
 import threading
 import time
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any, Callable, Optional
+from typing import Any, Callable, Optional
 
 from ..core import msgtypes, names, plan as planning, versions as versions_mod
 from ..core.errors import (
@@ -33,12 +33,11 @@ from ..core.errors import (
 from ..core.model import NodeModel, TopicModel
 from ..core.plan import Spec
 from ..core.records import History, NodeStatus, StatusRow, Versions
+from ..core.remapping import base_fullname, check_wrapping, resolve_for
 from ..core.slots import HandlerSlot, OutputScope, SendFigures
 from ..core.versions import HandlerVersion
-from .wrapping import base_fullname, check_wrapping, resolve_for, start_base
-
-if TYPE_CHECKING:
-    from .session import Session
+from .session import Session
+from .wrapping import start_base
 
 #: A slot key's new handler and whether it takes the message (or timer event) as its argument.
 Handlers = dict[str, tuple[Callable[..., Any], bool]]
@@ -62,7 +61,7 @@ class HandlerTarget:
 class NodeEngine:
     """The state of one DSL node and the changes to it; see the module's docstring."""
 
-    def __init__(self, dsl: Any, model: NodeModel, session: "Session", explicit_namespace: bool) -> None:
+    def __init__(self, dsl: Any, model: NodeModel, session: Session, explicit_namespace: bool) -> None:
         self.dsl = dsl  # the rosNode the user holds (advice names its variable; tools hand it back)
         self.session = session
         #: Whether the namespace was given; a wrapping node without one lives in its basenode's.
@@ -320,7 +319,7 @@ class NodeEngine:
             return publication, declared
 
     def write(self, topic: str, msg: Any) -> None:
-        """Publish ``msg`` on ``topic`` (see :meth:`rosNode.write <ipyros.node.dsl.rosNode.write>`)."""
+        """Publish ``msg`` on ``topic`` (see :meth:`rosNode.write <ipyros.dsl.rosnode.rosNode.write>`)."""
         publication, type_name = self.writer(topic)
         got = msgtypes.type_name(msg)  # a class of the right type is refused by the publication, in its words
         if got != type_name:

@@ -17,15 +17,24 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Optional
+from typing import Any, Callable, Optional, Protocol
 
 from ..core.errors import NodeStateError
 from ..core.journal import Change, Journal
 from ..core.slots import HandlerFailure, OutputScope
 from .backend import Backend, choose as choose_backend
 
-if TYPE_CHECKING:
-    from .engine import NodeEngine
+
+class SessionNode(Protocol):
+    """What the session needs of its nodes (each is a :class:`~ipyros.node.engine.NodeEngine`, which uses the
+    session: named here as a protocol, so that the session does not import the engine back)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def fullname(self) -> str: ...
+    def quieten(self) -> None: ...
+    def shutdown(self) -> None: ...
 
 
 def print_notice(text: str) -> None:
@@ -63,7 +72,7 @@ class Session:
         self.config = config or SessionConfig()
         self.backend: Backend = choose_backend()
         self.process = self.backend.process
-        self.nodes: dict[str, "NodeEngine"] = {}  # full name → the engine of a DSL node, in creation order
+        self.nodes: dict[str, SessionNode] = {}  # full name → the engine of a DSL node, in creation order
         self.history: list[Change] = []  # every change of every node, in order
         self._journal: Optional[Journal] = None
         self._on_close: list[Callable[[], None]] = []
@@ -132,7 +141,7 @@ class Session:
             atexit.register(self.close)
             self._closes_at_exit = True
 
-    def add(self, node: "NodeEngine") -> None:
+    def add(self, node: SessionNode) -> None:
         with self._lock:
             other = self.nodes.get(node.fullname)
             if other is not None and other is not node and other.created:
@@ -141,7 +150,7 @@ class Session:
                                      "another name")
             self.nodes[node.fullname] = node
 
-    def remove(self, node: "NodeEngine") -> None:
+    def remove(self, node: SessionNode) -> None:
         with self._lock:
             if self.nodes.get(node.fullname) is node:
                 del self.nodes[node.fullname]

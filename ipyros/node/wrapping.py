@@ -1,27 +1,19 @@
-"""Wrapping: the DSL side of a node that wraps a basenode (paper section III, figure 1).
+"""Wrapping: the live side of a node that wraps a basenode (paper section III, figure 1).
 
-Which endpoints run is decided in :mod:`ipyros.core.plan`. This module resolves base topic
-names the way the basenode will (in its namespace, ``~`` under its name, then through
-its own remaps), checks the declarations that only make sense together, starts the
-basenode with its remaps, and offers black-box discovery: read a running basenode's
-interface from the master and declare it all as ``reuse`` in one call.
+Which endpoints run is decided in :mod:`ipyros.core.plan`, and how names resolve and remap
+in :mod:`ipyros.core.remapping`. This module declares the basenode (checking what it is
+given), starts it with its remaps, and offers black-box discovery: read a running
+basenode's interface from the graph and declare it all as ``reuse`` in one call.
 
 A basenode may also come from a launch file (:func:`set_launch_base`, read by the
 backend): then ``create()`` runs the rest of that file too, and ``nd.base`` stops both.
 Running it, reading its interface and finding its package are the backend's
 (``basenode``, ``wait_for_node``): the same here for both ROS.
-
-**One remap per name.** ROS applies at most one remap to a name: no chains. If the
-basenode's own remaps (its launch file's ``<remap>``, or ``baseNode(remaps=...)``) send
-``cmd_vel`` to ``/robot1/base/cmd_vel`` and that is the topic wrapped, the basenode
-must be given ``cmd_vel:=<internal name>`` itself; :func:`basenode_remaps` composes
-the two so.
 """
 
 from __future__ import annotations
 
 import os
-import re
 import threading
 from pathlib import Path
 from typing import Any, Callable, Optional, Protocol
@@ -29,8 +21,9 @@ from typing import Any, Callable, Optional, Protocol
 from ..core import names
 from ..core.errors import BaseNodeError, DeclarationError, TopicTypeConflict, cut
 from ..core.model import BaseModel, NodeModel
-from ..core.plan import internal_name, node_fullname
+from ..core.plan import internal_name
 from ..core.records import Interface
+from ..core.remapping import base_fullname, base_namespace, base_node_name, basenode_remaps, check_wrapping, reresolve
 from ..processes.basenode import exit_reason
 
 
@@ -50,74 +43,6 @@ class NodeEngine(Protocol):
     def apply(self, edit: Callable[[NodeModel], None], change: str) -> None: ...
 
 _BASE_OPTIONS = {"name": "node_name", "namespace": "namespace", "remaps": "remaps", "params": "params", "args": "args"}
-
-
-# -- names ---------------------------------------------------------------------------------
-
-def base_node_name(base: BaseModel) -> str:
-    """The basenode's ROS name: the one given, else the executable's (``move_base``)."""
-    if base.node_name:
-        return base.node_name.strip("/")
-    stem = re.sub(r"\W", "_", (base.executable or "base").rsplit("/", 1)[-1].split(".")[0])
-    return stem if stem[:1].isalpha() else "n" + stem
-
-
-def base_namespace(model: NodeModel) -> str:
-    base = model.base
-    return names.global_ns(base.namespace) if base and base.namespace else model.namespace
-
-
-def base_fullname(model: NodeModel) -> str:
-    assert model.base is not None
-    return names.join(base_namespace(model), base_node_name(model.base))
-
-
-def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
-    """``reuse`` names are the basenode's: resolve them as it does; ``new`` ones are the node's own.
-
-    A ``new`` declaration spelled like a ``reuse`` one (``~reset`` both times) means the
-    basenode's name: that is how a reused topic or service is intercepted.
-    """
-    if role == "new" and model.base is not None:
-        declared = model.topics if kind == "topic" else model.services
-        if any(d.role == "reuse" and d.name == name for d in declared):
-            role = "reuse"
-    if role == "reuse" and model.base is not None:
-        resolved = names.resolve(name, base_namespace(model), base_node_name(model.base), kind)
-        return own_remaps(model).get(resolved, resolved)  # the basenode's remaps apply: it talks there
-    return names.resolve(name, model.namespace, model.name, kind)
-
-
-def own_remaps(model: NodeModel) -> dict[str, str]:
-    """The basenode's own remaps (launch file or ``baseNode(remaps=...)``), both sides resolved as it resolves them."""
-    if model.base is None:
-        return {}
-    ns, node = base_namespace(model), base_node_name(model.base)
-    return {names.resolve(src, ns, node, "remapped"): names.resolve(dst, ns, node, "remapped")
-            for src, dst in model.base.remaps.items() if not src.startswith("__")}
-
-
-def basenode_remaps(model: NodeModel) -> dict[str, str]:
-    """Every ``from:=to`` the basenode is started with: its own remaps composed with the wrapping's.
-
-    A wrapped name ``T`` (resolved through the own remaps already) goes to its internal
-    name; an own remap ``S:=T`` becomes ``S:=internal(T)``, because ROS would not follow
-    ``S → T → internal(T)``; the other own remaps stay as they are.
-    """
-    wrapped = {t.resolved: internal_name(model, t.resolved) for t in model.topics if t.role == "reuse"}
-    wrapped.update({s.resolved: internal_name(model, s.resolved) for s in model.services if s.role == "reuse"})
-    remaps = {src: wrapped.get(dst, dst) for src, dst in own_remaps(model).items()}
-    for name, inner in wrapped.items():
-        remaps.setdefault(name, inner)
-    return remaps
-
-
-def _reresolve(model: NodeModel) -> None:
-    """After the basenode changed: base names may resolve elsewhere now."""
-    for t in model.topics:
-        t.resolved = resolve_for(model, t.role, t.name, "topic")
-    for s in model.services:
-        s.resolved = resolve_for(model, s.role, s.name, "service")
 
 
 # -- declarations --------------------------------------------------------------------------
@@ -149,7 +74,7 @@ def set_base(node: "NodeEngine", **fields: Any) -> None:
         model.base = base
         if fields.get("namespace") and not node.explicit_namespace:
             model.namespace = names.global_ns(fields["namespace"])
-        _reresolve(model)
+        reresolve(model)
 
     node.apply(edit, "base " + ", ".join(f"{k}={cut(v)}" for k, v in fields.items()))
 
@@ -209,7 +134,7 @@ def set_launch_base(node: "NodeEngine", launch: Any, node_name: str, args: Optio
         model.base = base
         if not node.explicit_namespace:
             model.namespace = base.namespace or "/"
-        _reresolve(model)
+        reresolve(model)
 
     given = "".join(f", {name}={value!r}" for name, value in base.launch_args.items())
     node.apply(edit, f"baseLaunch({launch!r}, {node_name!r}{given}): {base.package}/{base.executable} "
@@ -239,41 +164,13 @@ def set_bag(node: "NodeEngine", path: Any, rate: float, loop: bool, topics: Opti
              args=bagfile.player_args(bag, float(rate), bool(loop), topics, float(delay)))
 
 
-def check_reuse(model: NodeModel, resolved: str, direction: str, kind: str = "topic") -> None:
-    """A base topic is wrapped once: refuse reuse of it in both directions."""
-    if kind != "topic":
-        return
-    other = "subscribe" if direction == "publish" else "publish"
-    if model.topic(resolved, other, "reuse") is not None:  # type: ignore[arg-type]
-        raise DeclarationError(f"{resolved} is already wrapped as reuse.{other}; a base topic is wrapped once: "
-                               f"remove it first ({model.name}.remove({resolved!r}))")
-
-
-def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # type: ignore[assignment]
-    """Refuse to create a node whose wrapping declarations are incomplete or clash."""
-    reuses = [t.name for t in model.topics if t.role == "reuse"] + [s.name for s in model.services if s.role == "reuse"]
-    if model.base is None:
-        if reuses:
-            raise DeclarationError(f"{model.name} reuses {', '.join(reuses)} but has no basenode; declare it: "
-                                   f"{model.name}.baseNode('executable').basePackage('package')")
-        return
-    executable = model.base.executable
-    if not executable:
-        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .baseNode('executable')")
-    if not model.base.package and not model.base.launch and "/" not in executable and not executable.startswith("~"):
-        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .basePackage('package'), or give the "
-                               f"path of the file to run: baseNode('./{executable}')")
-    mine = base_fullname(model)
-    for other in others:
-        if other.base is None or base_fullname(other) != mine:
-            continue
-        raise DeclarationError(f"basenode {mine} is already wrapped by {node_fullname(other)}; "
-                               "wrap it once, or give this one another name: baseNode(..., name='other')")
-
-
 # -- the basenode process ------------------------------------------------------------------
 
-def start_base(node: "NodeEngine", settle_timeout: float = 10.0) -> None:
+#: How long a basenode may take to register all it declares (s); a basenode that ends sooner is told at once.
+REGISTRATION_TIMEOUT = 10.0
+
+
+def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> None:
     """Launch the basenode remapped onto the wrapping node's internal names, and check its types.
 
     A basenode from a launch file starts after the rest of its file (the backend's
@@ -323,7 +220,8 @@ def start_base(node: "NodeEngine", settle_timeout: float = 10.0) -> None:
         session.notify(f"ipyros: roslaunch could not start {', '.join(handle.not_started)} of {model.base.launch} "
                        f"(the rest runs without); why: {node.called}.base.rest.tail()")
     try:
-        interface = backend.wait_for_node(base_fullname(model), timeout=settle_timeout, alive=lambda: process.running)
+        interface = backend.wait_for_node(base_fullname(model), timeout=settle_timeout or REGISTRATION_TIMEOUT,
+                                                 alive=lambda: process.running)
         starting.clear()
         if not process.running:  # it ended after settling, before a notice could be sent
             raise BaseNodeError("ended")

@@ -1,1 +1,11 @@
-"""processes"""
+"""Processes: the children a session starts, started so that none outlives it.
+
+- :mod:`.process`: spawning in a process group of its own, killed with the session even
+  if it is killed; stopping SIGINT, SIGTERM, SIGKILL;
+- :mod:`.basenode`: a basenode run from its command line, its log, and its exit told.
+
+May import: core. Which command line a basenode has is its backend's (``ros1/nodes.py``,
+``ros2/nodes.py``).
+"""
+
+__all__ = ["basenode", "process"]

@@ -11,8 +11,13 @@ from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
-from . import introspect, nodes, runtime
+from . import bagfile, introspect, master as master_mod, nodes, runtime
 from .connection import MasterConnection
+from .discovery import wait_for_node
+from .export import RospyScript
+from .graph import fetch_snapshot
+from .launch_rest import LaunchBase
+from .launchfile import read_base
 
 __all__ = ["Ros1"]
 
@@ -53,8 +58,6 @@ class Ros1:
     def connect(self, session: Any, wait: bool = True) -> str:
         """The load line: the master in use; one that answers now is attached, else one is started when allowed
         (in the background unless ``wait``)."""
-        from . import master as master_mod
-
         connection = self.connection
         if connection.master is not None:
             return connection.master.describe()
@@ -140,13 +143,15 @@ class Ros1:
     has_param = staticmethod(runtime.has_param)
     delete_param = staticmethod(runtime.delete_param)
 
+    def forget_params(self, names: list[str]) -> None:
+        """Delete what nodes that ended left on the parameter server (a demo robot's launch params)."""
+        introspect.forget_params(self.connection.uri, names)
+
     def refuse_taken_name(self, name: str) -> None:
         runtime.refuse_taken_name(self.connection.uri, name)
 
     # -- the graph -------------------------------------------------------------------------
     def graph_snapshot(self, timeout: float = 1.0) -> GraphSnapshot:
-        from .graph import fetch_snapshot
-
         return fetch_snapshot(self.connection.uri, timeout)  # never raises: a master down is a snapshot too
 
     def where(self) -> str:
@@ -182,31 +187,21 @@ class Ros1:
     def wait_for_node(self, name: str, timeout: float = 10.0, alive: Optional[Callable[[], bool]] = None,
                       settle: float = 0.5) -> Interface:
         """The interface of the running node ``name``, read from the master once it has settled."""
-        from .discovery import wait_for_node
-
         return wait_for_node(self.connection.uri, name, timeout=timeout, settle=settle, alive=alive)
 
     def read_launch(self, launch: Any, node: str, args: Optional[dict[str, Any]]) -> tuple[BaseModel, list[str]]:
-        from .launchfile import read_base
-
         return read_base(launch, node, args)
 
     def launch_base(self, base: BaseModel, process: BaseProcess, node: str, on_rest_exit: Any) -> Any:
-        from .launch_rest import LaunchBase
-
         return LaunchBase(base, process, node=node, master_uri=self.connection.uri, on_rest_exit=on_rest_exit)
 
     list_packages = staticmethod(nodes.list_packages)
     list_executables = staticmethod(nodes.list_executables)
 
     def bags(self) -> Any:
-        from . import bagfile
-
         return bagfile
 
     def export_flavour(self) -> Any:
-        from .export import RospyScript
-
         return RospyScript
 
     # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----

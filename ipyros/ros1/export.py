@@ -21,7 +21,7 @@ import yaml
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError
-from .nodes import list_packages
+from .nodes import command, list_packages
 
 __all__ = ["RospyScript"]
 
@@ -61,6 +61,9 @@ class RospyScript:
     #: Names the generated script defines itself; a handler global with one of them would clash.
     SCRIPT_NAMES = {"rospy", "os", "signal", "subprocess", "NodeHandle", "relay", "main", "BASENODE",
                     "BASENODE_ENV", "start_basenode", "stop_basenode"}
+
+    #: The basenode's command line, as the backend runs it (rosrun's lookup, or ros2 run's).
+    base_command = staticmethod(command)
 
     @staticmethod
     def shebang() -> str:

@@ -13,6 +13,7 @@ import io
 import socket
 import struct
 import time
+import xmlrpc.client
 from typing import Any, Optional
 from urllib.parse import urlparse
 
@@ -128,6 +129,16 @@ def params_under(master_uri: str, namespace: str, timeout: float = 2.0) -> dict[
         if code == 1:  # else deleted meanwhile
             values[name] = value
     return values
+
+
+def forget_params(master_uri: str, names: list[str], timeout: float = 2.0) -> None:
+    """Delete the parameters ``names`` from the master (those not there are no matter)."""
+    proxy = master_proxy(master_uri, timeout)
+    for name in names:
+        try:
+            proxy.deleteParam("/ipyros", name)
+        except (OSError, xmlrpc.client.Error):
+            return  # the master is gone: so are its parameters
 
 
 def node_pid(master_uri: str, node: str, timeout: float = 2.0) -> Optional[int]:

@@ -35,6 +35,8 @@ from typing import Any, Optional
 from ..core.errors import BaseNodeError, IpyrosError
 from ..core.model import BaseModel
 from ..processes.basenode import BaseProcess, OnExit, temp_log
+from . import launchfile
+from .launchfile import fullname
 from .master import master_proxy
 
 #: Lines the runner prints to say how its start went (the session reads its log for them).
@@ -220,7 +222,6 @@ def _attached_parent(run_id: str, launch: str):
     from roslaunch.core import RLException
     from roslaunch.parent import ROSLaunchParent
 
-    from .launchfile import fullname
 
     class AttachedParent(ROSLaunchParent):
         not_started: list[str]
@@ -256,7 +257,6 @@ def run(launch: str, exclude: str, args: Optional[dict[str, str]] = None) -> int
     import roslaunch.rlutil
     from roslaunch.core import RLException
 
-    from . import launchfile
 
     def failed(message: str) -> int:
         print(f"{FAILED} {launchfile.one_line(message)}", flush=True)

@@ -1,11 +1,16 @@
 """ROS 2 (rclpy, from PyPI or a ROS 2 install): everything ipyros does that only ROS 2 does.
 
-- :mod:`.runtime`: one ROS 2 node per DSL node, in one context, spun by one executor
-  thread; publications, subscriptions, byte relays, timers, services, parameters, and
-  a basenode's interface read from the graph;
-- :mod:`.packages`: a package's executables as ``ros2 run`` finds them (the ament index);
-- :mod:`.backend`: those behind :class:`ipyros.node.backend.Backend`.
+- :mod:`.backend`: all of it behind :class:`ipyros.node.backend.Backend`;
+- :mod:`.runtime`: one ROS 2 node per DSL node, in one context, spun by one supervised
+  executor thread; publications, subscriptions, byte relays, timers, services, parameters,
+  and a basenode's interface read from the graph; :mod:`.graph`: the graph as a snapshot;
+- :mod:`.nodes`: a package's executables as ``ros2 run`` finds them (the ament index), and
+  a node's command line; :mod:`.fastdds`: ipyros's Fast DDS profile;
+- :mod:`.introspect`: services, parameters and nodes of the graph, for the magics;
+- :mod:`.bagfile`, :mod:`.bag_player`: bags written and played; :mod:`.export`: rclpy scripts.
 
-The DSL and wrapping run here; the magics' view of the graph (%topics, %echo, %pub,
-completion of live names) and a qos= option are the next steps (issues 10 and 11).
+May import: core, processes, demo (the demo package's ament prefix). Nothing above the
+node layer imports it: the node layer chooses it.
 """
+
+__all__ = ["backend", "bag_player", "bagfile", "export", "fastdds", "graph", "introspect", "nodes", "runtime"]

@@ -15,7 +15,9 @@ from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
-from . import fastdds, introspect, nodes, runtime
+from . import bagfile, fastdds, introspect, nodes, runtime
+from .export import RclpyScript
+from .graph import snapshot
 from .runtime import Complain
 
 __all__ = ["Ros2"]
@@ -135,6 +137,9 @@ class Ros2:
         node, key = self._owner(name)
         node.undeclare_parameter(key)
 
+    def forget_params(self, names: list[str]) -> None:
+        """Nothing to delete: a ROS 2 node's parameters end with it."""
+
     def refuse_taken_name(self, name: str) -> None:
         """Refuse a node name that a node elsewhere in the graph has.
 
@@ -151,8 +156,6 @@ class Ros2:
     def graph_snapshot(self, timeout: float = 1.0) -> GraphSnapshot:
         """What discovery has found so far (:func:`.graph.snapshot`): read locally, no round trip (but, just
         after rclpy started, once discovery has had its moment: :meth:`ProcessNode.discovered`)."""
-        from .graph import snapshot
-
         graph = self._graph()
         self.process.discovered(within=timeout)
         return snapshot(graph)
@@ -186,13 +189,9 @@ class Ros2:
     list_executables = staticmethod(nodes.list_executables)
 
     def bags(self) -> Any:
-        from . import bagfile
-
         return bagfile
 
     def export_flavour(self) -> Any:
-        from .export import RclpyScript
-
         return RclpyScript
 
     def _graph(self) -> Any:

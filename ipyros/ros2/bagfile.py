@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from ..core.errors import DeclarationError, first_line
+from ..core.msgtypes import type_name
 
 __all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
 
@@ -108,8 +109,6 @@ class BagWriter:
 
     def write(self, topic: str, msg: Any) -> None:
         from rclpy.serialization import serialize_message
-
-        from ..core.msgtypes import type_name
 
         if self._closed:
             return

@@ -15,6 +15,7 @@ from typing import Any, Iterable
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError
+from .nodes import command
 
 __all__ = ["RclpyScript"]
 
@@ -73,6 +74,9 @@ class RclpyScript:
     SCRIPT_NAMES = {"rclpy", "os", "signal", "subprocess", "sys", "threading", "NodeHandle", "relay", "qos",
                     "service_relay", "main", "BASENODE", "BASENODE_ENV", "start_basenode", "stop_basenode",
                     "QoSProfile", "ReliabilityPolicy", "DurabilityPolicy", "SingleThreadedExecutor"}
+
+    #: The basenode's command line, as the backend runs it (rosrun's lookup, or ros2 run's).
+    base_command = staticmethod(command)
 
     @staticmethod
     def shebang() -> str:

@@ -36,9 +36,10 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
 from ..core import msgtypes
-from ..core.errors import DeclarationError, HandlerError, MessageTypeError, NodeStateError
+from ..core.errors import BaseNodeError, DeclarationError, HandlerError, MessageTypeError, NodeStateError
 from ..core.msgbuild import conform
 from ..core.qos import Qos
+from ..core.records import Interface
 from ..core.slots import Arrival, HandlerSlot, Pristine, SendFigures
 
 #: Reliable, and deep enough that a burst is not cut short: what ROS 1's unbounded
@@ -357,6 +358,27 @@ class ProcessNode:
             self.name = None
 
 
+def _made(node: Node, make: Callable[[], Any], patience: float = 2.0) -> Any:
+    """``make()``'s publisher or subscription, once the one this session just closed on the topic is gone.
+
+    rclpy destroys an endpoint only when the executor lets go of it (its QoS event handlers are in
+    the executor's wait set): until then Fast DDS still holds the topic with the old type, and an
+    endpoint of a new type on it is refused ("incompatible type"). A topic retyped live waits for
+    that moment: the executor is woken, and the endpoint made again, for ``patience`` seconds at most.
+    """
+    deadline = time.monotonic() + patience
+    while True:
+        try:
+            return make()
+        except Exception as error:  # noqa: BLE001 - rclpy raises a plain RCLError here
+            if "incompatible type" not in str(error) or time.monotonic() > deadline:
+                raise
+        executor = node.executor
+        if executor is not None:
+            executor.wake()
+        time.sleep(0.02)
+
+
 class Publication:
     """A publisher; ``write`` checks the message, then publishes it."""
 
@@ -364,8 +386,8 @@ class Publication:
                  complain: Optional[Complain] = None) -> None:
         self.topic, self.cls, self.count = topic, cls, 0
         self._node = node
-        self._pub = node.create_publisher(cls, topic, _profile(qos),
-                                          event_callbacks=_mismatch_report(node, topic, qos, "publication", complain))
+        self._pub = _made(node, lambda: node.create_publisher(
+            cls, topic, _profile(qos), event_callbacks=_mismatch_report(node, topic, qos, "publication", complain)))
 
     def write(self, msg: Any) -> None:
         if isinstance(msg, type):
@@ -441,9 +463,9 @@ class Subscription:
 
     def _open(self, qos: Qos) -> Any:
         self._since = time.time_ns()
-        return self._node.create_subscription(
+        return _made(self._node, lambda: self._node.create_subscription(
             self.cls, self.topic, self._deliver, _profile(qos), raw=True,
-            event_callbacks=_mismatch_report(self._node, self.topic, qos, "subscription", self._complain))
+            event_callbacks=_mismatch_report(self._node, self.topic, qos, "subscription", self._complain)))
 
     def _deliver(self, data: bytes, info: Any) -> None:
         # A transient-local publisher sends its last messages again to a new subscription:
@@ -503,15 +525,16 @@ class Relay:
 
     def _endpoints(self, qos: Qos) -> tuple[Any, Any]:
         node = self._node
-        pub = node.create_publisher(self.cls, self.target, _profile(qos),
-                                    event_callbacks=_mismatch_report(node, self.target, qos, "publication",
-                                                                     self._complain))
+        pub = _made(node, lambda: node.create_publisher(
+            self.cls, self.target, _profile(qos),
+            event_callbacks=_mismatch_report(node, self.target, qos, "publication", self._complain)))
         # Until the source's publishers show up, a mismatch with them is expected, and
         # mended by _follow_source: no warning for it.
         from rclpy.event_handler import SubscriptionEventCallbacks
 
-        sub = node.create_subscription(self.cls, self.source, self._forward, _profile(qos), raw=True,
-                                       event_callbacks=SubscriptionEventCallbacks(incompatible_qos=lambda _: None))
+        sub = _made(node, lambda: node.create_subscription(
+            self.cls, self.source, self._forward, _profile(qos), raw=True,
+            event_callbacks=SubscriptionEventCallbacks(incompatible_qos=lambda _: None)))
         return pub, sub
 
     def _follow_source(self) -> None:
@@ -643,7 +666,7 @@ class Timer:
 
 
 class _Later:
-    """What a service callback returns to rclpy instead of a response: "answered on the service's own thread"."""
+    """What a service callback returns to rclpy instead of a response: "answered elsewhere, later"."""
 
     __slots__ = ("request",)
 
@@ -651,14 +674,34 @@ class _Later:
         self.request = request
 
 
+def _serve_later(node: Node, cls: type, name: str, take: Callable[[Any, Any], None]) -> tuple[Any, Callable]:
+    """A service whose requests go to ``take(request, header)`` and whose answers are sent by whoever has them.
+
+    rclpy sends what the callback returns; the callback returns a :class:`_Later`, and the
+    service's ``send_response`` (replaced here) hands the request on instead of sending it, so
+    the executor thread never waits for an answer. Returns the service and rclpy's own send
+    (thread-safe in rcl), for the answer.
+    """
+    service = node.create_service(cls, name, lambda request, response: _Later(request))
+    send = service.send_response
+
+    def send_or_hand_over(response: Any, header: Any) -> None:
+        if isinstance(response, _Later):
+            take(response.request, header)
+        else:
+            send(response, header)
+
+    service.send_response = send_or_hand_over  # type: ignore[method-assign]
+    return service, send
+
+
 class ServiceServer:
     """A service whose handler is a :class:`HandlerSlot` (it returns the response), run on a thread of its own.
 
     A service handler may take long (it may even call another service), and on the one
     executor thread it would stop every subscription of the session for that long. So the
-    executor only takes the request: the callback gives rclpy a :class:`_Later`, this
-    service's ``send_response`` sees it and hands request and header to the service's own
-    thread, which runs the handler and sends the answer itself (rcl's send is thread-safe).
+    executor only takes the request (:func:`_serve_later`) and hands it to the service's own
+    thread, which runs the handler and sends the answer itself.
     Calls to one service are answered in order; the other callbacks never wait for them.
     """
 
@@ -666,17 +709,7 @@ class ServiceServer:
         self.name, self.cls, self.slot = name, cls, slot
         self._node = node
         self._requests: "queue.SimpleQueue[Optional[tuple[Any, Any]]]" = queue.SimpleQueue()
-        self._service = node.create_service(cls, name, lambda request, response: _Later(request))
-        send = self._service.send_response  # rclpy's, for the answers of the service's thread
-        self._send = send
-
-        def send_or_hand_over(response: Any, header: Any) -> None:
-            if isinstance(response, _Later):
-                self._requests.put((response.request, header))
-            else:
-                send(response, header)
-
-        self._service.send_response = send_or_hand_over  # type: ignore[method-assign]
+        self._service, self._send = _serve_later(node, cls, name, lambda *item: self._requests.put(item))
         self._worker = threading.Thread(target=self._answer, name=f"ipyros-service-{name}", daemon=True)
         self._worker.start()
 
@@ -718,8 +751,11 @@ class ServiceServer:
 class ServiceRelay:
     """Serve ``target`` by calling ``source`` (a basenode's service) and answering with its response.
 
-    The call goes out from the process's caller node (:meth:`ProcessNode.caller`), whose
-    executor takes the answer while this callback waits for it.
+    Nothing waits for the basenode: each request becomes an asynchronous call from the
+    process's caller node (:meth:`ProcessNode.caller`, spun by an executor of its own), and
+    the answer is sent when it comes (:func:`_serve_later`), or the default response after
+    :attr:`TIMEOUT`. A slow basenode stalls neither the session's subscriptions nor other
+    calls to the same service.
     """
 
     TIMEOUT = 10.0  # seconds a basenode may take to answer
@@ -729,20 +765,37 @@ class ServiceRelay:
         self.source, self.target, self.cls = source, target, cls
         self._node, self._caller, self._complain = node, process.caller(), complain
         self._client = self._caller.create_client(cls, source)
-        self._service = node.create_service(cls, target, self._serve)
+        self._service, self._send = _serve_later(node, cls, target, self._call)
 
-    def _serve(self, request: Any, response: Any) -> Any:
-        answered = threading.Event()
+    def _call(self, request: Any, header: Any) -> None:
         future = self._client.call_async(request)
-        future.add_done_callback(lambda _: answered.set())
-        answer = future.result() if answered.wait(self.TIMEOUT) else None
-        if answer is None:
+        unanswered = threading.Lock()  # taken by the first of answer and expiry
+
+        def answer(done: Any) -> None:
+            if done.cancelled() or not unanswered.acquire(blocking=False):
+                return
+            expiry.cancel()
+            self._reply(done.result(), header)
+
+        def expire() -> None:
+            if not unanswered.acquire(blocking=False):
+                return
             self._client.remove_pending_request(future)
             if self._complain is not None:
                 self._complain(f"{self.target}: the basenode's service did not answer within {self.TIMEOUT:g} s; "
                                "the caller got an empty response (see its log: nd.base.tail())")
-            return response  # ROS 2 has no error reply: the caller gets the default response
-        return answer
+            self._reply(self.cls.Response(), header)  # type: ignore[attr-defined]  # ROS 2 has no error reply
+
+        expiry = threading.Timer(self.TIMEOUT, expire)
+        expiry.daemon = True
+        expiry.start()
+        future.add_done_callback(answer)
+
+    def _reply(self, response: Any, header: Any) -> None:
+        try:
+            self._send(response, header)
+        except Exception:  # noqa: BLE001 - the relay was closed meanwhile, or the caller left
+            pass
 
     def close(self) -> None:
         self._node.destroy_service(self._service)
@@ -766,8 +819,6 @@ def _short(type_name: str) -> str:
 
 def node_interface(graph: Node, fullname: str) -> Any:
     """The publications, subscriptions and services of the running node ``fullname``, or None if unseen."""
-    from ..core.records import Interface
-
     namespace, name = fullname.rsplit("/", 1)
     namespace = namespace or "/"
     if (name, namespace) not in graph.get_node_names_and_namespaces():
@@ -801,8 +852,6 @@ def wait_for_node(graph: Node, fullname: str, timeout: float = 10.0, settle: flo
 
     Raises :class:`BaseNodeError` if it never shows up, at once when ``alive()`` turns False.
     """
-    from ..core.errors import BaseNodeError
-
     deadline = time.monotonic() + timeout
     last, stable_since = None, time.monotonic()
     while True:

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Optional
 
 from ..core.errors import IpyrosError
-from ..node.dsl import engine_of, rosNode
+from ..dsl import engine_of, rosNode
 from ..node.engine import HandlerTarget
 
 __all__ = ["EditWatch", "PendingEdit", "handler_source", "lambda_as_def", "new_functions"]

@@ -23,7 +23,7 @@ from collections import deque
 from typing import Any, Optional, Sequence
 
 from ..core.errors import IpyrosError
-from ..node.dsl import rosNode
+from ..dsl import rosNode
 from .probe import tool_name
 
 __all__ = ["Plot", "figure", "text_chart"]

@@ -29,7 +29,7 @@ from typing import Any, Mapping, Optional
 from ..core import msgtypes
 from ..core.errors import MessageTypeError
 from ..core.slots import arrival
-from ..node.dsl import engine_of, rosNode
+from ..dsl import engine_of, rosNode
 from ..node.session import current
 
 

@@ -12,7 +12,7 @@ import threading
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
-from ..node.dsl import rosNode
+from ..dsl import rosNode
 from ..node.session import current
 from .probe import tool_name
 

@@ -246,6 +246,8 @@ class DemoRobot:
                 thread.start()
             for thread in stoppers:
                 thread.join()
+            if processes:  # ROS 1: the launch file's params stay on the master unless deleted; the next start reads them
+                self.session.backend.forget_params(list(self.params))
 
     def _died(self, process: BaseProcess, returncode: int, last_lines: list[str]) -> None:
         """A node of the robot ended without being asked: say so, with its last log lines."""

@@ -33,7 +33,7 @@ from ..core import msgtypes, plan as planning
 from ..core.errors import IpyrosError, NotDeclaredError
 from ..core.msgbuild import flow_yaml
 from ..core.slots import call_arity
-from ..node.dsl import engine_of, rosNode
+from ..dsl import engine_of, rosNode
 
 
 @dataclass(frozen=True)

@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Any, Optional
 
 from ..core.model import BaseModel
-from ..node.dsl import rosNode
-from ..node.wrapping import base_node_name
+from ..core.remapping import base_node_name
+from ..dsl import rosNode
 
 __all__ = ["wrap"]
 

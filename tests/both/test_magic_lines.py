@@ -3,26 +3,25 @@
 from __future__ import annotations
 
 import threading
-import time
 
 import pytest
+from shell import error_of, ok
 from std_srvs.srv import SetBool
-
-from shell import error_of, ip, ok  # noqa: F401 - the ip fixture
 from support import response_of
 
 
 @pytest.fixture
 def slow_service(make_node):
-    """/lines/slow answers after 8 s (or when released)."""
-    release = threading.Event()
+    """/lines/slow answers only when released (the test's end); says whether it has answered yet."""
+    release, answered = threading.Event(), threading.Event()
 
     def slow(request):
-        release.wait(8)
+        release.wait(60)
+        answered.set()
         return response_of(SetBool)(success=True, message="late")
 
     make_node("lines_slow").new.service("/lines/slow", SetBool, handler=slow).create()
-    yield
+    yield answered
     release.set()
 
 
@@ -32,15 +31,13 @@ def slow_service(make_node):
     "%call -t 1 /lines/slow {data: true}",
     "%call /lines/slow {data: true} --timeout=1",
 ])
-def test_call_honours_its_timeout_wherever_it_is_given(ip, slow_service, line):  # noqa: F811
-    start = time.monotonic()
+def test_call_honours_its_timeout_wherever_it_is_given(ip, slow_service, line):
     error = error_of(ip, line)
-    took = time.monotonic() - start
     assert "did not answer within 1 s" in str(error), error
-    assert took < 6, f"the call waited {took:.1f} s for a server that takes 8 s, with -t 1"
+    assert not slow_service.is_set(), "the call waited for the server's answer instead of giving up after 1 s"
 
 
-def test_pub_reads_options_after_the_message(ip, peer, capsys):  # noqa: F811
+def test_pub_reads_options_after_the_message(ip, peer, capsys):
     listener = peer("listen.py", "/lines/chatter", "std_msgs/String", "data")
     listener.wait_line("ready")
     with_interrupt = threading.Timer(3.0, __import__("_thread").interrupt_main)
@@ -62,9 +59,8 @@ def test_pub_reads_options_after_the_message(ip, peer, capsys):  # noqa: F811
     "c: &c [*b,*b,*b,*b,*b,*b,*b,*b,*b], d: &d [*c,*c,*c,*c,*c,*c,*c,*c,*c], e: &e [*d,*d,*d,*d,*d,*d,*d,*d,*d], "
     "f: &f [*e,*e,*e,*e,*e,*e,*e,*e,*e], g: &g [*f,*f,*f,*f,*f,*f,*f,*f,*f], h: [*g,*g,*g,*g,*g,*g,*g,*g,*g]}",
 ])
-def test_a_yaml_alias_bomb_is_refused_at_once(ip, line, make_node):  # noqa: F811
+def test_a_yaml_alias_bomb_is_refused_at_once(ip, line, make_node):
+    """Refused by counting what the aliases would expand to, before anything is built (10 million elements)."""
     make_node("lines_bomb_host").create()  # %param needs a running session
-    start = time.monotonic()
     error = error_of(ip, line)
     assert "expands to more than" in str(error) and "\n" not in str(error)
-    assert time.monotonic() - start < 5

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 from std_msgs.msg import String
 
-from ipyros.core import errors
 from ipyros import rosNode
-from ipyros.node.dsl import engine_of
+from ipyros.core import errors
+from ipyros.dsl import engine_of
 
 
 def one_line(error: BaseException) -> str:
@@ -76,7 +76,7 @@ def test_a_model_with_an_unknown_role_is_one_line(tmp_path):
     path.write_text(f"{keep.FORMAT_KEY}: {keep.FORMAT}\nnode: {{name: x, topics: [{{name: /a, resolved: /a, "
                     "direction: publish, type: std_msgs/String, role: borrowed}]}\n")
     with pytest.raises(errors.IpyrosError) as caught:
-        keep.load(path)
+        rosNode.load(path)
     assert "role 'borrowed' is not one of new, reuse" in one_line(caught.value)
 
 

@@ -3,9 +3,8 @@ types: ROS connects no two types, and says so only in a log file (ROS 1) or not 
 
 from __future__ import annotations
 
+from shell import ok
 from std_msgs.msg import String
-
-from shell import ip, ok  # noqa: F401 - the ip fixture
 from support import wait_for
 
 

@@ -8,11 +8,10 @@ import time
 import pytest
 from std_msgs.msg import UInt32
 from std_srvs.srv import SetBool
-
 from support import request_of, response_of, wait_for
 
 from ipyros.core import errors
-from ipyros.node.dsl import engine_of
+from ipyros.dsl import engine_of
 
 
 def counting(make_node, name: str, topic: str):

@@ -17,13 +17,12 @@ from pathlib import Path
 
 import pytest
 import yaml
+from shell import error_of
 from std_msgs.msg import String
 
-from shell import error_of, ip, ok  # noqa: F401 - the ip fixture
-
+from ipyros import rosNode
 from ipyros.core import errors
 from ipyros.files import modelfile as keep
-from ipyros import rosNode
 
 FORMAT = {keep.FORMAT_KEY: keep.FORMAT}
 
@@ -88,7 +87,7 @@ def test_a_model_file_that_is_a_bomb_is_one_line(tmp_path, text, says):
     path = tmp_path / "bomb.yaml"
     path.write_text(text)
     with pytest.raises(errors.IpyrosError) as caught:
-        keep.load(path)
+        rosNode.load(path)
     assert "\n" not in str(caught.value)
     if says:
         assert says in str(caught.value)
@@ -98,7 +97,7 @@ def test_deeply_nested_json_is_one_line(tmp_path):
     path = tmp_path / "deep.json"
     path.write_text("[" * 100000 + "]" * 100000)
     with pytest.raises(errors.IpyrosError, match="nested too deeply"):
-        keep.load(path)
+        rosNode.load(path)
 
 
 @pytest.mark.parametrize("declare, says", [
@@ -165,8 +164,8 @@ def test_an_intercepted_service_makes_the_round_trip(make_node, tmp_path, sessio
     nd = make_node("intercepted_service").baseNode(str(node_script))
     nd.reuse.service("/intercepted/set", type=SetBool)
     nd.new.service("/intercepted/set", SetBool, handler=answer_set)
-    path = keep.save(nd, tmp_path / "intercepted.yaml")
-    loaded = keep.load(path, {"answer_set": answer_set}, trust=True, session=session)
+    path = nd.save(tmp_path / "intercepted.yaml")
+    loaded = rosNode.load(path, {"answer_set": answer_set}, trust=True, session=session)
     assert loaded.model() == nd.model()
     assert json.loads(json.dumps(loaded.model().to_dict())) == nd.model().to_dict()
 

@@ -11,14 +11,13 @@ import contextlib
 
 import pytest
 from geometry_msgs.msg import Twist, Vector3
+from shell import ok
 from std_msgs.msg import Int32, String
 from std_srvs.srv import SetBool
-
-from shell import ip, ok  # noqa: F401 - the ip fixture
 from support import graph_knows, request_of, response_of, wait_for
 
 from ipyros.core import errors
-from ipyros.node.dsl import engine_of
+from ipyros.dsl import engine_of
 
 
 def one_line(error: BaseException) -> str:

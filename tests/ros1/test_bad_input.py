@@ -5,11 +5,10 @@ from __future__ import annotations
 import pytest
 import rospy
 from geometry_msgs.msg import Twist
+from peer import Peer
+from ros1_fixtures import master_state, wait_for
 from std_msgs.msg import Empty, String
 from std_srvs.srv import SetBool, SetBoolResponse
-
-from ros1_fixtures import master_state, wait_for
-from peer import Peer
 
 from ipyros.core import errors
 

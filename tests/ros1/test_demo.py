@@ -15,17 +15,24 @@ import xmlrpc.client
 
 import numpy as np
 import pytest
-from ros1_fixtures import ros1_process, wait_for
 from geometry_msgs.msg import Pose, PoseStamped, Twist, Vector3
 from IPython.core.error import UsageError
+from ros1_fixtures import ros1_process, wait_for
+from shell import error_of, ok
 from std_msgs.msg import Bool
 
+from ipyros.core.errors import BaseNodeError
 from ipyros.demo import DEMO_DIR
 from ipyros.ros1.nodes import find_executable
-from ipyros.core.errors import BaseNodeError
-from ipyros.tools.robot import (ROBOTS, DemoRobotError, demo_robot, launch_args, read_launch, running_robot,
-                                stop_demo_robot)
-from shell import error_of, ip, ok  # noqa: F401
+from ipyros.tools.robot import (
+    ROBOTS,
+    DemoRobotError,
+    demo_robot,
+    launch_args,
+    read_launch,
+    running_robot,
+    stop_demo_robot,
+)
 
 
 @pytest.fixture
@@ -178,6 +185,7 @@ def test_one_robot_at_a_time_and_the_same_one_again(ros_session, robot_stopper, 
     kobuki = demo_robot("kobuki")  # another one: the first stops
     assert not turtle.running and not turtle.processes and kobuki.running
     wait_for(lambda: not os.path.exists(f"/proc/{pid}"), what="turtle_sim to be gone")
+    assert master.hasParam("/t", "/turtle_sim/max_speed")[2] is False  # its params went with it
     assert running_robot() is kobuki
     assert stop_demo_robot() is kobuki and stop_demo_robot() is None
     assert running_robot() is None

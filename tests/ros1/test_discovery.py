@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import pytest
-from rich.console import Console
-
-from ros1_fixtures import free_port, ros1_process
 from helpers import use_test_nodes
+from rich.console import Console
+from ros1_fixtures import free_port, ros1_process
+
 from ipyros.core.errors import BaseNodeError, MasterError
 from ipyros.core.records import Interface
 from ipyros.ipython.display import interface_table, renderable

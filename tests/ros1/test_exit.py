@@ -11,7 +11,6 @@ import xmlrpc.client
 from pathlib import Path
 
 import pytest
-
 from ros1_fixtures import master_state, wait_for
 
 SESSION = """

@@ -21,16 +21,14 @@ from typing import Callable, Iterator
 
 import pytest
 from geometry_msgs.msg import Pose, Twist
+from helpers import pid_alive
+from ros1_fixtures import ROS1_PYTHON, master_state, wait_for
 from std_msgs.msg import String
 from std_srvs.srv import Empty
 
-from ros1_fixtures import master_state, wait_for
-from helpers import pid_alive
-
-from ipyros.files import export
-from ipyros.ros1 import runtime
 from ipyros.core.errors import IpyrosError
-from ipyros.node.wrapping import basenode_remaps
+from ipyros.core.remapping import basenode_remaps
+from ipyros.ros1 import runtime
 
 speed = 2.5  # read by on_pose when called: exported as a literal
 plain = wrapper = None  # the nodes the handlers write with: bound to the live node by the builders below
@@ -248,18 +246,18 @@ def assert_stops_everything(run: Run, *nodes: str) -> None:
 
 def test_exported_plain_package_runs_under_roslaunch(make_node, tmp_path, ros_master, no_ipyros):
     ns = "/launched_plain"
-    package = export.export(plain_node(make_node, ns), tmp_path / "plain_pkg")
+    package = plain_node(make_node, ns).export(tmp_path / "plain_pkg")
     assert package == tmp_path / "plain_pkg"
     assert sorted(p.relative_to(package).as_posix() for p in package.rglob("*") if p.is_file()) == [
         "CMakeLists.txt", "launch/export_plain.launch", "package.xml", "scripts/export_plain"]
     script = package / "scripts" / "export_plain"
     text = script.read_text()
-    assert text.startswith("#!/usr/bin/python3\n") and os.access(script, os.X_OK)
+    assert text.startswith(f"#!{ROS1_PYTHON}\n") and os.access(script, os.X_OK)
     assert "import ipyros" not in text and "from ipyros" not in text
     assert "os.environ.setdefault(\"ROS_NAMESPACE\", '/launched_plain/')" in text
     env = export_env(tmp_path, no_ipyros)
     for python_path, why in ((no_ipyros, "must run without ipyros"), ("", "No module named 'ipyros'")):
-        tried = subprocess.run(["/usr/bin/python3", "-c", "import ipyros"], check=False, capture_output=True, text=True,
+        tried = subprocess.run([ROS1_PYTHON, "-c", "import ipyros"], check=False, capture_output=True, text=True,
                                cwd=tmp_path, env={**env, "PYTHONPATH": str(python_path)})
         assert tried.returncode != 0 and why in tried.stderr  # the exported node's interpreter has no ipyros
 
@@ -270,7 +268,7 @@ def test_exported_plain_package_runs_under_roslaunch(make_node, tmp_path, ros_ma
 
 def test_exported_wrapper_package_starts_its_basenode_under_roslaunch(make_node, tmp_path, ros_master, no_ipyros):
     ns = "/launched_wrapper"
-    package = export.export(wrapper_node(make_node, ns), tmp_path / "wrapper_pkg")
+    package = wrapper_node(make_node, ns).export(tmp_path / "wrapper_pkg")
     text = (package / "scripts" / "export_wrapper").read_text()
     assert "start_basenode" not in text and "subprocess" not in text  # roslaunch starts the basenode
     assert "roslaunch wrapper_pkg export_wrapper.launch" in text
@@ -285,7 +283,7 @@ def test_exported_wrapper_package_starts_its_basenode_under_roslaunch(make_node,
 def test_the_basenode_stops_with_the_exported_node(make_node, tmp_path, ros_master, no_ipyros):
     """As under ipyros, the basenode does not outlive its wrapper: the launch file marks the node required."""
     ns = "/required_wrapper"
-    export.export(wrapper_node(make_node, ns), tmp_path / "required_pkg")
+    wrapper_node(make_node, ns).export(tmp_path / "required_pkg")
     with running(["roslaunch", "required_pkg", "export_wrapper.launch"], export_env(tmp_path, no_ipyros)) as launch:
         pids = wait_for(lambda: len(launch.started()) == 2 and launch.started(), timeout=30, what="both nodes")
         # Both well into their spin: rospy can deadlock on a SIGINT that lands while it registers.
@@ -302,7 +300,7 @@ def test_the_basenode_stops_with_the_exported_node(make_node, tmp_path, ros_mast
 def test_exported_plain_node_runs_with_rosrun(make_node, tmp_path, ros_master, no_ipyros):
     """rosrun, without the launch file: the script sets its params' defaults, a _param:= given wins."""
     ns = "/rosrun_plain"
-    export.export(plain_node(make_node, ns), tmp_path / "rosrun_pkg")
+    plain_node(make_node, ns).export(tmp_path / "rosrun_pkg")
     with running(["rosrun", "rosrun_pkg", "export_plain", "_gain:=4.0"], export_env(tmp_path, no_ipyros)) as run:
         check_plain(make_node, ns, lambda: run.lines, gain=4.0)
         assert run.interrupt() == 0, run.lines[-10:]
@@ -321,7 +319,7 @@ def test_launch_file_loads_with_roslaunch(make_node, tmp_path):
     for key, value in odd.items():
         node.params[key] = value
     node.baseNode("echo_node", params={"~rate": 10, "_label": "it's <b>"})
-    package = export.export(node, tmp_path / "loaded_pkg")
+    package = node.export(tmp_path / "loaded_pkg")
     config = load_config_default([str(package / "launch" / "export_wrapper.launch")], None)
     params = {name: p.value for name, p in config.params.items()}
     expected = {**{k: v for k, v in odd.items() if k != "nested"}, "nested/a": 1, "nested/b": [True],
@@ -346,7 +344,7 @@ def test_a_basenode_of_a_launch_file_is_exported_as_that_node(make_node, tmp_pat
     node = make_node("planner_export")
     node.baseLaunch(robot, "/robot1/planner")
     node.reuse.subscribe("in", type=String).publish("out", type=String)
-    launch = export.export(node, tmp_path / "planner_pkg") / "launch" / "planner_export.launch"
+    launch = node.export(tmp_path / "planner_pkg") / "launch" / "planner_export.launch"
     text = launch.read_text()
     assert f"It is /robot1/planner of {robot}, as ipyros wrapped it there" in text
     assert "Start the rest of that launch file separately, without this node" in text
@@ -373,14 +371,14 @@ def test_package_xml_and_catkin_make(make_node, tmp_path):
     from catkin_pkg.package import parse_package
 
     workspace = tmp_path / "ws"
-    package = export.export(wrapper_node(make_node, "/built"), workspace / "src" / "built_pkg")
+    package = wrapper_node(make_node, "/built").export(workspace / "src" / "built_pkg")
     manifest = parse_package(str(package))
     warnings: list[str] = []
     manifest.validate(warnings=warnings)
     assert manifest.name == "built_pkg" and warnings == []
     assert [d.name for d in manifest.exec_depends] == ["ipyros_test_nodes", "rospy", "std_msgs", "std_srvs"]
     # The Python with catkin_pkg: the python3 first on PATH may not be Debian's.
-    build = subprocess.run(["catkin_make", "-C", str(workspace), "install", "-DPYTHON_EXECUTABLE=/usr/bin/python3"],
+    build = subprocess.run(["catkin_make", "-C", str(workspace), "install", f"-DPYTHON_EXECUTABLE={ROS1_PYTHON}"],
                            check=False, capture_output=True, text=True, timeout=300)
     assert build.returncode == 0, build.stdout[-2000:] + build.stderr[-2000:]
     installed = workspace / "install"
@@ -392,7 +390,7 @@ def test_package_xml_and_catkin_make(make_node, tmp_path):
 
 def test_an_earlier_export_is_replaced(make_node, tmp_path):
     target = tmp_path / "again_pkg"
-    export.export(plain_node(make_node, "/again"), target)
+    plain_node(make_node, "/again").export(target)
     other = make_node("other_node")
     other.new.publish("/again/x", msgType=String)
     assert other.export(target) == target  # the DSL method, the same export
@@ -411,14 +409,14 @@ def test_a_directory_holding_other_files_is_refused(make_node, tmp_path, existin
     target = tmp_path / "taken_pkg"
     node = plain_node(make_node, "/taken")
     if existing is None:  # an earlier export that someone added a file to
-        export.export(node, target)
+        node.export(target)
         existing = {"launch/mine.launch": "<launch/>"}
     for name, text in existing.items():
         (target / name).parent.mkdir(parents=True, exist_ok=True)
         (target / name).write_text(text)
     before = {p: p.read_bytes() for p in target.rglob("*") if p.is_file()}
     with pytest.raises(IpyrosError, match=message) as error:
-        export.export(node, target)
+        node.export(target)
     assert "\n" not in str(error.value)
     assert {p: p.read_bytes() for p in target.rglob("*") if p.is_file()} == before  # nothing written
 
@@ -426,26 +424,26 @@ def test_a_directory_holding_other_files_is_refused(make_node, tmp_path, existin
 @pytest.mark.parametrize("name", ["MyPkg", "my-pkg", "my__pkg", "x", "1pkg", "pkg_"])
 def test_an_invalid_package_name_is_refused(make_node, tmp_path, name):
     with pytest.raises(IpyrosError, match=rf"'{re.escape(name)}' is not a valid ROS package name .*: export to a"):
-        export.export(plain_node(make_node, "/invalid"), tmp_path / name)
+        plain_node(make_node, "/invalid").export(tmp_path / name)
     assert not (tmp_path / name).exists()
 
 
 def test_a_file_in_the_way_is_refused(make_node, tmp_path):
     (tmp_path / "file_pkg").write_text("mine")
     with pytest.raises(IpyrosError, match=r"file_pkg is a file: export to a directory .* or to a \.py script"):
-        export.export(plain_node(make_node, "/file"), tmp_path / "file_pkg")
+        plain_node(make_node, "/file").export(tmp_path / "file_pkg")
     assert (tmp_path / "file_pkg").read_text() == "mine"
 
 
 def test_an_export_removes_only_files_inside_its_own_folder(make_node, tmp_path):
     """A package.xml edited to list ../victim.txt as an earlier export's file does not make export delete it."""
     target = tmp_path / "victim_pkg"
-    export.export(plain_node(make_node, "/victim"), target)
+    plain_node(make_node, "/victim").export(target)
     victim = tmp_path / "victim.txt"
     victim.write_text("mine")
     manifest = target / "package.xml"
     manifest.write_text(manifest.read_text().replace("files: ", "files: ../victim.txt /etc/hostname "))
-    export.export(plain_node(make_node, "/victim2"), target)
+    plain_node(make_node, "/victim2").export(target)
     assert victim.read_text() == "mine"
     assert "../victim.txt" not in manifest.read_text()
 
@@ -455,7 +453,7 @@ def test_package_xml_is_written_by_an_xml_library(make_node, tmp_path):
     import xml.etree.ElementTree as ET
 
     node = plain_node(make_node, "/escaped")
-    package = export.export(node, tmp_path / "escaped_pkg")
+    package = node.export(tmp_path / "escaped_pkg")
     root = ET.parse(package / "package.xml").getroot()
     assert root.tag == "package" and root.findtext("name") == "escaped_pkg"
     assert [e.text for e in root.findall("exec_depend")] == ["geometry_msgs", "rospy", "std_msgs"]

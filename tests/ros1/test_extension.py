@@ -9,20 +9,19 @@ import re
 import subprocess
 import sys
 import textwrap
-import time
 
 import pytest
-from ros1_fixtures import free_port, wait_for
 from IPython.core.error import UsageError
 from peer import Peer
+from ros1_fixtures import free_port, wait_for
+from shell import error_of, interactive_shell, ok
 from traitlets.config import Config
 
 from ipyros import IpyrosError, rosNode
-from ipyros.ros1 import master as master_mod
 from ipyros.ipython.completion import IDENTIFIER
 from ipyros.ipython.extension import _loaded
 from ipyros.ipython.magics import RosMagics
-from shell import error_of, interactive_shell, ip, ok  # noqa: F401
+from ipyros.ros1 import master as master_mod
 
 MAGICS = {"line": {"topics", "echo", "pub", "handler", "try", "status", "wrap"}, "cell": {"pub", "handler"}}
 
@@ -34,12 +33,9 @@ def ipyros_matchers(shell):
 def test_load_registers_everything_and_prints_one_line(ros_session, ros_master, capsys):
     with interactive_shell(load=False) as shell:
         before_exc = shell.custom_exceptions
-        start = time.monotonic()
         shell.run_line_magic("load_ext", "ipyros")
-        took = time.monotonic() - start
         lines = capsys.readouterr().out.strip().splitlines()
         assert lines == [f"ipyros: ROS master {ros_master} (found running)"]
-        assert took < 5, "loading must not wait on the network"  # generous: it is a few ms plus imports
         for kind, names in MAGICS.items():
             assert names <= set(shell.magics_manager.magics[kind])
         assert shell.user_ns["rosNode"] is rosNode
@@ -197,14 +193,11 @@ def test_no_master_and_no_start_returns_at_once_and_says_so(ros_session, capsys)
     connection.master, attached = None, connection.master  # as if nothing was attached yet
     try:
         config.RosMagics.master_uri = uri
-        start = time.monotonic()
         with interactive_shell(config):
-            took = time.monotonic() - start
             out = capsys.readouterr().out
     finally:
         connection.master, ros_session.config = attached, previous
     assert f"ipyros: no ROS master answers at {uri}; start roscore there" in out
-    assert took < 5
 
 
 @pytest.mark.timeout(60)
@@ -219,10 +212,9 @@ def test_embedded_master_starts_in_the_background_and_outlives_the_load(tmp_path
         from traitlets.config import Config
         c = Config(); c.HistoryManager.hist_file = ':memory:'
         ip = InteractiveShell.instance(config=c)
-        start = time.monotonic()
-        ip.run_line_magic('load_ext', 'ipyros')
-        print('load took', round(time.monotonic() - start, 3), flush=True)
         from ipyros.ros1 import master
+        ip.run_line_magic('load_ext', 'ipyros')
+        print('master up when the load returned:', master.answers('{uri}', 0.05), flush=True)
         while not master.answers('{uri}'):
             time.sleep(0.05)
         time.sleep(0.5)  # the thread that started it has finished its work: the master must live on
@@ -241,8 +233,8 @@ def test_embedded_master_starts_in_the_background_and_outlives_the_load(tmp_path
                 break
         assert f"ipyros: no ROS master answered at {uri}; starting one there (it stops when this session exits)" \
             in lines, lines
-        took = float(next(line for line in lines if line.startswith("load took")).split()[-1])
-        assert took < 2, lines
+        # The load did not wait for it: rosmaster takes most of a second to come up.
+        assert "master up when the load returned: False" in lines, lines
         assert "created /embedded_user" in lines, lines
         assert master_mod.answers(uri)
         # Loading again names it in one plain line: no brackets inside brackets.

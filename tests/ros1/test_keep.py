@@ -19,15 +19,14 @@ from pathlib import Path
 import pytest
 import yaml
 from geometry_msgs.msg import Pose, Twist
+from ros1_fixtures import ROS1_PYTHON, master_state, wait_for
 from std_msgs.msg import String
 from std_srvs.srv import Empty, EmptyResponse
 
-from ros1_fixtures import master_state, wait_for
-
-from ipyros.files import export, modelfile as keep
 from ipyros import rosNode
-from ipyros.ros1 import runtime
 from ipyros.core.errors import IpyrosError
+from ipyros.files import export, modelfile as keep
+from ipyros.ros1 import runtime
 
 speed = 2.5  # read by showPose when called: exported as a literal
 
@@ -96,7 +95,7 @@ def world(make_node, name, publish, *listen):
 
 def test_plain_node_round_trip(make_node, tmp_path):
     nd = turtle_node(make_node)
-    path = keep.save(nd, tmp_path / "turtle.yaml")
+    path = nd.save(tmp_path / "turtle.yaml")
     text = path.read_text()
     data = yaml.safe_load(text)
     assert data[keep.FORMAT_KEY] == keep.FORMAT and data["node"] == nd.model().to_dict()
@@ -107,11 +106,11 @@ def test_plain_node_round_trip(make_node, tmp_path):
                                                      "service /turtle_control_node/reset"]
 
     namespace: dict = {}
-    loaded = keep.load(path, namespace, trust=True)
+    loaded = rosNode.load(path, namespace, trust=True)
     assert not loaded.created and loaded.model() == nd.model()
     assert loaded.handler("/turtle1/pose") is namespace["showPose"] is not showPose
     assert namespace["nd"] is loaded  # the name its handlers write with
-    assert keep.save(loaded, tmp_path / "again.yaml").read_text() == text  # the loaded sources are findable too
+    assert loaded.save(tmp_path / "again.yaml").read_text() == text  # the loaded sources are findable too
 
 
 def test_the_model_as_json_round_trips(make_node, tmp_path):
@@ -137,15 +136,15 @@ def test_a_model_without_handler_sources_takes_them_by_name(make_node, tmp_path)
 
 def test_wrapping_node_round_trip(make_node, tmp_path):
     wnode = wrapper_node(make_node)
-    loaded = keep.load(keep.save(wnode, tmp_path / "wrapper.yaml"), trust=True)
+    loaded = rosNode.load(wnode.save(tmp_path / "wrapper.yaml"), trust=True)
     assert loaded.model() == wnode.model()
     assert loaded.model().base.args == ["--prefix", "echo> "] and loaded.params["volume"] == 11
 
 
 def test_loaded_node_runs_its_handlers_in_the_namespace_given(make_node, tmp_path):
-    path = keep.save(turtle_node(make_node), tmp_path / "turtle.yaml")
+    path = turtle_node(make_node).save(tmp_path / "turtle.yaml")
     namespace = {"speed": 4.0}
-    loaded = keep.load(path, namespace, trust=True)
+    loaded = rosNode.load(path, namespace, trust=True)
     try:
         loaded.create()
         driver, heard = world(make_node, "keep_turtle_world", ("/turtle1/pose", Pose), ("/turtle1/cmd_vel", Twist))
@@ -161,25 +160,25 @@ def test_loaded_node_runs_its_handlers_in_the_namespace_given(make_node, tmp_pat
 def test_lambda_handlers(make_node, tmp_path):
     nd = make_node("keep_lambdas")
     nd.new.subscribe("/keep/a", handler=lambda m: got.append(m.data), msgType=String)  # noqa: F821
-    path = keep.save(nd, tmp_path / "lambdas.yaml")
+    path = nd.save(tmp_path / "lambdas.yaml")
     assert yaml.safe_load(path.read_text())["handlers"][0]["source"] == "lambda m: got.append(m.data)\n"
     namespace = {"got": []}
-    loaded = keep.load(path, namespace, trust=True)
+    loaded = rosNode.load(path, namespace, trust=True)
     loaded.handler("/keep/a")(String("x"))
     assert namespace["got"] == ["x"] and loaded.model() == nd.model()
 
     nd.new.subscribe("/keep/a",  # getsource gives only the lambda's line of this statement
                      handler=lambda msg: got.append(msg.data.upper()),  # noqa: F821
                      msgType=String)
-    handler = yaml.safe_load(keep.save(nd, path).read_text())["handlers"][0]
+    handler = yaml.safe_load(nd.save(path).read_text())["handlers"][0]
     assert handler["source"] == "lambda msg: got.append(msg.data.upper())\n"
 
     nd.new.subscribe("/keep/b", handler=[lambda m: 1, lambda m: 2][1], msgType=String)
     with pytest.raises(IpyrosError, match=r"/keep/b is a lambda that looks like other lambdas on its line; define it with def"):
-        keep.save(nd, tmp_path / "two.yaml")
+        nd.save(tmp_path / "two.yaml")
     nd.new.subscribe("/keep/b", handler=[].append, msgType=String)
     with pytest.raises(IpyrosError, match=r"/keep/b is builtin_function_or_method 'append', which has no source to keep; define it with def"):
-        keep.save(nd, tmp_path / "builtin.yaml")
+        nd.save(tmp_path / "builtin.yaml")
 
 
 def test_handler_typed_at_an_ipython_prompt(make_node, tmp_path):
@@ -189,9 +188,9 @@ def test_handler_typed_at_an_ipython_prompt(make_node, tmp_path):
         ok(shell, "def onChatter(msg):\n    print('heard', msg.data)\n")
         nd = make_node("keep_prompt")
         nd.new.subscribe("/keep/chatter", handler=shell.user_ns["onChatter"], msgType=String)
-        path = keep.save(nd, tmp_path / "prompt.yaml")
+        path = nd.save(tmp_path / "prompt.yaml")
         assert "def onChatter(msg):\n        print('heard', msg.data)" in path.read_text()
-        keep.load(path, shell.user_ns, trust=True)
+        rosNode.load(path, shell.user_ns, trust=True)
         assert shell.user_ns["onChatter"] is not nd.handler("/keep/chatter")  # rebound by the load
 
 
@@ -208,19 +207,19 @@ def test_load_errors_say_what_is_wrong(tmp_path, change, message):
     if change is not None:
         path.write_text(change)
     with pytest.raises(IpyrosError, match=message) as error:
-        keep.load(path)
+        rosNode.load(path)
     assert "\n" not in str(error.value)
 
 
 def test_load_names_a_handler_that_does_not_compile(make_node, tmp_path):
-    path = keep.save(turtle_node(make_node), tmp_path / "turtle.yaml")
+    path = turtle_node(make_node).save(tmp_path / "turtle.yaml")
     path.write_text(path.read_text().replace("def heartbeat():", "def heartbeat() oops:"))
     with pytest.raises(IpyrosError, match=r"handler heartbeat \(timer heartbeat\) does not compile: .* line 1"):
-        keep.load(path, trust=True)
+        rosNode.load(path, trust=True)
 
 
 def test_a_model_file_carrying_code_is_not_run_unless_trusted(make_node, tmp_path):
-    path = keep.save(turtle_node(make_node), tmp_path / "turtle.yaml")
+    path = turtle_node(make_node).save(tmp_path / "turtle.yaml")
     planted = tmp_path / "planted"
     data = yaml.safe_load(path.read_text())
     data["handlers"][0]["imports"] = [f"import os; open({str(planted)!r}, 'w').close()"]
@@ -232,7 +231,7 @@ def test_a_model_file_carrying_code_is_not_run_unless_trusted(make_node, tmp_pat
     assert text.startswith(f"{path} would run imports ") and "import os; open(" in text \
         and "the handlers showPose, heartbeat, reset; read it, and if you trust it load it with trust=True" in text
     assert not planted.exists() and not namespace, "nothing ran"
-    keep.load(path, namespace, trust=True)
+    rosNode.load(path, namespace, trust=True)
     assert planted.exists()
 
 
@@ -240,8 +239,8 @@ def test_a_model_file_carrying_code_is_not_run_unless_trusted(make_node, tmp_pat
 
 @contextmanager
 def running(script: Path):
-    """Run an exported script with /usr/bin/python3; yield (process, output lines); stop it after."""
-    proc = subprocess.Popen(["/usr/bin/python3", str(script)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+    """Run an exported script with the Python it names; yield (process, output lines); stop it after."""
+    proc = subprocess.Popen([ROS1_PYTHON, str(script)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                             text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
     lines: list[str] = []
     reader = threading.Thread(target=lambda: lines.extend(line.rstrip("\n") for line in proc.stdout), daemon=True)
@@ -265,9 +264,9 @@ def stop(proc: subprocess.Popen) -> int:
 
 
 def test_exported_turtle_node_runs_without_ipyros(make_node, tmp_path, ros_master):
-    script = export.export(turtle_node(make_node), tmp_path / "turtle_control_node.py")
+    script = turtle_node(make_node).export(tmp_path / "turtle_control_node.py")
     text = script.read_text()
-    assert text.startswith("#!/usr/bin/python3\n") and os.access(script, os.X_OK)
+    assert text.startswith(f"#!{ROS1_PYTHON}\n") and os.access(script, os.X_OK)
     for line in ("import math", "from geometry_msgs.msg import Pose, Twist", "speed = 2.5", "nd = NodeHandle()",
                  "def showPose(data):", "rospy.init_node('turtle_control_node')",
                  "rospy.Timer(rospy.Duration(0.1), lambda event: heartbeat())"):
@@ -290,7 +289,7 @@ def test_exported_turtle_node_runs_without_ipyros(make_node, tmp_path, ros_maste
 
 
 def test_exported_wrapper_runs_and_stops_its_basenode(make_node, tmp_path, ros_master):
-    script = export.export(wrapper_node(make_node), tmp_path / "keep_wrapper.py")
+    script = wrapper_node(make_node).export(tmp_path / "keep_wrapper.py")
     text = script.read_text()
     assert "os.environ[\"ROS_NAMESPACE\"] = '/keep_ns/'" in text
     assert "relay('/keep_ns/in', '/keep_ns/keep_wrapper/base/keep_ns/in', String)" in text
@@ -327,7 +326,7 @@ def test_export_marks_globals_it_cannot_write(make_node, tmp_path):
 
     nd.new.subscribe("/keep/watch", handler=watch, msgType=String)
     with pytest.warns(export.ExportWarning, match="needs values for threshold"):
-        script = export.export(nd, tmp_path / "watch.py")
+        script = nd.export(tmp_path / "watch.py")
     text = script.read_text()
     assert "threshold = None  # set me: used by handler watch" in text
     assert "def clamp(value):" in text and "LIMIT = 3" in text
@@ -341,4 +340,4 @@ def test_the_dsl_methods_save_load_and_export(make_node, tmp_path, ros_session):
     saved = nd.save(tmp_path / "nd.yaml")
     again = rosNode.load(saved, {}, session=ros_session, trust=True)
     assert again.model() == nd.model()
-    assert nd.export(tmp_path / "nd.py").read_text().startswith("#!/usr/bin/python3")
+    assert nd.export(tmp_path / "nd.py").read_text().startswith(f"#!{ROS1_PYTHON}")

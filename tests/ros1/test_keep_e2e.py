@@ -9,8 +9,8 @@ first handler version gives the first behaviour.
 
 from __future__ import annotations
 
-from ros1_fixtures import master_state, wait_for
 from kernels import start_kernel
+from ros1_fixtures import master_state, wait_for
 
 NS = "/e2e_keep"
 

@@ -13,9 +13,8 @@ from __future__ import annotations
 import re
 
 import pytest
-from ros1_fixtures import master_state, wait_for
-from kernels import kernel  # noqa: F401 - the fixture
 from peer import Peer
+from ros1_fixtures import master_state, wait_for
 
 TOPIC = "/e2e_kernel/ticks"  # std_msgs/UInt32 0, 1, 2, ... from peers/ticker.py
 

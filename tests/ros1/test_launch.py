@@ -17,15 +17,14 @@ from pathlib import Path
 
 import pytest
 import rosnode
-from std_msgs.msg import Int32, String
-
-from ros1_fixtures import master_state, wait_for
 from helpers import pid_alive
+from ros1_fixtures import master_state, wait_for
+from std_msgs.msg import Int32, String
 
 from ipyros.core import errors
 from ipyros.core.model import NodeModel
-from ipyros.node.wrapping import basenode_remaps
-from ipyros.node.dsl import engine_of
+from ipyros.core.remapping import basenode_remaps
+from ipyros.dsl import engine_of
 
 LAUNCH = Path(__file__).resolve().parents[1] / "launch"
 ROBOT = str(LAUNCH / "robot.launch")

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from shell import ip  # noqa: F401 - the ip fixture
-
 
 def test_a_refused_setting_is_said_after_a_node_exists(ip, make_node, capsys):  # noqa: F811
     make_node("logging_first").create()  # rospy.init_node has run: it configured logging

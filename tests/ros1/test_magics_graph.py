@@ -5,14 +5,14 @@ from __future__ import annotations
 import threading
 
 import pytest
-from ros1_fixtures import master_state, wait_for
 from IPython.core.error import UsageError
 from peer import Peer
+from ros1_fixtures import master_state, wait_for
+from shell import ctrl_c_after, error_of, ok
 
 from ipyros.core.errors import MessageTypeError, TopicTypeConflict
+from ipyros.dsl import engine_of
 from ipyros.ipython.extension import _loaded
-from ipyros.node.dsl import engine_of
-from shell import ctrl_c_after, error_of, ip, ok  # noqa: F401
 
 
 @pytest.fixture
@@ -319,7 +319,6 @@ def test_echo_as_csv_and_as_a_table_and_hz_of_two_topics_at_once(ip, capsys, rat
 
 def test_plot_in_the_terminal_until_ctrl_c_and_to_a_png(ip, capsys, rate_peer, tmp_path):
     import matplotlib.image
-
     from shell import ctrl_c_after
 
     wait_listed(ip, "/mg/rate")

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from ros1_fixtures import wait_for
+from shell import error_of, ok
 
 from ipyros.ipython.extension import _loaded
-from shell import error_of, ip, ok  # noqa: F401
 
 SERVER = """\
 from std_srvs.srv import SetBool, SetBoolResponse

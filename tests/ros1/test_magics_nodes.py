@@ -5,14 +5,14 @@ from __future__ import annotations
 import textwrap
 
 import pytest
-from ros1_fixtures import wait_for
 from IPython.core.error import UsageError
 from peer import Peer
+from ros1_fixtures import wait_for
+from shell import error_of, ok
 
 from ipyros.core.errors import HandlerError, IpyrosError, NotDeclaredError
+from ipyros.dsl import engine_of
 from ipyros.ipython.extension import _loaded
-from ipyros.node.dsl import engine_of
-from shell import error_of, ip, ok  # noqa: F401
 
 LISTENER = textwrap.dedent("""\
     from std_msgs.msg import String, UInt32

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import pytest
-from ros1_fixtures import master_state, wait_for
 from IPython.core.error import UsageError
 from peer import Peer
+from ros1_fixtures import master_state, wait_for
+from shell import error_of, ok
 
 from ipyros import rosNode
 from ipyros.core.errors import BaseNodeError
 from ipyros.ipython.magics.wrap import rosrun_words
-from shell import error_of, ip, ok  # noqa: F401
 
 
 def test_rosrun_words_split_into_remaps_params_and_arguments():

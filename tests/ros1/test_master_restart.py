@@ -6,10 +6,9 @@ import subprocess
 import xmlrpc.client
 
 import pytest
-
 from child import Child, ChildError
-from ros1_fixtures import free_port, master_state, wait_for
 from peer import Peer
+from ros1_fixtures import free_port, master_state, wait_for
 
 SETUP = """
 from ipyros import rosNode
@@ -70,12 +69,12 @@ def test_the_master_goes_away_and_comes_back(own_master):
         stop(masters[0])
         child.wait_err(f"the ROS master at {uri} does not answer; your nodes keep the connections they have")
 
-        took, result = child.timed('nd.new.publish("/phoenix/more", msgType=String)')
-        assert isinstance(result, ChildError) and took < 5, (took, result)
+        result = child.attempt('nd.new.publish("/phoenix/more", msgType=String)')
+        assert isinstance(result, ChildError), result
         assert str(result).startswith(f"MasterError: the ROS master at {uri} does not answer, so opening "
                                       "publisher /phoenix/more on phoenix was not done (nothing changed)"), result
-        took, result = child.timed('nd.params["other"] = 2')
-        assert isinstance(result, ChildError) and "does not answer" in str(result) and took < 5, (took, result)
+        result = child.attempt('nd.params["other"] = 2')
+        assert isinstance(result, ChildError) and "does not answer" in str(result), result
         child.run('nd.new.subscribe("/phoenix/in", handler=lambda m: got.append(m), msgType=UInt32)')  # a swap needs no master
         assert "/phoenix/more" not in child.run("print(nd.model().topics)")
 

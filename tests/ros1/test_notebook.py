@@ -13,8 +13,17 @@ from typing import Callable
 import nbformat
 import pytest
 
-from notebooks import (NOTEBOOKS, cell_with, check_kobuki, check_turtle_circle, html_of, number,
-                       run_notebook, text_of, text_of_cell)
+from notebooks import (
+    NOTEBOOKS,
+    cell_with,
+    check_kobuki,
+    check_turtle_circle,
+    html_of,
+    number,
+    run_notebook,
+    text_of,
+    text_of_cell,
+)
 
 
 def check_tour(nb: nbformat.NotebookNode, text: str) -> None:

@@ -6,9 +6,8 @@ from pathlib import Path
 
 import rospy
 from geometry_msgs.msg import Pose, Twist
-
-from ros1_fixtures import wait_for
 from peer import Peer
+from ros1_fixtures import wait_for
 
 from ipyros import rosNode
 

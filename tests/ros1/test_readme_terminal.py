@@ -14,12 +14,13 @@ import os
 import re
 
 import pytest
-from ros1_fixtures import free_port, wait_for
 from helpers import pid_alive
 from readme import ROOT, readme_lines, watch_the_turtle_go_round
+from ros1_fixtures import free_port, wait_for
 from terminal import Terminal, descendants, prompt, run
 
 from ipyros.tools.robot import TURTLE_CIRCLE
+
 
 def test_the_readme_shows_the_lines_the_demo_suggests():
     assert readme_lines() == list(TURTLE_CIRCLE) and len(TURTLE_CIRCLE) == 5

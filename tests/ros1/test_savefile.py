@@ -16,14 +16,14 @@ from pathlib import Path
 
 import pytest
 from ros1_fixtures import wait_for
-from shell import error_of, ip, ok  # noqa: F401
+from shell import error_of, ok
 
-from ipyros.core import journal
 from ipyros import rosNode
-from ipyros.files import savefile
+from ipyros.core import journal
 from ipyros.core.errors import IpyrosError
+from ipyros.dsl import engine_of, restore
+from ipyros.files import savefile
 from ipyros.ipython.display import renderable
-from ipyros.node.dsl import engine_of
 
 SETUP = '''
 from std_msgs.msg import String
@@ -201,9 +201,9 @@ def test_bad_paths_and_files_say_what_is_wrong(sf, tmp_path):
     other = tmp_path / "other.py"
     other.write_text("print('hello')\n")
     with pytest.raises(IpyrosError, match="is not a file saved by ipyros"):
-        savefile.restore(other)
+        restore(other)
     with pytest.raises(IpyrosError, match="cannot read"):
-        savefile.restore(tmp_path / "missing.py")
+        restore(tmp_path / "missing.py")
 
 
 def test_a_file_failing_halfway_leaves_nothing_running(sf, tmp_path):
@@ -251,7 +251,7 @@ def test_a_node_of_a_launch_file_is_saved_as_baselaunch(make_node, tmp_path):
     assert f"planner_saved.baseLaunch({launch!r}, '/robot1/planner')" in text
     assert "# planner_saved.create()  (it was not running when saved)" in text
     namespace: dict = {}
-    (restored,) = savefile.restore(tmp_path / "planner.py", namespace)
+    (restored,) = restore(tmp_path / "planner.py", namespace)
     assert restored.model() == wrapper.model() and not restored.created
     wrapper.save(tmp_path / "planner.yaml")
     assert rosNode.load(tmp_path / "planner.yaml", trust=True).model() == wrapper.model()

@@ -5,12 +5,12 @@ from __future__ import annotations
 import time
 
 import pytest
-from std_msgs.msg import UInt32
-from ros1_fixtures import wait_for
 from peer import Peer
+from ros1_fixtures import wait_for
+from shell import error_of, ok
+from std_msgs.msg import UInt32
 
 from ipyros.core.errors import MessageTypeError
-from shell import error_of, ip, ok  # noqa: F401
 
 
 def last_x(peer: Peer) -> float | None:
@@ -75,14 +75,11 @@ def test_a_slow_subscriber_blocks_neither_the_writer_nor_the_others(make_node):
         fast.wait_line("ready")
         wait_for(lambda: nd.status().row("/slow/image").connections == 2, timeout=20,
                  what="both subscribers to connect")
-        longest, start = 0.0, time.monotonic()
         for _ in range(60):
-            before = time.monotonic()
             nd.write("/slow/image", image)
-            longest = max(longest, time.monotonic() - before)
-            time.sleep(0.05)
-        assert longest < 0.5, f"a write blocked for {longest:.2f} s"
-        assert time.monotonic() - start < 10
+            time.sleep(0.05)  # 20 Hz, as a camera sends
+        # All 60 got through to the fast one while the slow one is still in its first 30 s callback:
+        # the writes did not wait for it.
         fast.wait_line("got 60", timeout=20)
         row = nd.status().row("/slow/image")
         assert row.calls == 60 and row.dropped > 0, row

@@ -8,11 +8,10 @@ import sys
 import textwrap
 
 import pytest
-
 from ros1_fixtures import free_port, master_state, wait_for
 
-from ipyros.ros1 import master as masters
 from ipyros.core.errors import MasterError
+from ipyros.ros1 import master as masters
 
 
 def run_python(code: str, env: dict, timeout: float = 60) -> subprocess.CompletedProcess:

@@ -18,9 +18,9 @@ import sys
 from pathlib import Path
 
 import pytest
-from ros1_fixtures import master_state, wait_for
 from helpers import pid_alive
 from peer import Peer
+from ros1_fixtures import master_state, wait_for
 from terminal import PROMPT, Terminal, descendants, prompt, prompt_reads, run
 
 TOPIC = "/e2e_turtle/ticks"  # std_msgs/UInt32 0, 1, 2, ... from peers/ticker.py

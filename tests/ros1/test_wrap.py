@@ -7,13 +7,12 @@ import subprocess
 
 import pytest
 from geometry_msgs.msg import Pose, PoseStamped, Twist
+from ros1_fixtures import master_state, wait_for
 from std_msgs.msg import String
 
-from ros1_fixtures import master_state, wait_for
-
-from ipyros.core import errors
 from ipyros import rosNode
-from ipyros.node.dsl import engine_of
+from ipyros.core import errors
+from ipyros.dsl import engine_of
 
 speed = 4.5
 

@@ -10,7 +10,7 @@ from std_msgs.msg import String, UInt32
 from std_srvs.srv import SetBool
 
 from ipyros.core import errors
-from ipyros.node.dsl import engine_of
+from ipyros.dsl import engine_of
 
 
 def test_each_dsl_node_is_a_ros2_node_and_talks_to_other_processes(make_node):
@@ -32,41 +32,18 @@ def test_each_dsl_node_is_a_ros2_node_and_talks_to_other_processes(make_node):
             return {"/r2/talker", "/listener"} <= set(listing.split())
 
         wait_for(peer_lists_both, timeout=20, interval=0.2, what="the peer to list both DSL nodes")
-        assert talker.ros_name == engine_of(talker).session.process.name  # the session's first node names it
+        assert talker.ros_name == "/r2/talker"  # a ROS 2 node of its own
         with pytest.raises(errors.MessageTypeError, match="chatter carries std_msgs/String, not std_msgs/UInt32"):
             talker.write("chatter", UInt32(data=1))
-        # The peer's name is taken: a DSL node of that name is refused, and nothing of it runs.
+        # The peer's name is taken: a DSL node of that name is refused, and nothing of it runs (once the
+        # graph knows the name: discovery may tell of it a moment after the peer's topics).
+        backend = engine_of(talker).session.backend
+        wait_for(lambda: "/echo_peer" in backend.graph_snapshot().nodes, timeout=20, what="the peer's name")
         taker = make_node("echo_peer")
         taker.new.publish("/r2/taken", msgType=String)
         with pytest.raises(errors.NodeStateError, match="a node named /echo_peer is already running in the ROS 2 graph"):
             taker.create()
         assert not taker.created and "/echo_peer" not in engine_of(talker).session.process.hosts()
-
-
-def test_a_handler_swapped_under_a_200_hz_stream_loses_none_and_doubles_none(make_node):
-    seen: list[tuple[str, int]] = []
-    lock = threading.Lock()
-
-    def version(tag):
-        def handler(msg):
-            with lock:
-                seen.append((tag, msg.data))
-        return handler
-
-    nd = make_node("swapper").new.subscribe("/r2/seq", handler=version("v0"), msgType=UInt32).create()
-    count = 600
-    with Peer("seq.py", "/r2/seq", count, 200) as peer:
-        peer.wait_line("started")
-        swaps = 0
-        while not any("done" in line for line in peer.lines):
-            swaps += 1
-            nd.new.subscribe("/r2/seq", handler=version(f"v{swaps}"), msgType=UInt32)
-            threading.Event().wait(0.01)
-        wait_for(lambda: len(seen) >= count, timeout=10, what="every message")
-    numbers = [n for _, n in seen]
-    assert sorted(numbers) == list(range(count)), "none lost, none doubled"
-    assert len({tag for tag, _ in seen}) > 5 and swaps >= 10, "the stream was served by many versions in turn"
-    assert len(nd.versions("/r2/seq")) == swaps + 1
 
 
 def test_timers_params_and_services(make_node, failures):

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import logging
 
-from std_msgs.msg import UInt32
-
 from ros2_fixtures import wait_for
+from std_msgs.msg import UInt32
 
 
 def test_a_callback_that_raises_system_exit_does_not_stop_the_nodes(make_node, ros2_session, caplog):

@@ -6,13 +6,12 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
+from ros2_fixtures import wait_for
 from sensor_msgs.msg import Image
 
-from ros2_fixtures import wait_for
-from ipyros.node.dsl import engine_of
+from ipyros.dsl import engine_of
 
 
 def receiving_sockets(pid: int) -> list[tuple[str, int]]:
@@ -74,9 +73,13 @@ def test_a_large_best_effort_topic_is_delivered(make_node, peer):
     nd = make_node("fastdds_camera").new.publish("/fastdds/image", msgType=Image, qos="sensor_data").create()
     wait_for(lambda: engine_of(nd).sent()[0].connections, timeout=20, what="the listener")
     image = Image(height=1024, width=1024, encoding="mono8", step=1024, data=bytes(1 << 20))
-    for i in range(30):
-        image.header.frame_id = str(i)
+    sent = 0
+
+    def heard_ten() -> bool:  # best effort may drop some on a loaded machine; the default profile dropped all
+        nonlocal sent
+        image.header.frame_id = str(sent)
         nd.write("/fastdds/image", image)
-        time.sleep(1 / 30)
-    wait_for(lambda: sum(line.startswith("heard") for line in listener.lines) >= 15, timeout=10,
-             what="most of 30 images (best effort)")
+        sent += 1
+        return sum(line.startswith("heard") for line in listener.lines) >= 10
+
+    wait_for(heard_ten, timeout=30, interval=0.05, what="ten 1 MiB images sent best effort")

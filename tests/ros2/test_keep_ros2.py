@@ -25,7 +25,7 @@ NS = "/k2"
 BUILD = f'''
 import sys
 from ipyros import rosNode
-from ipyros.files.savefile import save_session
+from ipyros.dsl import save_session
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 mark = "*"
@@ -140,8 +140,8 @@ handlers:
 
 
 def test_a_model_made_on_ros1_loads_on_ros2_and_says_so(tmp_path, ros2_session, notices, make_node):
-    from ipyros.core import errors
     from ipyros import rosNode
+    from ipyros.core import errors
 
     path = tmp_path / "from_ros1.yaml"
     path.write_text(ROS1_MODEL)

@@ -9,6 +9,7 @@ monitor fires after ``speed = 6`` and not before; the base holds the robot to 5 
 from __future__ import annotations
 
 import pytest
+
 from notebooks import NOTEBOOKS, check_kobuki, check_turtle_circle, run_notebook, text_of
 
 CHECKS = {"turtle_circle.ipynb": check_turtle_circle, "kobuki.ipynb": check_kobuki}

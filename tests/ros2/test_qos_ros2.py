@@ -9,8 +9,8 @@ from ros2_fixtures import wait_for
 from std_msgs.msg import String
 
 from ipyros.core import errors
+from ipyros.dsl import engine_of
 from ipyros.ipython.display import node_table
-from ipyros.node.dsl import engine_of
 
 ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
 

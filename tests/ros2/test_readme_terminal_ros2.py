@@ -10,8 +10,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ros2_fixtures import wait_for
 from readme import ROOT, readme_lines, watch_the_turtle_go_round
+from ros2_fixtures import wait_for
 from terminal import Terminal, descendants, prompt, prompt_reads, run
 
 

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
 
 import pytest
 from ros2_fixtures import wait_for
 from std_msgs.msg import String
 
-from ipyros.node.dsl import engine_of
+from ipyros.dsl import engine_of
 
 ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
 
@@ -96,6 +97,32 @@ def test_a_basenode_service_relayed_then_intercepted(make_node, caller):
     assert caller("/robot5/check", SetBool, SetBool.Request(data=True)).message == "S checked"
 
 
+def test_a_slow_basenode_service_stalls_nothing_else(make_node, caller):
+    """A relayed call waits for the basenode off the executor thread: the session's subscriptions go on meanwhile."""
+    from std_srvs.srv import SetBool
+
+    w = make_node("w2_slow")
+    w.baseNode(ECHO_NODE, namespace="robot7", params={"prefix": "Z", "check_delay": 6.0})
+    w.reuse.service("check", type=SetBool)
+    w.create()
+    heard = listen(make_node, "w2_slow_listener", "/robot7/tick")
+    talker = make_node("w2_slow_talker").new.publish("/robot7/tick", msgType=String).create()
+    wait_for(lambda: talker.write("/robot7/tick", String(data="before")) or heard, timeout=20, interval=0.2,
+             what="the listener")
+    answers: list = []
+    calling = threading.Thread(target=lambda: answers.append(
+        caller("/robot7/check", SetBool, SetBool.Request(data=True), patience=30)))
+    calling.start()
+    try:
+        wait_for(lambda: "checking" in w.base.tail(), timeout=20, what="the basenode to take the call")
+        talker.write("/robot7/tick", String(data="during"))
+        wait_for(lambda: "during" in heard, timeout=4, what="a message while the basenode's service is busy")
+        assert not answers
+    finally:
+        calling.join(timeout=60)
+    assert answers and answers[0].message == "Z checked"
+
+
 def test_discovery_reads_the_basenode_from_the_ros2_graph(make_node):
     w = make_node("w2_discovered")
     w.baseNode(ECHO_NODE, namespace="robot3")
@@ -180,7 +207,6 @@ def _gone(pid: int) -> bool:
 _INTERPRETER = """
 import sys
 from ipyros import rosNode
-from ipyros.node.dsl import engine_of
 from std_msgs.msg import String
 w = rosNode("orphan_wrapper")
 w.baseNode(sys.argv[2], namespace="orphans")

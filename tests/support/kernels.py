@@ -16,10 +16,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import pytest
-from support import wait_for
 from helpers import pid_alive
 from jupyter_client import KernelManager
 from jupyter_client.kernelspec import KernelSpecManager
+from support import wait_for
 
 TIMEOUT = 30  # per request: generous, finite
 

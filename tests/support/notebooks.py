@@ -14,8 +14,8 @@ import sys
 from pathlib import Path
 
 import nbformat
-from jupyter_client.kernelspec import KernelSpec
 import pytest
+from jupyter_client.kernelspec import KernelSpec
 from nbclient import NotebookClient
 
 NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
@@ -91,7 +91,7 @@ def check_kobuki(nb: nbformat.NotebookNode, text: str) -> None:
     assert "demo robot kobuki (running)" in text
     assert "rosNode /experimental_move_base (running) wrapping ipyros_demo/move_base" in text
     (relayed,) = number(r"the base is told ([\d.]+) m/s: move_base's own speed, relayed", text)
-    assert relayed == 1.0  # relayVelocity passes move_base's ~speed on
+    assert relayed == 1.0, text  # relayVelocity passes move_base's ~speed on
     assert "before speed = 6: speed_exceeded was [False]" in text, "the monitor fired before speed = 6"
     # after the first 6 m/s command, not before it (both times are when this kernel saw the messages,
     # on two threads: a few milliseconds either way are noise, not an early alarm)

@@ -20,13 +20,15 @@ import pytest
 
 TESTS = Path(__file__).resolve().parents[1]
 
+from peer import Peer as SharedPeer  # noqa: E402
+from support import SESSION_PIDS, node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
+
 from ipyros.core.model import BaseModel  # noqa: E402
 from ipyros.processes.basenode import BaseProcess  # noqa: E402
+from ipyros.ros1.export import RospyScript  # noqa: E402
 from ipyros.ros1.graph import fetch_snapshot  # noqa: E402
 from ipyros.ros1.nodes import command  # noqa: E402
 from ipyros.tools.graph import GraphCache  # noqa: E402
-from peer import Peer as SharedPeer  # noqa: E402
-from support import SESSION_PIDS, node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
 
 # The test basenodes are a ROS package: found by package + executable, as rosrun finds them.
 os.environ["ROS_PACKAGE_PATH"] = os.pathsep.join(
@@ -35,6 +37,9 @@ os.environ.setdefault("IPYROS_ROS", "1")
 
 #: The ROS this plugin is for (the tests in both/ ask).
 ROS = 1
+
+#: The interpreter that runs rospy here, as exported scripts name it (the tests run exports with it).
+ROS1_PYTHON = RospyScript.shebang()[2:]
 
 
 def ros1_process(executable, args=(), *, master_uri=None, node_name=None, namespace=None, remaps=None, params=None,

@@ -7,10 +7,10 @@ master or DDS domain, and its DSL nodes live in the pytest process.
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import os
 import threading
-import _thread
 from typing import Iterator, Optional
 
 import pytest

@@ -33,6 +33,16 @@ def graph_knows(topic: str, side: str = "subscribers", timeout: float = 20.0) ->
                     what=f"the graph to list {side} of {topic}")
 
 
+def graph_forgets(topic: str, side: str = "subscribers", timeout: float = 20.0) -> None:
+    """Wait until the session's graph lists no node on ``side`` of ``topic`` (ROS 2 discovery tells of a
+    removal a moment later; the ROS 1 master at once)."""
+    from ipyros.node.session import current
+
+    backend = current().backend
+    wait_for(lambda: not getattr(backend.graph_snapshot(timeout=2.0), side).get(topic), timeout,
+             what=f"the graph to drop the {side} of {topic}")
+
+
 def node_maker(session: Any) -> Iterator[Callable[..., Any]]:
     """The body of a ``make_node`` fixture: build rosNodes in ``session``, shut down when the test ends."""
     from ipyros import rosNode

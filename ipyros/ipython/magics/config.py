@@ -26,6 +26,7 @@ from IPython.core.magic import Magics, magics_class
 from traitlets import Bool, CaselessStrEnum, Float, Int, TraitError, Unicode, validate
 
 from ...core.errors import IpyrosError
+from ...core.names import check_namespace, check_node_name
 
 
 @magics_class
@@ -143,8 +144,6 @@ class RosMagics(Magics):
     def _process_node_name(self, proposal):
         name = proposal.value.strip()
         if name:
-            from ...core.names import check_namespace, check_node_name
-
             namespace, _, base = ("/" + name.strip("/")).rpartition("/")
             try:
                 check_namespace(namespace or "/")

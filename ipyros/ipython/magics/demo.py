@@ -14,10 +14,11 @@ from __future__ import annotations
 
 from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
-from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from IPython.core.magic_arguments import magic_arguments, parse_argstring
 from rich.table import Table
 
 from ...tools.robot import ROBOTS, demo_robot, launch_args, running_robot, stop_demo_robot
+from ..arguments import DEMO_ROBOT, argument
 from .common import ExtensionMagics
 
 
@@ -26,7 +27,7 @@ class DemoMagics(ExtensionMagics):
     """The magic that runs ipyros's demo robots."""
 
     @magic_arguments()
-    @argument("robot", nargs="?", default="turtle", help=f"which demo robot: {', '.join(ROBOTS)} (default: turtle)")
+    @argument("robot", nargs="?", default="turtle", complete=DEMO_ROBOT, help=f"which demo robot: {', '.join(ROBOTS)} (default: turtle)")
     @argument("args", nargs="*", metavar="name:=value", help="arguments of its launch file (see --list)")
     @argument("--stop", action="store_true", help="stop the demo robot")
     @argument("--list", action="store_true", help="list the demo robots and their arguments")

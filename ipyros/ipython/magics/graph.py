@@ -7,25 +7,35 @@ and print with rich (tables in a terminal or a notebook, plain text in a pipe).
 
 from __future__ import annotations
 
-import dataclasses
-import difflib
 import re
 import time
 from typing import Any, Optional
 
 from IPython.core.error import UsageError
 from IPython.core.magic import line_cell_magic, line_magic, magics_class, no_var_expand
-from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from IPython.core.magic_arguments import magic_arguments, parse_argstring
 from rich.syntax import Syntax
 from rich.table import Table
 
-from ...core import msgtypes, plan as planning
-from ...core.errors import MasterError
-from ...core.graph import GraphSnapshot, frozen
+from ...core import msgtypes
 from ...core.msgbuild import build_message, fields_of, flat_fields, parse_data, to_yaml
-from ...tools.probe import Echo, Rate, measure_rates
+from ...tools.probe import Echo, measure_rates
+from ..api import (
+    as_dsl_nodes,
+    close_names,
+    compile_filter,
+    global_topic,
+    live_graph,
+    live_type,
+    node_name,
+    split_head,
+    topic_and_field,
+    type_once_live,
+)
+from ..arguments import MSG_TEMPLATE, MSG_TYPE, NODE, TOPIC, argument
+from ..display import endpoints_table, topics_table
 from .cell_output import OutputArea, in_kernel
-from .common import ExtensionMagics, global_topic, split_head
+from .common import ExtensionMagics
 
 
 class Messages(list):
@@ -37,27 +47,6 @@ class Messages(list):
 
     def __repr__(self) -> str:
         return f"<{len(self)} message{'s' * (len(self) != 1)} from {self.topic}: a list>"
-
-
-def _compile_filter(expression: str, namespace: dict) -> Any:
-    """``--filter EXPR`` compiled once; the returned test says for message ``m`` whether to keep it."""
-    expression = expression.strip()
-    if len(expression) > 1 and expression[0] == expression[-1] and expression[0] in "'\"":
-        expression = expression[1:-1]  # IPython's argument split keeps the quotes
-    try:
-        code = compile(expression, "<%echo --filter>", "eval")
-    except SyntaxError as error:
-        raise UsageError(f"--filter {expression!r} is not a Python expression ({error.msg}); "
-                         "write one over the message m, e.g. --filter 'm.linear.x > 0'") from None
-
-    def keep(msg: Any, number: int) -> bool:
-        try:
-            return bool(eval(code, namespace, {"m": msg}))  # noqa: S307 - the user's own expression
-        except Exception as error:  # noqa: BLE001 - said in one line, and the listening stops
-            raise UsageError(f"--filter {expression!r} raised {type(error).__name__}: {error} on message "
-                             f"{number}; fix the expression (the message is m)") from None
-
-    return keep
 
 
 def _fields_yaml(msg: Any, fields: list[str], type_name: str) -> str:
@@ -86,10 +75,10 @@ class TopicMagics(ExtensionMagics):
 
     # -- %topics -------------------------------------------------------------------------
     @magic_arguments()
-    @argument("pattern", nargs="?", default="",
+    @argument("pattern", nargs="?", default="", complete=TOPIC,
               help="only topics matching this glob (/turtle*/pose) or containing this text (cmd)")
-    @argument("-t", "--type", help="only topics of this message type (a glob works: geometry_msgs/*)")
-    @argument("-n", "--node", help="only topics this node publishes or subscribes to")
+    @argument("-t", "--type", complete=MSG_TYPE, help="only topics of this message type (a glob works: geometry_msgs/*)")
+    @argument("-n", "--node", complete=NODE, help="only topics this node publishes or subscribes to")
     @argument("--hz", action="store_true",
               help="also measure each topic's message rate, listening for c.RosMagics.hz_window seconds")
     @argument("-v", "--verbose", action="store_true",
@@ -99,10 +88,10 @@ class TopicMagics(ExtensionMagics):
     def topics(self, line: str) -> None:
         """List the live topics: name, type, publishers and subscribers."""
         args = parse_argstring(self.topics, line)
-        snap = self.live_graph()
-        node = _node_name(args.node) if args.node else None
+        snap = live_graph(self.ext)
+        node = node_name(args.node) if args.node else None
         if node and node not in snap.nodes:
-            raise UsageError(f"no node {node} in the ROS graph{_close(node, snap.nodes)}")
+            raise UsageError(f"no node {node} in the ROS graph{close_names(node, snap.nodes)}")
         found = snap.topics_matching(args.pattern, type=args.type, node=node)
         if not found:
             if args.type and not any(c in args.type for c in "*?[") and args.type not in snap.topics.values():
@@ -113,17 +102,17 @@ class TopicMagics(ExtensionMagics):
             print(f"no live topics {what}".rstrip() + (" (the master knows none)" if not snap.topics else ""))
             return
         if args.verbose:
-            self.ext.printer.show(_endpoints_table(snap, found, self.ext.session.backend.topic_endpoints,
+            self.ext.printer.show(endpoints_table(snap, found, self.ext.session.backend.topic_endpoints,
                                                    self.ext.graph.where))
             return
         window = self.ext.settings.hz_window
         rates = measure_rates({t: snap.topics[t] for t in found}, window) if args.hz else None
-        self.ext.printer.show(_topics_table(_as_dsl_nodes(snap, self.ext.session), found, rates, window,
+        self.ext.printer.show(topics_table(as_dsl_nodes(snap, self.ext.session), found, rates, window,
                                             self.ext.graph.where))
 
     # -- %echo ---------------------------------------------------------------------------
     @magic_arguments()
-    @argument("topic", help="the live topic to listen to")
+    @argument("topic", complete=TOPIC, help="the live topic to listen to")
     @argument("-n", "--count", type=int, default=None,
               help="stop after this many messages (default c.RosMagics.echo_count; 0: until Ctrl-C)")
     @argument("--field", action="append", metavar="A.B",
@@ -146,11 +135,11 @@ class TopicMagics(ExtensionMagics):
         count = self.ext.settings.echo_count if args.count is None else args.count
         if count < 0:
             raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {count}")
-        topic, field = self._topic_and_field(global_topic(args.topic))
-        keep = _compile_filter(args.filter, self.shell.user_ns) if args.filter else None
+        topic, field = topic_and_field(self.ext.graph.snapshot, global_topic(args.topic))
+        keep = compile_filter(args.filter, self.shell.user_ns) if args.filter else None
         fields = [f.strip("'\"") for f in args.field or []] + ([field] if field else [])
         seen = Messages(topic)
-        type_name = self._type_once_live(topic)
+        type_name = type_once_live(self.ext, topic)
         if type_name is None:  # Ctrl-C while waiting for it
             return seen
         if args.csv and args.table:
@@ -187,12 +176,12 @@ class TopicMagics(ExtensionMagics):
 
     # -- %pub / %%pub ----------------------------------------------------------------------
     @magic_arguments()
-    @argument("topic", help="the topic to publish on")
-    @argument("type", nargs="?", help="its message type, pkg/Type; may be left out for a live topic")
-    @argument("data", nargs="*", help="the message, the rest of the line (or the cell of %%%%pub): a Python "
+    @argument("topic", complete=TOPIC, help="the topic to publish on")
+    @argument("type", nargs="?", complete=MSG_TYPE, help="its message type, pkg/Type; may be left out for a live topic")
+    @argument("data", nargs="*", complete=MSG_TEMPLATE, help="the message, the rest of the line (or the cell of %%%%pub): a Python "
               "dict, a YAML mapping, a list of all fields in order, or one value for a one-field message; "
               "fields left out keep their defaults, unknown or mistyped fields are errors")
-    @argument("-t", "--type", dest="type_option", metavar="TYPE", help="the message type, as an option")
+    @argument("-t", "--type", dest="type_option", metavar="TYPE", complete=MSG_TYPE, help="the message type, as an option")
     @argument("-r", "--rate", type=float, help="publish again at this rate (Hz) until Ctrl-C")
     @argument("--latch", action="store_true", help="keep the message for subscribers that come later too "
               "(ROS 1 latched, ROS 2 transient local), until the extension is unloaded")
@@ -229,7 +218,7 @@ class TopicMagics(ExtensionMagics):
             raise UsageError(f"--rate must be a positive number of messages per second, not {args.rate}")
         topic = global_topic(args.topic)
         given = args.type or args.type_option
-        type_name = msgtypes.resolve_message(given)[0] if given else self.live_type(topic, for_pub=True)
+        type_name = msgtypes.resolve_message(given)[0] if given else live_type(self.ext, topic, for_pub=True)
         msg = build_message(type_name, parse_data(data), nonfinite=args.nonfinite)
         if args.rate is None:
             sender, reached = self.ext.publisher.publish(topic, type_name, msg, latch=args.latch)
@@ -250,116 +239,6 @@ class TopicMagics(ExtensionMagics):
                 time.sleep(max(0.0, start + sent * period - time.monotonic()))
         except KeyboardInterrupt:
             print(f"published {sent} {type_name} message{'s' * (sent != 1)} on {topic} at {rate:g} Hz")
-
-    # -- shared ----------------------------------------------------------------------------
-    def live_graph(self) -> GraphSnapshot:
-        self.ext.session.backend.check_graph()  # a master just restarted: the session registers again first
-        snap = self.ext.graph.refresh_now()
-        if not snap.master_up:
-            raise MasterError(f"no ROS master answers at {self.ext.graph.where}; start roscore, "
-                              "or check ROS_MASTER_URI (c.RosMagics.master_uri)")
-        return snap
-
-    def _topic_and_field(self, name: str) -> tuple[str, str]:
-        """``/turtle1/pose/position.x`` → ``("/turtle1/pose", "position.x")``, as rostopic echo reads a
-        field path; a name that is a live topic, or has no live topic in it, stays whole."""
-        snap = self.ext.graph.snapshot
-        if name in snap.topics:
-            return name, ""
-        parts = name.split("/")
-        for cut in range(len(parts) - 1, 1, -1):
-            topic = "/".join(parts[:cut])
-            if topic in snap.topics:
-                return topic, ".".join(parts[cut:])
-        return name, ""
-
-    def _type_once_live(self, topic: str, poll: float = 0.5) -> Optional[str]:
-        """The type of ``topic``, waiting (said once) while nobody publishes it, as rostopic echo
-        waits; None if Ctrl-C ends the wait."""
-        snap = self.live_graph()
-        if snap.topics.get(topic) not in (None, "", "*"):
-            return snap.topics[topic]
-        close = _close(topic, snap.topic_names)
-        print(f"ipyros: {topic} is not published yet{close}; waiting for it (Ctrl-C stops)", flush=True)
-        try:
-            while True:
-                time.sleep(poll)
-                found = self.ext.graph.refresh_now().topics.get(topic)
-                if found not in (None, "", "*"):
-                    return found
-        except KeyboardInterrupt:
-            print(f"stopped waiting for {topic}")
-            return None
-
-    def live_type(self, topic: str, for_pub: bool = False, snap: Optional[GraphSnapshot] = None) -> str:
-        """The type of the live ``topic`` from the graph read afresh (or from ``snap``, read once for
-        several topics); a one-line error if there is none."""
-        snap = snap if snap is not None else self.live_graph()
-        if topic not in snap.topics:
-            fix = f"; give its type: %pub {topic} pkg/Type ..." if for_pub else "; %topics lists them"
-            raise UsageError(f"no live topic {topic}{_close(topic, snap.topic_names)}{fix}")
-        type_name = snap.topics[topic]
-        if not type_name or type_name == "*":
-            raise UsageError(f"the master does not know the type of {topic} yet; try again in a moment")
-        return type_name
-
-
-def _as_dsl_nodes(snap: GraphSnapshot, session: Any) -> GraphSnapshot:
-    """``snap`` with this session's ROS 1 node replaced, topic by topic, by its DSL nodes that use the topic.
-
-    On ROS 1 every DSL node of the session lives in one ROS node, named after the first
-    one created: after ``nd.shutdown()`` the master still lists that name as publishing
-    what the session's other nodes (a ``%pub``) publish. Naming the DSL nodes says who.
-    """
-    process = session.process.name if session.process.shared else None
-    if not process:
-        return snap
-    uses: dict[tuple[str, str], list[str]] = {}
-    for node in list(session.nodes.values()):
-        for spec in planning.plan(node.model()):
-            if isinstance(spec, planning.PublishSpec):
-                ends = [(spec.topic, "publish")]
-            elif isinstance(spec, planning.SubscribeSpec):
-                ends = [(spec.topic, "subscribe")]
-            elif isinstance(spec, planning.RelaySpec):
-                ends = [(spec.source, "subscribe"), (spec.target, "publish")]
-            else:  # timers and services: no topic
-                ends = []
-            for end in ends:
-                uses.setdefault(end, []).append(node.fullname)
-
-    def named(mapping: Any, side: str) -> dict[str, tuple[str, ...]]:
-        return {topic: tuple(sorted({n for node in nodes for n in (uses.get((topic, side)) or [node]
-                                                                    if node == process else [node])}))
-                for topic, nodes in mapping.items()}
-
-    return dataclasses.replace(snap, publishers=frozen(named(snap.publishers, "publish")),
-                               subscribers=frozen(named(snap.subscribers, "subscribe")))
-
-
-def _topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
-                  window: float, where: str) -> Table:
-    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}", title_justify="left")
-    # Names stay whole (they are what you copy); the node lists give way when space runs out.
-    table.add_column("topic", overflow="fold", style="bold", min_width=min(60, max(map(len, found), default=5)))
-    table.add_column("type", overflow="fold", min_width=min(40, max((len(snap.topics[t] or "?") for t in found),
-                                                                   default=4)))
-    table.add_column("publishers", overflow="fold")
-    table.add_column("subscribers", overflow="fold")
-    if rates is not None:
-        table.add_column("rate Hz", justify="right")
-    for topic in found:
-        row = [topic, snap.topics[topic] or "?", _nodes(snap.publishers.get(topic, ())),
-               _nodes(snap.subscribers.get(topic, ()))]
-        if rates is not None:
-            rate = rates.get(topic)
-            row.append(rate.describe(window) if rate is not None else "? (type not installed)")
-        table.add_row(*row)
-    if rates is not None and any(r is not None and r.hz is None and r.count for r in rates.values()):
-        table.caption = f"< N: one message per publisher in {window:g} s; %hz TOPIC listens longer"
-        table.caption_justify = "left"
-    return table
-
 
 class _Rows:
     """``%echo --csv`` (a line per message, as it arrives) and ``--table`` (a table when done)."""
@@ -401,31 +280,3 @@ def _csv_quoted(text: str) -> str:
     return '"' + text.replace('"', '""') + '"' if any(c in text for c in ',"\n') else text
 
 
-def _endpoints_table(snap: GraphSnapshot, found: list[str], endpoints: Any, where: str) -> Table:
-    """``%topics -v``: a row per publisher and subscription of each topic, with its QoS."""
-    table = Table(title=f"{len(found)} live topic{'s' * (len(found) != 1)} at {where}, by endpoint",
-                  title_justify="left")
-    for column in ("topic", "node", "endpoint", "type", "QoS"):  # names and QoS whole; the type gives way
-        table.add_column(column, overflow="fold", no_wrap=column != "type", style="bold" if column == "topic" else None)
-    for topic in found:
-        rows = endpoints(topic) or [("", "", snap.topics[topic] or "?", "")]
-        types = {row[2] for row in rows if not row[2].startswith("?")}
-        for i, (node, kind, type_name, qos) in enumerate(rows):
-            if len(types) > 1:  # ROS connects no two types: say which endpoint hears nothing from which
-                type_name = f"[red]{type_name}[/] (not {' or '.join(sorted(types - {type_name}))}: nothing passes)"
-            table.add_row(topic if i == 0 else "", node, kind, type_name, qos)
-    return table
-
-
-def _nodes(nodes: tuple[str, ...], most: int = 3) -> str:
-    shown = ", ".join(nodes[:most])
-    return shown + (f" +{len(nodes) - most} more" if len(nodes) > most else "")
-
-
-def _node_name(name: str) -> str:
-    return name if name.startswith("/") else "/" + name
-
-
-def _close(name: str, known: Any) -> str:
-    close = difflib.get_close_matches(name, list(known), n=3)
-    return f" (did you mean {', '.join(close)}?)" if close else ""

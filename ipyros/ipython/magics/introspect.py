@@ -21,7 +21,7 @@ from typing import Any
 
 from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class, no_var_expand
-from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from IPython.core.magic_arguments import magic_arguments, parse_argstring
 from rich.syntax import Syntax
 from rich.table import Table
 
@@ -29,7 +29,9 @@ from ...core import msgtypes
 from ...core.graph import GraphSnapshot, name_matches
 from ...core.msgbuild import build_message, parse_data, to_yaml
 from ...tools.probe import is_tool, tool_name
-from .common import ExtensionMagics, global_topic, split_head
+from ..api import global_topic, live_graph, split_head
+from ..arguments import NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, argument
+from .common import ExtensionMagics
 
 
 def internal(name: str, session_nodes: list[Any]) -> str:
@@ -55,12 +57,12 @@ class IntrospectMagics(ExtensionMagics):
 
     # -- %services / %call ------------------------------------------------------------------
     @magic_arguments()
-    @argument("pattern", nargs="?", default="", help="only services matching this glob or containing this text")
+    @argument("pattern", nargs="?", default="", complete=SERVICE, help="only services matching this glob or containing this text")
     @line_magic
     def services(self, line: str) -> None:
         """List the live services: name, type and the nodes that serve them."""
         args = parse_argstring(self.services, line)
-        snap = self.ext.topic_magics.live_graph()
+        snap = live_graph(self.ext)
         backend = self._ready()
         found = [s for s in snap.services if name_matches(s, args.pattern)]
         if not found:
@@ -79,9 +81,9 @@ class IntrospectMagics(ExtensionMagics):
         self.ext.printer.show(table)
 
     @magic_arguments()
-    @argument("service", help="the live service to call")
-    @argument("type", nargs="?", help="its type, pkg/Service; may be left out: asked of the live service")
-    @argument("request", nargs="*", help="the request, the rest of the line: a dict or YAML mapping, "
+    @argument("service", complete=SERVICE, help="the live service to call")
+    @argument("type", nargs="?", complete=SRV_TYPE, help="its type, pkg/Service; may be left out: asked of the live service")
+    @argument("request", nargs="*", complete=REQUEST_TEMPLATE, help="the request, the rest of the line: a dict or YAML mapping, "
               "fields left out keep their defaults")
     @argument("-t", "--timeout", type=float, default=5.0, help="seconds to wait for the answer (default 5)")
     @no_var_expand
@@ -95,7 +97,7 @@ class IntrospectMagics(ExtensionMagics):
         args = parse_argstring(self.call, head)
         name = global_topic(args.service)
         backend = self._ready()
-        if name not in self.ext.topic_magics.live_graph().services:
+        if name not in live_graph(self.ext).services:
             raise UsageError(f"no live service {name}; %services lists them")
         type_name, cls = msgtypes.resolve_service(args.type or backend.service_type(name))
         request_class = cls._request_class if hasattr(cls, "_request_class") else cls.Request
@@ -105,7 +107,7 @@ class IntrospectMagics(ExtensionMagics):
 
     # -- %params / %param -------------------------------------------------------------------
     @magic_arguments()
-    @argument("namespace", nargs="?", default="/", help="only parameters under this namespace (default: all)")
+    @argument("namespace", nargs="?", default="/", complete=NODE, help="only parameters under this namespace (default: all)")
     @line_magic
     def params(self, line: str) -> None:
         """List the parameters under NAMESPACE with their values (ROS 2: the parameters of the nodes there)."""
@@ -124,7 +126,7 @@ class IntrospectMagics(ExtensionMagics):
         self.ext.printer.show(table)
 
     @magic_arguments()
-    @argument("name", help="the parameter's global name (ROS 2: /node/key)")
+    @argument("name", complete=NODE, help="the parameter's global name (ROS 2: /node/key)")
     @argument("value", nargs="*", help="a new value, the rest of the line (a Python literal or YAML); "
               "none: show the value")
     @no_var_expand
@@ -145,12 +147,12 @@ class IntrospectMagics(ExtensionMagics):
 
     # -- %nodes / %node ---------------------------------------------------------------------
     @magic_arguments()
-    @argument("pattern", nargs="?", default="", help="only nodes matching this glob or containing this text")
+    @argument("pattern", nargs="?", default="", complete=NODE, help="only nodes matching this glob or containing this text")
     @line_magic
     def nodes(self, line: str) -> None:
         """List the live nodes with how many topics each publishes and subscribes to and services it serves."""
         args = parse_argstring(self.nodes, line)
-        snap = self.ext.topic_magics.live_graph()
+        snap = live_graph(self.ext)
         found = [n for n in snap.nodes if name_matches(n, args.pattern)]
         if not found:
             print(f"no live nodes matching {args.pattern!r}" if args.pattern else "no live nodes")
@@ -168,13 +170,13 @@ class IntrospectMagics(ExtensionMagics):
         self.ext.printer.show(table)
 
     @magic_arguments()
-    @argument("name", help="the live node")
+    @argument("name", complete=NODE, help="the live node")
     @line_magic
     def node(self, line: str) -> None:
         """One live node: what it publishes, subscribes to and serves (with types), and its pid (ROS 1)."""
         args = parse_argstring(self.node, line)
         name = global_topic(args.name)
-        snap = self.ext.topic_magics.live_graph()
+        snap = live_graph(self.ext)
         if name not in snap.nodes:
             raise UsageError(f"no live node {name}; %nodes lists them")
         pid = self._ready().node_pid(name)

@@ -13,17 +13,18 @@ from typing import Any, Optional
 
 from IPython.core.error import UsageError
 from IPython.core.magic import line_cell_magic, line_magic, magics_class
-from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
 from ...core.errors import IpyrosError
-from ...files.savefile import restore, save_nodes
-from ...node.dsl import engine_of, rosNode
+from ...dsl import engine_of, keeping, restore, rosNode
 from ...node.session import current
 from ...tools.editing import EditWatch, PendingEdit, fresh_name, handler_source, lambda_as_def, new_functions
 from ...tools.probe import is_tool
 from ...tools.tryout import try_candidate
+from ..api import evaluate, find_node, split_head
+from ..arguments import DSL_NODE, FUNCTION, OWN_TOPIC, argument
 from ..display import session_table
-from .common import ExtensionMagics, evaluate, find_node, split_head
+from .common import ExtensionMagics
 
 
 @magics_class
@@ -41,8 +42,8 @@ class NodeMagics(ExtensionMagics):
 
     # -- %handler / %%handler ----------------------------------------------------------------
     @magic_arguments()
-    @argument("node", help="the variable holding the rosNode")
-    @argument("topic", help="the subscribed topic whose handler to edit (or a timer's name, or a service)")
+    @argument("node", complete=DSL_NODE, help="the variable holding the rosNode")
+    @argument("topic", complete=OWN_TOPIC, direction="subscribe", help="the subscribed topic whose handler to edit (or a timer's name, or a service)")
     @line_cell_magic
     def handler(self, line: str, cell: Optional[str] = None) -> None:
         """Edit the live handler of TOPIC on NODE.
@@ -94,9 +95,9 @@ class NodeMagics(ExtensionMagics):
 
     # -- %try ------------------------------------------------------------------------------
     @magic_arguments(name="try")
-    @argument("node", help="the variable holding the rosNode")
-    @argument("topic", help="the subscribed topic")
-    @argument("candidate", nargs="*", help="the candidate handler: a function's name, or any expression "
+    @argument("node", complete=DSL_NODE, help="the variable holding the rosNode")
+    @argument("topic", complete=OWN_TOPIC, direction="subscribe", help="the subscribed topic")
+    @argument("candidate", nargs="*", complete=FUNCTION, help="the candidate handler: a function's name, or any expression "
               "giving a function (a lambda), the rest of the line")
     @argument("-n", "--last", type=int, help="only the last N messages (default: all the node keeps, "
               "c.RosMagics.try_history)")
@@ -120,8 +121,9 @@ class NodeMagics(ExtensionMagics):
 
     # -- %versions / %revert -------------------------------------------------------------------
     @magic_arguments()
-    @argument("node", help="the variable holding the rosNode")
-    @argument("topic", help="the subscribed topic (or a timer's name, or a service)")
+    @argument("node", complete=DSL_NODE, help="the variable holding the rosNode")
+    @argument("topic", complete=OWN_TOPIC, direction="subscribe",
+              help="the subscribed topic (or a timer's name, or a service)")
     @line_magic
     def versions(self, line: str) -> None:
         """Every function the handler of TOPIC on NODE was given, oldest first; (now) marks the live one.
@@ -132,8 +134,9 @@ class NodeMagics(ExtensionMagics):
         self.ext.printer.show(find_node(self.shell, args.node).versions(args.topic))
 
     @magic_arguments()
-    @argument("node", help="the variable holding the rosNode")
-    @argument("topic", help="the subscribed topic (or a timer's name, or a service)")
+    @argument("node", complete=DSL_NODE, help="the variable holding the rosNode")
+    @argument("topic", complete=OWN_TOPIC, direction="subscribe",
+              help="the subscribed topic (or a timer's name, or a service)")
     @argument("version", type=int, help="the version number, as %%versions lists it")
     @line_magic
     def revert(self, line: str) -> None:
@@ -147,7 +150,7 @@ class NodeMagics(ExtensionMagics):
     # -- %save_nodes / %load_nodes ----------------------------------------------------------------
     @magic_arguments()
     @argument("path", help="the file to write: .py (runnable DSL code), or .yaml / .json (one node's model)")
-    @argument("node", nargs="*", help="the variables holding the rosNodes (default: every running node)")
+    @argument("node", nargs="*", complete=DSL_NODE, help="the variables holding the rosNodes (default: every running node)")
     @line_magic
     def save_nodes(self, line: str) -> None:
         """Save nodes to PATH: the DSL declarations and the source of every handler and helper.
@@ -163,7 +166,7 @@ class NodeMagics(ExtensionMagics):
                 raise UsageError(f"{args.path}: a model file holds one node; name it, or save to a .py file")
             written = nodes[0].save(args.path, self.shell.user_ns)
         else:
-            written = save_nodes(nodes, args.path, self.shell.user_ns)
+            written = keeping.save_nodes([engine_of(n) for n in nodes], args.path, self.shell.user_ns)
         print(f"ipyros: saved {', '.join(n.fullname for n in nodes)} to {written}")
 
     @magic_arguments()
@@ -187,7 +190,7 @@ class NodeMagics(ExtensionMagics):
 
     # -- %status ------------------------------------------------------------------------------
     @magic_arguments()
-    @argument("node", nargs="?", help="the variable holding the rosNode; none: list the session's nodes")
+    @argument("node", nargs="?", complete=DSL_NODE, help="the variable holding the rosNode; none: list the session's nodes")
     @line_magic
     def status(self, line: str) -> None:
         """Per topic and timer of NODE: calls, message rate, handler time (mean, max), exceptions.

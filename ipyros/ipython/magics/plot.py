@@ -20,10 +20,12 @@ from typing import Any, Optional
 
 from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
-from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
 from ...tools.plot import Plot, figure, text_chart
-from .common import ExtensionMagics, global_topic
+from ..api import global_topic, live_type
+from ..arguments import TOPIC, argument
+from .common import ExtensionMagics
 
 #: How often a live plot is redrawn (s).
 REDRAW = 0.5
@@ -43,7 +45,7 @@ class PlotMagics(ExtensionMagics):
         return stopped.stop() if stopped is not None else None
 
     @magic_arguments()
-    @argument("topic", nargs="?", help="the live topic")
+    @argument("topic", nargs="?", complete=TOPIC, help="the live topic")
     @argument("fields", nargs="*", help="its number fields to plot, dotted: linear.x angular.z")
     @argument("--xy", action="store_true", help="two fields drawn against each other: a trajectory")
     @argument("--window", type=float, default=30.0, help="keep (and draw) the last this many seconds (default 30)")
@@ -66,7 +68,7 @@ class PlotMagics(ExtensionMagics):
         if not 0 < args.window <= 3600 or (args.duration is not None and not 0 < args.duration <= 86400):
             raise UsageError("--window and --duration are seconds: more than 0 (window up to an hour)")
         topic = global_topic(args.topic)
-        type_name = self.ext.topic_magics.live_type(topic)
+        type_name = live_type(self.ext, topic)
         self.stop_live()
         plot = Plot(topic, type_name, [f.strip("'\"") for f in args.fields], xy=args.xy, window=args.window)
         if args.png:

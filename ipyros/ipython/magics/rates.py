@@ -17,11 +17,13 @@ from typing import Callable, Optional
 
 from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
-from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from IPython.core.magic_arguments import magic_arguments, parse_argstring
 from rich.table import Table
 
 from ...tools.probe import Rate, RateMeter
-from .common import ExtensionMagics, global_topic
+from ..api import global_topic, live_graph, live_type
+from ..arguments import TOPIC, argument
+from .common import ExtensionMagics
 
 #: A report's column names after "topic", and the cells of a row from (type, rate or None, seconds listened).
 Columns = tuple[tuple[str, ...], Callable[[str, Optional[Rate], float], list[str]]]
@@ -91,7 +93,7 @@ def _options(topics: str) -> Callable[[Callable[..., None]], Callable[..., None]
                          help="stop after this many reports (default: until Ctrl-C)")(magic)
         magic = argument("-w", "--window", type=float, default=1.0,
                          help="report every this many seconds (default 1)")(magic)
-        magic = argument("topic", nargs="+", help=topics)(magic)
+        magic = argument("topic", nargs="+", complete=TOPIC, help=topics)(magic)
         return magic_arguments()(magic)
     return decorate
 
@@ -106,8 +108,8 @@ class RateMagics(ExtensionMagics):
             raise UsageError(f"-w must be between 0.05 and 600 seconds, not {args.window}")
         if args.count < 0:
             raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {args.count}")
-        snap = self.ext.topic_magics.live_graph()  # one read of the graph for every topic
-        topics = {topic: self.ext.topic_magics.live_type(topic, snap=snap) for topic in map(global_topic, args.topic)}
+        snap = live_graph(self.ext)  # one read of the graph for every topic
+        topics = {topic: live_type(self.ext, topic, snap=snap) for topic in map(global_topic, args.topic)}
         where = self.ext.graph.where
         with RateMeter(topics) as meter:
             self.ext.printer.repeat(lambda listened: report(what, topics, meter.rates(), listened, where, columns),

@@ -11,10 +11,12 @@ from typing import Any, Optional
 
 from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
-from IPython.core.magic_arguments import argument, magic_arguments, parse_argstring
+from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
 from ...tools.record import Recording
-from .common import ExtensionMagics, global_topic
+from ..api import global_topic, live_graph, live_type
+from ..arguments import TOPIC, argument
+from .common import ExtensionMagics
 
 
 @magics_class
@@ -32,7 +34,7 @@ class RecordMagics(ExtensionMagics):
 
     @magic_arguments()
     @argument("file", nargs="?", help="the bag to write (.bag)")
-    @argument("topics", nargs="*", help="the live topics to record")
+    @argument("topics", nargs="*", complete=TOPIC, help="the live topics to record")
     @argument("--duration", type=float, default=None, help="stop after this many seconds (default: %%record --stop)")
     @argument("--stop", action="store_true", help="stop recording and close the bag")
     @line_magic
@@ -51,8 +53,8 @@ class RecordMagics(ExtensionMagics):
         path = Path(args.file).expanduser()
         if path.exists():
             raise UsageError(f"{path} exists; give a new file name (a recording never overwrites one)")
-        snap = self.ext.topic_magics.live_graph()  # one read of the graph for every topic
-        topics = {topic: self.ext.topic_magics.live_type(topic, snap=snap) for topic in map(global_topic, args.topics)}
+        snap = live_graph(self.ext)  # one read of the graph for every topic
+        topics = {topic: live_type(self.ext, topic, snap=snap) for topic in map(global_topic, args.topics)}
         self.stop()
         self.recording = Recording(path, topics, args.duration)
         until = f"for {args.duration:g} s" if args.duration else "until %record --stop"

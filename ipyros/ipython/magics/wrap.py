@@ -3,7 +3,7 @@
     %wrap turtlesim turtlesim_node --as turtle /turtle1/pose:=/t1/pose _background_r:=255
 
 launches the basenode with its remaps and private parameters, discovers its interface,
-declares all of it as ``reuse`` on a new wrapping node (see :func:`ipyros.node.wrapping.wrap`),
+declares all of it as ``reuse`` on a new wrapping node (see :func:`ipyros.tools.wrap.wrap`),
 creates that node, binds it to the variable ``turtle`` and prints its interface.
 """
 
@@ -16,9 +16,14 @@ from typing import Any
 import yaml
 from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
-from IPython.core.magic_arguments import argument, magic_arguments
+from IPython.core.magic_arguments import magic_arguments
 from IPython.utils.process import arg_split  # how IPython splits magic lines
 
+from ...core.model import BaseModel
+from ...core.remapping import base_node_name
+from ...dsl import rosNode
+from ...tools.wrap import wrap
+from ..arguments import EXECUTABLE, PACKAGE, TOPIC, argument
 from .common import ExtensionMagics
 
 
@@ -27,9 +32,9 @@ class WrapMagics(ExtensionMagics):
     """The magic that wraps running ROS executables into DSL nodes."""
 
     @magic_arguments()
-    @argument("package", help="the ROS package of the basenode")
-    @argument("executable", help="the executable in that package, as rosrun finds it")
-    @argument("extra", nargs="*", help="as for rosrun: from:=to remaps the basenode's names, _param:=value sets "
+    @argument("package", complete=PACKAGE, help="the ROS package of the basenode")
+    @argument("executable", complete=EXECUTABLE, help="the executable in that package, as rosrun finds it")
+    @argument("extra", nargs="*", complete=TOPIC, help="as for rosrun: from:=to remaps the basenode's names, _param:=value sets "
               "a private parameter (YAML value), other words are its arguments (after --, words starting with -)")
     @argument("--as", dest="var", metavar="NAME",
               help="the variable to bind the wrapping node to, also its name (default: from the executable)")
@@ -47,10 +52,6 @@ class WrapMagics(ExtensionMagics):
         if args.var is not None and not _is_variable(args.var):
             raise UsageError(f"--as {args.var}: give a Python variable name, e.g. --as turtle")
         remaps, params, extra_args = rosrun_words(args.extra)
-        from ...core.model import BaseModel
-        from ...node.wrapping import base_node_name
-        from ...tools.wrap import wrap
-
         default = f"{base_node_name(BaseModel(executable=args.executable))}_wrapper"
         self._refuse_running_variable(args.var or _variable_for(default), "--as" if args.var else "")
         node = wrap(args.package, args.executable, args.var, node_name=args.name, namespace=args.namespace,
@@ -59,11 +60,8 @@ class WrapMagics(ExtensionMagics):
         self.shell.user_ns[variable] = node
         self.ext.printer.show(node, f"bound to [bold]{variable}[/]")
 
-
     def _refuse_running_variable(self, variable: str, option: str) -> None:
         """Binding the new node must not drop the only handle on a node that runs (it would run on, unreachable)."""
-        from ...node.dsl import rosNode
-
         held = self.shell.user_ns.get(variable)
         if isinstance(held, rosNode) and held.created:
             how = f"--as {variable}" if option else f"the default variable {variable}"

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from ipyros.node import wrapping as wrap
+from ipyros.core import remapping as wrap
 from ipyros.core.errors import DeclarationError
 from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TopicModel
 

@@ -23,9 +23,9 @@ import types
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Optional
 
-from ..core import plan as planning
-from ..core.errors import IpyrosError
-from ..core.model import NodeModel
+from . import plan as planning
+from .errors import IpyrosError
+from .model import NodeModel
 
 __all__ = ["WRITER", "Bindings", "define_function", "global_names", "handler_slots", "handler_source", "import_of",
            "import_statement", "lookup"]

@@ -1,0 +1,128 @@
+"""How a wrapping node remaps its basenode: pure rules on the model (paper section III, figure 1).
+
+A basenode runs in its own namespace, under its own name, with its own remaps; the
+wrapping node sits on the names it would use and hands it internal ones instead
+(:func:`~ipyros.core.plan.internal_name`). Here: the basenode's name and namespace, how a
+``reuse`` name resolves (as the basenode resolves it, through its own remaps), the
+remaps the basenode is started with, and the checks of declarations that only make
+sense together.
+
+**One remap per name.** ROS applies at most one remap to a name: no chains. If the
+basenode's own remaps (its launch file's ``<remap>``, or ``baseNode(remaps=...)``) send
+``cmd_vel`` to ``/robot1/base/cmd_vel`` and that is the topic wrapped, the basenode
+must be given ``cmd_vel:=<internal name>`` itself; :func:`basenode_remaps` composes
+the two so.
+"""
+
+from __future__ import annotations
+
+import re
+
+from . import names
+from .errors import DeclarationError
+from .model import BaseModel, NodeModel
+from .plan import internal_name, node_fullname
+
+__all__ = ["base_fullname", "base_namespace", "base_node_name", "basenode_remaps", "check_reuse", "check_wrapping",
+           "own_remaps", "reresolve", "resolve_for"]
+
+
+def base_node_name(base: BaseModel) -> str:
+    """The basenode's ROS name: the one given, else the executable's (``move_base``)."""
+    if base.node_name:
+        return base.node_name.strip("/")
+    stem = re.sub(r"\W", "_", (base.executable or "base").rsplit("/", 1)[-1].split(".")[0])
+    return stem if stem[:1].isalpha() else "n" + stem
+
+
+def base_namespace(model: NodeModel) -> str:
+    base = model.base
+    return names.global_ns(base.namespace) if base and base.namespace else model.namespace
+
+
+def base_fullname(model: NodeModel) -> str:
+    assert model.base is not None
+    return names.join(base_namespace(model), base_node_name(model.base))
+
+
+def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
+    """``reuse`` names are the basenode's: resolve them as it does; ``new`` ones are the node's own.
+
+    A ``new`` declaration spelled like a ``reuse`` one (``~reset`` both times) means the
+    basenode's name: that is how a reused topic or service is intercepted.
+    """
+    if role == "new" and model.base is not None:
+        declared = model.topics if kind == "topic" else model.services
+        if any(d.role == "reuse" and d.name == name for d in declared):
+            role = "reuse"
+    if role == "reuse" and model.base is not None:
+        resolved = names.resolve(name, base_namespace(model), base_node_name(model.base), kind)
+        return own_remaps(model).get(resolved, resolved)  # the basenode's remaps apply: it talks there
+    return names.resolve(name, model.namespace, model.name, kind)
+
+
+def own_remaps(model: NodeModel) -> dict[str, str]:
+    """The basenode's own remaps (launch file or ``baseNode(remaps=...)``), both sides resolved as it resolves them."""
+    if model.base is None:
+        return {}
+    ns, node = base_namespace(model), base_node_name(model.base)
+    return {names.resolve(src, ns, node, "remapped"): names.resolve(dst, ns, node, "remapped")
+            for src, dst in model.base.remaps.items() if not src.startswith("__")}
+
+
+def basenode_remaps(model: NodeModel) -> dict[str, str]:
+    """Every ``from:=to`` the basenode is started with: its own remaps composed with the wrapping's.
+
+    A wrapped name ``T`` (resolved through the own remaps already) goes to its internal
+    name; an own remap ``S:=T`` becomes ``S:=internal(T)``, because ROS would not follow
+    ``S → T → internal(T)``; the other own remaps stay as they are.
+    """
+    wrapped = {t.resolved: internal_name(model, t.resolved) for t in model.topics if t.role == "reuse"}
+    wrapped.update({s.resolved: internal_name(model, s.resolved) for s in model.services if s.role == "reuse"})
+    remaps = {src: wrapped.get(dst, dst) for src, dst in own_remaps(model).items()}
+    for name, inner in wrapped.items():
+        remaps.setdefault(name, inner)
+    return remaps
+
+
+def reresolve(model: NodeModel) -> None:
+    """After the basenode changed: base names may resolve elsewhere now."""
+    for t in model.topics:
+        t.resolved = resolve_for(model, t.role, t.name, "topic")
+    for s in model.services:
+        s.resolved = resolve_for(model, s.role, s.name, "service")
+
+
+
+# -- checks ----------------------------------------------------------------------------------
+
+def check_reuse(model: NodeModel, resolved: str, direction: str, kind: str = "topic") -> None:
+    """A base topic is wrapped once: refuse reuse of it in both directions."""
+    if kind != "topic":
+        return
+    other = "subscribe" if direction == "publish" else "publish"
+    if model.topic(resolved, other, "reuse") is not None:  # type: ignore[arg-type]
+        raise DeclarationError(f"{resolved} is already wrapped as reuse.{other}; a base topic is wrapped once: "
+                               f"remove it first ({model.name}.remove({resolved!r}))")
+
+
+def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # type: ignore[assignment]
+    """Refuse to create a node whose wrapping declarations are incomplete or clash."""
+    reuses = [t.name for t in model.topics if t.role == "reuse"] + [s.name for s in model.services if s.role == "reuse"]
+    if model.base is None:
+        if reuses:
+            raise DeclarationError(f"{model.name} reuses {', '.join(reuses)} but has no basenode; declare it: "
+                                   f"{model.name}.baseNode('executable').basePackage('package')")
+        return
+    executable = model.base.executable
+    if not executable:
+        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .baseNode('executable')")
+    if not model.base.package and not model.base.launch and "/" not in executable and not executable.startswith("~"):
+        raise DeclarationError(f"{model.name}'s basenode is incomplete; add .basePackage('package'), or give the "
+                               f"path of the file to run: baseNode('./{executable}')")
+    mine = base_fullname(model)
+    for other in others:
+        if other.base is None or base_fullname(other) != mine:
+            continue
+        raise DeclarationError(f"basenode {mine} is already wrapped by {node_fullname(other)}; "
+                               "wrap it once, or give this one another name: baseNode(..., name='other')")

@@ -1,0 +1,291 @@
+"""Declarations: ``node.new`` and ``node.reuse`` (topics and services, chained), and ``node.params``.
+
+A chain (``nd.new.subscribe(...).publish(...)``) is one change: all of it applies, or
+none, and the error says which call failed. Each call validates its input and hands the
+node's :class:`~ipyros.node.engine.NodeEngine` an edit of the model.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import weakref
+from collections.abc import MutableMapping
+from typing import Any, Callable, Iterator, Optional
+
+from ..core import msgtypes, names, plan as planning, qos as qos_mod
+from ..core.errors import (
+    DeclarationError,
+    HandlerError,
+    IpyrosError,
+    MessageTypeError,
+    NotDeclaredError,
+    TopicTypeConflict,
+)
+from ..core.model import NodeModel, ServiceModel, TopicModel
+from ..core.remapping import check_reuse
+from ..core.slots import call_arity
+from ..core.versions import name_of
+from ..node.engine import NodeEngine
+
+__all__ = ["NodeParams", "TopicHandler", "UNSET", "end_chains", "one_type"]
+
+#: An argument not given (``None`` may be meant: a subscription without handler).
+UNSET: Any = object()
+
+
+class _Chain:
+    """One chain of declarations (``nd.new.subscribe(...).publish(...)``): all of it applies, or none.
+
+    Each call of a chain is applied as it comes (a running node changes at once); if a
+    later call fails, the earlier ones are undone, so that a chain is one change. A chain
+    ends when the prompt shows it, when the cell that typed it has run (the extension
+    says so: :func:`end_chains`), or when ``.create()`` ends it.
+    """
+
+    def __init__(self, snapshot: Any) -> None:
+        self.snapshot = snapshot
+        self.parts: list[str] = []
+        self.open = True
+
+
+_open_chains: "weakref.WeakSet[_Chain]" = weakref.WeakSet()
+
+
+def end_chains() -> None:
+    """End every open declaration chain (after a cell has run): a later call on one starts a new chain."""
+    for chain in list(_open_chains):
+        chain.open = False
+    _open_chains.clear()
+
+
+class TopicHandler:
+    """``node.new`` or ``node.reuse``: declares topics and services, chainable; a chain is all or nothing."""
+
+    def __init__(self, engine: NodeEngine, role: str, chain: Optional[_Chain] = None) -> None:
+        self._node = engine
+        self._role = role
+        self._chain = chain
+
+    def __repr__(self) -> str:
+        # A chain typed at the prompt shows what it did, in one line, not an object address.
+        node = self._node
+        state = "live" if node.created else "declared, not created yet"
+        chain = self._chain
+        done = "; ".join(chain.parts) if chain is not None and chain.parts else \
+            "subscribe(), publish(), service(), unsubscribe(), unpublish()"
+        if chain is not None:
+            chain.open = False
+        return f"{node.name}.{self._role}: {done} ({state})"
+
+    @contextlib.contextmanager
+    def _part(self, call: str) -> Iterator["TopicHandler"]:
+        """One call of a chain: yields the handler the chain goes on with; a failure undoes the chain's earlier calls."""
+        link = self
+        if self._chain is None or not self._chain.open:
+            chain = _Chain(self._node.snapshot())
+            _open_chains.add(chain)
+            link = TopicHandler(self._node, self._role, chain)
+        chain = link._chain
+        assert chain is not None
+        try:
+            yield link
+        except IpyrosError as error:
+            if not chain.parts:
+                raise
+            done = "; ".join(f"{self._role}.{part}" for part in chain.parts)
+            try:
+                self._node.restore(chain.snapshot, f"undo {done} ({self._role}.{call} failed)")
+            except Exception as undo:  # noqa: BLE001 - said, with the error that matters first
+                raise type(error)(f"{self._role}.{call} (call {len(chain.parts) + 1} of the chain) failed: {error}; "
+                                  f"undoing the calls before it ({done}) failed too: {undo}") from None
+            chain.open = False
+            raise type(error)(f"{self._role}.{call} (call {len(chain.parts) + 1} of the chain) failed: {error}; "
+                              f"the calls before it ({done}) were undone: the chain changed nothing") from None
+
+    def _did(self, text: str) -> None:
+        assert self._chain is not None
+        self._chain.parts.append(text)
+        self._node.record(f"{self._role}.{text}")
+
+    def subscribe(self, topic: str, handler: Optional[Callable[..., Any]] = None, msgType: Any = UNSET,
+                  type: Any = UNSET, qos: Any = None) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
+        """Subscribe ``handler(msg)`` to ``topic``; declaring it again swaps the handler live.
+
+        ``qos``: a profile name (``"sensor_data"``, ``"best_effort"``, ``"transient_local"``, ...),
+        a depth, or a dict of depth, reliability, durability (see :mod:`ipyros.core.qos`).
+        """
+        with self._part(f"subscribe({topic!r})") as link:
+            return link._subscribe(topic, handler, one_type(msgType, type, topic), qos)
+
+    def _subscribe(self, topic: str, handler: Optional[Callable[..., Any]], msg_type: Any, qos: Any) -> "TopicHandler":
+        node, role = self._node, self._role
+        resolved = node.resolve_as(role, topic, "topic")
+        type_name, _ = msgtypes.resolve_message(msg_type)
+        given = self._qos(qos, f"{role}.subscribe({topic!r})")
+        if role == "reuse":
+            check_reuse(node.model(), resolved, "subscribe")
+        label = f"{node.name} {resolved}"
+        handlers = {}
+        if role == "new":
+            if handler is None:
+                raise HandlerError(f"new.subscribe({topic!r}) needs handler=...: the function called with "
+                                   "each message")
+            handlers[planning.topic_slot(resolved)] = (handler, call_arity(handler, "subscribe", label))
+        elif handler is not None:
+            raise HandlerError(f"reuse.subscribe({topic!r}) relays messages unchanged and takes no handler; "
+                               "to handle them use new.subscribe(..., handler=...)")
+        entry = TopicModel(topic, resolved, "subscribe", type_name, role, name_of(handler), qos=given.to_model())
+        node.change(_replace_topic(entry), handlers, check=(entry,))
+        self._did(f"subscribe {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
+        return self
+
+    def publish(self, topic: str, msgType: Any = UNSET, type: Any = UNSET,
+                latch: bool = False, qos: Any = None) -> "TopicHandler":  # noqa: A002,N803 - the paper's names
+        """Publish ``topic``; ``node.write(topic, msg)`` sends on it.
+
+        ``latch``: a subscriber that connects later gets the last message (on ROS 2,
+        transient-local durability); ``qos`` as for :meth:`subscribe`.
+        """
+        with self._part(f"publish({topic!r})") as link:
+            return link._publish(topic, one_type(msgType, type, topic), latch, qos)
+
+    def _publish(self, topic: str, msg_type: Any, latch: bool, qos: Any) -> "TopicHandler":
+        node = self._node
+        resolved = node.resolve_as(self._role, topic, "topic")
+        type_name, _ = msgtypes.resolve_message(msg_type)
+        where = f"{self._role}.publish({topic!r})"
+        given = self._qos(qos, where)
+        if latch and given.durability == "volatile":
+            raise DeclarationError(f"{where}: latch=True and a volatile qos contradict each other; "
+                                   "drop one (latch=True is qos durability transient_local)")
+        if self._role == "reuse":
+            check_reuse(node.model(), resolved, "publish")
+        entry = TopicModel(topic, resolved, "publish", type_name, self._role, None, bool(latch), given.to_model())
+        node.change(_replace_topic(entry), check=(entry,))
+        self._did(f"publish {resolved} [{type_name}]")
+        return self
+
+    def _qos(self, value: Any, where: str) -> qos_mod.Qos:
+        """``qos=`` checked; refused on reuse, whose relays take the QoS of what they relay."""
+        if value is not None and self._role == "reuse":
+            raise DeclarationError(f"{where}: a reuse relay takes the QoS of the publishers it relays and "
+                                   "takes no qos=; give qos= to new.subscribe or new.publish")
+        return qos_mod.parse(value, where)
+
+    def create(self) -> Any:
+        """Create the node, so a declaration chain can end with ``.create()`` (which ends the chain)."""
+        if self._chain is not None:
+            self._chain.open = False
+        return self._node.dsl.create()
+
+    def unsubscribe(self, topic: str) -> "TopicHandler":
+        """Drop this role's subscription to ``topic``."""
+        with self._part(f"unsubscribe({topic!r})") as link:
+            return link._drop(topic, "subscribe")
+
+    def unpublish(self, topic: str) -> "TopicHandler":
+        """Drop this role's publication of ``topic``."""
+        with self._part(f"unpublish({topic!r})") as link:
+            return link._drop(topic, "publish")
+
+    def _drop(self, topic: str, direction: str) -> "TopicHandler":
+        node, role = self._node, self._role
+        resolved = node.resolve_as(role, topic, "topic")
+        if node.model().topic(resolved, direction, role) is None:  # type: ignore[arg-type]
+            raise NotDeclaredError(f"{node.name} has no {role}.{direction} of {resolved}")
+
+        def edit(model: NodeModel) -> None:
+            model.topics = [t for t in model.topics
+                            if not (t.resolved == resolved and t.direction == direction and t.role == role)]
+
+        drop = [planning.topic_slot(resolved)] if direction == "subscribe" and role == "new" else []
+        node.change(edit, drop=drop)
+        self._did(f"removed {direction} {resolved}")
+        return self
+
+    def service(self, name: str, srvType: Any = UNSET, handler: Optional[Callable[..., Any]] = None,
+                type: Any = UNSET) -> "TopicHandler":  # noqa: A002,N803
+        """Serve ``name`` with ``handler(request) -> response`` (new), or relay the basenode's (reuse)."""
+        with self._part(f"service({name!r})") as link:
+            return link._service(name, one_type(srvType, type, name), handler)
+
+    def _service(self, name: str, srv_type: Any, handler: Optional[Callable[..., Any]]) -> "TopicHandler":
+        node, role = self._node, self._role
+        resolved = node.resolve_as(role, name, "service")
+        type_name, _ = msgtypes.resolve_service(srv_type)
+        handlers = {}
+        if role == "new":
+            if handler is None:
+                raise HandlerError(f"new.service({name!r}) needs handler=...: called with each request, "
+                                   "returns the response")
+            handlers[planning.service_slot(resolved)] = (handler, call_arity(handler, "service", f"{node.name} {resolved}"))
+        elif handler is not None:
+            raise HandlerError(f"reuse.service({name!r}) relays the basenode's service and takes no handler; "
+                               "to answer it yourself use new.service(..., handler=...)")
+        entry = ServiceModel(name, resolved, type_name, role, name_of(handler))
+
+        def edit(model: NodeModel) -> None:
+            model.services = [s for s in model.services if not (s.resolved == resolved and s.role == role)]
+            model.services.append(entry)
+
+        node.change(edit, handlers)
+        self._did(f"service {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
+        return self
+
+
+class NodeParams(MutableMapping):
+    """The node's private (``~name``) parameters: live on the parameter server (ROS 2: the node) once created."""
+
+    def __init__(self, engine: NodeEngine) -> None:
+        self._node = engine
+
+    def _key(self, key: str) -> str:
+        if not isinstance(key, str) or key.startswith(("/", "~")):
+            raise DeclarationError(f"parameter key {key!r}: give the private name without ~ or /, e.g. 'gain'")
+        return names.check_param_key(key, f"{self._node.name}.params")
+
+    def __getitem__(self, key: str) -> Any:
+        return self._node.read_param(self._key(key))
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        self._node.set_param(self._key(key), value)
+
+    def __delitem__(self, key: str) -> None:
+        self._node.delete_param(self._key(key))
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._node.model().params)
+
+    def __len__(self) -> int:
+        return len(self._node.model().params)
+
+    def __repr__(self) -> str:
+        return f"<{self._node.name}.params {dict(self.items())!r}>"
+
+
+def _replace_topic(entry: TopicModel) -> Callable[[NodeModel], None]:
+    """An edit that declares ``entry``, replacing the same topic/direction/role if declared."""
+
+    def edit(model: NodeModel) -> None:
+        for other in model.topics:
+            if other.resolved == entry.resolved and other.type != entry.type and \
+                    (other.direction, other.role) != (entry.direction, entry.role):
+                raise TopicTypeConflict(
+                    f"{entry.resolved} is already declared as {other.role}.{other.direction} with {other.type}; "
+                    f"use the same type, or remove it first ({model.name}.remove({entry.name!r}))")
+        model.topics = [t for t in model.topics
+                        if not (t.resolved == entry.resolved and t.direction == entry.direction
+                                and t.role == entry.role)]
+        model.topics.append(entry)
+
+    return edit
+
+
+def one_type(msg_type: Any, type_: Any, name: str) -> Any:
+    if msg_type is not UNSET and type_ is not UNSET and msg_type is not type_ and msg_type != type_:
+        raise MessageTypeError(f"{name}: msgType={msg_type!r} and type={type_!r} disagree; give just one")
+    chosen = msg_type if msg_type is not UNSET else type_
+    if chosen is UNSET:
+        raise MessageTypeError(f"{name}: no message type given; add msgType=... e.g. msgType=Twist "
+                               "or msgType='geometry_msgs/Twist'")
+    return chosen

@@ -1,0 +1,82 @@
+"""The package's shape: its layers hold (import-linter's contracts in pyproject.toml) and no module imports
+itself back through others (no import circle, function-level imports included).
+
+The same checks by hand: ``lint-imports`` in the repository's root, and this file's ``circles()``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import grimp
+import pytest
+from importlinter.cli import EXIT_STATUS_SUCCESS, lint_imports
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def graph() -> grimp.ImportGraph:
+    return grimp.build_graph("ipyros", cache_dir=None)
+
+
+def circles(graph: grimp.ImportGraph) -> list[list[str]]:
+    """The import circles among ipyros's modules: the strongly connected components of more than one module
+    (Tarjan's algorithm over every import the code makes, at the top or in a function)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(module: str) -> None:
+        index[module] = low[module] = len(index)
+        stack.append(module)
+        on_stack.add(module)
+        for imported in graph.find_modules_directly_imported_by(module):
+            if not imported.startswith("ipyros"):
+                continue
+            if imported not in index:
+                visit(imported)
+                low[module] = min(low[module], low[imported])
+            elif imported in on_stack:
+                low[module] = min(low[module], index[imported])
+        if low[module] == index[module]:
+            component = []
+            while True:
+                member = stack.pop()
+                on_stack.discard(member)
+                component.append(member)
+                if member == module:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for module in sorted(m for m in graph.modules if m.startswith("ipyros")):
+        if module not in index:
+            visit(module)
+    return found
+
+
+def test_no_module_imports_itself_back(graph):
+    # A package's __init__ re-exporting its modules is not a circle: it imports them, they never import it.
+    assert circles(graph) == []
+
+
+def test_the_layer_contracts_hold(monkeypatch, capsys):
+    monkeypatch.chdir(ROOT)  # the contracts are in pyproject.toml
+    assert lint_imports(no_cache=True) == EXIT_STATUS_SUCCESS, capsys.readouterr().out
+
+
+def test_the_circle_finder_finds_a_circle():
+    """It can fail: a graph with a two-module circle, and one with a longer one, are both found."""
+    graph = grimp.ImportGraph()
+    for name in ("ipyros.a", "ipyros.b", "ipyros.c", "ipyros.d"):
+        graph.add_module(name)
+    graph.add_import(importer="ipyros.a", imported="ipyros.b")
+    graph.add_import(importer="ipyros.b", imported="ipyros.a")
+    graph.add_import(importer="ipyros.b", imported="ipyros.c")
+    graph.add_import(importer="ipyros.c", imported="ipyros.d")
+    assert circles(graph) == [["ipyros.a", "ipyros.b"]]
+    graph.add_import(importer="ipyros.d", imported="ipyros.a")
+    assert circles(graph) == [["ipyros.a", "ipyros.b", "ipyros.c", "ipyros.d"]]
