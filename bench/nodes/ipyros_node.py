@@ -36,7 +36,7 @@ os.environ["ROS_PACKAGE_PATH"] = os.pathsep.join(p for p in (str(HERE), os.envir
 
 import nodeio  # noqa: E402  (after ROS_PACKAGE_PATH: nodeio imports rospy)
 import wire  # noqa: E402
-from ipyros.node.dsl import rosNode  # noqa: E402
+from ipyros.dsl import rosNode  # noqa: E402
 from ipyros.core.plan import internal_name  # noqa: E402
 
 

@@ -18,7 +18,7 @@ os.environ["IPYROS_ROS"] = "2"
 
 import common  # noqa: E402
 import wire2  # noqa: E402
-from ipyros.node.dsl import rosNode  # noqa: E402
+from ipyros.dsl import rosNode  # noqa: E402
 from ipyros.core.plan import internal_name  # noqa: E402
 
 mode, source, target, kind = sys.argv[1:5]

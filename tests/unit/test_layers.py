@@ -6,6 +6,8 @@ The same checks by hand: ``lint-imports`` in the repository's root, and this fil
 
 from __future__ import annotations
 
+import ast
+import re
 from pathlib import Path
 
 import grimp
@@ -80,3 +82,36 @@ def test_the_circle_finder_finds_a_circle():
     assert circles(graph) == [["ipyros.a", "ipyros.b"]]
     graph.add_import(importer="ipyros.d", imported="ipyros.a")
     assert circles(graph) == [["ipyros.a", "ipyros.b", "ipyros.c", "ipyros.d"]]
+
+
+def ipyros_imports(path: Path) -> list[tuple[str, str]]:
+    """``(module, name)`` for each ``from ipyros.module import name`` in the file at ``path``."""
+    found = []
+    for statement in ast.walk(ast.parse(path.read_text())):
+        if isinstance(statement, ast.ImportFrom) and (statement.module or "").startswith("ipyros"):
+            found += [(statement.module, alias.name) for alias in statement.names]
+    return found
+
+
+def source_of(module: str) -> str:
+    path = ROOT / module.replace(".", "/")
+    return (path.with_suffix(".py") if path.with_suffix(".py").exists() else path / "__init__.py").read_text()
+
+
+def defines(source: str, name: str) -> bool:
+    """Whether a module's source defines or imports ``name`` at its top level (read, not imported: no ROS here)."""
+    return re.search(rf"^(?:def|class) {name}\b|^{name}\b|^(?:from|import) [^\n]*\b{name}\b|^    {name},$",
+                     source, re.M) is not None
+
+
+def test_scripts_outside_the_package_import_what_exists(graph):
+    """The bench's nodes, the tests and their peers run as scripts and import ipyros by module path:
+    a module moved in the package must not leave them behind (the bench ran nothing after the layers moved)."""
+    missing = []
+    for path in sorted((*ROOT.glob("bench/**/*.py"), *ROOT.glob("tests/**/*.py"))):
+        for module, name in ipyros_imports(path):
+            if module not in graph.modules:
+                missing.append(f"{path.relative_to(ROOT)}: no module {module}")
+            elif f"{module}.{name}" not in graph.modules and not defines(source_of(module), name):
+                missing.append(f"{path.relative_to(ROOT)}: {module} has no {name}")
+    assert not missing, "\n".join(missing)
