@@ -24,7 +24,7 @@ ros1_setup() {
     python3-rospy python3-rostopic python3-rosgraph python3-rosnode python3-rosmaster
     python3-roslaunch python3-rosservice python3-rosparam rosout rosbash topic-tools
     python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-std-srvs
-    python3-rosgraph-msgs python3-rosbag tmux
+    python3-rosgraph-msgs python3-rosbag python3-actionlib python3-actionlib-msgs tmux
   )
 
   local missing=() p stamp
@@ -53,6 +53,7 @@ ros1_setup() {
 # Debian's ROS 1 message packages (std_msgs, ...) would shadow the ROS 2 ones.
 venv2="$here/.venv-ros2"
 ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs ros-rcl-interfaces
+               ros-action-msgs ros-test-msgs  # actions: test_msgs/action/Fibonacci serves the tests and the README
                rosbags)  # rosbags: ROS 2 bags (%record, baseBag); rosbag2 is not on PyPI
 ros2_venv() {
   if ! /usr/bin/python3 -c "import ensurepip" 2>/dev/null; then  # Debian splits venv support out

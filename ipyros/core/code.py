@@ -45,6 +45,9 @@ def handler_slots(model: NodeModel) -> Iterator[tuple[str, str]]:
     for s in model.services:
         if s.role == "new":
             yield planning.service_slot(s.resolved), f"service {s.resolved}"
+    for a in model.actions:
+        if a.role == "new":
+            yield planning.action_slot(a.resolved), f"action {a.resolved}"
 
 
 def handler_source(fn: Any, label: str) -> str:

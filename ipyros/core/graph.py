@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Iterable, Mapping, Optional, Sequence
 
-__all__ = ["EMPTY", "GraphSnapshot", "frozen", "name_matches", "names_with_prefix"]
+__all__ = ["EMPTY", "ActionEntry", "GraphSnapshot", "actions_of", "frozen", "name_matches", "names_with_prefix"]
 
 
 def frozen(mapping: dict) -> Mapping:
@@ -101,3 +101,45 @@ def _matches_exactly(name: str, pattern: str) -> bool:
 
 
 EMPTY = GraphSnapshot()
+
+
+@dataclass(frozen=True)
+class ActionEntry:
+    """An action in the graph: its name, type (``pkg/Type``), the nodes serving it and the nodes calling it."""
+
+    name: str
+    type: str
+    servers: tuple[str, ...]
+    clients: tuple[str, ...]
+
+
+#: The topics of an action, as ROS 1's actionlib names them (under the action's name).
+ROS1_ACTION_TOPICS = ("goal", "cancel", "status", "feedback", "result")
+
+
+def actions_of(graph: GraphSnapshot) -> list[ActionEntry]:
+    """The actions the graph shows, sorted by name.
+
+    An action is not a graph entity of its own on either ROS, but a set of topics (and on
+    ROS 2 services) named after it, which cannot be mistaken for each other: ROS 1's
+    actionlib uses ``NAME/goal`` (of type ``pkg/TypeActionGoal``) beside ``NAME/cancel``,
+    ``/status``, ``/feedback`` and ``/result``; ROS 2 uses ``NAME/_action/feedback`` (of
+    type ``pkg/action/Type_FeedbackMessage``) and ``NAME/_action/status``, with the
+    services ``send_goal``, ``cancel_goal`` and ``get_result`` beside them. Servers
+    subscribe to the goals (ROS 1) or publish the status (ROS 2); clients do the other.
+    """
+    found = []
+    for topic in graph.topic_names:
+        type_name = graph.topics[topic]
+        if topic.endswith("/_action/feedback") and type_name.endswith("_FeedbackMessage"):
+            name = topic[: -len("/_action/feedback")]
+            package, _, kind = type_name.partition("/action/")
+            found.append(ActionEntry(name, f"{package}/{kind.removesuffix('_FeedbackMessage')}",
+                                     graph.publishers.get(name + "/_action/status", ()),
+                                     graph.subscribers.get(topic, ())))
+        elif topic.endswith("/goal") and type_name.endswith("ActionGoal"):
+            name = topic[: -len("/goal")]
+            if all(f"{name}/{part}" in graph.topics for part in ("status", "result")):
+                found.append(ActionEntry(name, type_name.removesuffix("ActionGoal"), graph.subscribers.get(topic, ()),
+                                         graph.publishers.get(topic, ())))
+    return found

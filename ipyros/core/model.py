@@ -56,6 +56,20 @@ class ServiceModel:
 
 
 @dataclass
+class ActionModel:
+    """An action the node serves (``new``: its handler gets each goal) or relays from its basenode (``reuse``).
+
+    ``type`` is ``"pkg/Type"`` on both ROS (``actionlib/TwoInts``, ``test_msgs/Fibonacci``).
+    """
+
+    name: str
+    resolved: str
+    type: str
+    role: Role = "new"
+    handler: Optional[str] = None
+
+
+@dataclass
 class BaseModel:
     """The basenode a wrapping node wraps: found as ``rosrun package executable`` finds it.
 
@@ -89,6 +103,7 @@ class NodeModel:
     timers: list[TimerModel] = field(default_factory=list)
     services: list[ServiceModel] = field(default_factory=list)
     params: dict[str, Any] = field(default_factory=dict)
+    actions: list[ActionModel] = field(default_factory=list)
 
     # -- queries -------------------------------------------------------------
     def topic(self, resolved: str, direction: Direction, role: Optional[Role] = None) -> Optional[TopicModel]:
@@ -110,6 +125,9 @@ class NodeModel:
     def service(self, resolved: str) -> Optional[ServiceModel]:
         return next((s for s in self.services if s.resolved == resolved), None)
 
+    def action(self, resolved: str, role: Optional[Role] = None) -> Optional[ActionModel]:
+        return next((a for a in self.actions if a.resolved == resolved and (role is None or a.role == role)), None)
+
     # -- plain data ----------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """A JSON/YAML-ready dict (only str, float, bool, list, dict, None)."""
@@ -128,6 +146,7 @@ class NodeModel:
             topics=[_build(TopicModel, t) for t in data.pop("topics", [])],
             timers=[_build(TimerModel, t) for t in data.pop("timers", [])],
             services=[_build(ServiceModel, s) for s in data.pop("services", [])],
+            actions=[_build(ActionModel, a) for a in data.pop("actions", [])],
             **data,
         )
 

@@ -23,7 +23,8 @@ def type_name(cls: Any) -> str | None:
     """The ROS type name ``"pkg/Type"`` of a generated message or service class (or instance), else None.
 
     ROS 1 classes say it (``_type``); ROS 2 classes live in ``pkg.msg._snake_name`` (or
-    ``.srv``) and are recognised by their metaclass's ``_TYPE_SUPPORT``. Both are named
+    ``.srv``, or ``.action`` for an action's parts: ``test_msgs/Fibonacci_Goal``) and are
+    recognised by their metaclass's ``_TYPE_SUPPORT``. Both are named
     ``"pkg/Type"`` in the model, so a node saved on one ROS reads the same on the other.
     """
     name = getattr(cls, "_type", None)
@@ -31,7 +32,7 @@ def type_name(cls: Any) -> str | None:
         return name
     cls = cls if isinstance(cls, type) else type(cls)
     parts = getattr(cls, "__module__", "").split(".")
-    if len(parts) == 3 and parts[1] in ("msg", "srv") and hasattr(type(cls), "_TYPE_SUPPORT"):
+    if len(parts) == 3 and parts[1] in ("msg", "srv", "action") and hasattr(type(cls), "_TYPE_SUPPORT"):
         return f"{parts[0]}/{cls.__name__}"
     return None
 
@@ -39,6 +40,76 @@ def type_name(cls: Any) -> str | None:
 def is_service(cls: type) -> bool:
     """A service class: ROS 1's have ``_request_class``, ROS 2's ``Request``."""
     return hasattr(cls, "_request_class") or (hasattr(cls, "Request") and hasattr(cls, "Response"))
+
+
+def is_action(cls: Any) -> bool:
+    """An action class: ROS 2's has ``Goal``, ``Result``, ``Feedback`` and ``Impl``; ROS 1's ``XAction``
+    message has the slots ``action_goal``, ``action_result``, ``action_feedback``."""
+    if not isinstance(cls, type):
+        return False
+    ros2 = all(hasattr(cls, part) for part in ("Goal", "Result", "Feedback", "Impl"))
+    return ros2 or "action_goal" in getattr(cls, "__slots__", ())
+
+
+def action_type_name(cls: type) -> str:
+    """``"pkg/Type"`` of an action class: ``test_msgs/Fibonacci``, ``actionlib/TwoInts`` (not ``TwoIntsAction``)."""
+    ros1 = getattr(cls, "_type", None)
+    if isinstance(ros1, str):
+        return ros1.removesuffix("Action")
+    return f"{cls.__module__.split('.')[0]}/{cls.__name__}"
+
+
+def action_messages(cls: type) -> tuple[type, type, type]:
+    """The Goal, Result and Feedback message classes of an action class of either ROS."""
+    if hasattr(cls, "Goal"):  # ROS 2: nested in the action class
+        return cls.Goal, cls.Result, cls.Feedback
+    module = importlib.import_module(cls.__module__.split(".")[0] + ".msg")  # ROS 1: XGoal beside XAction
+    stem = cls.__name__.removesuffix("Action")
+    return getattr(module, stem + "Goal"), getattr(module, stem + "Result"), getattr(module, stem + "Feedback")
+
+
+def resolve_action(spec: Any) -> tuple[str, type]:
+    """Return ``(type_name, class)`` for an action class or a ``"pkg/Type"`` string.
+
+    The class is ROS 2's action class (``test_msgs.action.Fibonacci``) or ROS 1's
+    ``XAction`` message (``actionlib.msg.TwoIntsAction``): whichever this Python has.
+    ``pkg/action/Type`` (ROS 2's spelling) and ``pkg/TypeAction`` (ROS 1's) are read too.
+    """
+    if spec is None:
+        raise MessageTypeError("no action type given; pass type=... e.g. 'actionlib/TwoInts' or "
+                               "'test_msgs/Fibonacci'")
+    if isinstance(spec, type):
+        if not is_action(spec):
+            raise MessageTypeError(f"{spec.__name__} is not a ROS action class; pass a generated action such as "
+                                   "test_msgs.action.Fibonacci (ROS 2) or actionlib.msg.TwoIntsAction (ROS 1)")
+        return action_type_name(spec), spec
+    if not isinstance(spec, str):
+        raise MessageTypeError(f"action type must be a class or a 'pkg/Type' string, not {type(spec).__name__}")
+    parts = spec.strip().split("/")
+    if len(parts) == 3 and parts[1] == "action":
+        parts = [parts[0], parts[2]]
+    if len(parts) != 2 or not all(p.isidentifier() for p in parts):
+        raise MessageTypeError(f"malformed action type {spec!r}: write 'package/Type', e.g. 'test_msgs/Fibonacci'")
+    package, name = parts[0], parts[1].removesuffix("Action") or parts[1]
+    for module_name, attribute in ((f"{package}.action", name), (f"{package}.msg", name + "Action")):
+        try:
+            cls = getattr(importlib.import_module(module_name), attribute, None)
+        except ImportError:
+            continue
+        if is_action(cls):
+            return f"{package}/{name}", cls
+    close = difflib.get_close_matches(f"{package}/{name}", known_action_types(), n=3)
+    hint = f"; did you mean {', '.join(close)}?" if close else \
+        f"; is it installed here? ({install_hint(package)})"
+    raise MessageTypeError(f"unknown action type {spec!r}{hint}")
+
+
+def known_action_types() -> list[str]:
+    """Every action type whose Python classes are importable here, as "pkg/Type", sorted."""
+    ros2 = [f"{p}/{t}" for p, types in _index("action").items() for t in types if "_" not in t]
+    ros1 = [f"{p}/{t[:-6]}" for p, types in _index("msg").items() for t in types
+            if t.endswith("Action") and t + "Goal" in types]
+    return sorted(set(ros2 + ros1))
 
 
 def resolve_message(spec: Any) -> tuple[str, type]:
@@ -57,7 +128,7 @@ def _resolve(spec: Any, kind: str) -> tuple[str, type]:
         raise MessageTypeError(f"no {what} type given; pass msgType=... e.g. Twist or 'geometry_msgs/Twist'")
     if isinstance(spec, type):
         name = type_name(spec)
-        if name is None or is_service(spec) != (kind == "srv"):
+        if name is None or is_service(spec) != (kind == "srv") or is_action(spec):
             raise MessageTypeError(
                 f"{spec.__name__} is not a ROS {what} class; pass a generated type such as "
                 + ("geometry_msgs.msg.Twist" if kind == "msg" else "std_srvs.srv.Empty")
@@ -117,7 +188,7 @@ def _index(kind: str) -> dict[str, tuple[str, ...]]:
     return {pkg: tuple(sorted(types)) for pkg, types in sorted(found.items())}
 
 
-_EXPORTED = re.compile(r"^from \S+ import (\w+)", re.M)  # ROS 2: from pkg.msg._twist import Twist
+_EXPORTED = re.compile(r"^from \S+\._\w+ import (\w+)", re.M)  # ROS 2: from pkg.msg._twist import Twist
 
 
 def _type_names(init: Path) -> set[str]:

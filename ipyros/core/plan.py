@@ -16,13 +16,17 @@ reuse.subscribe(T) + new.subscribe(T, h) h gets T's messages; ``write(T)`` feeds
 new.publish(X) / new.subscribe(X, h)     plain publisher / subscriber on X
 reuse.service(S)                W serves S by calling B's internal(S)
 reuse.service(S) + new.service(S, h)     h serves S; B's S stays reachable at internal(S)
+reuse.action(A)                 goals, cancels, feedback, status and results relayed between
+                                A and B's internal(A), as one unit (the backend knows the parts)
+new.action(A, h)                h serves A's goals
+reuse.action(A) + new.action(A, h)       h serves A's goals and may forward them to B's internal(A)
 ==============================  ==========================================================
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Union
+from typing import Optional, Union
 
 from . import names
 from .model import NodeModel
@@ -74,7 +78,23 @@ class ServiceRelaySpec:
     type: str
 
 
-Spec = Union[PublishSpec, SubscribeSpec, RelaySpec, TimerSpec, ServiceSpec, ServiceRelaySpec]
+@dataclass(frozen=True)
+class ActionServerSpec:
+    name: str
+    type: str
+    slot: str
+    forward: Optional[str] = None  # the basenode's own server (internal name), when the action is intercepted
+
+
+@dataclass(frozen=True)
+class ActionRelaySpec:
+    source: str
+    target: str
+    type: str
+
+
+Spec = Union[PublishSpec, SubscribeSpec, RelaySpec, TimerSpec, ServiceSpec, ServiceRelaySpec, ActionServerSpec,
+             ActionRelaySpec]
 
 
 def topic_slot(resolved: str) -> str:
@@ -87,6 +107,10 @@ def timer_slot(name: str) -> str:
 
 def service_slot(resolved: str) -> str:
     return f"service {resolved}"
+
+
+def action_slot(resolved: str) -> str:
+    return f"action {resolved}"
 
 
 def node_fullname(model: NodeModel) -> str:
@@ -131,6 +155,15 @@ def plan(model: NodeModel) -> dict[Spec, None]:
             specs[ServiceSpec(s.resolved, s.type, service_slot(s.resolved))] = None
         elif s.resolved not in served:
             specs[ServiceRelaySpec(internal_name(model, s.resolved), s.resolved, s.type)] = None
+
+    reused = {a.resolved for a in model.actions if a.role == "reuse"}
+    handled = {a.resolved for a in model.actions if a.role == "new"}
+    for a in model.actions:
+        if a.role == "new":
+            forward = internal_name(model, a.resolved) if a.resolved in reused else None
+            specs[ActionServerSpec(a.resolved, a.type, action_slot(a.resolved), forward)] = None
+        elif a.resolved not in handled:
+            specs[ActionRelaySpec(internal_name(model, a.resolved), a.resolved, a.type)] = None
     return specs
 
 

@@ -101,3 +101,34 @@ class Interface:
     services: list[tuple[str, str]] = field(default_factory=list)
     left_out: list[str] = field(default_factory=list)
     not_seen: list[str] = field(default_factory=list)
+    actions: list[tuple[str, str]] = field(default_factory=list)  # the action servers, found by fold_actions()
+
+    def fold_actions(self) -> "Interface":
+        """Take the actions this node serves out of its topics and services, into ``actions`` (``pkg/Type``).
+
+        An action is a set of topics (ROS 1: ``NAME/goal`` of a ``pkg/TypeActionGoal`` and
+        four more; ROS 2: ``NAME/_action/feedback`` of a ``pkg/Type_FeedbackMessage``, the
+        status topic and three services): a wrapper relays it as one unit, so it is one entry.
+        """
+        found = {}
+        for name, type_name in self.publications:  # ROS 2: the server publishes the feedback
+            if name.endswith("/_action/feedback") and type_name.endswith("_FeedbackMessage"):
+                package, stem = type_name.split("/")[0], type_name.split("/")[-1]
+                found[name.removesuffix("/_action/feedback")] = f"{package}/{stem.removesuffix('_FeedbackMessage')}"
+        for name, type_name in self.subscriptions:  # ROS 1: the server subscribes to the goals
+            if name.endswith("/goal") and type_name.endswith("ActionGoal"):
+                found[name.removesuffix("/goal")] = type_name.removesuffix("ActionGoal")
+
+        def part(entry: tuple[str, str]) -> bool:
+            head, _, tail = entry[0].rpartition("/")
+            return head.removesuffix("/_action") in found and (head.endswith("/_action") or tail in _ROS1_PARTS)
+
+        self.publications = [e for e in self.publications if not part(e)]
+        self.subscriptions = [e for e in self.subscriptions if not part(e)]
+        self.services = [e for e in self.services if not part(e)]
+        self.actions = sorted(found.items())
+        return self
+
+
+#: The topics of a ROS 1 action under its name (actionlib's).
+_ROS1_PARTS = ("goal", "cancel", "status", "feedback", "result")

@@ -17,6 +17,7 @@ the two so.
 from __future__ import annotations
 
 import re
+from typing import Sequence
 
 from . import names
 from .errors import DeclarationError
@@ -52,7 +53,7 @@ def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
     basenode's name: that is how a reused topic or service is intercepted.
     """
     if role == "new" and model.base is not None:
-        declared = model.topics if kind == "topic" else model.services
+        declared = {"topic": model.topics, "service": model.services, "action": model.actions}[kind]
         if any(d.role == "reuse" and d.name == name for d in declared):
             role = "reuse"
     if role == "reuse" and model.base is not None:
@@ -70,15 +71,19 @@ def own_remaps(model: NodeModel) -> dict[str, str]:
             for src, dst in model.base.remaps.items() if not src.startswith("__")}
 
 
-def basenode_remaps(model: NodeModel) -> dict[str, str]:
+def basenode_remaps(model: NodeModel, action_parts: Sequence[str] = ("",)) -> dict[str, str]:
     """Every ``from:=to`` the basenode is started with: its own remaps composed with the wrapping's.
 
     A wrapped name ``T`` (resolved through the own remaps already) goes to its internal
     name; an own remap ``S:=T`` becomes ``S:=internal(T)``, because ROS would not follow
-    ``S → T → internal(T)``; the other own remaps stay as they are.
+    ``S → T → internal(T)``; the other own remaps stay as they are. A wrapped action is
+    remapped by the names its ROS gives its parts (``action_parts``, from the backend): ROS 2
+    remaps an action by its name (``("",)``), ROS 1 remaps each of its five topics.
     """
     wrapped = {t.resolved: internal_name(model, t.resolved) for t in model.topics if t.role == "reuse"}
     wrapped.update({s.resolved: internal_name(model, s.resolved) for s in model.services if s.role == "reuse"})
+    wrapped.update({a.resolved + part: internal_name(model, a.resolved) + part
+                    for a in model.actions if a.role == "reuse" for part in action_parts})
     remaps = {src: wrapped.get(dst, dst) for src, dst in own_remaps(model).items()}
     for name, inner in wrapped.items():
         remaps.setdefault(name, inner)
@@ -91,6 +96,8 @@ def reresolve(model: NodeModel) -> None:
         t.resolved = resolve_for(model, t.role, t.name, "topic")
     for s in model.services:
         s.resolved = resolve_for(model, s.role, s.name, "service")
+    for a in model.actions:
+        a.resolved = resolve_for(model, a.role, a.name, "action")
 
 
 
@@ -108,7 +115,7 @@ def check_reuse(model: NodeModel, resolved: str, direction: str, kind: str = "to
 
 def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # type: ignore[assignment]
     """Refuse to create a node whose wrapping declarations are incomplete or clash."""
-    reuses = [t.name for t in model.topics if t.role == "reuse"] + [s.name for s in model.services if s.role == "reuse"]
+    reuses = [d.name for d in (*model.topics, *model.services, *model.actions) if d.role == "reuse"]
     if model.base is None:
         if reuses:
             raise DeclarationError(f"{model.name} reuses {', '.join(reuses)} but has no basenode; declare it: "

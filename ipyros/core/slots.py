@@ -116,7 +116,7 @@ class HandlerSlot:
         handler: Callable[..., Any],
         report: Report,
         *,
-        pass_argument: bool = True,
+        pass_argument: int = True,  # 0: no argument, 1: one, 2: an action's goal and call
         keep: int = 20,
         report_interval: float = 5.0,
         output: Optional[OutputScope] = None,
@@ -138,7 +138,7 @@ class HandlerSlot:
         #: Set while the node shuts down: a last call that fails because its topics close is not news.
         self.closing = False
 
-    def swap(self, handler: Callable[..., Any], pass_argument: bool = True) -> None:
+    def swap(self, handler: Callable[..., Any], pass_argument: int = True) -> None:
         """Make ``handler`` serve every call from now on."""
         # One tuple assignment: a callback reads both fields from the same handler.
         self._current = (handler, pass_argument)
@@ -164,12 +164,16 @@ class HandlerSlot:
         handler, pass_argument = self._current
         if arg is not None:
             self.recent.append(arg if pristine is None else pristine)
+        call = handler
+        if isinstance(arg, GoalArguments):  # an action's goal: handler(goal, action) or handler(goal)
+            arg, self.recent[-1] = (arg if pass_argument == 2 else arg[:1]), arg[0]
+            call = _spread(handler)
         _handling.arrival = came
         output = self.output
         previous = output.enter() if output is not None else None
         start = time.perf_counter()
         try:
-            return True, (handler(arg) if pass_argument else handler())
+            return True, (call(arg) if pass_argument else call())
         except BaseException as error:  # a handler's bug must never kill the node, not even sys.exit()
             if isinstance(error, KeyboardInterrupt) and threading.current_thread() is threading.main_thread():
                 raise  # Ctrl-C at the prompt (a handler tried there): the user's, not the handler's
@@ -220,11 +224,20 @@ class HandlerSlot:
         return SlotFigures(calls, errors, rate, mean, peak * 1e3)
 
 
-def call_arity(handler: Any, what: str, label: str) -> bool:
+class GoalArguments(tuple):
+    """What an action's slot is called with: ``(goal, action)``, given to the handler as it takes them."""
+
+
+def _spread(handler: Callable[..., Any]) -> Callable[[tuple], Any]:
+    return lambda arguments: handler(*arguments)
+
+
+def call_arity(handler: Any, what: str, label: str) -> int:
     """Check ``handler`` can be called by ROS; return whether it takes the one argument.
 
     Subscriptions and services pass one argument (message, request); timers pass the
-    timer event, which a handler may also do without.
+    timer event, which a handler may also do without; an action's handler takes the goal
+    and may take the :class:`~ipyros.core.actions.ActionCall` too (then 2 is returned).
     """
     if not callable(handler):
         raise HandlerError(f"handler for {label} is {type(handler).__name__} {handler!r}, not a function; "
@@ -242,6 +255,12 @@ def call_arity(handler: Any, what: str, label: str) -> bool:
         signature = inspect.signature(handler)
     except (TypeError, ValueError):
         return True  # builtins without a signature: trust the user
+    if what == "action":
+        try:
+            signature.bind(None, None)
+            return 2
+        except TypeError:
+            pass
     try:
         signature.bind(None)
         return True
@@ -253,6 +272,7 @@ def call_arity(handler: Any, what: str, label: str) -> bool:
             return False
         except TypeError:
             pass
-    expected = {"subscribe": "the message", "service": "the request", "timer": "the timer event (or nothing)"}[what]
+    expected = {"subscribe": "the message", "service": "the request", "timer": "the timer event (or nothing)",
+                "action": "the goal (and the action, to send feedback: def h(goal, action))"}[what]
     raise HandlerError(f"handler {name}{signature} for {label} must take one argument, {expected}; "
                        f"e.g. def {name}(msg): ...")

@@ -1,4 +1,4 @@
-"""Declarations: ``node.new`` and ``node.reuse`` (topics and services, chained), and ``node.params``.
+"""Declarations: ``node.new`` and ``node.reuse`` (topics, services and actions, chained), and ``node.params``.
 
 A chain (``nd.new.subscribe(...).publish(...)``) is one change: all of it applies, or
 none, and the error says which call failed. Each call validates its input and hands the
@@ -21,7 +21,7 @@ from ..core.errors import (
     NotDeclaredError,
     TopicTypeConflict,
 )
-from ..core.model import NodeModel, ServiceModel, TopicModel
+from ..core.model import ActionModel, NodeModel, ServiceModel, TopicModel
 from ..core.remapping import check_reuse
 from ..core.slots import call_arity
 from ..core.versions import name_of
@@ -59,7 +59,7 @@ def end_chains() -> None:
 
 
 class TopicHandler:
-    """``node.new`` or ``node.reuse``: declares topics and services, chainable; a chain is all or nothing."""
+    """``node.new`` or ``node.reuse``: declares topics, services and actions, chainable; a chain is all or nothing."""
 
     def __init__(self, engine: NodeEngine, role: str, chain: Optional[_Chain] = None) -> None:
         self._node = engine
@@ -72,7 +72,7 @@ class TopicHandler:
         state = "live" if node.created else "declared, not created yet"
         chain = self._chain
         done = "; ".join(chain.parts) if chain is not None and chain.parts else \
-            "subscribe(), publish(), service(), unsubscribe(), unpublish()"
+            "subscribe(), publish(), service(), action(), unsubscribe(), unpublish()"
         if chain is not None:
             chain.open = False
         return f"{node.name}.{self._role}: {done} ({state})"
@@ -230,6 +230,47 @@ class TopicHandler:
 
         node.change(edit, handlers)
         self._did(f"service {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
+        return self
+
+
+    def action(self, name: str, type: Any = UNSET, handler: Optional[Callable[..., Any]] = None,
+               actionType: Any = UNSET) -> "TopicHandler":  # noqa: A002,N803 - type= as for topics
+        """Serve action ``name`` with ``handler(goal[, action]) -> result`` (new), or relay the basenode's (reuse).
+
+        The handler runs on a thread of its own for each goal; ``action.feedback(msg)``
+        sends feedback, ``action.cancelled`` tells of a cancel, and on a node that also
+        reuses the action ``action.forward(goal)`` hands the goal to the basenode's server
+        (see :mod:`ipyros.core.actions`). Declaring it again swaps the handler live.
+        """
+        with self._part(f"action({name!r})") as link:
+            return link._action(name, one_type(actionType, type, name), handler)
+
+    def _action(self, name: str, action_type: Any, handler: Optional[Callable[..., Any]]) -> "TopicHandler":
+        node, role = self._node, self._role
+        resolved = node.resolve_as(role, name, "action")
+        type_name, _ = msgtypes.resolve_action(action_type)
+        handlers = {}
+        if role == "new":
+            if handler is None:
+                raise HandlerError(f"new.action({name!r}) needs handler=...: called with each goal, returns the "
+                                   "result")
+            handlers[planning.action_slot(resolved)] = (handler, call_arity(handler, "action", f"{node.name} {resolved}"))
+        elif handler is not None:
+            raise HandlerError(f"reuse.action({name!r}) relays the basenode's action and takes no handler; to serve "
+                               "or change its goals use new.action(..., handler=...)")
+        entry = ActionModel(name, resolved, type_name, role, name_of(handler))
+
+        def edit(model: NodeModel) -> None:
+            other = model.action(resolved)
+            if other is not None and other.type != type_name:
+                raise TopicTypeConflict(f"action {resolved} is already declared as {other.role}.action with "
+                                        f"{other.type}; use the same type, or remove it first "
+                                        f"({model.name}.remove(action={name!r}))")
+            model.actions = [a for a in model.actions if not (a.resolved == resolved and a.role == role)]
+            model.actions.append(entry)
+
+        node.change(edit, handlers)
+        self._did(f"action {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
         return self
 
 

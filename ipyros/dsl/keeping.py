@@ -131,6 +131,9 @@ def _declare(node: Any, model: NodeModel, functions: dict[str, Callable[..., Any
     for s in model.services:  # a reuse relays and takes no handler: the slot is the intercepting new's
         handler = functions.get(planning.service_slot(s.resolved)) if s.role == "new" else None
         getattr(node, s.role).service(s.name, type=s.type, handler=handler)
+    for a in model.actions:  # as for services: the slot is the intercepting new's
+        handler = functions.get(planning.action_slot(a.resolved)) if a.role == "new" else None
+        getattr(node, a.role).action(a.name, type=a.type, handler=handler)
     for timer in model.timers:
         node.timer(timer.period, functions.get(planning.timer_slot(timer.name)), name=timer.name,
                    oneshot=timer.oneshot)

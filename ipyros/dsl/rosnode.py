@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Callable, Optional
 
 from ..core import names, plan as planning
+from ..core.actions import SentGoal
 from ..core.errors import DeclarationError, NotDeclaredError, cut
 from ..core.model import NodeModel, TimerModel
 from ..core.records import History, NodeStatus, Versions
@@ -191,8 +192,8 @@ class rosNode:  # noqa: N801 - the paper's name
 
     # -- removal ---------------------------------------------------------------------
     def remove(self, topic: Optional[str] = None, *, timer: Optional[str] = None,
-               service: Optional[str] = None) -> "rosNode":
-        """Remove every declaration of ``topic``, or the named ``timer`` or ``service``."""
+               service: Optional[str] = None, action: Optional[str] = None) -> "rosNode":
+        """Remove every declaration of ``topic``, or the named ``timer``, ``service`` or ``action``."""
         engine, model = self._engine, self._engine.model()
         if topic is not None:
             resolved = engine.resolve(topic)
@@ -216,7 +217,27 @@ class rosNode:  # noqa: N801 - the paper's name
             engine.change(lambda m: setattr(m, "services", [s for s in m.services if s.resolved != resolved]),
                           drop=[planning.service_slot(resolved)])
             engine.record(f"remove service {resolved}")
+        if action is not None:
+            resolved = engine.resolve(action, "action")
+            if model.action(resolved) is None:
+                known = ", ".join(a.resolved for a in model.actions) or "none"
+                raise NotDeclaredError(f"{self.name} has no action {resolved} (actions: {known})")
+            engine.change(lambda m: setattr(m, "actions", [a for a in m.actions if a.resolved != resolved]),
+                          drop=[planning.action_slot(resolved)])
+            engine.record(f"remove action {resolved}")
         return self
+
+    # -- actions as a client ----------------------------------------------------------
+    def send_goal(self, name: str, goal: Any = None, type: Any = None,  # noqa: A002 - as for topics
+                  feedback: Optional[Callable[[Any], None]] = None, timeout: float = 10.0) -> SentGoal:
+        """Send ``goal`` (a Goal message or a dict of its fields) to action server ``name``; returns at once.
+
+        ``type`` is the action's type (``"test_msgs/Fibonacci"``), read from the graph when not
+        given; ``feedback(msg)`` is called with each feedback. The returned goal has
+        ``result(timeout)``, ``cancel()``, ``status`` and ``feedback`` (see :mod:`ipyros.core.actions`).
+        ``timeout``: how long the server may take to show up.
+        """
+        return self._engine.send_goal(name, goal, type, feedback, timeout)
 
     # -- writing ----------------------------------------------------------------------
     def write(self, topic: str, msg: Any) -> None:
@@ -294,8 +315,9 @@ class rosNode:  # noqa: N801 - the paper's name
     def __repr__(self) -> str:
         model = self._engine.model()
         state = "running" if self.created else "declared"
+        actions = f", {len(model.actions)} actions" if model.actions else ""
         return f"<rosNode {self.fullname} ({state}): {len(model.topics)} topics, " \
-               f"{len(model.timers)} timers, {len(model.services)} services>"
+               f"{len(model.timers)} timers, {len(model.services)} services{actions}>"
 
 
 def engine_of(node: rosNode) -> NodeEngine:

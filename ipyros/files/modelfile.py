@@ -208,8 +208,9 @@ def _by_name(path: Path, model: NodeModel, functions: dict[str, Any], namespace:
 
 def _slot_handlers(model: NodeModel) -> Iterator[tuple[str, str]]:
     """``(slot key, handler name)`` of every handler the model declares."""
-    names = {planning.topic_slot(t.resolved): t.handler for t in model.topics}
-    names.update({planning.service_slot(s.resolved): s.handler for s in model.services})
+    names = {planning.topic_slot(t.resolved): t.handler for t in model.topics if t.handler}
+    names.update({planning.service_slot(s.resolved): s.handler for s in model.services if s.role == "new"})
+    names.update({planning.action_slot(a.resolved): a.handler for a in model.actions if a.role == "new"})
     names.update({planning.timer_slot(t.name): t.handler for t in model.timers})
     for slot, _ in handler_slots(model):
         yield slot, names[slot] or "?"

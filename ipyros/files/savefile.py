@@ -161,6 +161,9 @@ class _SavedFile:
         for s in model.services:
             handler = f", handler={fn_of(planning.service_slot(s.resolved))}" if s.role == "new" else ""
             lines.append(f"{var}.{s.role}.service({s.name!r}, srvType={s.type!r}{handler})")
+        for a in model.actions:
+            handler = f", handler={fn_of(planning.action_slot(a.resolved))}" if a.role == "new" else ""
+            lines.append(f"{var}.{a.role}.action({a.name!r}, type={a.type!r}{handler})")
         for timer in model.timers:
             fn = fn_of(planning.timer_slot(timer.name))
             options = (f", name={timer.name!r}" if timer.name != fn else "") + (", oneshot=True" if timer.oneshot else "")
@@ -207,6 +210,9 @@ def _declared_name(model: NodeModel, slot: str) -> str:
     for s in model.services:
         if planning.service_slot(s.resolved) == slot:
             return s.name
+    for a in model.actions:
+        if planning.action_slot(a.resolved) == slot:
+            return a.name
     return slot.split(" ", 1)[1]
 
 

@@ -24,9 +24,9 @@ from typing import Any, Callable, Mapping, Optional
 
 from IPython.core import magic_arguments
 
-__all__ = ["DEMO_ROBOT", "DSL_NODE", "EXECUTABLE", "FUNCTION", "MSG_TEMPLATE", "MSG_TYPE", "NODE", "OWN_TOPIC",
-           "PACKAGE", "REQUEST_TEMPLATE", "SERVICE", "SRV_TYPE", "TIMER", "TOPIC", "Grammar", "Word", "argument",
-           "grammar_of"]
+__all__ = ["ACTION", "ACTION_TYPE", "DEMO_ROBOT", "DSL_NODE", "EXECUTABLE", "FUNCTION", "GOAL_TEMPLATE",
+           "MSG_TEMPLATE", "MSG_TYPE", "NODE", "OWN_TOPIC", "PACKAGE", "REQUEST_TEMPLATE", "SERVICE", "SRV_TYPE",
+           "TIMER", "TOPIC", "Grammar", "Word", "argument", "grammar_of"]
 
 # What an argument is, i.e. where its completions come from.
 TOPIC = "topic"              # live topics (+ the node's own first, when a node is known)
@@ -43,9 +43,12 @@ EXECUTABLE = "executable"    # executables of the package named by the argument 
 DEMO_ROBOT = "demo robot"    # the robots %demo starts
 MSG_TEMPLATE = "template"    # a message of the type before it, every field at its default
 REQUEST_TEMPLATE = "request template"  # the request of the service type before it, at its defaults
+ACTION = "action"            # live actions
+ACTION_TYPE = "action type"  # action types (the live action's before it first)
+GOAL_TEMPLATE = "goal template"  # the goal of the action (type) before it, at its defaults
 
 #: Kinds that complete the first word of their argument only (a whole message, inserted at once).
-_FIRST_WORD_ONLY = {MSG_TEMPLATE, REQUEST_TEMPLATE}
+_FIRST_WORD_ONLY = {MSG_TEMPLATE, REQUEST_TEMPLATE, GOAL_TEMPLATE}
 
 
 class argument(magic_arguments.argument):  # noqa: N801 - used as IPython's own @argument is

@@ -40,7 +40,7 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 from IPython.core.completer import CompletionContext, SimpleCompletion, SimpleMatcherResult, context_matcher
 
 from ..core import msgtypes, names
-from ..core.graph import GraphSnapshot, names_with_prefix
+from ..core.graph import GraphSnapshot, actions_of, names_with_prefix
 from ..core.model import NodeModel
 from ..core.msgbuild import template
 from ..core.names import default_namespace
@@ -48,10 +48,13 @@ from ..node.session import current
 from ..tools.graph import GraphCache
 from ..tools.robot import ROBOTS
 from .arguments import (
+    ACTION,
+    ACTION_TYPE,
     DEMO_ROBOT,
     DSL_NODE,
     EXECUTABLE,
     FUNCTION,
+    GOAL_TEMPLATE,
     MSG_TEMPLATE,
     MSG_TYPE,
     NODE,
@@ -86,21 +89,26 @@ class Catalog:
     executables: Callable[[str], Sequence[str]]
     templates: Callable[[str], str] = field(default=lambda msg_type: _template(msg_type))
     request_templates: Callable[[str], str] = field(default=lambda srv_type: _template(srv_type, request=True))
+    action_types: Callable[[], Sequence[str]] = field(default=msgtypes.known_action_types)
+    goal_templates: Callable[[str], str] = field(default=lambda action_type: template(
+        msgtypes.action_messages(msgtypes.resolve_action(action_type)[1])[0]))
 
     def __post_init__(self) -> None:
         self._sources = (self.message_types, self.service_types, self.packages, self.executables, self.templates,
-                         self.request_templates)
+                         self.request_templates, self.action_types, self.goal_templates)
         self.refresh()
 
     def refresh(self) -> None:
         """Forget every cached scan; the next completion scans again."""
-        types, srvs, pkgs, exes, templates, requests = self._sources
+        types, srvs, pkgs, exes, templates, requests, actions, goals = self._sources
         self.message_types = _sorted_once(types)
         self.service_types = _sorted_once(srvs)
         self.packages = _sorted_once(pkgs)
         self.executables = lru_cache(maxsize=512)(lambda package: tuple(sorted(exes(package))))
         self.templates = lru_cache(maxsize=256)(templates)
         self.request_templates = lru_cache(maxsize=256)(requests)
+        self.action_types = _sorted_once(actions)
+        self.goal_templates = lru_cache(maxsize=256)(goals)
 
     def warm(self) -> None:
         """Run the whole-catalog scans now, so the first TAB does not pay for them."""
@@ -179,7 +187,11 @@ CALLS: dict[str, CallSpec] = {
     "unsubscribe": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC}, "subscribe"),
     "unpublish": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC}, "publish"),
     "handler": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC}, "subscribe", needs_node=True),
-    "remove": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC, "timer": TIMER, "service": SERVICE}, needs_node=True),
+    "remove": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC, "timer": TIMER, "service": SERVICE, "action": ACTION},
+                       needs_node=True),
+    "action": CallSpec((ACTION, ACTION_TYPE), {"name": ACTION, "type": ACTION_TYPE, "actionType": ACTION_TYPE},
+                       needs_node=True),
+    "send_goal": CallSpec((ACTION,), {"name": ACTION, "type": ACTION_TYPE}, needs_node=True),
     "service": CallSpec((SERVICE, SRV_TYPE, None, SRV_TYPE), {"name": SERVICE, "srvType": SRV_TYPE, "type": SRV_TYPE},
                         needs_node=True),
     "baseNode": CallSpec((EXECUTABLE,), {"executable": EXECUTABLE}),
@@ -441,6 +453,10 @@ class Answerer:
                 return []
         if kind == SRV_TYPE:
             return [(t, kind) for t in _types(self.catalog.service_types(), frag)]
+        if kind == ACTION:
+            return [(a.name, a.type) for a in actions_of(snap) if a.name.startswith(_global(frag) if frag else "/")]
+        if kind in (ACTION_TYPE, GOAL_TEMPLATE):
+            return self._action_words(want, snap)
         if kind == PACKAGE:
             return [(p, kind) for p in names_with_prefix(self.catalog.packages(), frag)]
         if kind == DEMO_ROBOT:
@@ -448,6 +464,26 @@ class Answerer:
         if kind == EXECUTABLE and want.package:
             return [(e, kind) for e in names_with_prefix(self.catalog.executables(want.package), frag)]
         return []
+
+    def _action_words(self, want: Want, snap: GraphSnapshot) -> list[tuple[str, str]]:
+        """``%action NAME <TAB>``: the live action's type first, then every action type; after the
+        type (or after a name whose type the graph knows), the goal at its defaults."""
+        frag = want.fragment
+        live = next((a.type for a in actions_of(snap) if want.before and a.name == _global(want.before[0])), None)
+        if want.kind == ACTION_TYPE:
+            found = [(t, ACTION_TYPE) for t in _types(self.catalog.action_types(), frag)]
+            if live and live.startswith(frag):
+                found = [(live, f"type of {_global(want.before[0])}")] + [f for f in found if f[0] != live]
+            if not frag and live:  # the type may be left out: the goal itself is offered too
+                found += self._action_words(Want(GOAL_TEMPLATE, "", before=want.before), snap)
+            return found
+        action_type = want.before[1] if len(want.before) > 1 else live
+        if frag or not action_type:
+            return []
+        try:
+            return [(self.catalog.goal_templates(action_type), f"{action_type} goal, at its defaults")]
+        except Exception:  # an unknown type: %action itself will say so, in one line
+            return []
 
     def _topics(self, want: Want, snap: GraphSnapshot) -> list[tuple[str, str]]:
         model, frag = want.model, want.fragment

@@ -137,7 +137,7 @@ def trial_view(report: TrialReport) -> Group:
 
 
 def interface_table(interface: Interface) -> Table:
-    """A rich table of an interface: one row per topic or service, with its direction and type."""
+    """A rich table of an interface: one row per topic, service or action, with its direction and type."""
     table = Table(title=f"Interface of {interface.node}", title_justify="left", show_edge=False)
     table.add_column("", style="bold")
     table.add_column("name", style="cyan")
@@ -146,10 +146,11 @@ def interface_table(interface: Interface) -> Table:
         ("publishes", interface.publications),
         ("subscribes", interface.subscriptions),
         ("service", interface.services),
+        ("action", interface.actions),
     ):
         for name, type_ in entries:
             table.add_row(label, name, type_ or "[dim]unknown[/]")
-    if not (interface.publications or interface.subscriptions or interface.services):
+    if not (interface.publications or interface.subscriptions or interface.services or interface.actions):
         table.add_row("", "[dim]no topics or services[/]", "")
     if interface.not_seen:
         table.add_section()

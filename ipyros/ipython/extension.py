@@ -36,6 +36,7 @@ from ..tools.graph import GraphCache
 from ..tools.probe import PromptPublisher, is_tool
 from . import completion, display
 from .magics import (
+    ActionMagics,
     DemoMagics,
     IntrospectMagics,
     NodeMagics,
@@ -71,7 +72,7 @@ class Extension:
         self.record_magics = RecordMagics(shell, self)
         self.magics = [self.settings, TopicMagics(shell, self), RateMagics(shell, self), IntrospectMagics(shell, self),
                        self.node_magics, WrapMagics(shell, self), self.plot_magics, self.record_magics,
-                       DemoMagics(shell, self)]
+                       DemoMagics(shell, self), ActionMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
         self._log_handler = StderrLogHandler()
         self._report = failure_report(lambda: self.settings.handler_tracebacks)

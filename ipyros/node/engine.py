@@ -47,9 +47,9 @@ __all__ = ["HandlerTarget", "NodeEngine"]
 
 @dataclass(frozen=True)
 class HandlerTarget:
-    """Something on a node that calls a handler: a subscription, a timer or a service."""
+    """Something on a node that calls a handler: a subscription, a timer, a service or an action."""
 
-    kind: str  # "topic", "timer" or "service"
+    kind: str  # "topic", "timer", "service" or "action"
     name: str  # as declared: the topic/service name as typed, or the timer's name
     slot: str  # the node's handler slot key (see ipyros.core.plan): where its versions are kept
 
@@ -130,7 +130,8 @@ class NodeEngine:
             resolved: Optional[str] = self.resolve(name)
         except TopicNameError:  # not a graph name: only a timer can be called that ("<lambda>")
             resolved = None
-        keys = (planning.topic_slot(resolved), planning.service_slot(resolved)) if resolved is not None else ()
+        keys = (planning.topic_slot(resolved), planning.service_slot(resolved),
+                planning.action_slot(resolved)) if resolved is not None else ()
         for key in (*keys, planning.timer_slot(name)):
             if key in self._handlers:
                 return self._handlers[key]
@@ -328,6 +329,13 @@ class NodeEngine:
                                    f"build a {type_name.split('/')[1]}() and write that")
         publication.write(msg)
 
+    def send_goal(self, name: str, goal: Any, action_type: Any, feedback: Optional[Callable[[Any], None]],
+                  timeout: float) -> Any:
+        """Send a goal to action ``name`` (see :meth:`rosNode.send_goal <ipyros.dsl.rosnode.rosNode.send_goal>`)."""
+        if not self.created:
+            raise NodeStateError(f"{self.name} is not running; call {self.called}.create() first")
+        return self.session.send_goal(self.resolve(name, "action"), goal, action_type, feedback, timeout)
+
     # -- parameters (by key, as nd.params takes them) ------------------------------------------
     def get_param(self, key: str) -> Any:
         return self.session.backend.get_param(self.resolve("~" + key, "parameter"))
@@ -390,12 +398,16 @@ class NodeEngine:
             service = next((s for s in model.services if s.resolved == resolved and s.role == "new"), None)
             if service is not None:
                 return HandlerTarget("service", service.name, planning.service_slot(resolved))
+            action = model.action(resolved, "new")
+            if action is not None:
+                return HandlerTarget("action", action.name, planning.action_slot(resolved))
         timer = model.timer(name)
         if timer is not None:
             return HandlerTarget("timer", timer.name, planning.timer_slot(timer.name))
         handlers = [f"{t.resolved} ({t.handler})" for t in model.subscriptions() if t.role == "new"]
         handlers += [f"timer {t.name} ({t.handler})" for t in model.timers]
         handlers += [f"service {s.resolved} ({s.handler})" for s in model.services if s.role == "new"]
+        handlers += [f"action {a.resolved} ({a.handler})" for a in model.actions if a.role == "new"]
         relayed = next((t for t in model.topics if t.resolved == resolved and t.role == "reuse"), None)
         if relayed is not None:  # a wrapped topic passed on unchanged: a handler is declared with new
             raise NotDeclaredError(
@@ -425,6 +437,11 @@ class NodeEngine:
             if timer is None:
                 raise NotDeclaredError(f"{self.name} no longer has the timer {target.name}")
             dsl.timer(timer.period, handler, name=timer.name, oneshot=timer.oneshot)
+        elif target.kind == "action":
+            action = model.action(self.resolve(target.name, "action"), "new")
+            if action is None:
+                raise NotDeclaredError(f"{self.name} no longer serves the action {target.name}")
+            dsl.new.action(action.name, action.type, handler=handler)
         else:
             resolved = self.resolve(target.name, "service")
             service = next((s for s in model.services if s.resolved == resolved and s.role == "new"), None)
@@ -550,6 +567,13 @@ class NodeEngine:
         if isinstance(spec, planning.ServiceRelaySpec):
             return backend.service_relay(host, spec.source, spec.target, msgtypes.resolve_service(spec.type)[1],
                                          self._complain)
+        if isinstance(spec, planning.ActionRelaySpec):
+            def wrong_part(got: str, spec: planning.ActionRelaySpec = spec) -> None:
+                self.session.notify(f"ipyros: a part of action {spec.source} carries {got}, but {self.name} relays "
+                                    f"it as {spec.type}; its messages are dropped: declare the action's own type")
+
+            return backend.action_relay(host, spec.source, spec.target, msgtypes.resolve_action(spec.type)[1],
+                                        wrong_part, self._complain)
         slot = self._slots.get(spec.slot)
         if slot is None:
             label = f"{self.name} {spec.slot.split(' ', 1)[1]}"
@@ -562,6 +586,8 @@ class NodeEngine:
                                         self._complain)
         if isinstance(spec, planning.TimerSpec):
             return backend.timer(host, spec.period, slot, spec.oneshot, self._complain)
+        if isinstance(spec, planning.ActionServerSpec):
+            return backend.action_server(host, spec.name, msgtypes.resolve_action(spec.type)[1], slot, spec.forward)
         return backend.service(host, spec.name, msgtypes.resolve_service(spec.type)[1], slot)
 
     def _complain(self, text: str) -> None:
@@ -595,8 +621,9 @@ class NodeEngine:
 
 def _describe(spec: Spec) -> str:
     """``publisher /x``, ``relay /a -> /b``: an endpoint of the plan in a few words."""
-    kind = {"PublishSpec": "publisher", "SubscribeSpec": "subscriber", "ServiceRelaySpec": "service relay"}.get(
+    kind = {"PublishSpec": "publisher", "SubscribeSpec": "subscriber", "ServiceRelaySpec": "service relay",
+            "ActionServerSpec": "action server", "ActionRelaySpec": "action relay"}.get(
         type(spec).__name__, type(spec).__name__.removesuffix("Spec").lower())
-    if isinstance(spec, (planning.RelaySpec, planning.ServiceRelaySpec)):
+    if isinstance(spec, (planning.RelaySpec, planning.ServiceRelaySpec, planning.ActionRelaySpec)):
         return f"{kind} {spec.source} -> {spec.target}"
     return f"{kind} {getattr(spec, 'topic', None) or getattr(spec, 'name', '')}"

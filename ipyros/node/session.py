@@ -10,6 +10,7 @@ start and watch) is the backend's: the session reads the same on both.
 from __future__ import annotations
 
 import atexit
+import difflib
 import os
 import signal
 import sys
@@ -19,7 +20,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Optional, Protocol
 
-from ..core.errors import NodeStateError
+from ..core import msgtypes
+from ..core.errors import NodeStateError, NotDeclaredError
+from ..core.graph import actions_of
 from ..core.journal import Change, Journal
 from ..core.slots import HandlerFailure, OutputScope
 from .backend import Backend, choose as choose_backend
@@ -120,6 +123,21 @@ class Session:
             self._close_before_ros_at_exit()
             stop_on_termination()
             return name
+
+    def send_goal(self, name: str, goal: Any, action_type: Any, feedback: Optional[Callable[[Any], None]],
+                  timeout: float) -> Any:
+        """Send ``goal`` to action ``name`` (a global name) from this process; its type is read from the
+        graph when not given. Returns a :class:`~ipyros.core.actions.SentGoal`."""
+        self.require_graph(f"send a goal to {name}")
+        if action_type is None:
+            found = {a.name: a for a in actions_of(self.backend.graph_snapshot())}
+            if name not in found:
+                close = difflib.get_close_matches(name, list(found), n=3)
+                hint = f"; did you mean {', '.join(close)}?" if close else " (%actions lists the actions there are)"
+                raise NotDeclaredError(f"no action {name} in the graph; give its type=..., or start its server{hint}")
+            action_type = found[name].type
+        _, cls = msgtypes.resolve_action(action_type)
+        return self.backend.send_goal(name, cls, goal, feedback, timeout)
 
     def require_graph(self, doing: str) -> None:
         """Fail in a moment when the graph cannot be reached (ROS 1: the master does not answer), rather than hang.

@@ -185,7 +185,7 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
     backend = session.backend
     from_launch = model.base.launch is not None
     base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
-                        "namespace": base_namespace(model), "remaps": basenode_remaps(model),
+                        "namespace": base_namespace(model), "remaps": basenode_remaps(model, backend.action_parts),
                         # from a launch file, the params go on the parameter server as roslaunch puts them
                         "params": {} if from_launch else model.base.params})
 
@@ -252,7 +252,7 @@ def check_base_types(model: NodeModel, interface: Interface) -> None:
 
 
 def declare_interface(node: "NodeEngine", interface: Interface) -> Interface:
-    """Declare every topic and service of a basenode's interface as ``reuse`` on ``node``."""
+    """Declare every topic, service and action of a basenode's interface as ``reuse`` on ``node``."""
     model = node.model()
     reuse = node.dsl.reuse
     prefix = names.global_ns(base_namespace(model))
@@ -267,6 +267,8 @@ def declare_interface(node: "NodeEngine", interface: Interface) -> Interface:
     for name, type_ in interface.services:
         if type_:
             reuse.service(_relative(name, prefix), type=type_)
+    for name, type_ in interface.actions:
+        reuse.action(_relative(name, prefix), type=type_)
     if untyped:
         node.session.notify(f"ipyros: {', '.join(untyped)} of {interface.node} have no known type yet "
                              "(nobody publishes them); declare them yourself with type=...")
@@ -313,7 +315,7 @@ def discover(node: "NodeEngine", timeout: float = 10.0) -> Interface:
     elif not interface.publications and interface.subscriptions:
         node.session.notify(f"ipyros: {interface.node} publishes nothing yet: {_LATE}; declare what it will "
                              f"publish: {node.called}.reuse.publish('name', type=...)")
-    return declare_interface(node, interface)
+    return declare_interface(node, interface.fold_actions())
 
 
 _LATE = "a node may advertise only after its first input (topic_tools throttle and mux do)"

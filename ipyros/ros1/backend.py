@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any, Callable, Optional
 
-from ..core.errors import MasterError
-from ..core.graph import GraphSnapshot
+from ..core.errors import IpyrosError, MasterError
+from ..core.graph import ROS1_ACTION_TOPICS, GraphSnapshot
 from ..core.model import BaseModel
 from ..core.qos import Qos
 from ..core.records import Interface
@@ -20,6 +20,17 @@ from .launch_rest import LaunchBase
 from .launchfile import read_base
 
 __all__ = ["Ros1"]
+
+
+def _actions() -> Any:
+    """:mod:`ipyros.ros1.actions`, imported on first use: it needs actionlib (python3-actionlib), which a
+    ROS 1 may lack; everything else runs without it."""
+    try:
+        from . import actions  # noqa: PLC0415 - see the docstring
+    except ImportError as error:
+        raise IpyrosError(f"actions need actionlib, which this ROS 1 lacks ({error}); "
+                          "apt install python3-actionlib") from None
+    return actions
 
 Complain = Callable[[str], None]
 
@@ -39,6 +50,7 @@ class Ros1:
     def __init__(self) -> None:
         self.process = runtime.ProcessNode()
         self.connection = MasterConnection(self.process)
+        self._goals: Any = None  # the session's action clients, made with the first goal sent
 
     @property
     def master(self) -> Any:
@@ -129,6 +141,25 @@ class Ros1:
     def service_relay(self, host: str, source: str, target: str, cls: type,
                       complain: Complain) -> runtime.ServiceRelay:
         return runtime.ServiceRelay(source, target, cls)  # a basenode's failure reaches the caller as an error
+
+    # -- actions (actionlib: imported when first used, so that a ROS 1 without python3-actionlib runs the rest)
+    action_parts = tuple("/" + part for part in ROS1_ACTION_TOPICS)  # ROS 1 remaps names, one topic each
+
+    def action_server(self, host: str, name: str, cls: type, slot: HandlerSlot, forward: Optional[str]) -> Any:
+        return _actions().ActionServer(name, cls, slot, forward)
+
+    def action_relay(self, host: str, source: str, target: str, cls: type,
+                     on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> Any:
+        return _actions().ActionRelay(source, target, cls, on_wrong_type, complain)
+
+    def send_goal(self, name: str, cls: type, goal: Any, feedback: Optional[Callable[[Any], None]],
+                  timeout: float) -> Any:
+        if self._goals is None:
+            self._goals = _actions().Goals()
+        return self._goals.send(name, cls, goal, feedback, timeout)
+
+    def watch_action(self, name: str, cls: type, tell: Callable[[str, str, Any], None]) -> Any:
+        return _actions().ActionWatch(name, cls, tell)
 
     def open_host(self, host: str) -> None:
         """Nothing to do: the DSL node's endpoints live in the process node."""

@@ -15,7 +15,7 @@ from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
-from . import bagfile, fastdds, introspect, nodes, runtime
+from . import actions, bagfile, fastdds, introspect, nodes, runtime
 from .export import RclpyScript
 from .graph import snapshot
 from .runtime import Complain
@@ -34,6 +34,7 @@ class Ros2:
         #: Which Fast DDS configuration this session (and what it starts) runs with, in words.
         self.transport = fastdds.prepare()  # before rclpy starts, and before any child is started
         self.process = runtime.ProcessNode()
+        self._goals: Optional[actions.Goals] = None  # the session's action clients, made with the first goal sent
 
     # -- the session's ROS: no master; peers find each other in the DDS domain -------------
     def start(self, name: str, session: Any) -> str:
@@ -78,6 +79,27 @@ class Ros2:
     def service_relay(self, host: str, source: str, target: str, cls: type,
                       complain: Complain) -> runtime.ServiceRelay:
         return runtime.ServiceRelay(self.process, self.process.host(host), source, target, cls, complain)
+
+    # -- actions: an action is remapped by its name, as a whole ------------------------------
+    action_parts = ("",)
+
+    def action_server(self, host: str, name: str, cls: type, slot: HandlerSlot,
+                      forward: Optional[str]) -> actions.ActionServer:
+        return actions.ActionServer(self.process, self.process.host(host), name, cls, slot, forward)
+
+    def action_relay(self, host: str, source: str, target: str, cls: type,
+                     on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> actions.ActionRelay:
+        return actions.ActionRelay(self.process, self.process.host(host), source, target, cls, on_wrong_type,
+                                   complain)
+
+    def send_goal(self, name: str, cls: type, goal: Any, feedback: Optional[Callable[[Any], None]],
+                  timeout: float) -> actions.Goal:
+        if self._goals is None:
+            self._goals = actions.Goals(self.process.caller())
+        return self._goals.send(name, cls, goal, feedback, timeout)
+
+    def watch_action(self, name: str, cls: type, tell: Callable[[str, str, Any], None]) -> actions.ActionWatch:
+        return actions.ActionWatch(self.process.caller(), name, cls, tell)
 
     def wait_for_node(self, name: str, timeout: float = 10.0, alive: Optional[Callable[[], bool]] = None,
                       settle: float = 0.5) -> Interface:

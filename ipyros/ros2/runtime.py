@@ -754,15 +754,16 @@ class ServiceRelay:
     Nothing waits for the basenode: each request becomes an asynchronous call from the
     process's caller node (:meth:`ProcessNode.caller`, spun by an executor of its own), and
     the answer is sent when it comes (:func:`_serve_later`), or the default response after
-    :attr:`TIMEOUT`. A slow basenode stalls neither the session's subscriptions nor other
-    calls to the same service.
+    ``timeout`` seconds (:attr:`TIMEOUT` unless given; None waits as long as it takes). A
+    slow basenode stalls neither the session's subscriptions nor other calls to the same
+    service.
     """
 
     TIMEOUT = 10.0  # seconds a basenode may take to answer
 
     def __init__(self, process: ProcessNode, node: Node, source: str, target: str, cls: type,
-                 complain: Optional[Complain] = None) -> None:
-        self.source, self.target, self.cls = source, target, cls
+                 complain: Optional[Complain] = None, timeout: Optional[float] = TIMEOUT) -> None:
+        self.source, self.target, self.cls, self.timeout = source, target, cls, timeout
         self._node, self._caller, self._complain = node, process.caller(), complain
         self._client = self._caller.create_client(cls, source)
         self._service, self._send = _serve_later(node, cls, target, self._call)
@@ -774,7 +775,8 @@ class ServiceRelay:
         def answer(done: Any) -> None:
             if done.cancelled() or not unanswered.acquire(blocking=False):
                 return
-            expiry.cancel()
+            if expiry is not None:
+                expiry.cancel()
             self._reply(done.result(), header)
 
         def expire() -> None:
@@ -782,13 +784,14 @@ class ServiceRelay:
                 return
             self._client.remove_pending_request(future)
             if self._complain is not None:
-                self._complain(f"{self.target}: the basenode's service did not answer within {self.TIMEOUT:g} s; "
+                self._complain(f"{self.target}: the basenode's service did not answer within {self.timeout:g} s; "
                                "the caller got an empty response (see its log: nd.base.tail())")
             self._reply(self.cls.Response(), header)  # type: ignore[attr-defined]  # ROS 2 has no error reply
 
-        expiry = threading.Timer(self.TIMEOUT, expire)
-        expiry.daemon = True
-        expiry.start()
+        expiry = None if self.timeout is None else threading.Timer(self.timeout, expire)
+        if expiry is not None:  # none for an action's result, which comes when the goal ends
+            expiry.daemon = True
+            expiry.start()
         future.add_done_callback(answer)
 
     def _reply(self, response: Any, header: Any) -> None:

@@ -173,3 +173,11 @@ def call(ros_session):
             proxy.close()
 
     return call
+
+
+@pytest.fixture
+def counting():
+    """Count to N as an action of ROS 1 (actionlib/Test; see support/counting.py)."""
+    from counting import CountingRos1
+
+    return CountingRos1()

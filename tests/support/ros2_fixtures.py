@@ -155,3 +155,11 @@ def caller():
 def call(caller):
     """``call(service, cls, request)`` as the tests in both/ name it: :func:`caller`."""
     return caller
+
+
+@pytest.fixture
+def counting():
+    """Count to N as an action of ROS 2 (test_msgs/Fibonacci; see support/counting.py)."""
+    from counting import CountingRos2
+
+    return CountingRos2()

@@ -7,7 +7,7 @@ import json
 import pytest
 import yaml
 
-from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from ipyros.core.model import ActionModel, BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
 
 
 def full_model() -> NodeModel:
@@ -20,6 +20,8 @@ def full_model() -> NodeModel:
         timers=[TimerModel("tick", 0.1, "tick", oneshot=False)],
         services=[ServiceModel("~reset", "/robot1/mb_wrapper/reset", "std_srvs/Empty", "new", "reset")],
         params={"gain": 2.5, "names": ["a", "b"], "nested": {"k": True}},
+        actions=[ActionModel("navigate", "/robot1/navigate", "nav2_msgs/NavigateToPose", "reuse"),
+                 ActionModel("navigate", "/robot1/navigate", "nav2_msgs/NavigateToPose", "new", "clamp_goal")],
     )
 
 

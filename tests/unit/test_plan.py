@@ -3,8 +3,17 @@
 from __future__ import annotations
 
 from ipyros.core import plan as planning
-from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
-from ipyros.core.plan import PublishSpec, RelaySpec, ServiceRelaySpec, ServiceSpec, SubscribeSpec, TimerSpec
+from ipyros.core.model import ActionModel, BaseModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from ipyros.core.plan import (
+    ActionRelaySpec,
+    ActionServerSpec,
+    PublishSpec,
+    RelaySpec,
+    ServiceRelaySpec,
+    ServiceSpec,
+    SubscribeSpec,
+    TimerSpec,
+)
 from ipyros.core.qos import Qos
 
 TWIST = "geometry_msgs/Twist"
@@ -88,3 +97,26 @@ def test_the_plan_is_a_pure_function_of_the_model():
     model = wrapper(topic("/a", "publish", "reuse"), topic("/b", "subscribe", "new", "h"))
     assert list(planning.plan(model)) == list(planning.plan(model))
     assert model == wrapper(topic("/a", "publish", "reuse"), topic("/b", "subscribe", "new", "h"))
+
+
+# -- actions ---------------------------------------------------------------------------------
+FIB = "test_msgs/Fibonacci"
+
+
+def with_actions(*actions: ActionModel) -> NodeModel:
+    model = wrapper()
+    model.actions = list(actions)
+    return model
+
+
+def test_reuse_action_relays_the_basenodes_action_as_one_unit():
+    plan = list(planning.plan(with_actions(ActionModel("/fib", "/fib", FIB, "reuse"))))
+    assert plan == [ActionRelaySpec("/w/base/fib", "/fib", FIB)]
+
+
+def test_new_action_serves_the_goals_and_forwards_to_the_basenode_only_when_it_wraps_that_action():
+    served = list(planning.plan(with_actions(ActionModel("/fib", "/fib", FIB, "new", "h"))))
+    assert served == [ActionServerSpec("/fib", FIB, "action /fib", None)]
+    intercepted = list(planning.plan(with_actions(ActionModel("/fib", "/fib", FIB, "reuse"),
+                                                  ActionModel("/fib", "/fib", FIB, "new", "h"))))
+    assert intercepted == [ActionServerSpec("/fib", FIB, "action /fib", "/w/base/fib")], "no relay beside it"

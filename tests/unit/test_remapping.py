@@ -7,7 +7,7 @@ import pytest
 
 from ipyros.core import remapping as wrap
 from ipyros.core.errors import DeclarationError
-from ipyros.core.model import BaseModel, NodeModel, ServiceModel, TopicModel
+from ipyros.core.model import ActionModel, BaseModel, NodeModel, ServiceModel, TopicModel
 
 
 def model(base: BaseModel | None = None, namespace: str = "/", **more) -> NodeModel:
@@ -83,3 +83,12 @@ def test_a_base_topic_is_wrapped_once():
     with pytest.raises(DeclarationError, match="wrapped once"):
         wrap.check_reuse(m, "/a", "subscribe")
     wrap.check_reuse(m, "/a", "publish")  # the same declaration again is a redeclaration, not a clash
+
+
+def test_a_wrapped_action_is_remapped_by_the_parts_its_ros_names():
+    m = model(BaseModel(executable="nav", package="p", namespace="r1"),
+              actions=[ActionModel("navigate", "/r1/navigate", "a/Nav", "reuse")])
+    assert wrap.basenode_remaps(m) == {"/r1/navigate": "/w/base/r1/navigate"}  # ROS 2: the action's name
+    ros1 = wrap.basenode_remaps(m, ("/goal", "/cancel", "/status", "/feedback", "/result"))
+    assert ros1["/r1/navigate/goal"] == "/w/base/r1/navigate/goal" and len(ros1) == 5
+    assert wrap.resolve_for(m, "new", "navigate", "action") == "/r1/navigate", "new spelled as the reuse intercepts"

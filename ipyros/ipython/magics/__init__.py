@@ -5,6 +5,7 @@
 * :class:`RateMagics` (``rates.py``): ``%hz``, ``%bw``, ``%delay``, measured until Ctrl-C;
 * :class:`IntrospectMagics` (``introspect.py``): ``%services``, ``%call``, ``%params``, ``%param``,
   ``%nodes``, ``%node``;
+* :class:`ActionMagics` (``actions.py``): ``%actions``, ``%action`` (a goal with live feedback, or --watch);
 * :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
 * :class:`WrapMagics` (``wrap.py``): ``%wrap``;
 * :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
@@ -14,6 +15,7 @@
 :mod:`ipyros.ipython.extension` creates and registers them; ``%magic?`` shows each one's help.
 """
 
+from .actions import ActionMagics
 from .config import RosMagics
 from .demo import DemoMagics
 from .graph import TopicMagics
@@ -25,4 +27,4 @@ from .record import RecordMagics
 from .wrap import WrapMagics
 
 __all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics",
-           "RateMagics", "IntrospectMagics"]
+           "RateMagics", "IntrospectMagics", "ActionMagics"]

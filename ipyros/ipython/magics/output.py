@@ -51,8 +51,10 @@ class Printer:
             else:
                 console.print(shown)
 
-    def repeat(self, render: Callable[[float], Any], period: float, times: int = 0) -> None:
-        """Show ``render(seconds so far)`` every ``period`` seconds, ``times`` times (0: until Ctrl-C).
+    def repeat(self, render: Callable[[float], Any], period: float, times: int = 0,
+               until: Optional[Callable[[], bool]] = None) -> bool:
+        """Show ``render(seconds so far)`` every ``period`` seconds, ``times`` times (0: until Ctrl-C)
+        or until ``until()`` is true; True if Ctrl-C ended it.
 
         Redrawn in place where the front end can: a terminal (rich's Live), Jupyter (a display
         updated by its id). Anywhere else (a pipe) only the last one is printed, when it stops.
@@ -71,21 +73,23 @@ class Printer:
 
             handle = display({"text/plain": ""}, raw=True, display_id=True)
             redraw = lambda shown: handle.update(mime_bundle(shown), raw=True)  # noqa: E731
-        start, shown = time.monotonic(), None
+        start, shown, interrupted = time.monotonic(), None, False
         try:
             for done in itertools.count(1):
                 time.sleep(max(0.0, start + done * period - time.monotonic()))
+                finished = until is not None and until()  # before rendering: the last view shows the end
                 shown = render(time.monotonic() - start)
                 if redraw is not None:
                     redraw(shown)
-                if times and done >= times:
+                if times and done >= times or finished:
                     break
         except KeyboardInterrupt:
-            pass
+            interrupted = True
         finally:
             stop()
         if redraw is None and shown is not None:
             self.show(shown)
+        return interrupted
 
     def text(self, renderable: Any) -> str:
         """``renderable`` as plain text (no colour), e.g. to put inside a one-line message."""

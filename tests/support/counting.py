@@ -1,0 +1,130 @@
+"""Counting, as an action of each ROS: what tests/both/test_actions.py sends, serves and checks.
+
+Both ROS have a test action in a package the tests can install (ROS 1: actionlib's own
+``actionlib/Test``; ROS 2: ``test_msgs/Fibonacci``), with different fields. A
+:class:`Counting` says "count to N" in either: the goal holds N, the i-th feedback holds i,
+the result holds how far it got. Its ``plain_send`` is a client of the ROS's own library
+(actionlib, rclpy.action), as another program would be, not ipyros's.
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+from typing import Any, Optional
+
+PEERS = Path(__file__).resolve().parents[1] / "both" / "peers"
+
+
+class Counting:
+    """Count to N in one ROS's test action (see the module's docstring)."""
+
+    type: str
+    server: Path  # a basenode serving "count" (relative to its namespace)
+
+    def goal(self, n: int) -> dict: ...
+    def n_of(self, goal: Any) -> int: ...
+    def feedback(self, i: int) -> dict: ...
+    def i_of(self, feedback: Any) -> int: ...
+    def result(self, k: int) -> dict: ...
+    def k_of(self, result: Any) -> int: ...
+    def result_yaml(self, k: int) -> str: ...  # a line of the result of k as %action shows it
+
+    def plain_send(self, name: str, n: int, cancel_after: Optional[int] = None,
+                   timeout: float = 30.0) -> tuple[str, int, list[int]]:
+        """Send "count to n" with the ROS's own client; ``(final state, the result's count, feedbacks seen)``.
+        ``cancel_after``: cancel once that many feedbacks came."""
+        raise NotImplementedError
+
+
+class CountingRos1(Counting):
+    type = "actionlib/Test"
+    server = PEERS / "count_server_ros1.py"
+
+    def goal(self, n): return {"goal": n}
+    def n_of(self, goal): return goal.goal
+    def feedback(self, i): return {"feedback": i}
+    def i_of(self, feedback): return feedback.feedback
+    def result(self, k): return {"result": k}
+    def k_of(self, result): return result.result
+    def result_yaml(self, k): return f"result: {k}"
+
+    def plain_send(self, name, n, cancel_after=None, timeout=30.0):
+        import actionlib
+        import rospy
+        from actionlib.msg import TestAction, TestGoal
+        from actionlib_msgs.msg import GoalStatus
+
+        client = actionlib.SimpleActionClient(name, TestAction)
+        try:
+            assert client.wait_for_server(rospy.Duration(timeout)), f"no action server {name}"
+            seen: list[int] = []
+
+            def feedback(message):
+                seen.append(message.feedback)
+                if cancel_after is not None and len(seen) == cancel_after:
+                    client.cancel_goal()
+
+            client.send_goal(TestGoal(goal=n), feedback_cb=feedback)
+            assert client.wait_for_result(rospy.Duration(timeout)), f"no result from {name}"
+            state = {GoalStatus.SUCCEEDED: "succeeded", GoalStatus.PREEMPTED: "cancelled",
+                     GoalStatus.ABORTED: "aborted"}.get(client.get_state(), str(client.get_state()))
+            return state, client.get_result().result, seen
+        finally:
+            client.action_client.stop()
+
+
+class CountingRos2(Counting):
+    type = "test_msgs/Fibonacci"
+    server = PEERS / "count_server_ros2.py"
+
+    def goal(self, n): return {"order": n}
+    def n_of(self, goal): return goal.order
+    def feedback(self, i): return {"sequence": list(range(i))}
+    def i_of(self, feedback): return len(feedback.sequence)
+    def result(self, k): return {"sequence": list(range(k))}
+    def k_of(self, result): return len(result.sequence)
+    def result_yaml(self, k): return f"- {k - 1}"
+
+    def plain_send(self, name, n, cancel_after=None, timeout=30.0):
+        import rclpy
+        from action_msgs.msg import GoalStatus
+        from rclpy.action import ActionClient
+        from rclpy.executors import SingleThreadedExecutor
+        from test_msgs.action import Fibonacci
+
+        context = rclpy.Context()
+        rclpy.init(context=context)
+        node = rclpy.create_node("plain_action_client", context=context)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        client = ActionClient(node, Fibonacci, name)
+        spinner = threading.Thread(target=executor.spin, daemon=True)
+        spinner.start()
+        try:
+            assert client.wait_for_server(timeout_sec=timeout), f"no action server {name}"
+            seen: list[int] = []
+            for _ in range(5):  # right after discovery a server's reply can be lost (rmw waits 100 ms for our
+                # reader): as ROS 2 clients do, the goal is sent again
+                accepted, ended = threading.Event(), threading.Event()
+                sent = client.send_goal_async(Fibonacci.Goal(order=n),
+                                              feedback_callback=lambda m: seen.append(len(m.feedback.sequence)))
+                sent.add_done_callback(lambda _: accepted.set())
+                if accepted.wait(timeout / 5):
+                    break
+            assert accepted.is_set(), f"{name} did not take the goal"
+            result = sent.result().get_result_async()
+            result.add_done_callback(lambda _: ended.set())
+            if cancel_after is not None:
+                while len(seen) < cancel_after and not ended.wait(0.01):
+                    pass
+                sent.result().cancel_goal_async()
+            assert ended.wait(timeout), f"no result from {name}"
+            state = {GoalStatus.STATUS_SUCCEEDED: "succeeded", GoalStatus.STATUS_CANCELED: "cancelled",
+                     GoalStatus.STATUS_ABORTED: "aborted"}.get(result.result().status, str(result.result().status))
+            return state, len(result.result().result.sequence), seen
+        finally:
+            executor.shutdown()
+            client.destroy()
+            node.destroy_node()
+            context.try_shutdown()
