@@ -127,6 +127,10 @@ class Script:
         """Whether the timer handler of ``slot`` takes the timer event."""
         return call_arity(self.handlers[slot], "timer", self.names[slot])
 
+    def takes_action(self, slot: str) -> bool:
+        """Whether the action handler of ``slot`` takes the action beside the goal (``def h(goal, action)``)."""
+        return call_arity(self.handlers[slot], "action", self.names[slot]) == 2
+
     def writes_to(self) -> dict[str, str]:
         """Each publication of the plan → the name the handlers ``write`` to it by."""
         return {planning.write_target(self.model, t.resolved): t.resolved for t in self.model.topics}
@@ -164,7 +168,7 @@ class Script:
         model = self.model
         assert model.base is not None
         return dataclasses.replace(model.base, node_name=base_node_name(model.base), namespace=base_namespace(model),
-                                   remaps=basenode_remaps(model))
+                                   remaps=basenode_remaps(model, self.flavour.action_parts))
 
     def _base_argv(self) -> list[str]:
         """The basenode's command line as ipyros launches it (its executable found now, as the backend finds it)."""

@@ -54,13 +54,104 @@ def relay(source, target, msg_class):
 '''
 
 
+_ACTIONS = '''
+class ActionCall:
+    """What an action handler gets beside the goal, as ipyros gave it: feedback(msg), cancelled, forward(goal)."""
+
+    def __init__(self, handle, cancelled, feedback_class, forward_to, spec):
+        self._handle, self._cancelled, self._feedback_class = handle, cancelled, feedback_class
+        self._forward_to, self._spec = forward_to, spec
+        self.forwarded = None  # the final state of a forwarded goal
+
+    def feedback(self, msg):
+        self._handle.publish_feedback(self._feedback_class(**msg) if isinstance(msg, dict) else msg)
+
+    @property
+    def cancelled(self):
+        return self._cancelled.is_set()
+
+    def forward(self, goal):
+        """Send goal to the basenode's own server; its feedback goes on to the client; its result comes back."""
+        client = actionlib.SimpleActionClient(self._forward_to, self._spec)
+        client.wait_for_server()
+        client.send_goal(goal, feedback_cb=self.feedback)
+        while not client.wait_for_result(rospy.Duration(0.05)):
+            if self.cancelled:
+                client.cancel_goal()
+        self.forwarded = client.get_state()
+        return client.get_result()
+
+
+def serve_action(name, spec, result_class, feedback_class, handler, takes_action, forward_to=None):
+    """Serve action name: each goal runs handler on a thread of its own; a cancel sets action.cancelled."""
+    cancels = {}
+
+    def work(handle, cancelled):
+        call = ActionCall(handle, cancelled, feedback_class, forward_to, spec)
+        try:
+            result = handler(handle.get_goal(), call) if takes_action else handler(handle.get_goal())
+        except Exception as error:  # as ipyros does: the goal is aborted, the node goes on
+            rospy.logerr(f"the handler of action {name} failed: {error!r}")
+            handle.set_aborted(result_class())
+            return
+        result = result_class(**result) if isinstance(result, dict) else result or result_class()
+        if cancelled.is_set():
+            handle.set_canceled(result)
+        elif call.forwarded in (GoalStatus.ABORTED, GoalStatus.REJECTED):
+            handle.set_aborted(result)
+        else:
+            handle.set_succeeded(result)
+
+    def on_goal(handle):
+        cancelled = cancels.setdefault(handle.get_goal_id().id, threading.Event())
+        handle.set_accepted()
+        threading.Thread(target=work, args=(handle, cancelled), daemon=True).start()
+
+    def on_cancel(handle):
+        cancels.setdefault(handle.get_goal_id().id, threading.Event()).set()
+
+    server = actionlib.ActionServer(name, spec, on_goal, on_cancel, auto_start=False)
+    server.start()
+    return server
+'''
+
+
+def _actions_in(script: Any) -> bool:
+    return any(isinstance(s, planning.ActionServerSpec) for s in script.plan())
+
+
+def _action_relay(script: Any, spec: Any) -> list[str]:
+    """Relay a basenode's action: its five topics, goals and cancels in, status, feedback and results out."""
+    package, stem = spec.type.split("/")
+    lines = []
+    for part, type_name, inward in (("goal", f"{package}/{stem}ActionGoal", True),
+                                    ("cancel", "actionlib_msgs/GoalID", True),
+                                    ("status", "actionlib_msgs/GoalStatusArray", False),
+                                    ("feedback", f"{package}/{stem}ActionFeedback", False),
+                                    ("result", f"{package}/{stem}ActionResult", False)):
+        ends = (f"{spec.target}/{part}", f"{spec.source}/{part}")
+        source, target = ends if inward else ends[::-1]
+        lines.append(f"relay({source!r}, {target!r}, {script.cls(type_name)})")
+    return lines
+
+
+def _action_server(script: Any, spec: Any) -> str:
+    package, stem = spec.type.split("/")
+    return (f"serve_action({spec.name!r}, {script.cls(f'{package}/{stem}Action')}, "
+            f"{script.cls(f'{package}/{stem}Result')}, {script.cls(f'{package}/{stem}Feedback')}, "
+            f"{script.names[spec.slot]}, {script.takes_action(spec.slot)!r}, {spec.forward!r})")
+
+
 class RospyScript:
     """The rospy flavour of an exported script (see :class:`ipyros.files.export.Script`, which asks it)."""
 
     LIBRARY = "rospy"
     #: Names the generated script defines itself; a handler global with one of them would clash.
     SCRIPT_NAMES = {"rospy", "os", "signal", "subprocess", "NodeHandle", "relay", "main", "BASENODE",
-                    "BASENODE_ENV", "start_basenode", "stop_basenode"}
+                    "BASENODE_ENV", "start_basenode", "stop_basenode", "threading", "actionlib", "GoalStatus",
+                    "ActionCall", "serve_action"}
+    #: What a wrapped action is remapped by: each of its topics (ROS 1 remaps names, not namespaces).
+    action_parts = ("/goal", "/cancel", "/status", "/feedback", "/result")
 
     #: The basenode's command line, as the backend runs it (rosrun's lookup, or ros2 run's).
     base_command = staticmethod(command)
@@ -85,7 +176,8 @@ class RospyScript:
 
     @staticmethod
     def stdlib(script: Any, starts_base: bool) -> list[str]:
-        return ["os", "signal", "subprocess"] if starts_base else ["os"] if script.model.namespace != "/" else []
+        found = ["os", "signal", "subprocess"] if starts_base else ["os"] if script.model.namespace != "/" else []
+        return found + (["threading"] if _actions_in(script) else [])
 
     @staticmethod
     def before_imports(script: Any) -> list[str]:
@@ -102,7 +194,7 @@ class RospyScript:
 
     @staticmethod
     def imports(script: Any) -> list[str]:
-        return []
+        return ["import actionlib", "from actionlib_msgs.msg import GoalStatus"] if _actions_in(script) else []
 
     @staticmethod
     def handle(script: Any) -> list[str]:
@@ -112,7 +204,9 @@ class RospyScript:
     @staticmethod
     def helpers(script: Any) -> list[str]:
         """The helpers the plan's relays need."""
-        return [_RELAY.strip("\n")] if any(isinstance(s, planning.RelaySpec) for s in script.plan()) else []
+        plan = script.plan()
+        found = [_RELAY] if any(isinstance(s, (planning.RelaySpec, planning.ActionRelaySpec)) for s in plan) else []
+        return [h.strip("\n") for h in found + ([_ACTIONS] if _actions_in(script) else [])]
 
     @staticmethod
     def main(script: Any) -> list[str]:
@@ -139,6 +233,10 @@ class RospyScript:
                 lines.append(f"rospy.Timer(rospy.Duration({spec.period!r}), {call}{oneshot})")
             elif isinstance(spec, planning.ServiceSpec):
                 lines.append(f"rospy.Service({spec.name!r}, {script.cls(spec.type, 'srv')}, {script.names[spec.slot]})")
+            elif isinstance(spec, planning.ActionServerSpec):
+                lines.append(_action_server(script, spec))
+            elif isinstance(spec, planning.ActionRelaySpec):
+                lines += _action_relay(script, spec)
             else:  # ServiceRelaySpec: answer with the basenode's own service
                 srv = script.cls(spec.type, "srv")
                 lines.append(f"rospy.Service({spec.target!r}, {srv}, rospy.ServiceProxy({spec.source!r}, {srv}))")

@@ -67,13 +67,109 @@ def qos(depth=1000, best_effort=False, transient_local=False):
 '''
 
 
+_ACTIONS_ROS2 = '''
+class ActionCall:
+    """What an action handler gets beside the goal, as ipyros gave it: feedback(msg), cancelled, forward(goal)."""
+
+    def __init__(self, handle, feedback_class, forward_client):
+        self._handle, self._feedback_class, self._client = handle, feedback_class, forward_client
+        self.forwarded = None  # the final status of a forwarded goal
+
+    def feedback(self, msg):
+        self._handle.publish_feedback(self._feedback_class(**msg) if isinstance(msg, dict) else msg)
+
+    @property
+    def cancelled(self):
+        return self._handle.is_cancel_requested
+
+    def forward(self, goal):
+        """Send goal to the basenode's own server; its feedback goes on to the client; its result comes back."""
+        self._client.wait_for_server()
+        accepted, ended = threading.Event(), threading.Event()
+        sent = self._client.send_goal_async(goal, feedback_callback=lambda m: self.feedback(m.feedback))
+        sent.add_done_callback(lambda _: accepted.set())
+        accepted.wait()
+        result = sent.result().get_result_async()
+        result.add_done_callback(lambda _: ended.set())
+        asked = False
+        while not ended.wait(0.05):
+            if self.cancelled and not asked:
+                asked = True
+                sent.result().cancel_goal_async()
+        self.forwarded = result.result().status
+        return result.result().result
+
+
+def serve_action(node, caller, name, action_class, handler, takes_action, forward_to=None):
+    """Serve action name: each goal runs handler on a thread of its own (the executor only awaits it)."""
+    client = ActionClient(caller, action_class, forward_to) if forward_to else None
+
+    def work(handle, done):
+        call = ActionCall(handle, action_class.Feedback, client)
+        try:
+            result = handler(handle.request, call) if takes_action else handler(handle.request)
+            result = action_class.Result(**result) if isinstance(result, dict) else result or action_class.Result()
+        except Exception as error:  # as ipyros does: the goal is aborted, the node goes on
+            node.get_logger().error(f"the handler of action {name} failed: {error!r}")
+            handle.abort()
+            done.set_result(action_class.Result())
+            return
+        if handle.is_cancel_requested:
+            handle.canceled()
+        elif call.forwarded in (GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED):
+            handle.abort()
+        else:
+            handle.succeed()
+        done.set_result(result)
+
+    async def execute(handle):
+        done = Future(executor=node.executor)
+        threading.Thread(target=work, args=(handle, done), daemon=True).start()
+        return await done
+
+    return ActionServer(node, action_class, name, execute_callback=execute,
+                        cancel_callback=lambda handle: CancelResponse.ACCEPT)
+
+
+def action_relay(node, caller, source, target, action_class):
+    """Relay action source as target: its services answered by calling source's from the caller node (each
+    call on a thread of the executor's: a result comes when its goal ends), its two topics as bytes."""
+    group = ReentrantCallbackGroup()
+    for part, srv_class, patience in (("send_goal", action_class.Impl.SendGoalService, 10.0),
+                                      ("cancel_goal", CancelGoal, 10.0),
+                                      ("get_result", action_class.Impl.GetResultService, None)):
+        client = caller.create_client(srv_class, f"{source}/_action/{part}")
+
+        def answer(request, response, client=client, patience=patience):
+            done = threading.Event()
+            future = client.call_async(request)
+            future.add_done_callback(lambda _: done.set())
+            return future.result() if done.wait(patience) and future.result() is not None else response
+
+        node.create_service(srv_class, f"{target}/_action/{part}", answer, callback_group=group)
+    relay(node, f"{source}/_action/feedback", f"{target}/_action/feedback", action_class.Impl.FeedbackMessage)
+    status = node.create_publisher(GoalStatusArray, f"{target}/_action/status", qos_profile_action_status_default)
+    node.create_subscription(GoalStatusArray, f"{source}/_action/status", status.publish,
+                             qos_profile_action_status_default, raw=True)
+'''
+
+
+def _has(script: Any, *kinds: type) -> bool:
+    return any(isinstance(s, kinds) for s in script.plan())
+
+
 class RclpyScript:
     """The rclpy flavour of an exported script (see :class:`ipyros.files.export.Script`, which asks it)."""
 
     LIBRARY = "rclpy"
     SCRIPT_NAMES = {"rclpy", "os", "signal", "subprocess", "sys", "threading", "NodeHandle", "relay", "qos",
                     "service_relay", "main", "BASENODE", "BASENODE_ENV", "start_basenode", "stop_basenode",
-                    "QoSProfile", "ReliabilityPolicy", "DurabilityPolicy", "SingleThreadedExecutor"}
+                    "QoSProfile", "ReliabilityPolicy", "DurabilityPolicy", "SingleThreadedExecutor",
+                    "MultiThreadedExecutor", "ActionCall", "serve_action", "action_relay", "ActionClient",
+                    "ActionServer", "CancelResponse", "Future", "GoalStatus", "GoalStatusArray", "CancelGoal",
+                    "ReentrantCallbackGroup", "qos_profile_action_status_default"}
+    #: What a wrapped action is remapped by: its name (ROS 2 remaps an action as a whole).
+    action_parts = ("",)
 
     #: The basenode's command line, as the backend runs it (rosrun's lookup, or ros2 run's).
     base_command = staticmethod(command)
@@ -102,8 +198,18 @@ class RclpyScript:
 
     @staticmethod
     def imports(script: Any) -> list[str]:
-        return ["from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor",
-                "from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy"]
+        executors = "MultiThreadedExecutor, SingleThreadedExecutor" if _has(script, planning.ActionRelaySpec) \
+            else "SingleThreadedExecutor"
+        found = [f"from rclpy.executors import ExternalShutdownException, {executors}",
+                 "from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy"]
+        if _has(script, planning.ActionServerSpec, planning.ActionRelaySpec):
+            found += ["from action_msgs.msg import GoalStatus, GoalStatusArray",
+                      "from action_msgs.srv import CancelGoal",
+                      "from rclpy.action import ActionClient, ActionServer, CancelResponse",
+                      "from rclpy.callback_groups import ReentrantCallbackGroup",
+                      "from rclpy.qos import qos_profile_action_status_default",
+                      "from rclpy.task import Future"]
+        return found
 
     @staticmethod
     def handle(script: Any) -> list[str]:
@@ -111,17 +217,21 @@ class RclpyScript:
 
     @staticmethod
     def helpers(script: Any) -> list[str]:
-        plan = script.plan()
-        found = [_RELAY_ROS2] if any(isinstance(s, planning.RelaySpec) for s in plan) else []
-        if any(isinstance(s, planning.ServiceRelaySpec) for s in plan):
+        found = [_RELAY_ROS2] if _has(script, planning.RelaySpec, planning.ActionRelaySpec) else []
+        if _has(script, planning.ServiceRelaySpec):
             found.append(_SERVICE_RELAY_ROS2)
+        if _has(script, planning.ActionServerSpec, planning.ActionRelaySpec):
+            found.append(_ACTIONS_ROS2)
         return [h.strip("\n") for h in found]
 
     @staticmethod
     def main(script: Any) -> list[str]:
         model, handle = script.model, script.writers[0]
         specs = script.plan()
-        relays_services = any(isinstance(s, planning.ServiceRelaySpec) for s in specs)
+        relays_services = any(isinstance(s, (planning.ServiceRelaySpec, planning.ActionRelaySpec)) or
+                              isinstance(s, planning.ActionServerSpec) and s.forward for s in specs)
+        # an action's result is answered when its goal ends: its relay waits on a thread of the executor's
+        executor = "MultiThreadedExecutor" if _has(script, planning.ActionRelaySpec) else "SingleThreadedExecutor"
         lines = ["rclpy.init(args=sys.argv)  # --ros-args: remaps, -p key:=value",
                  f"node = {handle}.node = rclpy.create_node({model.name!r}, "
                  f"namespace={model.namespace.rstrip('/') or '/'!r})"]
@@ -152,10 +262,17 @@ class RclpyScript:
             elif isinstance(spec, planning.ServiceSpec):
                 lines.append(f"node.create_service({script.cls(spec.type, 'srv')}, {spec.name!r}, "
                              f"lambda request, response: {script.names[spec.slot]}(request))")
+            elif isinstance(spec, planning.ActionServerSpec):
+                lines.append(f"serve_action(node, {'caller' if spec.forward else 'None'}, {spec.name!r}, "
+                             f"{script.cls(spec.type, 'action')}, {script.names[spec.slot]}, "
+                             f"{script.takes_action(spec.slot)!r}, {spec.forward!r})")
+            elif isinstance(spec, planning.ActionRelaySpec):
+                lines.append(f"action_relay(node, caller, {spec.source!r}, {spec.target!r}, "
+                             f"{script.cls(spec.type, 'action')})")
             else:  # ServiceRelaySpec
                 lines.append(f"service_relay(node, caller, {spec.source!r}, {spec.target!r}, "
                              f"{script.cls(spec.type, 'srv')})")
-        lines += ["executor = SingleThreadedExecutor()", "executor.add_node(node)"]
+        lines += [f"executor = {executor}()", "executor.add_node(node)"]
         if script.starts_base:
             lines.append("basenode = start_basenode()")
         lines += ["try:", "    executor.spin()", "except (KeyboardInterrupt, ExternalShutdownException):",

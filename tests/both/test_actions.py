@@ -7,6 +7,10 @@ rclpy.action), as another program would be, and the basenodes are real processes
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import sys
 import threading
 import time
 
@@ -203,3 +207,71 @@ def test_tab_completes_action_names_types_and_the_goal(ip, make_node, counting):
 def _actions(ip):
     """The actions the session's graph shows now."""
     return actions_of(current().backend.graph_snapshot())
+
+
+# -- exported: the same behaviour without ipyros --------------------------------------------------
+# The export copies a handler's globals in: literals and helper functions, written for either ROS here.
+COUNT_IS_LIST = os.environ.get("IPYROS_ROS") == "2"  # Fibonacci's sequences (ROS 2), actionlib/Test's ints (ROS 1)
+GOAL_FIELD, FEEDBACK_FIELD, RESULT_FIELD = ("order", "sequence", "sequence") if COUNT_IS_LIST else \
+    ("goal", "feedback", "result")
+
+
+def as_count(i):
+    return list(range(i)) if COUNT_IS_LIST else i
+
+
+def exported_count(goal, action):
+    n = getattr(goal, GOAL_FIELD)
+    for i in range(1, n + 1):
+        if action.cancelled:
+            return {RESULT_FIELD: as_count(i - 1)}
+        action.feedback({FEEDBACK_FIELD: as_count(i)})
+        time.sleep(0.02)
+    return {RESULT_FIELD: as_count(n)}
+
+
+def exported_clamp(goal, action):
+    setattr(goal, GOAL_FIELD, min(getattr(goal, GOAL_FIELD), 3))
+    return action.forward(goal)
+
+
+def run_exported(script, tmp_path):
+    """Run an exported script as a process of its own, with an ipyros that fails to import; stopped by Ctrl-C."""
+    poisoned = tmp_path / "no_ipyros" / "ipyros"
+    poisoned.mkdir(parents=True, exist_ok=True)
+    (poisoned / "__init__.py").write_text('raise ImportError("an exported node runs without ipyros")\n')
+    env = {**os.environ, "PYTHONPATH": str(poisoned.parent), "PYTHONUNBUFFERED": "1"}
+    log = script.with_suffix(".log")
+    with log.open("w") as out:
+        return subprocess.Popen([sys.executable, str(script)], env=env, stdout=out, stderr=subprocess.STDOUT,
+                                start_new_session=True), log
+
+
+def stop(proc):
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        proc.wait(20)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+
+
+def test_an_exported_node_serves_relays_and_intercepts_actions_without_ipyros(make_node, counting, tmp_path):
+    nd = make_node("act_export")
+    nd.baseNode(str(counting.server), namespace="act_exported")
+    nd.reuse.action("count", type=counting.type)
+    nd.new.action("count", counting.type, exported_clamp)
+    nd.new.action("/act_exported/mine", counting.type, exported_count)
+    relaying = make_node("act_export_relay")
+    relaying.baseNode(str(counting.server), namespace="act_exported_relay")
+    relaying.reuse.action("count", type=counting.type)
+    scripts = [nd.export(tmp_path / "act_export.py"), relaying.export(tmp_path / "act_export_relay.py")]
+    (proc, log), (relay_proc, _) = (run_exported(script, tmp_path) for script in scripts)
+    try:
+        assert counting.plain_send("/act_exported/mine", 3) == ("succeeded", 3, [1, 2, 3])
+        assert counting.plain_send("/act_exported/count", 10) == ("succeeded", 3, [1, 2, 3])
+        assert counting.plain_send("/act_exported_relay/count", 4) == ("succeeded", 4, [1, 2, 3, 4])
+    finally:
+        stop(proc)
+        stop(relay_proc)
+    assert "goal 3" in log.read_text()

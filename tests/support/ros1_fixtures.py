@@ -176,8 +176,11 @@ def call(ros_session):
 
 
 @pytest.fixture
-def counting():
-    """Count to N as an action of ROS 1 (actionlib/Test; see support/counting.py)."""
+def counting(ros_session):
+    """Count to N as an action of ROS 1 (actionlib/Test; see support/counting.py); its client runs in
+    this process's rospy node, started here if no test has yet."""
     from counting import CountingRos1
 
+    if not ros_session.process.started:
+        ros_session.start_process_node("/counting_client")
     return CountingRos1()
