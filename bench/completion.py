@@ -43,6 +43,7 @@ from IPython.core.interactiveshell import InteractiveShell
 from traitlets.config import Config
 
 from bench.relay import BenchError, Child, Master, stop_cleanly_on_sigterm, wait_until
+from ipyros.ipython import magics
 from ipyros.ipython.completion import RosMatcher, default_catalog, install, uninstall
 from ipyros.tools.graph import GraphCache
 from ipyros.core.model import NodeModel, TopicModel
@@ -152,6 +153,9 @@ def completing_shell(graph: GraphCache) -> Iterator[tuple[InteractiveShell, RosM
     catalog = default_catalog()
     catalog.warm()  # done before install(), whose background warm-up then finds it cached
     handle = install(shell, graph, catalog)
+    for name in magics.__all__:  # each magic's own parser is its grammar, as when the extension is loaded
+        if name != "RosMagics":
+            shell.register_magics(getattr(magics, name)(shell, None))
     try:
         with provisionalcompleter(), warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -162,6 +166,8 @@ def completing_shell(graph: GraphCache) -> Iterator[tuple[InteractiveShell, RosM
 
 
 def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]:
+    from ipyros.ros1.graph import fetch_snapshot  # ROS 1's own graph reader: this venv has rospy
+
     rows: list[Row] = []
     notes: list[str] = []
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-completion-") as tmp:
@@ -175,7 +181,8 @@ def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]
                                               "--prefix", "/bench/t"], master.env, workdir)
             publisher.expect("ready", 180)
             notes.append(f"{TOPICS} publishers registered in {time.monotonic() - started:.1f} s")
-            graph = GraphCache(master.uri, period=1.0).start()
+            graph = GraphCache(lambda timeout: fetch_snapshot(master.uri, timeout), lambda: f"ROS master {master.uri}",
+                               period=1.0).start()
             wait_until(lambda: len(graph.snapshot.topics_with_prefix("/bench/t")) == TOPICS, 30,
                        "the graph cache to see every topic", 0.05)
             started = time.perf_counter()
@@ -218,7 +225,7 @@ def run_ros2(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[
     rows: list[Row] = []
     notes: list[str] = []
     backend = current().backend
-    graph = GraphCache("", period=1.0, source=backend.graph_snapshot, where=backend.graph_where()).start()
+    graph = GraphCache(backend.graph_snapshot, backend.where, period=1.0).start()
     publisher = None
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-completion-") as tmp:
         try:
