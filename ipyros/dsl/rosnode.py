@@ -272,6 +272,18 @@ class rosNode:  # noqa: N801 - the paper's name
         """
         return keeping.load(cls, path, namespace, create=create, session=session, trust=trust)
 
+    @classmethod
+    def running(cls, name: str, *, session: Optional[Session] = None) -> "rosNode":
+        """The running node of this session called ``name`` (``/turtle_control_node``, or without the ``/``):
+        how to reach a node whose variable now holds something else."""
+        session = session or current()
+        wanted = names.join("/", name) if not name.startswith("/") else name
+        engine = session.nodes.get(wanted)
+        if engine is None or not engine.created:
+            known = ", ".join(sorted(n for n, e in session.nodes.items() if e.created)) or "none"
+            raise NotDeclaredError(f"no node {wanted} is running in this session (running: {known})")
+        return engine.dsl
+
     def export(self, path: Any, namespace: Optional[dict] = None) -> Path:
         """Export this node to run without ipyros: a ``.py`` path is one standalone script; any other
         path becomes a ROS package (package.xml, scripts/<node>, launch/<node>.launch with its basenode);

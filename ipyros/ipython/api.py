@@ -38,6 +38,8 @@ class Host(Protocol):
     publisher: PromptPublisher
     settings: Any  # the RosMagics configurable (magics/config.py)
     printer: Any  # magics/output.py's Printer: rich in a terminal, HTML in Jupyter
+    #: While a file is loaded into user_ns: the namespace as it was, whose variables advice names.
+    names_before: Optional[dict]
 
 
 # -- the live graph ----------------------------------------------------------------------------

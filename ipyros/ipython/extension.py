@@ -77,6 +77,7 @@ class Extension:
         self._log_handler = StderrLogHandler()
         self._report = failure_report(lambda: self.settings.handler_tracebacks)
         self._saved: dict[str, Any] = {}
+        self.names_before: Optional[dict] = None
 
     @property
     def session(self) -> Session:
@@ -181,9 +182,12 @@ class Extension:
         logger.setLevel(self.settings.log_level.upper())
 
     def _variable_of(self, node: Any) -> str:
-        """The user's variable holding ``node`` (for advice like ``wnode.base.restart()``), else its name."""
-        names = sorted(k for k, v in list(self.shell.user_ns.items()) if v is node and not k.startswith("_"))
-        return names[0] if names else node.name
+        """The user's variable holding ``node`` (for advice like ``wnode.base.restart()``), else how to get it."""
+        for namespace in (self.shell.user_ns, self.names_before or {}):  # a load that fails restores the latter
+            names = sorted(k for k, v in list(namespace.items()) if v is node and not k.startswith("_"))
+            if names:
+                return names[0]
+        return f"rosNode.running({node.fullname!r})" if node.created else node.name  # its variable holds another
 
     # -- while loaded ------------------------------------------------------------------------
     def _after_cell(self, result: Any = None) -> None:

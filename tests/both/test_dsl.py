@@ -286,5 +286,5 @@ def test_the_dsl_is_all_a_node_shows(make_node):
     assert public == {
         "name", "fullname", "created", "ros_name", "base", "basenode_name", "model", "handler", "resolve",
         "new", "reuse", "params", "baseNode", "basePackage", "baseLaunch", "baseBag", "discover", "create",
-        "shutdown", "timer", "remove", "write", "save", "load", "export", "status", "history", "versions",
-        "revert", "restore_versions"}
+        "shutdown", "timer", "remove", "write", "send_goal", "save", "load", "export", "status", "history",
+        "versions", "revert", "restore_versions", "running"}

@@ -270,3 +270,27 @@ def test_a_relay_and_a_typed_subscriber_on_one_topic_each_get_what_they_asked_fo
         echoed = echo.get(timeout=10)
     assert set(typed) == {"x"} and set(relayed) == {"x"} and echoed.data == "x"
     assert failures == []
+
+
+def test_an_intercepted_service_makes_the_model_file_round_trip(make_node, tmp_path, caller):
+    """A reuse.service beside the new.service that intercepts it: saved, loaded back, still intercepted (issue 25)."""
+    from std_srvs.srv import SetBool
+
+    from ipyros import rosNode
+
+    w = make_node("w2_srv_kept")
+    w.baseNode(ECHO_NODE, namespace="robot8")
+    w.reuse.service("check", type=SetBool)
+
+    def mine(request):
+        return SetBool.Response(success=False, message="mine")
+
+    w.new.service("check", SetBool, handler=mine)
+    path = w.save(tmp_path / "intercepted.yaml")
+    w.shutdown()
+    again = rosNode.load(path, {"SetBool": SetBool}, create=True, trust=True)
+    try:
+        assert [(s.role, s.handler) for s in again.model().services] == [("reuse", None), ("new", "mine")]
+        assert caller("/robot8/check", SetBool, SetBool.Request(data=True)).message == "mine"
+    finally:
+        again.shutdown()

@@ -181,10 +181,22 @@ class NodeMagics(ExtensionMagics):
         like data, so the code in it runs only with --trust.
         """
         args = parse_argstring(self.load_nodes, line)
-        if args.path.endswith(".py"):
-            nodes = restore(args.path, self.shell.user_ns)
-        else:
-            nodes = [rosNode.load(args.path, self.shell.user_ns, create=True, trust=args.trust)]
+        user_ns = self.shell.user_ns
+        before = self.ext.names_before = dict(user_ns)
+        try:
+            if args.path.endswith(".py"):
+                nodes = restore(args.path, user_ns)
+            else:
+                nodes = [rosNode.load(args.path, user_ns, create=True, trust=args.trust)]
+        except BaseException:
+            # A load that fails leaves the namespace as it was: a variable it had rebound would name a node that
+            # never ran, and the running node it held would be lost to the user (and to its handlers).
+            for name in [n for n in user_ns if n not in before]:
+                del user_ns[name]
+            user_ns.update({name: value for name, value in before.items() if user_ns.get(name) is not value})
+            raise
+        finally:
+            self.ext.names_before = None
         running = ", ".join(f"{n.fullname} ({'running' if n.created else 'declared'})" for n in nodes)
         print(f"ipyros: loaded {running or 'no nodes'} from {args.path}")
 
