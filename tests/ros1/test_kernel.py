@@ -161,3 +161,22 @@ def test_echo_until_interrupted_in_a_kernel_is_one_rolling_view(kernel, ticks):
     updates = [c for c in cell.outputs("update_display_data")
                if c["transient"]["display_id"] == table["transient"]["display_id"]]
     assert len(updates) == 3 and "<table" in updates[-1]["data"]["text/html"] and TOPIC in updates[-1]["data"]["text/html"]
+
+
+def test_action_feedback_in_a_kernel_is_one_view_updated_in_place(kernel):
+    """%action in Jupyter: the goal's feedback in one display redrawn by its id, then how it ended and the result."""
+    kernel.ok("%load_ext ipyros")
+    kernel.ok("import time\n"
+              "def count(goal, action):\n"
+              "    for i in range(1, goal.goal + 1):\n"
+              "        action.feedback({'feedback': i})\n"
+              "        time.sleep(0.1)\n"
+              "    return {'result': goal.goal}\n"
+              "server = rosNode('e2e_kernel_act').new.action('/e2e_kernel_act/count', 'actionlib/Test', count)"
+              ".create()")
+    cell = kernel.ok("%action /e2e_kernel_act/count actionlib/Test {goal: 10}")
+    (view,) = [out for out in cell.outputs("display_data") if out.get("transient", {}).get("display_id")]
+    shown = cell.updated(view["transient"]["display_id"])
+    assert "/e2e_kernel_act/count: " in shown and "feedback: {feedback:" in shown, shown
+    assert "succeeded after" in cell.stdout(), cell.stdout()
+    assert "result: 10" in cell.stdout() + cell.shown(), "the result, as YAML"
