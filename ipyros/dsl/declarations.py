@@ -135,8 +135,12 @@ class TopicHandler:
             raise HandlerError(f"reuse.subscribe({topic!r}) relays messages unchanged and takes no handler; "
                                "to handle them use new.subscribe(..., handler=...)")
         entry = TopicModel(topic, resolved, "subscribe", type_name, role, name_of(handler), qos=given.to_model())
+        before = node.model().topic(resolved, "subscribe", role)  # declared again: a swap, said as one
         node.change(_replace_topic(entry), handlers, check=(entry,))
-        self._did(f"subscribe {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
+        if before is not None and before.type == type_name and before.handler and handler is not None:
+            self._did(f"subscribe {resolved}: handler {before.handler} → {entry.handler}")
+        else:
+            self._did(f"subscribe {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
         return self
 
     def publish(self, topic: str, msgType: Any = UNSET, type: Any = UNSET,

@@ -51,7 +51,8 @@ bags                     ``bags()``: reading, playing and writing bags of this R
 exports                  ``export_flavour()``: how a node is written as a script of this ROS
 %services, %call         ``service_type(name)``, ``call(name, cls, request, timeout)``
 %params, %param          ``params_under(namespace)``, ``read_param(name)``,
-                         ``write_param(name, value)``: any node's
+                         ``write_param(name, value)``: any node's (the value set: ROS 2
+                         makes an int a double for a double parameter); ``standard_params``
 %topics -v               ``topic_endpoints(topic)``: each endpoint with its type and QoS
 %node                    ``node_pid(name)``: None where the ROS does not say (ROS 2)
 =======================  =================================================================
@@ -144,7 +145,8 @@ class Backend(Protocol):
     def call(self, name: str, cls: type, request: Any, timeout: float) -> Any: ...
     def params_under(self, namespace: str) -> dict[str, Any]: ...
     def read_param(self, name: str) -> Any: ...
-    def write_param(self, name: str, value: Any) -> None: ...
+    def write_param(self, name: str, value: Any) -> Any: ...  # the value set (coerced to the param's type)
+    standard_params: tuple[str, ...]  # parameters every node has (%params leaves them out)
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]: ...
     def node_pid(self, node: str) -> Optional[int]: ...
 

@@ -247,7 +247,13 @@ class Ros1:
         return introspect.params_under(self.connection.uri, namespace)
 
     read_param = staticmethod(runtime.get_param)
-    write_param = staticmethod(runtime.set_param)
+    #: Parameters every node has, which %params leaves out unless asked: none on ROS 1.
+    standard_params: tuple[str, ...] = ()
+
+    def write_param(self, name: str, value: Any) -> Any:
+        """Set the parameter ``name`` on the parameter server; the value set."""
+        runtime.set_param(name, value)
+        return value
 
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]:
         """Who publishes and subscribes to ``topic``, each with its type (``%topics -v``)."""

@@ -269,14 +269,25 @@ class Ros2:
             raise DeclarationError(f"{node} has no parameter {key!r}; it has: {', '.join(values) or 'none'}")
         return values[key]
 
-    def write_param(self, name: str, value: Any) -> None:
-        """Set the parameter ``/ns/node/key`` of any live node (``%param NAME VALUE``)."""
-        runtime.check_param(name, value)
+    #: Parameters every rclpy node has, which %params leaves out unless asked.
+    standard_params = ("use_sim_time", "start_type_description_service")
+
+    def write_param(self, name: str, value: Any) -> Any:
+        """Set the parameter ``/ns/node/key`` of any live node (``%param NAME VALUE``); the value set.
+
+        An integer given for a double parameter is made a double (as ROS 1 would store it): ROS 2
+        refuses to change a parameter's type, and ``3`` typed at the prompt means ``3.0`` there.
+        """
         node, key = self._live_owner(name)
+        current = introspect.node_params(self.process, node).get(key)
+        if isinstance(current, float) and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        runtime.check_param(name, value)
         if node in self.process.hosts():
             self.set_param(name, value)
         else:
             introspect.set_node_param(self.process, node, key, value)
+        return value
 
     def _live_owner(self, name: str) -> tuple[str, str]:
         for node in sorted(self.graph_snapshot().nodes, key=len, reverse=True):

@@ -288,3 +288,19 @@ def test_the_dsl_is_all_a_node_shows(make_node):
         "new", "reuse", "params", "baseNode", "basePackage", "baseLaunch", "baseBag", "discover", "create",
         "shutdown", "timer", "remove", "write", "send_goal", "save", "load", "export", "status", "history",
         "versions", "revert", "restore_versions", "running"}
+
+
+def test_declaring_a_subscription_again_reads_as_a_handler_swap(make_node):
+    """Redeclared, a subscription is not a second one: the chain and the history say "handler a → b" (issue 25)."""
+    nd = make_node("dsl_swap_said")
+
+    def append(msg):
+        pass
+
+    def keep(msg):
+        pass
+
+    nd.new.subscribe("/dsl_swap_said/pose", append, msgType="std_msgs/String")
+    shown = repr(nd.new.subscribe("/dsl_swap_said/pose", keep, msgType="std_msgs/String"))
+    assert "subscribe /dsl_swap_said/pose: handler append → keep" in shown, shown
+    assert nd.history()[-1].change == "new.subscribe /dsl_swap_said/pose: handler append → keep"

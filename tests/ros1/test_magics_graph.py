@@ -267,6 +267,8 @@ def test_echo_fields_filter_and_the_messages_kept(ip, capsys, rate_peer):
     assert isinstance(error, UsageError) and "raised AttributeError" in str(error) and "on message 1" in str(error)
     error = error_of(ip, "%echo /mg/rate -n 1 --field dta")
     assert isinstance(error, UsageError) and "--field dta: no field 'dta' in std_msgs/UInt32 (it has data)" in str(error)
+    error = error_of(ip, "%echo /mg/rate -n 1 --field data dta")  # several fields after one --field
+    assert isinstance(error, UsageError) and "--field dta: no field 'dta'" in str(error)
     assert "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"], "nothing left listening"
 
 

@@ -278,9 +278,16 @@ def test_services_call_params_and_nodes_at_the_ros2_prompt(ip, capsys):
         _ok(ip, "%params /mi2")
         out = capsys.readouterr().out
         assert "/mi2/echo_node/prefix" in out and "P>" in out, out
+        assert "use_sim_time" not in out and "start_type_description_service" not in out, "every node has them"
+        _ok(ip, "%params /mi2 --all")
+        assert "/mi2/echo_node/use_sim_time" in capsys.readouterr().out
         _ok(ip, "%param /mi2/echo_node/prefix Q>")
         _ok(ip, "%param /mi2/echo_node/prefix")
         assert "/mi2/echo_node/prefix: Q>" in capsys.readouterr().out
+        _ok(ip, "%param /mi2/echo_node/check_delay 0")  # a double parameter given an integer stays a double
+        assert "/mi2/echo_node/check_delay = 0.0" in capsys.readouterr().out
+        _ok(ip, "%param /mi2/echo_node/check_delay")
+        assert "/mi2/echo_node/check_delay: 0.0" in capsys.readouterr().out
         _ok(ip, "%nodes /mi2")
         assert "/mi2/echo_node" in capsys.readouterr().out
         _ok(ip, "%node /mi2/echo_node")

@@ -115,8 +115,8 @@ class TopicMagics(ExtensionMagics):
     @argument("topic", complete=TOPIC, help="the live topic to listen to")
     @argument("-n", "--count", type=int, default=None,
               help="stop after this many messages (default c.RosMagics.echo_count; 0: until Ctrl-C)")
-    @argument("--field", action="append", metavar="A.B",
-              help="print only this field (repeat for several), e.g. --field linear.x --field angular.z")
+    @argument("--field", action="extend", nargs="+", metavar="A.B",
+              help="print only these fields, e.g. --field linear.x angular.z (or --field repeated)")
     @argument("--filter", metavar="EXPR",
               help="only messages for which this Python expression over m is true, e.g. 'm.linear.x > 0'; "
                    "it sees your namespace")

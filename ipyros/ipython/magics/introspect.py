@@ -108,14 +108,21 @@ class IntrospectMagics(ExtensionMagics):
     # -- %params / %param -------------------------------------------------------------------
     @magic_arguments()
     @argument("namespace", nargs="?", default="/", complete=NODE, help="only parameters under this namespace (default: all)")
+    @argument("-a", "--all", action="store_true", help="also the parameters every node has (ROS 2: use_sim_time, "
+              "start_type_description_service)")
     @line_magic
     def params(self, line: str) -> None:
         """List the parameters under NAMESPACE with their values (ROS 2: the parameters of the nodes there)."""
         args = parse_argstring(self.params, line)
         namespace = global_topic(args.namespace)
-        values = self._ready().params_under(namespace)
+        backend = self._ready()
+        values = backend.params_under(namespace)
+        standard = {name for name in values if name.rsplit("/", 1)[-1] in backend.standard_params}
+        if not args.all:
+            values = {name: value for name, value in values.items() if name not in standard}
         if not values:
-            print(f"no parameters under {namespace}")
+            print(f"no parameters under {namespace}" + (f" but the {len(standard)} every node has (--all shows them)"
+                                                         if standard else ""))
             return
         table = Table(title=f"{len(values)} parameter{'s' * (len(values) != 1)} under {namespace}",
                       title_justify="left")
@@ -141,8 +148,7 @@ class IntrospectMagics(ExtensionMagics):
             value = backend.read_param(name)
             print(f"{name}: {_short(value)}")
             return
-        value = parse_data(data)
-        backend.write_param(name, value)
+        value = backend.write_param(name, parse_data(data))
         print(f"ipyros: {name} = {_short(value)}")
 
     # -- %nodes / %node ---------------------------------------------------------------------
