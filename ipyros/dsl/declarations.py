@@ -8,6 +8,7 @@ node's :class:`~ipyros.node.engine.NodeEngine` an edit of the model.
 from __future__ import annotations
 
 import contextlib
+import inspect
 import weakref
 from collections.abc import MutableMapping
 from typing import Any, Callable, Iterator, Optional
@@ -21,6 +22,7 @@ from ..core.errors import (
     NotDeclaredError,
     TopicTypeConflict,
 )
+from ..core.graph import actions_of
 from ..core.model import ActionModel, NodeModel, ServiceModel, TopicModel
 from ..core.remapping import check_reuse
 from ..core.slots import call_arity
@@ -56,6 +58,60 @@ def end_chains() -> None:
     for chain in list(_open_chains):
         chain.open = False
     _open_chains.clear()
+
+
+class _Spelled:
+    """A declaring method that the paper's spelling reaches too: ``nd.reuse.publish.cmd_vel(Twist)`` is
+    ``nd.reuse.publish("cmd_vel", Twist)``, ``nd.reuse.subscribe.turtle1.pose(Pose)`` names ``turtle1/pose``.
+
+    A descriptor: ``nd.new.publish`` is a :class:`_Name` with no name yet, which calls the method
+    as it is; each attribute after it adds a part of the name. TAB after the dot offers the names
+    the graph knows there (the extension's cached graph: never a wait on the network).
+    """
+
+    def __init__(self, method: Callable[..., Any], kind: str) -> None:
+        self.method, self.kind = method, kind
+        self.__doc__ = method.__doc__
+
+    def __get__(self, handler: Optional["TopicHandler"], owner: type) -> Any:
+        if handler is None:
+            return self.method
+        return _Name(handler, self.method, self.kind, ())
+
+
+class _Name:
+    """``nd.reuse.subscribe.turtle1.pose``: a name being spelled as attributes; calling it declares it."""
+
+    def __init__(self, handler: "TopicHandler", method: Callable[..., Any], kind: str, parts: tuple[str, ...]) -> None:
+        self._handler, self._method, self._kind, self._parts = handler, method, kind, parts
+        self.__doc__ = method.__doc__
+        parameters = list(inspect.signature(method).parameters.values())[1 if not parts else 2:]
+        self.__signature__ = inspect.Signature(parameters)
+
+    def __call__(self, *args: Any, **kwargs: Any) -> "TopicHandler":
+        if not self._parts:
+            return self._method(self._handler, *args, **kwargs)
+        return self._method(self._handler, "/".join(self._parts), *args, **kwargs)
+
+    def __getattr__(self, part: str) -> "_Name":
+        if part.startswith("__"):
+            raise AttributeError(part)
+        return _Name(self._handler, self._method, self._kind, self._parts + (part,))
+
+    def __dir__(self) -> list[str]:
+        """The next parts of the names the graph has here (relative to the node's namespace), for TAB."""
+        node = self._handler._node
+        graph = node.session.known_graph()
+        known = {"topic": graph.topic_names, "service": tuple(graph.services),
+                 "action": tuple(a.name for a in actions_of(graph))}[self._kind]
+        base = node.resolve_as(self._handler._role, "x", "topic")[:-1]  # the namespace names resolve in
+        prefix = base + "".join(part + "/" for part in self._parts)
+        return sorted({name[len(prefix):].split("/")[0] for name in known
+                       if name.startswith(prefix) and name[len(prefix):].split("/")[0].isidentifier()})
+
+    def __repr__(self) -> str:
+        spelled = "." + ".".join(self._parts) if self._parts else ""
+        return f"<{self._handler._node.name}.{self._handler._role}.{self._method.__name__}{spelled}: call it to declare>"
 
 
 class TopicHandler:
@@ -276,6 +332,10 @@ class TopicHandler:
         node.change(edit, handlers)
         self._did(f"action {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
         return self
+
+
+for _method, _kind in (("subscribe", "topic"), ("publish", "topic"), ("service", "service"), ("action", "action")):
+    setattr(TopicHandler, _method, _Spelled(getattr(TopicHandler, _method), _kind))
 
 
 class NodeParams(MutableMapping):

@@ -104,6 +104,8 @@ class Extension:
         self.session.notice = note_line
         self._saved["call_name"] = self.session.call_name
         self.session.call_name = self._variable_of
+        self._saved["known_graph"] = self.session.known_graph
+        self.session.known_graph = self._known_graph
         if cell_output.in_kernel(shell):
             cell_output.route()
             self._saved["output_scope"] = self.session.output_scope
@@ -181,6 +183,10 @@ class Extension:
         logger.propagate = False  # the root logger would print it a second time
         logger.setLevel(self.settings.log_level.upper())
 
+    def _known_graph(self) -> Any:
+        """The graph as the cache last read it (what TAB after ``nd.reuse.publish.`` offers)."""
+        return self.graph.snapshot
+
     def _variable_of(self, node: Any) -> str:
         """The user's variable holding ``node`` (for advice like ``wnode.base.restart()``), else how to get it."""
         for namespace in (self.shell.user_ns, self.names_before or {}):  # a load that fails restores the latter
@@ -240,6 +246,8 @@ class Extension:
             session.notice = self._saved["notice"]
         if session.call_name == self._variable_of:
             session.call_name = self._saved["call_name"]
+        if session.known_graph == self._known_graph:
+            session.known_graph = self._saved["known_graph"]
         if "output_scope" in self._saved:
             session.output_scope = self._saved["output_scope"]
             cell_output.unroute()

@@ -22,7 +22,7 @@ from typing import Any, Callable, Optional, Protocol
 
 from ..core import msgtypes
 from ..core.errors import NodeStateError, NotDeclaredError
-from ..core.graph import actions_of
+from ..core.graph import EMPTY, GraphSnapshot, actions_of
 from ..core.journal import Change, Journal
 from ..core.slots import HandlerFailure, OutputScope
 from .backend import Backend, choose as choose_backend
@@ -85,6 +85,9 @@ class Session:
         self.call_name: Callable[[Any], str] = lambda node: node.name
         #: Where a node created now has its handlers print (the extension gives Jupyter cells an area).
         self.output_scope: Callable[[Any], Optional[OutputScope]] = lambda node: None
+        #: The graph as last read, never waited for (the extension's cache): what TAB offers after
+        #: ``nd.reuse.publish.``; empty without one.
+        self.known_graph: Callable[[], GraphSnapshot] = lambda: EMPTY
         self._lock = threading.RLock()
         self.closed = False
         self._closes_at_exit = False
