@@ -76,7 +76,9 @@ class BaseModel:
     A basenode read from a launch file (``baseLaunch``) also keeps ``launch``, the file
     (absolute, or ``$(find pkg)/...`` as written), ``launch_node``, its full name in it,
     and ``launch_args``, the ``<arg>`` values it was read with (as ``roslaunch file a:=1``);
-    its ``env`` comes from the file's ``<env>`` tags.
+    its ``env`` comes from the file's ``<env>`` tags. A recorded bag as the basenode
+    (``baseBag``) keeps ``bag``: its path and how it is played (``rate``, ``loop``,
+    ``topics``, ``delay``), beside the player it runs as.
     """
 
     executable: Optional[str] = None
@@ -90,6 +92,18 @@ class BaseModel:
     launch: Optional[str] = None
     launch_node: Optional[str] = None
     launch_args: dict[str, str] = field(default_factory=dict)
+    bag: Optional[dict[str, Any]] = None
+
+    def describe(self) -> str:
+        """The basenode in a few words, as a person names it: ``ipyros_demo/move_base``, ``bag /data/run1.bag``,
+        ``/planner of nav.launch``, or the path of a script run by path."""
+        if self.bag:
+            return f"bag {self.bag.get('path')}"
+        if self.launch:
+            return f"{self.launch_node or self.node_name} of {self.launch}"
+        if self.package:
+            return f"{self.package}/{self.executable}"
+        return str(self.executable or "?")
 
 
 @dataclass

@@ -114,6 +114,9 @@ def _across_ros(file: modelfile.ModelFile, session: Any) -> None:
 def _declare(node: Any, model: NodeModel, functions: dict[str, Callable[..., Any]]) -> None:
     """Replay ``model`` through the public DSL: base first, then topics, services, timers, params."""
     base = model.base
+    if base is not None and base.bag:  # a recorded bag: played by this ipyros's player
+        node.baseBag(**base.bag)
+        base = None
     if base is not None and base.launch:  # the launch file says the rest, as it does now
         node.baseLaunch(base.launch, base.launch_node or base.node_name or "", args=base.launch_args)
         base = None

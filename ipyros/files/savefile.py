@@ -192,6 +192,10 @@ def _base_lines(var: str, model: NodeModel) -> list[str]:
     base = model.base
     if base is None:
         return []
+    if base.bag:  # a recorded bag: played as baseBag plays it, wherever ipyros's player lies now
+        options = {k: v for k, v in base.bag.items() if k != "path" and v is not None}
+        text = "".join(f", {k}={v!r}" for k, v in options.items())
+        return [f"{var}.baseBag({base.bag['path']!r}{text})"]
     if base.launch:  # a node of a launch file: the launch file says the rest
         args = f", args={base.launch_args!r}" if base.launch_args else ""
         return [f"{var}.baseLaunch({base.launch!r}, {base.launch_node!r}{args})"]

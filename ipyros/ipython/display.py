@@ -65,7 +65,7 @@ def session_table(nodes: list[Any], user_ns: dict[str, Any], host: str) -> Table
         table.add_column(column, justify="right" if column in ("topics", "timers", "services") else "left")
     for node in nodes:
         model = node.model()
-        base = f"{model.base.package}/{model.base.executable}" if model.base else ""
+        base = model.base.describe() if model.base else ""
         names = ", ".join(sorted(k for k, v in user_ns.items() if v is node and not k.startswith("_")))
         counts = (str(len(model.topics)), str(len(model.timers)), str(len(model.services)))
         table.add_row(node.fullname, *counts, base, names)

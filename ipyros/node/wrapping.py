@@ -69,6 +69,8 @@ def set_base(node: "NodeEngine", **fields: Any) -> None:
 
     def edit(model: NodeModel) -> None:
         base = model.base or BaseModel()
+        if "executable" in fields:
+            base.bag = None  # another program now; baseBag says so again after this when it is a bag
         for key, value in fields.items():
             setattr(base, _BASE_OPTIONS.get(key, key), value)
         model.base = base
@@ -162,6 +164,9 @@ def set_bag(node: "NodeEngine", path: Any, rate: float, loop: bool, topics: Opti
                                "(1.0 as recorded), delay seconds from 0 to 60")
     set_base(node, executable=str(bagfile.PLAYER), name="bag_player",
              args=bagfile.player_args(bag, float(rate), bool(loop), topics, float(delay)))
+    played = {"path": str(bag), "rate": float(rate), "loop": bool(loop), "topics": list(topics or []) or None,
+              "delay": float(delay)}
+    node.change(lambda model: setattr(model.base, "bag", played))  # saved as baseBag(...), shown as "bag FILE"
 
 
 # -- the basenode process ------------------------------------------------------------------

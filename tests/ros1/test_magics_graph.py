@@ -379,6 +379,11 @@ def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, cap
            "w.new.subscribe('/mg/rate', triple, msgType=UInt32)\nouts.clear()\nw.base.restart()")
     wait_for(lambda: len(outs) >= recorded, timeout=20, what="the bag again, through the new handler")
     assert list(outs) == [3 * x for x in inputs], "the same messages, the new behaviour, one for one"
+    capsys.readouterr()
+    ok(ip, "%status")  # the basenode is the bag, by name (not ipyros's player script)
+    assert "bag " in capsys.readouterr().out
+    ok(ip, f"w.save({str(tmp_path / 'w.py')!r})")
+    assert f"w.baseBag({str(bag)!r}, rate=2.0, loop=False, delay=5.0)" in (tmp_path / "w.py").read_text()
     ok(ip, "w.shutdown(); listener.shutdown()")
     assert "no such file" in str(error_of(ip, "rosNode('mg_b2').baseBag('/nonexistent.bag')"))
     assert "has no topic /nope" in str(error_of(ip, f"rosNode('mg_b3').baseBag({str(bag)!r}, topics=['/nope'])"))

@@ -229,6 +229,11 @@ def test_record_on_ros2_then_replay_the_bag_through_two_handler_versions(ip, cap
             "w.new.subscribe('/b2/counts', triple, msgType=UInt32)\nouts.clear()\nw.base.restart()")
     wait_for(lambda: len(outs) >= recorded, timeout=20, what="the bag again through the new handler")
     assert list(outs) == [3 * x for x in inputs]
+    capsys.readouterr()
+    _ok(ip, "%status")  # the basenode is the bag, by name (not ipyros's player script)
+    assert "bag " in capsys.readouterr().out
+    _ok(ip, f"w.save({str(tmp_path / 'w.py')!r})")
+    assert f"w.baseBag({str(bag)!r}, rate=2.0, loop=False, delay=5.0)" in (tmp_path / "w.py").read_text()
     _ok(ip, "w.shutdown(); ear.shutdown()")
 
 

@@ -66,3 +66,11 @@ def test_queries():
     assert [t.direction for t in model.subscriptions()] == ["subscribe"]
     assert model.timer("tick").period == 0.1 and model.timer("nope") is None
     assert model.service("/robot1/mb_wrapper/reset").handler == "reset"
+
+
+def test_a_basenode_is_described_as_a_person_names_it():
+    assert BaseModel("move_base", "ipyros_demo").describe() == "ipyros_demo/move_base"
+    assert BaseModel("./counter_node.py").describe() == "./counter_node.py"
+    assert BaseModel("/x/bag_player.py", bag={"path": "/data/run1.bag", "rate": 1.0}).describe() == "bag /data/run1.bag"
+    launched = BaseModel("planner", "nav", launch="$(find nav)/nav.launch", launch_node="/planner")
+    assert launched.describe() == "/planner of $(find nav)/nav.launch"
