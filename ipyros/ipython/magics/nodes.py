@@ -17,6 +17,7 @@ from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
 from ...core.errors import IpyrosError
 from ...dsl import engine_of, keeping, restore, rosNode
+from ...files.modelfile import handler_sources
 from ...node.session import current
 from ...tools.editing import EditWatch, PendingEdit, fresh_name, handler_source, lambda_as_def, new_functions
 from ...tools.probe import is_tool
@@ -158,9 +159,21 @@ class NodeMagics(ExtensionMagics):
         Run the file to bring them back (python3 PATH, %run PATH, or %load_nodes PATH).
         """
         args = parse_argstring(self.save_nodes, line)
-        nodes = [find_node(self.shell, name) for name in args.node] or [engine.dsl for engine in current().nodes.values()]
+        nodes = [find_node(self.shell, name) for name in args.node]
+        if not nodes:  # every node of the user's: ipyros's own tool nodes (%pub's, %echo's) are not saved
+            nodes = [engine.dsl for engine in current().nodes.values() if not is_tool(engine.name)]
+            left_out = {}
+            for node in nodes:  # save what can be saved; say what could not, and why
+                try:
+                    handler_sources([engine_of(node)])
+                except IpyrosError as error:
+                    left_out[node.fullname] = str(error).removeprefix("nothing saved: ")
+            nodes = [node for node in nodes if node.fullname not in left_out]
+            for name, why in left_out.items():
+                print(f"ipyros: not saved: {name}: {why}")
         if not nodes:
-            raise UsageError("no rosNode is running in this session; name the node to save: %save_nodes PATH nd")
+            raise UsageError("no rosNode is running in this session that can be saved; name the node to save: "
+                             "%save_nodes PATH nd")
         if not args.path.endswith(".py"):
             if len(nodes) != 1:
                 raise UsageError(f"{args.path}: a model file holds one node; name it, or save to a .py file")
