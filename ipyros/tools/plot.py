@@ -95,7 +95,7 @@ class Plot:
     def __repr__(self) -> str:
         state = "recording" if self.running else "stopped"
         return (f"<Plot of {self.topic} {', '.join(self.fields)} ({state}): {len(self)} samples; "
-                "p.data holds them as arrays>")
+                ".data holds them as arrays>")
 
 
 def _field(msg: Any, path: str) -> Any:

@@ -14,6 +14,7 @@ meanwhile; in a terminal, a chart of characters redrawn in place until Ctrl-C (o
 from __future__ import annotations
 
 import io
+import re
 import threading
 import time
 from typing import Any, Optional
@@ -106,8 +107,17 @@ class PlotMagics(ExtensionMagics):
         finally:
             plot.stop()
         _check(plot)
-        print(f"ipyros: plotted {len(plot)} messages of {plot.topic}; p.data holds them")
+        print(f"ipyros: plotted {len(plot)} messages of {plot.topic}; {self._kept_as()} holds them")
         return plot
+
+    def _kept_as(self) -> str:
+        """Where the Plot this line returns lands: ``p.data`` for ``p = %plot ...``, else ``_.data`` (the last
+        result) and its ``Out[n]``."""
+        source = (self.shell.user_ns.get("In") or [""])[-1]
+        assigned = re.match(r"\s*([A-Za-z_]\w*)\s*=\s*(?:%plot|get_ipython\(\)\.run_line_magic\(.plot)", source)
+        if assigned:
+            return f"{assigned.group(1)}.data"
+        return f"_.data (Out[{self.shell.execution_count}].data)"
 
     def _in_notebook(self, plot: Plot, duration: float) -> Plot:
         from IPython.display import Image, display
