@@ -74,6 +74,49 @@ def template(msg_type: Any) -> str:
     return yaml.safe_dump(_as_data(cls()), default_flow_style=True, width=1 << 20, sort_keys=False).strip()
 
 
+def definition(type_name: str, expand: bool = False) -> str:
+    """A message, service or action type's definition, as ``rosmsg show`` / ``ros2 interface show`` print it:
+    a line per constant and field (``float64 x``); ``---`` between a service's request and response and an
+    action's goal, result and feedback; nested message types spelled out below their field when ``expand``.
+    Types in ROS 1's spelling on both ROS, as the model writes them."""
+    try:
+        parts = [msgtypes.resolve_message(type_name)[1]]
+    except MessageTypeError as not_message:
+        try:
+            cls = msgtypes.resolve_service(type_name)[1]
+            parts = [cls._request_class, cls._response_class] if hasattr(cls, "_request_class") else \
+                [cls.Request, cls.Response]
+        except MessageTypeError:
+            try:
+                parts = list(msgtypes.action_messages(msgtypes.resolve_action(type_name)[1]))
+            except MessageTypeError:
+                raise not_message from None
+    return "\n---\n".join("\n".join(_definition_lines(part, expand, "")) for part in parts)
+
+
+def _definition_lines(cls: type, expand: bool, indent: str) -> list[str]:
+    lines = [f"{indent}{name}={value!r}" for name, value in _constants(cls)]
+    for name, field_type in zip(*_field_types(cls)):
+        lines.append(f"{indent}{field_type} {name}")
+        nested = _nested_class(field_type.split("[")[0]) if expand and _kind(field_type.split("[")[0]) == "message" \
+            else None
+        if nested is not None:
+            lines += _definition_lines(nested, expand, indent + "  ")
+    return lines
+
+
+def _constants(cls: type) -> list[tuple[str, Any]]:
+    """A message's constants (``GoalStatus.PENDING``): upper-case class attributes holding plain values."""
+    fields = set(_field_types(cls)[0])
+    found = []
+    for name in dir(cls):
+        if name.isupper() and not name.startswith("_") and name.lower() not in fields:
+            value = getattr(cls, name, None)
+            if isinstance(value, (bool, int, float, str)):
+                found.append((name, value))
+    return found
+
+
 def to_yaml(msg: Any) -> str:
     """A message as the block YAML ``rostopic echo`` and ``ros2 topic echo`` print (``%pub`` reads it back)."""
     if not _is_message(msg) or _is_ros1_message(msg):

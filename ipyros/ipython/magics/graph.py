@@ -84,11 +84,17 @@ class TopicMagics(ExtensionMagics):
     @argument("-v", "--verbose", action="store_true",
               help="one row per publisher and subscription, with the type each uses and (ROS 2) the QoS each "
                    "offers or asks for")
+    @argument("--find", metavar="TYPE", complete=MSG_TYPE,
+              help="only the names of the topics of this type, one per line (as rostopic find)")
     @line_magic
     def topics(self, line: str) -> None:
         """List the live topics: name, type, publishers and subscribers."""
         args = parse_argstring(self.topics, line)
         snap = live_graph(self.ext)
+        if args.find:
+            found = snap.topics_matching(args.pattern, type=msgtypes.resolve_message(args.find)[0])
+            print("\n".join(found) if found else f"no live topic of type {args.find}")
+            return
         node = node_name(args.node) if args.node else None
         if node and node not in snap.nodes:
             raise UsageError(f"no node {node} in the ROS graph{close_names(node, snap.nodes)}")

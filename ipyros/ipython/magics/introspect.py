@@ -1,7 +1,9 @@
-"""``%services``, ``%call``, ``%params``, ``%param``, ``%nodes``, ``%node``: what ``rosservice``, ``rosparam``
-and ``rosnode`` (``ros2 service/param/node``) do, at the prompt, on either ROS.
+"""``%services``, ``%call``, ``%params``, ``%param``, ``%nodes``, ``%node``, ``%interface``: what ``rosservice``,
+``rosparam``, ``rosnode`` and ``rosmsg`` (``ros2 service/param/node/interface``) do, at the prompt, on either ROS.
 
     %services /turtle*                      live services, their types and servers
+    %services --find std_srvs/SetBool       the names of the services of a type
+    %interface geometry_msgs/Twist -r       a type's definition, nested types spelled out
     %call /turtle1/teleport {x: 2.0, y: 1}  a request built field by field; the response as YAML
     %params /turtle_sim                     parameters under a namespace (on ROS 2: of the nodes there)
     %param /turtle_sim/speed 2.0            read or set one
@@ -26,11 +28,12 @@ from rich.syntax import Syntax
 from rich.table import Table
 
 from ...core import msgtypes
+from ...core.errors import IpyrosError
 from ...core.graph import GraphSnapshot, name_matches
-from ...core.msgbuild import build_message, parse_data, to_yaml
+from ...core.msgbuild import build_message, definition, parse_data, to_yaml
 from ...tools.probe import is_tool, tool_name
 from ..api import global_topic, live_graph, split_head
-from ..arguments import NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, argument
+from ..arguments import MSG_TYPE, NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, argument
 from .common import ExtensionMagics
 
 
@@ -58,6 +61,8 @@ class IntrospectMagics(ExtensionMagics):
     # -- %services / %call ------------------------------------------------------------------
     @magic_arguments()
     @argument("pattern", nargs="?", default="", complete=SERVICE, help="only services matching this glob or containing this text")
+    @argument("--find", metavar="TYPE", complete=SRV_TYPE,
+              help="only the names of the services of this type, one per line (as rosservice find)")
     @line_magic
     def services(self, line: str) -> None:
         """List the live services: name, type and the nodes that serve them."""
@@ -65,6 +70,11 @@ class IntrospectMagics(ExtensionMagics):
         snap = live_graph(self.ext)
         backend = self._ready()
         found = [s for s in snap.services if name_matches(s, args.pattern)]
+        if args.find:
+            wanted = msgtypes.resolve_service(args.find)[0]
+            found = [s for s in found if _same_type(_type_or_none(backend, s), wanted)]
+            print("\n".join(found) if found else f"no live service of type {wanted}")
+            return
         if not found:
             print(f"no live services matching {args.pattern!r}" if args.pattern else "no live services")
             return
@@ -104,6 +114,21 @@ class IntrospectMagics(ExtensionMagics):
         request = build_message(request_class, parse_data(data))
         response = backend.call(name, cls, request, args.timeout)
         self.ext.printer.show(Syntax(to_yaml(response) or "{}", "yaml", background_color="default"))
+
+    # -- %interface ---------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("type", complete=MSG_TYPE, help="a message, service or action type, pkg/Type")
+    @argument("-r", "--expand", action="store_true", help="spell out nested message types below their field")
+    @line_magic
+    def interface(self, line: str) -> None:
+        """Show a message, service or action type's definition (as rosmsg show, ros2 interface show):
+        its constants and fields; --- between a service's request and response, an action's goal,
+        result and feedback."""
+        args = parse_argstring(self.interface, line)
+        try:
+            print(definition(args.type, args.expand))
+        except IpyrosError as error:
+            raise UsageError(str(error)) from None
 
     # -- %params / %param -------------------------------------------------------------------
     @magic_arguments()
@@ -201,6 +226,18 @@ class IntrospectMagics(ExtensionMagics):
         if not table.row_count:
             table.add_row("", "nothing", "", "")
         self.ext.printer.show(table)
+
+
+def _type_or_none(backend: Any, service: str) -> str:
+    try:
+        return backend.service_type(service)
+    except Exception:  # noqa: BLE001 - a server that does not answer is no match
+        return ""
+
+
+def _same_type(have: str, wanted: str) -> bool:
+    """``std_srvs/srv/SetBool`` (ROS 2's spelling) is ``std_srvs/SetBool``."""
+    return have.replace("/srv/", "/") == wanted
 
 
 def _interface(snap: GraphSnapshot, node: str) -> tuple[list[str], list[str], list[str]]:
