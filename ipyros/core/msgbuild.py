@@ -117,11 +117,16 @@ def _constants(cls: type) -> list[tuple[str, Any]]:
     return found
 
 
-def to_yaml(msg: Any) -> str:
-    """A message as the block YAML ``rostopic echo`` and ``ros2 topic echo`` print (``%pub`` reads it back)."""
-    if not _is_message(msg) or _is_ros1_message(msg):
+def to_yaml(msg: Any, noarr: bool = False, offset: bool = False) -> str:
+    """A message as the block YAML ``rostopic echo`` and ``ros2 topic echo`` print (``%pub`` reads it back).
+
+    As ``rostopic echo``'s options: ``noarr`` shows arrays as ``<array of N float64>``, ``offset``
+    shows times as seconds from now (``-0.0213``: how old a stamp is).
+    """
+    if not _is_message(msg) or _is_ros1_message(msg) and not (noarr or offset):
         return str(msg)  # a field's value; or genpy's own YAML, as rostopic prints it
-    return yaml.safe_dump(_as_data(msg), default_flow_style=False, width=1 << 20, sort_keys=False).strip()
+    data = _as_data(msg, noarr=noarr, now=time.time() if offset else None)
+    return yaml.safe_dump(data, default_flow_style=False, width=1 << 20, sort_keys=False).strip()
 
 
 def flow_yaml(msg: Any) -> str:
@@ -176,19 +181,41 @@ def _stamp_class(field_type: str) -> type:
     return type(msgtypes.resolve_message("std_msgs/Duration")[1]().data)
 
 
-def _as_data(value: Any) -> Any:
-    """A message as plain data: dicts of fields, times as {secs, nsecs}, byte arrays as lists."""
+def _as_data(value: Any, noarr: bool = False, now: Any = None) -> Any:
+    """A message as plain data: dicts of fields, times as {secs, nsecs}, byte arrays as lists.
+
+    ``noarr``: arrays as ``<array of N type>``; ``now`` (seconds): times as seconds from it."""
+    if now is not None and _is_time(value):
+        return round(_seconds(value) - now, 6)
     if _is_message(value):
-        return {name: _as_data(getattr(value, name)) for name in fields_of(value)}
+        return {name: _as_data(getattr(value, name), noarr, now) for name in fields_of(value)}
     if _is_ros1_stamp(value):
         return {"secs": value.secs, "nsecs": value.nsecs}
+    if noarr and isinstance(value, (bytes, bytearray, list, tuple)) or noarr and hasattr(value, "tolist") and \
+            hasattr(value, "__len__"):
+        items = value.tolist() if hasattr(value, "tolist") else value
+        kind = type(items[0]).__name__ if len(items) else "items"
+        return f"<array of {len(items)} {kind}>"
     if isinstance(value, (bytes, bytearray)):
         return list(value)
     if isinstance(value, (list, tuple)):
-        return [_as_data(item) for item in value]
+        return [_as_data(item, noarr, now) for item in value]
     if hasattr(value, "tolist"):  # ROS 2 arrays: array.array, numpy (a float64 scalar too)
-        return _as_data(value.tolist())
+        return _as_data(value.tolist(), noarr, now)
     return value
+
+
+def _is_time(value: Any) -> bool:
+    """A point in time: ROS 1's rospy.Time, ROS 2's builtin_interfaces/Time."""
+    if _is_ros1_stamp(value):
+        return type(value).__name__ == "Time"
+    return type(value).__name__ == "Time" and type(value).__module__.startswith("builtin_interfaces")
+
+
+def _seconds(stamp: Any) -> float:
+    if hasattr(stamp, "secs"):
+        return stamp.secs + stamp.nsecs * 1e-9
+    return stamp.sec + stamp.nanosec * 1e-9
 
 
 class _FieldError(Exception):

@@ -128,6 +128,9 @@ class TopicMagics(ExtensionMagics):
                    "it sees your namespace")
     @argument("--csv", action="store_true", help="one line per message, comma-separated, a header line first")
     @argument("--table", action="store_true", help="a table of the messages when the listening ends")
+    @argument("--once", action="store_true", help="one message, then stop (-n 1)")
+    @argument("--noarr", action="store_true", help="show arrays as <array of N type>, not their items")
+    @argument("--offset", action="store_true", help="show times as seconds from now (how old a stamp is)")
     @no_var_expand
     @line_magic
     def echo(self, line: str) -> "Messages":
@@ -138,7 +141,7 @@ class TopicMagics(ExtensionMagics):
         subscription made for listening is removed when it stops.
         """
         args = parse_argstring(self.echo, line)
-        count = self.ext.settings.echo_count if args.count is None else args.count
+        count = 1 if args.once else self.ext.settings.echo_count if args.count is None else args.count
         if count < 0:
             raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {count}")
         topic, field = topic_and_field(self.ext.graph.snapshot, global_topic(args.topic))
@@ -166,7 +169,8 @@ class TopicMagics(ExtensionMagics):
                         if rows is not None:
                             rows.add(msg)
                         else:
-                            text = _fields_yaml(msg, fields, type_name) if fields else to_yaml(msg)
+                            text = _fields_yaml(msg, fields, type_name) if fields else \
+                                to_yaml(msg, noarr=args.noarr, offset=args.offset)
                             if rolling is not None:
                                 rolling.write(f"{text}\n---\n")
                             else:
