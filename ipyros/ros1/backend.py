@@ -247,6 +247,10 @@ class Ros1:
         return introspect.params_under(self.connection.uri, namespace)
 
     read_param = staticmethod(runtime.get_param)
+    def describe_param(self, name: str) -> dict[str, Any]:
+        """What ROS 1 knows of a parameter: the type of its value (the parameter server keeps no more)."""
+        return {"type": type(self.read_param(name)).__name__}
+
     #: Parameters every node has, which %params leaves out unless asked: none on ROS 1.
     standard_params: tuple[str, ...] = ()
 

@@ -289,6 +289,11 @@ class Ros2:
             introspect.set_node_param(self.process, node, key, value)
         return value
 
+    def describe_param(self, name: str) -> dict[str, Any]:
+        """The parameter ``/ns/node/key``'s type, description, range (``ros2 param describe``)."""
+        node, key = self._live_owner(name)
+        return introspect.describe_node_param(self.process, node, key)
+
     def _live_owner(self, name: str) -> tuple[str, str]:
         for node in sorted(self.graph_snapshot().nodes, key=len, reverse=True):
             if name.startswith(node + "/"):

@@ -85,3 +85,24 @@ def set_node_param(process: ProcessNode, node: str, key: str, value: Any, timeou
     (result,) = _request(process, node, "SetParameters", timeout, parameters=[parameter]).results
     if not result.successful:
         raise IpyrosError(f"{node} refused {key} = {value!r}: {result.reason or 'no reason given'}")
+
+
+#: rcl_interfaces/ParameterType codes by the names ros2 param describe prints.
+_PARAMETER_TYPES = {1: "bool", 2: "integer", 3: "double", 4: "string", 5: "byte array", 6: "bool array",
+                    7: "integer array", 8: "double array", 9: "string array"}
+
+
+def describe_node_param(process: ProcessNode, node: str, key: str, timeout: float = 3.0) -> dict[str, Any]:
+    """What ``ros2 param describe`` says of ``key``: its type, description, whether read-only, its range."""
+    (found,) = _request(process, node, "DescribeParameters", timeout, names=[key]).descriptors
+    described: dict[str, Any] = {"type": _PARAMETER_TYPES.get(found.type, "not set")}
+    if found.description:
+        described["description"] = found.description
+    if found.read_only:
+        described["read only"] = True
+    for kind in ("floating_point_range", "integer_range"):
+        for span in getattr(found, kind):
+            described["range"] = f"{span.from_value} to {span.to_value}" + (f" by {span.step}" if span.step else "")
+    if found.additional_constraints:
+        described["constraints"] = found.additional_constraints
+    return described

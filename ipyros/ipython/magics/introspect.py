@@ -19,8 +19,10 @@ marked as such, so they are not mistaken for the robot's.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
+import yaml
 from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class, no_var_expand
 from IPython.core.magic_arguments import magic_arguments, parse_argstring
@@ -31,6 +33,8 @@ from ...core import msgtypes
 from ...core.errors import IpyrosError
 from ...core.graph import GraphSnapshot, name_matches
 from ...core.msgbuild import build_message, definition, parse_data, to_yaml
+from ...core.userdata import load_yaml
+from ...files.atomic import write_atomic
 from ...tools.probe import is_tool, tool_name
 from ..api import global_topic, live_graph, split_head
 from ..arguments import MSG_TYPE, NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, argument
@@ -135,16 +139,27 @@ class IntrospectMagics(ExtensionMagics):
     @argument("namespace", nargs="?", default="/", complete=NODE, help="only parameters under this namespace (default: all)")
     @argument("-a", "--all", action="store_true", help="also the parameters every node has (ROS 2: use_sim_time, "
               "start_type_description_service)")
+    @argument("--dump", metavar="FILE", help="write them to a YAML file, {global name: value}, instead of showing "
+              "them (as rosparam dump / ros2 param dump)")
+    @argument("--load", metavar="FILE", help="set every parameter a --dump file holds (as rosparam load)")
     @line_magic
     def params(self, line: str) -> None:
         """List the parameters under NAMESPACE with their values (ROS 2: the parameters of the nodes there)."""
         args = parse_argstring(self.params, line)
         namespace = global_topic(args.namespace)
         backend = self._ready()
+        if args.load:
+            self._load_params(backend, args.load, namespace)
+            return
         values = backend.params_under(namespace)
         standard = {name for name in values if name.rsplit("/", 1)[-1] in backend.standard_params}
         if not args.all:
             values = {name: value for name, value in values.items() if name not in standard}
+        if args.dump:
+            text = yaml.safe_dump(values, default_flow_style=False, sort_keys=True)
+            written = write_atomic(Path(args.dump).expanduser(), text)
+            print(f"ipyros: {len(values)} parameter{'s' * (len(values) != 1)} under {namespace} written to {written}")
+            return
         if not values:
             print(f"no parameters under {namespace}" + (f" but the {len(standard)} every node has (--all shows them)"
                                                          if standard else ""))
@@ -157,10 +172,26 @@ class IntrospectMagics(ExtensionMagics):
             table.add_row(name, _short(value))
         self.ext.printer.show(table)
 
+    def _load_params(self, backend: Any, path: str, namespace: str) -> None:
+        """Set the parameters of a --dump file (those under ``namespace``); all are checked before any is set."""
+        try:
+            values = load_yaml(Path(path).expanduser().read_text(), path)
+        except OSError as error:
+            raise UsageError(f"--load {path}: {error.strerror or error}") from None
+        if not isinstance(values, dict) or not all(isinstance(k, str) and k.startswith("/") for k in values):
+            raise UsageError(f"--load {path}: expected a mapping of global parameter names to values, as --dump "
+                             "writes it (/node/key: value)")
+        chosen = {k: v for k, v in values.items() if k.startswith(namespace.rstrip("/") + "/") or namespace == "/"}
+        for name, value in chosen.items():
+            backend.write_param(name, value)
+        print(f"ipyros: {len(chosen)} parameter{'s' * (len(chosen) != 1)} set from {path}")
+
     @magic_arguments()
     @argument("name", complete=NODE, help="the parameter's global name (ROS 2: /node/key)")
     @argument("value", nargs="*", help="a new value, the rest of the line (a Python literal or YAML); "
               "none: show the value")
+    @argument("--describe", action="store_true", help="its type, and on ROS 2 its description, range and "
+              "whether it is read-only (ros2 param describe)")
     @no_var_expand
     @line_magic
     def param(self, line: str) -> None:
@@ -169,6 +200,10 @@ class IntrospectMagics(ExtensionMagics):
         args = parse_argstring(self.param, head)
         name = global_topic(args.name)
         backend = self._ready()
+        if args.describe:
+            described = backend.describe_param(name)
+            print(f"{name}: " + ", ".join(f"{k} {v}" if v is not True else k for k, v in described.items()))
+            return
         if not data.strip():
             value = backend.read_param(name)
             print(f"{name}: {_short(value)}")
