@@ -54,7 +54,8 @@ exports                  ``export_flavour()``: how a node is written as a script
                          ``write_param(name, value)``: any node's (the value set: ROS 2
                          makes an int a double for a double parameter); ``standard_params``
 %topics -v               ``topic_endpoints(topic)``: each endpoint with its type and QoS
-%node                    ``node_pid(name)``: None where the ROS does not say (ROS 2)
+%node                    ``node_pid(name)``: None where the ROS does not say (ROS 2);
+                         ``ping_node``, ``kill_node``, ``cleanup_nodes`` (``%nodes --cleanup``)
 =======================  =================================================================
 """
 
@@ -150,6 +151,9 @@ class Backend(Protocol):
     def describe_param(self, name: str) -> dict[str, Any]: ...  # its type (ROS 2: description, range)
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]: ...
     def node_pid(self, node: str) -> Optional[int]: ...
+    def ping_node(self, node: str) -> float: ...  # ms to answer (ROS 1: XML-RPC; ROS 2: a parameter call)
+    def kill_node(self, node: str) -> None: ...  # ask it to end (ROS 1); ROS 2 refuses in one line
+    def cleanup_nodes(self) -> list[str]: ...  # forget dead registrations (ROS 1); the names
 
 
 def choose() -> Backend:

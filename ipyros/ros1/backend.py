@@ -266,5 +266,14 @@ class Ros1:
     def node_pid(self, node: str) -> Optional[int]:
         return introspect.node_pid(self.connection.uri, node)
 
+    def ping_node(self, node: str) -> float:
+        return introspect.ping_node(self.connection.uri, node)
+
+    def kill_node(self, node: str) -> None:
+        introspect.kill_node(self.connection.uri, node)
+
+    def cleanup_nodes(self) -> list[str]:
+        return introspect.cleanup_nodes(self.connection.uri)
+
     def __repr__(self) -> str:
         return f"<ipyros backend {self.name}: {self.process.name or 'no node yet'}>"

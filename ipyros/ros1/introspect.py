@@ -20,7 +20,8 @@ from urllib.parse import urlparse
 from ..core.errors import IpyrosError
 from .master import master_proxy
 
-__all__ = ["call", "node_pid", "params_under", "service_type", "topic_endpoints"]
+__all__ = ["call", "cleanup_nodes", "kill_node", "node_pid", "params_under", "ping_node", "service_type",
+           "topic_endpoints"]
 
 CALLER_ID = "/ipyros_introspect"
 
@@ -172,3 +173,75 @@ def topic_endpoints(master_uri: str, topic: str, timeout: float = 2.0) -> list[t
                 type_name = "? (does not answer)"
             found.append((node, kind, type_name, "TCP"))
     return sorted(found)
+
+
+def _node_api(master_uri: str, node: str, timeout: float) -> Any:
+    """The XML-RPC API of the live node ``node``, as the master lists it."""
+    code, _, uri = master_proxy(master_uri, timeout).lookupNode(CALLER_ID, node)
+    if code != 1:
+        raise IpyrosError(f"the master knows no node {node}; %nodes lists them")
+    return master_proxy(uri, timeout)
+
+
+def ping_node(master_uri: str, node: str, timeout: float = 2.0) -> float:
+    """How long ``node`` takes to answer over XML-RPC, in ms (as ``rosnode ping``); a one-line error if it does
+    not answer within ``timeout``."""
+    api = _node_api(master_uri, node, timeout)
+    started = time.perf_counter()
+    try:
+        api.getPid(CALLER_ID)
+    except (OSError, xmlrpc.client.Error) as error:
+        raise IpyrosError(f"{node} does not answer ({error}); if it is gone, %nodes --cleanup forgets it") from None
+    return (time.perf_counter() - started) * 1e3
+
+
+def kill_node(master_uri: str, node: str, timeout: float = 2.0) -> None:
+    """Ask ``node`` to shut down (as ``rosnode kill``); return once it no longer answers."""
+    api = _node_api(master_uri, node, timeout)
+    try:
+        api.getPid(CALLER_ID)
+    except (OSError, xmlrpc.client.Error) as error:
+        raise IpyrosError(f"{node} does not answer ({error}); if it is gone, %nodes --cleanup forgets it") from None
+    try:
+        code, message, _ = api.shutdown(CALLER_ID, "%node --kill from ipyros")
+        if code != 1:
+            raise IpyrosError(f"{node} refused to shut down: {message}")
+    except (OSError, xmlrpc.client.Error):
+        pass  # rospy closes its server as it ends, before the answer goes out
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline:
+        try:
+            api.getPid(CALLER_ID)
+        except (OSError, xmlrpc.client.Error):
+            return  # ended
+        time.sleep(0.05)
+    raise IpyrosError(f"{node} was asked to shut down and still answers after 5 s")
+
+
+def cleanup_nodes(master_uri: str, timeout: float = 1.0) -> list[str]:
+    """Forget the registrations of nodes that no longer answer (as ``rosnode cleanup``); their names."""
+    master = master_proxy(master_uri, timeout)
+    _, _, (publishers, subscribers, services) = master.getSystemState(CALLER_ID)
+    nodes = {n for part in (publishers, subscribers, services) for _, listed in part for n in listed}
+    gone = []
+    for node in sorted(nodes):
+        code, _, uri = master.lookupNode(CALLER_ID, node)
+        if code != 1:
+            continue
+        try:
+            master_proxy(uri, timeout).getPid(CALLER_ID)
+            continue
+        except (OSError, xmlrpc.client.Error):
+            gone.append(node)
+        for topic, listed in publishers:
+            if node in listed:
+                master.unregisterPublisher(node, topic, uri)
+        for topic, listed in subscribers:
+            if node in listed:
+                master.unregisterSubscriber(node, topic, uri)
+        for service, listed in services:
+            if node in listed:
+                code, _, service_uri = master.lookupService(CALLER_ID, service)
+                if code == 1:
+                    master.unregisterService(node, service, service_uri)
+    return gone

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 from typing import Any, Callable, Optional
 
 from rclpy._rclpy_pybind11 import RCLError
@@ -303,6 +304,19 @@ class Ros2:
 
     def node_pid(self, node: str) -> Optional[int]:
         return None  # ROS 2 discovery does not say
+
+    def ping_node(self, node: str) -> float:
+        """How long ``node`` takes to answer a call of its parameter services, in ms (ROS 2 has no node ping)."""
+        started = time.perf_counter()
+        introspect.node_params(self.process, node, timeout=2.0)
+        return (time.perf_counter() - started) * 1e3
+
+    def kill_node(self, node: str) -> None:
+        raise IpyrosError(f"ROS 2 has no way to ask {node} to end (ros2 node has no kill); stop its process, or "
+                          "for a lifecycle node use its shutdown transition")
+
+    def cleanup_nodes(self) -> list[str]:
+        return []  # discovery forgets a node that is gone by itself: nothing is left registered
 
     def describe(self) -> str:
         """One line for ``%load_ext``: which ROS 2, which domain, which middleware, how far discovery reaches."""

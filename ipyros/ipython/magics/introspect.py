@@ -31,7 +31,7 @@ from rich.table import Table
 
 from ...core import msgtypes
 from ...core.errors import IpyrosError
-from ...core.graph import GraphSnapshot, name_matches
+from ...core.graph import GraphSnapshot, actions_of, name_matches
 from ...core.msgbuild import build_message, definition, parse_data, to_yaml
 from ...core.userdata import load_yaml
 from ...files.atomic import write_atomic
@@ -214,10 +214,17 @@ class IntrospectMagics(ExtensionMagics):
     # -- %nodes / %node ---------------------------------------------------------------------
     @magic_arguments()
     @argument("pattern", nargs="?", default="", complete=NODE, help="only nodes matching this glob or containing this text")
+    @argument("--cleanup", action="store_true", help="forget the registrations of nodes that no longer answer "
+              "(ROS 1, as rosnode cleanup; ROS 2 discovery forgets them by itself)")
     @line_magic
     def nodes(self, line: str) -> None:
         """List the live nodes with how many topics each publishes and subscribes to and services it serves."""
         args = parse_argstring(self.nodes, line)
+        if args.cleanup:
+            gone = self._ready().cleanup_nodes()
+            print(f"ipyros: forgot {', '.join(gone)}, which no longer answered" if gone else
+                  "ipyros: every registered node answers; nothing to clean up")
+            return
         snap = live_graph(self.ext)
         found = [n for n in snap.nodes if name_matches(n, args.pattern)]
         if not found:
@@ -237,17 +244,25 @@ class IntrospectMagics(ExtensionMagics):
 
     @magic_arguments()
     @argument("name", complete=NODE, help="the live node")
+    @argument("--ping", action="store_true", help="how long it takes to answer (as rosnode ping)")
+    @argument("--kill", action="store_true", help="ask it to end (ROS 1, as rosnode kill)")
     @line_magic
     def node(self, line: str) -> None:
-        """One live node: what it publishes, subscribes to and serves (with types), and its pid (ROS 1)."""
+        """One live node: what it publishes, subscribes to and serves (with types), its actions, and its pid (ROS 1)."""
         args = parse_argstring(self.node, line)
         name = global_topic(args.name)
         snap = live_graph(self.ext)
         if name not in snap.nodes:
             raise UsageError(f"no live node {name}; %nodes lists them")
-        pid = self._ready().node_pid(name)
+        backend = self._ready()
         mine = list(self.ext.session.nodes.values())
-        pubs, subs, srvs = _interface(snap, name)
+        if args.ping or args.kill:
+            self._ping_or_kill(backend, name, args.kill, mine)
+            return
+        pid = backend.node_pid(name)
+        actions = [a for a in actions_of(snap) if name in a.servers or name in a.clients]
+        parts = tuple(a.name + "/" for a in actions)  # an action's topics and services: one row, its own
+        pubs, subs, srvs = ([n for n in names if not n.startswith(parts)] for names in _interface(snap, name))
         why = internal(name, mine)
         title = f"node {name}" + (f" (pid {pid})" if pid else "") + (f" ({why})" if why else "")
         table = Table(title=title, title_justify="left")
@@ -257,10 +272,26 @@ class IntrospectMagics(ExtensionMagics):
             for topic in names:
                 table.add_row(kind, topic, snap.topics.get(topic) or "?", internal(topic, mine))
         for service in srvs:
-            table.add_row("serves", service, "", internal(service, mine))
+            table.add_row("serves", service, _type_or_none(backend, service) or "?", internal(service, mine))
+        for action in actions:
+            table.add_row("action server" if name in action.servers else "action client", action.name, action.type,
+                          internal(action.name, mine))
         if not table.row_count:
             table.add_row("", "nothing", "", "")
         self.ext.printer.show(table)
+
+    def _ping_or_kill(self, backend: Any, name: str, kill: bool, mine: list[Any]) -> None:
+        try:
+            if not kill:
+                print(f"{name}: answered in {backend.ping_node(name):.1f} ms")
+                return
+            ours = next((n for n in mine if n.fullname == name or n.session.process.name == name), None)
+            if ours is not None:
+                raise UsageError(f"{name} is this session's own; end a node of yours with {ours.called}.shutdown()")
+            backend.kill_node(name)
+        except IpyrosError as error:
+            raise UsageError(str(error)) from None
+        print(f"ipyros: asked {name} to shut down")
 
 
 def _type_or_none(backend: Any, service: str) -> str:

@@ -1,0 +1,60 @@
+"""%node as complete as rosnode info / ros2 node info, %node --ping and --kill, %nodes --cleanup (issue 25)."""
+
+from __future__ import annotations
+
+import signal
+
+from shell import error_of, ok
+from std_srvs.srv import SetBool
+from support import response_of, wait_for
+
+from ipyros.node.session import current
+
+
+def graph_has(node: str) -> bool:
+    return node in current().backend.graph_snapshot().nodes
+
+
+def test_node_shows_services_and_actions_with_their_types_and_answers_a_ping(ip, make_node, counting, capsys):
+    make_node("info_node", namespace="/info").new.service("enable", SetBool, handler=lambda r: response_of(SetBool)()) \
+        .action("count", counting.type, lambda goal: None).create()
+    wait_for(lambda: graph_has("/info/info_node") or graph_has(current().process.name), timeout=20,
+             what="the node in the graph")
+    host = "/info/info_node" if current().backend.name == "ROS 2" else current().process.name
+    capsys.readouterr()
+    ok(ip, f"%node {host}")
+    out = capsys.readouterr().out
+    assert "SetBool" in next(line for line in out.splitlines() if "/info/enable" in line), out
+    row = next(line for line in out.splitlines() if "/info/count" in line and "action" in line)
+    assert "action server" in row and counting.type in row, out
+    assert "/info/count/" not in out, "an action's parts are one row"
+    ok(ip, f"%node {host} --ping")
+    assert f"{host}: answered in " in capsys.readouterr().out
+    assert "this session's own" in str(error_of(ip, f"%node {host} --kill"))
+
+
+def test_node_kill_ends_a_peer_on_ros1_and_is_refused_in_one_line_on_ros2(ip, peer, session, capsys):
+    listener = peer("listen.py", "/kill_me/topic", "std_msgs/String", "data")
+    listener.wait_line("ready")
+    wait_for(lambda: graph_has("/listen_peer"), timeout=20, what="the peer in the graph")
+    if session.backend.name == "ROS 2":
+        assert "ROS 2 has no way to ask /listen_peer to end" in str(error_of(ip, "%node /listen_peer --kill"))
+        return
+    ok(ip, "%node /listen_peer --kill")
+    assert listener.proc.wait(20) is not None
+
+
+def test_nodes_cleanup_forgets_a_node_that_died_without_unregistering(ip, peer, session, capsys):
+    listener = peer("listen.py", "/cleanup_me/topic", "std_msgs/String", "data")
+    listener.wait_line("ready")
+    wait_for(lambda: graph_has("/listen_peer"), timeout=20, what="the peer in the graph")
+    listener.proc.send_signal(signal.SIGKILL)  # no chance to unregister
+    listener.proc.wait(10)
+    capsys.readouterr()
+    ok(ip, "%nodes --cleanup")
+    out = capsys.readouterr().out
+    if session.backend.name == "ROS 2":
+        assert "nothing to clean up" in out  # discovery forgets it by itself
+        return
+    assert "forgot /listen_peer" in out, out
+    assert not graph_has("/listen_peer")
