@@ -49,7 +49,7 @@ __all__ = ["HandlerTarget", "NodeEngine"]
 class HandlerTarget:
     """Something on a node that calls a handler: a subscription, a timer, a service or an action."""
 
-    kind: str  # "topic", "timer", "service" or "action"
+    kind: str  # "topic", "timer", "service", "action", or "relay" (a relayed topic a handler takes over)
     name: str  # as declared: the topic/service name as typed, or the timer's name
     slot: str  # the node's handler slot key (see ipyros.core.plan): where its versions are kept
 
@@ -417,6 +417,20 @@ class NodeEngine:
             f"; it has no handlers yet: declare one, e.g. {self.called}.new.subscribe(TOPIC, handler, msgType=...)")
         raise NotDeclaredError(f"{self.name} has no handler for {resolved or name}{known}")
 
+    def relayed_target(self, name: str) -> Optional[HandlerTarget]:
+        """``name`` as a topic this node only relays (``reuse``, no handler yet), as a target a handler can take
+        over (``%handler`` offers a pass-through to start from); None if it is not one."""
+        try:
+            resolved = self.resolve(name)
+        except TopicNameError:
+            return None
+        model = self.model()
+        relayed = next((t for t in model.topics if t.role == "reuse" and name in (t.name, t.resolved)), None) or \
+            next((t for t in model.topics if t.role == "reuse" and t.resolved == resolved), None)
+        if relayed is None or model.topic(relayed.resolved, "subscribe", "new") is not None:
+            return None
+        return HandlerTarget("relay", relayed.name, planning.topic_slot(relayed.resolved))
+
     def current_handler(self, target: HandlerTarget) -> Callable[..., Any]:
         """The function that serves ``target`` now."""
         handler = self.handler(target.name)
@@ -427,7 +441,12 @@ class NodeEngine:
     def redeclare(self, target: HandlerTarget, handler: Callable[..., Any]) -> None:
         """Declare ``target`` again exactly as it is, but served by ``handler`` (a live swap, as the DSL does it)."""
         model, dsl = self.model(), self.dsl
-        if target.kind == "topic":
+        if target.kind == "relay":  # a relayed topic taken over: new.subscribe spelled as its reuse intercepts it
+            relayed = next((t for t in model.topics if t.role == "reuse" and t.name == target.name), None)
+            if relayed is None:
+                raise NotDeclaredError(f"{self.name} no longer relays {target.name}")
+            dsl.new.subscribe(relayed.name, handler=handler, msgType=relayed.type)
+        elif target.kind == "topic":
             topic = model.topic(self.resolve(target.name), "subscribe", "new")
             if topic is None:
                 raise NotDeclaredError(f"{self.name} no longer subscribes to {target.name}")

@@ -104,7 +104,7 @@ class PendingEdit:
     node: rosNode
     target: HandlerTarget
     name: str
-    old: Callable[..., Any]
+    old: Optional[Callable[..., Any]]  # None: a relayed topic, which the new function takes over
 
 
 @dataclass

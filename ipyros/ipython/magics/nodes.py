@@ -61,8 +61,12 @@ class NodeMagics(ExtensionMagics):
         args = parse_argstring(self.handler, line)
         node = find_node(self.shell, args.node)
         engine = engine_of(node)
-        target = engine.find_target(args.topic)
-        old = engine.current_handler(target)
+        relayed = engine.relayed_target(args.topic)
+        if relayed is not None and cell is None:
+            self._offer_pass_through(node, relayed)
+            return
+        target = relayed or engine.find_target(args.topic)
+        old = None if relayed is not None else engine.current_handler(target)
         if cell is None:
             if getattr(old, "__name__", "") == "<lambda>" and (
                     as_def := lambda_as_def(old, fresh_name(target, self.shell.user_ns))) is not None:
@@ -80,16 +84,18 @@ class NodeMagics(ExtensionMagics):
         self.edits.forget(node, target)
         before = dict(self.shell.user_ns)
         result = self.shell.run_cell(cell)
+        old_name = old.__name__ if old is not None else fresh_name(target, {})
         if not result.success:  # its error was shown; the cell magic fails too, in one line
-            raise IpyrosError(f"the cell failed, so {node.name} {target.label} keeps its handler {old.__name__}")
+            keeps = f"keeps its handler {old_name}" if old is not None else "stays relayed"
+            raise IpyrosError(f"the cell failed, so {node.name} {target.label} {keeps}")
         defined = new_functions(before, self.shell.user_ns)
         if not defined:
             raise UsageError(f"the cell defines no function; define the new handler of {target.label} "
-                             f"with def, e.g. def {old.__name__}(msg): ...")
-        name = old.__name__ if old.__name__ in defined else None
+                             f"with def, e.g. def {old_name}(msg): ...")
+        name = old_name if old_name in defined else None
         if name is None and len(defined) > 1:
             raise UsageError(f"the cell defines {', '.join(sorted(defined))}; which is the handler? "
-                             f"name it {old.__name__}, like the one it replaces")
+                             f"name it {old_name}, like the one it replaces")
         name = name or next(iter(defined))
         engine_of(node).redeclare(target, defined[name])
         print(f"ipyros: {node.name} {target.label} is now handled by the new {name}")
@@ -212,6 +218,18 @@ class NodeMagics(ExtensionMagics):
             self.ext.names_before = None
         running = ", ".join(f"{n.fullname} ({'running' if n.created else 'declared'})" for n in nodes)
         print(f"ipyros: loaded {running or 'no nodes'} from {args.path}")
+
+    def _offer_pass_through(self, node: Any, target: Any) -> None:
+        """A relayed topic has no handler to edit: offer one that passes each message on as it came."""
+        engine = engine_of(node)
+        name = fresh_name(target, self.shell.user_ns)
+        resolved = engine.resolve_as("reuse", target.name, "topic")
+        source = (f"def {name}(msg):\n"
+                  f"    {engine.called}.write({resolved!r}, msg)  # passed on as it came: change it, or write another\n")
+        self.edits.expect(PendingEdit(node, target, name, None))
+        self.shell.set_next_input(source.rstrip("\n"))
+        print(f"ipyros: {node.name} relays {resolved} unchanged; here is a handler that passes each message on: edit "
+              f"it and run it, and it takes the relay's place")
 
     # -- %status ------------------------------------------------------------------------------
     @magic_arguments()
