@@ -133,7 +133,7 @@ def actions_of(graph: GraphSnapshot) -> list[ActionEntry]:
         type_name = graph.topics[topic]
         if topic.endswith("/_action/feedback") and type_name.endswith("_FeedbackMessage"):
             name = topic[: -len("/_action/feedback")]
-            package, _, kind = type_name.partition("/action/")
+            package, kind = type_name.split("/")[0], type_name.split("/")[-1]
             found.append(ActionEntry(name, f"{package}/{kind.removesuffix('_FeedbackMessage')}",
                                      graph.publishers.get(name + "/_action/status", ()),
                                      graph.subscribers.get(topic, ())))

@@ -37,6 +37,13 @@ def type_name(cls: Any) -> str | None:
     return None
 
 
+def short_name(type_name: str) -> str:
+    """``std_msgs/msg/String`` → ``std_msgs/String``: the one spelling a session shows on both ROS (ROS 2's
+    ``pkg/msg/Type``, ``pkg/srv/Type`` and ``pkg/action/Type`` are read as input too)."""
+    parts = type_name.split("/")
+    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else type_name
+
+
 def is_service(cls: type) -> bool:
     """A service class: ROS 1's have ``_request_class``, ROS 2's ``Request``."""
     return hasattr(cls, "_request_class") or (hasattr(cls, "Request") and hasattr(cls, "Response"))

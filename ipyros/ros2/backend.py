@@ -9,6 +9,7 @@ from typing import Any, Callable, Optional
 from rclpy._rclpy_pybind11 import RCLError
 from rclpy.exceptions import NameValidationException
 
+from ..core import msgtypes
 from ..core.errors import DeclarationError, IpyrosError, NodeStateError, first_line
 from ..core.graph import GraphSnapshot
 from ..core.model import BaseModel
@@ -233,7 +234,7 @@ class Ros2:
             for info in infos:
                 if not info.node_name.startswith("_"):
                     found.append((f"{info.node_namespace.rstrip('/')}/{info.node_name}", kind,
-                                  runtime._short(info.topic_type), str(runtime.qos_of(info.qos_profile))))
+                                  msgtypes.short_name(info.topic_type), str(runtime.qos_of(info.qos_profile))))
         return sorted(found)
 
     # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----

@@ -14,16 +14,18 @@ from typing import Any
 from rclpy.node import NodeNameNonExistentError
 
 from ..core.graph import GraphSnapshot, frozen
+from ..core.msgtypes import short_name
 
 __all__ = ["snapshot"]
 
 
 def snapshot(graph: Any) -> GraphSnapshot:
-    """What the graph node ``graph`` has discovered: topics with types, who publishes,
-    subscribes and serves what. ipyros's own hidden nodes (names starting with ``_``) are
-    left out, as ``ros2 node list`` leaves them out.
+    """What the graph node ``graph`` has discovered: topics with types (``pkg/Type``, the session's one
+    spelling on both ROS), who publishes, subscribes and serves what. ipyros's own hidden nodes
+    (names starting with ``_``) are left out, as ``ros2 node list`` leaves them out.
     """
-    topics = {name: types[0] if len(types) == 1 else "" for name, types in graph.get_topic_names_and_types()}
+    topics = {name: short_name(types[0]) if len(types) == 1 else ""
+              for name, types in graph.get_topic_names_and_types()}
     pubs: dict[str, list[str]] = {}
     subs: dict[str, list[str]] = {}
     srvs: dict[str, list[str]] = {}

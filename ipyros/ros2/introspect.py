@@ -13,6 +13,7 @@ import re
 import threading
 from typing import Any
 
+from ..core import msgtypes
 from ..core.errors import IpyrosError
 from ..core.msgbuild import conform
 from .runtime import ProcessNode
@@ -32,10 +33,10 @@ def _wait(future: Any, timeout: float, what: str) -> Any:
 
 
 def service_type(process: ProcessNode, name: str) -> str:
-    """The type (``pkg/srv/Service``) of the live service ``name``, from discovery."""
+    """The type (``pkg/Service``, the session's one spelling) of the live service ``name``, from discovery."""
     for found, types in process.graph().get_service_names_and_types():
         if found == name:
-            return types[0]
+            return msgtypes.short_name(types[0])
     raise IpyrosError(f"no live service {name}; %services lists them")
 
 

@@ -308,7 +308,7 @@ class ProcessNode:
             if topic not in publishers:
                 publishers[topic] = graph.get_publishers_info_by_topic(topic)
             for info in publishers[topic]:
-                theirs, peer = _short(info.topic_type), peer_name(info.node_namespace, info.node_name)
+                theirs, peer = msgtypes.short_name(info.topic_type), peer_name(info.node_namespace, info.node_name)
                 if theirs == type_name or peer is None or (topic, peer, theirs, complain) in self._told:
                     continue  # (a peer discovery has not named yet is looked at again next time)
                 self._told.add((topic, peer, theirs, complain))
@@ -814,12 +814,6 @@ _PLUMBING_SERVICES = ("/describe_parameters", "/get_parameter_types", "/get_para
                       "/get_logger_levels", "/set_logger_levels")
 
 
-def _short(type_name: str) -> str:
-    """``std_msgs/msg/String`` → ``std_msgs/String``, as the model names types on both ROS."""
-    parts = type_name.split("/")
-    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else type_name
-
-
 def node_interface(graph: Node, fullname: str) -> Any:
     """The publications, subscriptions and services of the running node ``fullname``, or None if unseen."""
     namespace, name = fullname.rsplit("/", 1)
@@ -834,7 +828,7 @@ def node_interface(graph: Node, fullname: str) -> Any:
             if plumbing(topic):
                 left_out.append(f"{topic} ({what})")
             else:
-                kept.append((topic, _short(types[0]) if len(types) == 1 else ""))
+                kept.append((topic, msgtypes.short_name(types[0]) if len(types) == 1 else ""))
         return kept
 
     return Interface(
