@@ -294,3 +294,17 @@ def test_an_intercepted_service_makes_the_model_file_round_trip(make_node, tmp_p
         assert caller("/robot8/check", SetBool, SetBool.Request(data=True)).message == "mine"
     finally:
         again.shutdown()
+
+
+def test_discovery_leaves_no_trace_and_no_false_warning(make_node, notices, session):
+    """Right after discover() and create(), the basenode's public names are the wrapper's alone, and nothing
+    warns that the basenode does not use them (issue 25: the discovery instance lingered in the graph)."""
+    w = make_node("mbw2_clean")
+    w.baseNode("move_base").basePackage("ipyros_demo")
+    w.discover()
+    w.create()
+    wait_for(lambda: session.backend.graph_snapshot().publishers.get("/cmd_vel") == ("/mbw2_clean",), timeout=20,
+             what="/cmd_vel published by the wrapper alone")
+    assert [(node, kind) for node, kind, *_ in session.backend.topic_endpoints("/cmd_vel")] == [
+        ("/mbw2_clean", "publisher")]
+    assert not [n for n in notices if "(yet)" in n or "does not use" in n], notices
