@@ -9,11 +9,12 @@
 - :mod:`.slots`: a handler slot, whose function is swapped live, its figures counted;
 - :mod:`.versions`, :mod:`.code`: handler versions and their source; :mod:`.journal`: the
   history of changes; :mod:`.records`: what a node reports (status, history, interface);
-- :mod:`.graph`: a snapshot of the live graph; :mod:`.userdata`: YAML and JSON from the
-  user, with limits; :mod:`.errors`: one-line errors.
+- :mod:`.graph`: a snapshot of the live graph; :mod:`.actions`: what an action's handler gets
+  and what a sent goal gives back; :mod:`.userdata`: YAML and JSON from the user, with
+  limits; :mod:`.errors`: one-line errors; :mod:`.text`: counts that read as English.
 
 May import: nothing of ipyros's outside it (the bottom layer).
 """
 
-__all__ = ["code", "errors", "graph", "journal", "model", "msgbuild", "msgtypes", "names", "plan", "qos", "records",
-           "remapping", "slots", "userdata", "versions"]
+__all__ = ["actions", "code", "errors", "graph", "journal", "model", "msgbuild", "msgtypes", "names", "plan", "qos",
+           "records", "remapping", "slots", "text", "userdata", "versions"]

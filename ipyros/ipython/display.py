@@ -24,6 +24,7 @@ from rich.text import Text
 from ..core.graph import GraphSnapshot
 from ..core.qos import from_model as qos_of
 from ..core.records import History, Interface, NodeStatus, Versions
+from ..core.text import counted
 from ..dsl import rosNode
 from ..tools.probe import Rate
 from ..tools.robot import DemoRobot
@@ -119,8 +120,8 @@ def robot_table(robot: DemoRobot) -> Table:
 
 def trial_view(report: TrialReport) -> Group:
     """``%try``: the live handler and the candidate side by side, one row per message, differences marked."""
-    summary = (f"{report.differing} of {len(report.rows)} messages give different results"
-               if report.differing else f"same results on all {len(report.rows)} messages")
+    summary = (f"{report.differing} of {counted(len(report.rows), 'message')} give different results"
+               if report.differing else f"same results on all {counted(len(report.rows), 'message')}")
     heading = Text.assemble((f"{report.node} {report.topic}", "bold"), f": live {report.live_name} vs candidate "
                             f"{report.candidate_name}: ", (summary, "yellow" if report.differing else "green"))
     table = Table(show_lines=True)

@@ -8,6 +8,7 @@ rospy or speaks to a ROS 1 master:
 - :mod:`.runtime`: the session's rospy node and its endpoints (publications,
   subscriptions, byte relays, timers, services), parameters;
   :mod:`.sending`: per-connection outboxes, so a slow subscriber never blocks a writer;
+  :mod:`.actions`: actionlib servers, clients, relays and watches (imported on first use);
 - :mod:`.master`, :mod:`.masterwatch`, :mod:`.connection`, :mod:`.rosout`: finding or
   starting the master (local only), watching it go and come back, a rosout on loopback;
 - :mod:`.graph`, :mod:`.discovery`, :mod:`.introspect`: the graph as a snapshot, a running
@@ -22,5 +23,5 @@ May import: core, processes, demo. Nothing above the node layer imports it: the 
 layer chooses it.
 """
 
-__all__ = ["backend", "bag_player", "bagfile", "connection", "discovery", "export", "graph", "introspect",
+__all__ = ["actions", "backend", "bag_player", "bagfile", "connection", "discovery", "export", "graph", "introspect",
            "launch_rest", "launchfile", "master", "masterwatch", "nodes", "rosout", "runtime", "sending"]

@@ -4,6 +4,7 @@
 - :mod:`.runtime`: one ROS 2 node per DSL node, in one context, spun by one supervised
   executor thread; publications, subscriptions, byte relays, timers, services, parameters,
   and a basenode's interface read from the graph; :mod:`.graph`: the graph as a snapshot;
+  :mod:`.actions`: rclpy.action servers (goals on threads of their own), clients, relays, watches;
 - :mod:`.nodes`: a package's executables as ``ros2 run`` finds them (the ament index), and
   a node's command line; :mod:`.fastdds`: ipyros's Fast DDS profile;
 - :mod:`.introspect`: services, parameters and nodes of the graph, for the magics;
@@ -13,4 +14,4 @@ May import: core, processes, demo (the demo package's ament prefix). Nothing abo
 node layer imports it: the node layer chooses it.
 """
 
-__all__ = ["backend", "bag_player", "bagfile", "export", "fastdds", "graph", "introspect", "nodes", "runtime"]
+__all__ = ["actions", "backend", "bag_player", "bagfile", "export", "fastdds", "graph", "introspect", "nodes", "runtime"]

@@ -23,6 +23,7 @@ from collections import deque
 from typing import Any, Optional, Sequence
 
 from ..core.errors import IpyrosError
+from ..core.text import counted
 from ..dsl import rosNode
 from .probe import tool_name
 
@@ -129,7 +130,7 @@ def figure(plot: Plot) -> Any:
             ax.plot(data["t"], data[path], lw=1, label=path)
         ax.set_xlabel("time (s)")
         ax.legend(loc="upper left", fontsize=8)
-    ax.set_title(f"{plot.topic} ({len(data['t'])} messages)", fontsize=9)
+    ax.set_title(f"{plot.topic} ({counted(len(data['t']), 'message')})", fontsize=9)
     fig.tight_layout()
     return fig
 

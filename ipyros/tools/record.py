@@ -12,6 +12,7 @@ import threading
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
+from ..core.text import counted
 from ..dsl import rosNode
 from ..node.session import current
 from .probe import tool_name
@@ -68,4 +69,4 @@ class Recording:
 
     def __repr__(self) -> str:
         state = "recording" if self.running else "closed"
-        return f"<Recording of {', '.join(self.topics)} to {self.path} ({state}): {self.count} messages>"
+        return f"<Recording of {', '.join(self.topics)} to {self.path} ({state}): {counted(self.count, 'message')}>"

@@ -23,6 +23,7 @@ from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
 from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
+from ...core.text import counted
 from ...tools.plot import Plot, figure, text_chart
 from ..api import global_topic, live_type
 from ..arguments import TOPIC, argument
@@ -88,7 +89,7 @@ class PlotMagics(ExtensionMagics):
             figure(plot).savefig(path, format="png", dpi=100)
         except OSError as error:
             raise UsageError(f"cannot write {path}: {error.strerror or error}") from None
-        print(f"ipyros: {len(plot)} messages of {plot.topic} plotted to {path}")
+        print(f"ipyros: {counted(len(plot), 'message')} of {plot.topic} plotted to {path}")
         return plot
 
     def _in_terminal(self, plot: Plot, duration: Optional[float]) -> Plot:
@@ -107,7 +108,7 @@ class PlotMagics(ExtensionMagics):
         finally:
             plot.stop()
         _check(plot)
-        print(f"ipyros: plotted {len(plot)} messages of {plot.topic}; {self._kept_as()} holds them")
+        print(f"ipyros: plotted {counted(len(plot), 'message')} of {plot.topic}; {self._kept_as()} holds them")
         return plot
 
     def _kept_as(self) -> str:
