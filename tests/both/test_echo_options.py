@@ -27,3 +27,14 @@ def test_echo_once_without_arrays_and_with_times_from_now(ip, capsys):
     assert "name: <array of 2 str>" in out and "position: <array of 2 float>" in out, out
     stamp = float(re.search(r"stamp: (\S+)", out).group(1))
     assert -5.0 < stamp <= 0.01, "the stamp as seconds from now: a moment ago"
+
+
+def test_echo_table_rounds_floats_and_keeps_every_digit_in_the_messages(ip, capsys):
+    ok(ip, "from std_msgs.msg import Float64\n"
+           "third = rosNode('echo_third').new.publish('/echo_third/x', msgType=Float64).create()\n"
+           "third.timer(0.05, lambda: third.write('/echo_third/x', Float64(data=1 / 3)))")
+    capsys.readouterr()
+    ok(ip, "rows = %echo /echo_third/x -n 1 --table")
+    out = capsys.readouterr().out
+    assert "0.333333" in out and "0.3333333333" not in out and "1 messages" not in out, out
+    assert ip.user_ns["rows"][0].data == 1 / 3

@@ -267,11 +267,10 @@ class _Rows:
                 c == f or c.startswith(f + ".") for f in self.fields)]
             if self.csv:
                 print(",".join(self.columns), flush=True)
-        row = [_cell(flat.get(c)) for c in self.columns]
-        if self.csv:
-            print(",".join(_csv_quoted(v) for v in row), flush=True)
-        else:
-            self.rows.append(row)
+        if self.csv:  # a file for a spreadsheet: every digit
+            print(",".join(_csv_quoted(_cell(flat.get(c))) for c in self.columns), flush=True)
+        else:  # a table to read: floats rounded (the messages returned keep every digit)
+            self.rows.append([_cell(flat.get(c), rounded=True) for c in self.columns])
 
     def table(self, title: str) -> Table:
         table = Table(title=title, title_justify="left")
@@ -282,8 +281,12 @@ class _Rows:
         return table
 
 
-def _cell(value: Any) -> str:
-    return " ".join(map(str, value)) if isinstance(value, list) else "" if value is None else str(value)
+def _cell(value: Any, rounded: bool = False) -> str:
+    if isinstance(value, list):
+        return " ".join(_cell(item, rounded) for item in value)
+    if rounded and isinstance(value, float):
+        return f"{value:.6g}"
+    return "" if value is None else str(value)
 
 
 def _csv_quoted(text: str) -> str:
