@@ -234,7 +234,7 @@ class Ros2:
             for info in infos:
                 if not info.node_name.startswith("_"):
                     found.append((f"{info.node_namespace.rstrip('/')}/{info.node_name}", kind,
-                                  msgtypes.short_name(info.topic_type), str(runtime.qos_of(info.qos_profile))))
+                                  msgtypes.short_name(info.topic_type), runtime.qos_text(info.qos_profile)))
         return sorted(found)
 
     # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----

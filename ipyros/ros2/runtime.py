@@ -32,7 +32,7 @@ import rclpy
 from rclpy._rclpy_pybind11 import RCLError
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
 from ..core import msgtypes
@@ -68,6 +68,20 @@ def qos_of(profile: Any) -> Qos:
     return Qos(profile.depth or None,
                "best_effort" if profile.reliability == ReliabilityPolicy.BEST_EFFORT else "reliable",
                "transient_local" if profile.durability == DurabilityPolicy.TRANSIENT_LOCAL else "volatile")
+
+
+def qos_text(profile: Any) -> str:
+    """A peer's QoS in words, for ``%topics -v``: reliability, durability, depth, and the deadline, lifespan and
+    liveliness where they are not the defaults (a deadline or a manual liveliness also decides what matches)."""
+    words = [str(qos_of(profile))]
+    for what, duration in (("deadline", profile.deadline), ("lifespan", profile.lifespan)):
+        if 0 < duration.nanoseconds < (1 << 63) - 1:
+            words.append(f"{what} {duration.nanoseconds / 1e9:g} s")
+    if profile.liveliness not in (LivelinessPolicy.AUTOMATIC, LivelinessPolicy.SYSTEM_DEFAULT):
+        lease = profile.liveliness_lease_duration.nanoseconds
+        words.append(f"liveliness {profile.liveliness.name.lower().replace('_', '-')}" +
+                     (f" lease {lease / 1e9:g} s" if 0 < lease < (1 << 63) - 1 else ""))
+    return " ".join(words)
 
 
 _MATCH_ADVICE = {

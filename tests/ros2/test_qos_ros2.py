@@ -85,3 +85,22 @@ def test_a_relay_takes_the_qos_of_a_best_effort_basenode(make_node, notices):
     relay = next(f for f in engine_of(w).sent() if f.topic == "/robot7/out")
     assert relay.messages >= 1
     assert not [n for n in notices if "incompatible" in n], notices
+
+
+def test_topics_verbose_shows_deadline_and_liveliness(make_node, session):
+    """%topics -v (the backend's topic_endpoints): an endpoint's deadline and manual liveliness, which decide what
+    matches as much as reliability does (issue 25)."""
+    from rclpy.duration import Duration
+    from rclpy.qos import LivelinessPolicy, QoSProfile
+
+    host = make_node("qos_deadline").create()
+    node = session.process.host(host.fullname)
+    publisher = node.create_publisher(String, "/qos_deadline/out", QoSProfile(
+        depth=3, deadline=Duration(seconds=0.25), liveliness=LivelinessPolicy.MANUAL_BY_TOPIC,
+        liveliness_lease_duration=Duration(seconds=2)))
+    try:
+        shown = wait_for(lambda: session.backend.topic_endpoints("/qos_deadline/out"), timeout=20,
+                         what="the publisher in the graph")
+        assert shown[0][3] == "reliable volatile deadline 0.25 s liveliness manual-by-topic lease 2 s", shown  # (a depth is no one else's business: DDS does not tell it)
+    finally:
+        node.destroy_publisher(publisher)
