@@ -101,6 +101,7 @@ def test_topics_verbose_shows_deadline_and_liveliness(make_node, session):
     try:
         shown = wait_for(lambda: session.backend.topic_endpoints("/qos_deadline/out"), timeout=20,
                          what="the publisher in the graph")
-        assert shown[0][3] == "reliable volatile deadline 0.25 s liveliness manual-by-topic lease 2 s", shown  # (a depth is no one else's business: DDS does not tell it)
+        # (no depth: discovery does not carry it)
+        assert shown[0][3] == "reliable volatile deadline 0.25 s liveliness manual-by-topic lease 2 s", shown
     finally:
         node.destroy_publisher(publisher)
