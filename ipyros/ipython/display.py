@@ -127,14 +127,23 @@ def trial_view(report: TrialReport) -> Group:
     table = Table(show_lines=True)
     table.add_column("#", justify="right")
     table.add_column("message", overflow="fold", max_width=40)
-    table.add_column(f"live: {report.live_name}", overflow="fold")
-    table.add_column(f"candidate: {report.candidate_name}", overflow="fold")
+    table.add_column(f"live: {report.live_name}", overflow="fold", max_width=60)
+    table.add_column(f"candidate: {report.candidate_name}", overflow="fold", max_width=60)
     for row in report.rows:
-        mark = Text(str(row.index), style="" if row.same else "bold yellow")
-        cells = [Text("\n".join(o.lines()) or "(nothing)", style="" if o.lines() else "dim")
-                 for o in (row.live, row.candidate)]
-        table.add_row(mark, one_line(row.message), *cells)
+        mark = Text(f"{row.index}" if row.same else f"{row.index} ≠", style="" if row.same else "bold yellow")
+        live, candidate = row.live.lines(), row.candidate.lines()
+        table.add_row(mark, one_line(row.message), _outcome(live, candidate), _outcome(candidate, live))
     return Group(heading, table)
+
+
+def _outcome(lines: list[str], other: list[str]) -> Text:
+    """One side of a %try row: the lines the other side does not have stand out."""
+    if not lines:
+        return Text("(nothing)", style="dim")
+    shown = Text()
+    for number, line in enumerate(lines):
+        shown.append(("\n" if number else "") + line, style="" if line in other else "bold yellow")
+    return shown
 
 
 def interface_table(interface: Interface) -> Table:
