@@ -25,12 +25,15 @@ import dataclasses
 import logging
 import os
 import threading
+import warnings
 from collections import deque
 from typing import Any, Optional
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError
 from ..dsl import end_chains, rosNode
+from ..files.export import ExportWarning
+from ..files.savefile import SaveWarning
 from ..node.session import Session, configure, current, started as session_started
 from ..tools.graph import GraphCache
 from ..tools.probe import PromptPublisher, is_tool
@@ -182,6 +185,17 @@ class Extension:
         logger.addHandler(self._log_handler)
         logger.propagate = False  # the root logger would print it a second time
         logger.setLevel(self.settings.log_level.upper())
+        self._saved["showwarning"] = warnings.showwarning
+        warnings.showwarning = self._show_warning
+
+    def _show_warning(self, message: Any, category: type, filename: str, lineno: int, file: Any = None,
+                      line: Optional[str] = None) -> None:
+        """ipyros's own warnings (a save that needs a global, an export that left one out) as the one line they
+        are, not Python's ``file:line: UserWarning`` with the magic's generated code under it."""
+        if issubclass(category, (SaveWarning, ExportWarning)):
+            note_line(str(message))
+            return
+        self._saved["showwarning"](message, category, filename, lineno, file, line)
 
     def _known_graph(self) -> Any:
         """The graph as the cache last read it (what TAB after ``nd.reuse.publish.`` offers)."""
@@ -239,6 +253,8 @@ class Extension:
         logger.removeHandler(self._log_handler)
         logger.setLevel(self._saved["logging"][0])
         logger.propagate = self._saved["logging"][1]
+        if warnings.showwarning == self._show_warning:
+            warnings.showwarning = self._saved["showwarning"]
         session = self.session
         if session.report is self._report:
             session.report = self._saved["report"]

@@ -20,3 +20,15 @@ def test_save_nodes_leaves_out_what_has_no_source_and_the_tools(ip, tmp_path, ca
     assert "ipyros: saved /save_good to" in out, out
     text = (tmp_path / "lab.py").read_text()
     assert "rosNode('save_good')" in text and "save_raw" not in text and "rosNode('ipyros_" not in text, text
+
+
+def test_a_save_warning_is_one_line_not_pythons_warning_with_generated_code(ip, tmp_path, capsys):
+    ok(ip, "import threading\nguard = threading.Lock()\n"
+           "def guarded(msg):\n    with guard:\n        pass\n"
+           "locked = rosNode('save_locked')\n"
+           "locked.new.subscribe('/save_locked/in', guarded, msgType='std_msgs/String')")
+    capsys.readouterr()
+    ok(ip, f"locked.save({str(tmp_path / 'locked.py')!r})")
+    err = capsys.readouterr().err
+    assert "ipyros: the saved file needs guard defined before it runs" in err, err
+    assert "UserWarning" not in err and "run_line_magic" not in err and "warnings.warn" not in err, err
