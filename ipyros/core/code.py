@@ -50,11 +50,18 @@ def handler_slots(model: NodeModel) -> Iterator[tuple[str, str]]:
             yield planning.action_slot(a.resolved), f"action {a.resolved}"
 
 
-def handler_source(fn: Any, label: str) -> str:
-    """The source of handler ``fn``: a dedented ``def``, or the expression of a lambda."""
+def handler_source(fn: Any, label: str, namespace: Optional[dict] = None) -> str:
+    """The source of handler ``fn``: a dedented ``def``, or the expression of a lambda.
+
+    A method of a list, dict or set that ``namespace`` holds by a name (``handler=poses.append``,
+    the README's first lines) is kept as the lambda that calls it: ``lambda msg: poses.append(msg)``.
+    """
     name = getattr(fn, "__name__", type(fn).__name__)
     give_def = f"give the handler of {label} a def (def handler(msg): ...) and declare it again"
     if not isinstance(fn, types.FunctionType):
+        held = container_of(fn, namespace)
+        if held is not None:
+            return f"lambda msg: {held[0]}.{name}(msg)\n"
         raise IpyrosError(f"the handler of {label} is {type(fn).__name__} {name!r}, which has no source to keep; "
                           + give_def)
     try:
@@ -63,6 +70,17 @@ def handler_source(fn: Any, label: str) -> str:
         raise IpyrosError(f"cannot find the source of handler {name} for {label} (defined in "
                           f"{fn.__code__.co_filename}); {give_def}") from None
     return source if name != "<lambda>" else _lambda_expression(fn, source, label, give_def)
+
+
+def container_of(fn: Any, namespace: Optional[dict]) -> Optional[tuple[str, Any]]:
+    """For a handler that is a method of a list, dict or set (``poses.append``): the name ``namespace`` holds
+    that container by, and the container; else None."""
+    owner = getattr(fn, "__self__", None)
+    if namespace is None or type(owner) not in (list, dict, set):
+        return None
+    name = next((k for k, v in list(namespace.items()) if v is owner and k.isidentifier() and not k.startswith("_")),
+                None)
+    return (name, owner) if name else None
 
 
 def _lambda_expression(fn: types.FunctionType, text: str, label: str, give_def: str) -> str:

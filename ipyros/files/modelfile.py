@@ -72,8 +72,9 @@ _Dumper.add_representer(str, lambda dumper, text: dumper.represent_scalar(
 MODEL_SUFFIXES = ("yaml", "yml", "json")
 
 
-def handler_sources(nodes: Iterable[KeptNode]) -> dict[tuple[int, str], str]:
-    """``(id(node), slot) → source`` of every handler of ``nodes``.
+def handler_sources(nodes: Iterable[KeptNode], namespace: Optional[dict] = None) -> dict[tuple[int, str], str]:
+    """``(id(node), slot) → source`` of every handler of ``nodes`` (a list's method in ``namespace``: the lambda
+    that calls it, see :func:`~ipyros.core.code.handler_source`).
 
     A handler without source fails it, and the error names every such handler, so
     nothing is saved with a handler silently missing.
@@ -83,7 +84,7 @@ def handler_sources(nodes: Iterable[KeptNode]) -> dict[tuple[int, str], str]:
         for slot, label in handler_slots(node.model()):
             fn = node.handlers()[slot]
             try:
-                sources[(id(node), slot)] = handler_source(fn, f"{node.name} {label}")
+                sources[(id(node), slot)] = handler_source(fn, f"{node.name} {label}", namespace)
             except IpyrosError as error:
                 missing.append(str(error).split("; ")[0])  # names the handler and why
     if missing:

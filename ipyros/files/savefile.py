@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, Iterable, Optional, Sequence
 
 from ..core import plan as planning
-from ..core.code import WRITER, Bindings, handler_slots
+from ..core.code import WRITER, Bindings, container_of, handler_slots
 from ..core.errors import IpyrosError, warn_user
 from ..core.model import NodeModel
 from .atomic import write_atomic
@@ -70,7 +70,7 @@ class _SavedFile:
         self.bindings = Bindings()
         self.handlers: dict[str, str] = {}  # function name in the file → source
         self.slot_names: dict[tuple[int, str], str] = {}  # (node id, slot) → function name in the file
-        self.sources = handler_sources(self.nodes)
+        self.sources = handler_sources(self.nodes, namespace)
         self.variables = self._variables()
         for node in self.nodes:
             for slot, _ in handler_slots(node.model()):
@@ -103,6 +103,12 @@ class _SavedFile:
     def _handler(self, node: KeptNode, slot: str) -> None:
         fn, source = node.handlers()[slot], self.sources[(id(node), slot)]
         name = fn.__name__
+        held = container_of(fn, self.namespace)
+        if held is not None:  # poses.append: kept as the lambda calling it; the list starts empty again
+            container, value = held
+            self.bindings.values.setdefault(container, f"{container} = {type(value).__name__}()  # filled by "
+                                                       f"{node.name}'s handler: its data is not kept")
+            name = "<lambda>"
         if name == "<lambda>":  # a name of its own: on_cmd_vel, timer_tick, ...
             name = _identifier(re.sub(r"\W+", "_", slot.replace("topic ", "on ", 1)).strip("_"))
             source = f"{name} = {source}"

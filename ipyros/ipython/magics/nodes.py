@@ -171,7 +171,7 @@ class NodeMagics(ExtensionMagics):
             left_out = {}
             for node in nodes:  # save what can be saved; say what could not, and why
                 try:
-                    handler_sources([engine_of(node)])
+                    handler_sources([engine_of(node)], self.shell.user_ns)
                 except IpyrosError as error:
                     left_out[node.fullname] = str(error).removeprefix("nothing saved: ")
             nodes = [node for node in nodes if node.fullname not in left_out]
