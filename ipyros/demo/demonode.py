@@ -82,17 +82,21 @@ class DemoNode:
         return self._node.create_publisher(cls, topic, qos)
 
     def subscribe(self, topic: str, cls: type, callback: Callable[[Any], None], depth: int = 10,
-                  best_effort: bool = False) -> None:
-        """Call ``callback(msg)`` for each message; ``best_effort``: as a sensor's subscriber (ROS 2; ROS 1 has TCP)."""
+                  best_effort: bool = False, latched: bool = False) -> None:
+        """Call ``callback(msg)`` for each message; ``best_effort``: as a sensor's subscriber (ROS 2; ROS 1 has TCP);
+        ``latched``: also the last message of a latching publisher (ROS 2 asks for it: transient local; ROS 1
+        gets it anyway)."""
         if not self.ros2:
             import rospy
 
             rospy.Subscriber(topic, cls, callback, queue_size=depth)
             return
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
         reliability = ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE
-        self._node.create_subscription(cls, topic, callback, QoSProfile(depth=depth, reliability=reliability))
+        durability = DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE
+        self._node.create_subscription(cls, topic, callback, QoSProfile(depth=depth, reliability=reliability,
+                                                                        durability=durability))
 
     def service(self, name: str, cls: type, callback: Callable[[Any], None]) -> None:
         """Serve ``name`` (``~name``: the node's own) by calling ``callback(request)``; the answer is empty."""

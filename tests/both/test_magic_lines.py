@@ -7,7 +7,7 @@ import threading
 import pytest
 from shell import error_of, ok
 from std_srvs.srv import SetBool
-from support import response_of
+from support import response_of, wait_for
 
 
 @pytest.fixture
@@ -64,3 +64,27 @@ def test_a_yaml_alias_bomb_is_refused_at_once(ip, line, make_node):
     make_node("lines_bomb_host").create()  # %param needs a running session
     error = error_of(ip, line)
     assert "expands to more than" in str(error) and "\n" not in str(error)
+
+
+def test_a_one_shot_pub_is_not_latched_unless_asked(ip, peer, session):
+    """%pub sends once, as rostopic pub -1 / ros2 topic pub --once: a subscriber that comes later does not get an
+    old command (issue 25); --latch keeps it for later ones."""
+    def known(topic: str, count: int) -> None:  # a one-shot %pub waits for the subscribers the graph knows
+        wait_for(lambda: len(session.backend.graph_snapshot().subscribers.get(topic, ())) == count, timeout=20,
+                 what=f"the graph to know {count} listener(s) of {topic}")
+
+    first = peer("listen.py", "/lines/once", "std_msgs/String", "data")
+    first.wait_line("ready")
+    known("/lines/once", 1)
+    ok(ip, "%pub /lines/once std_msgs/String {data: old}")
+    first.wait_line("heard 'old'")
+    late = peer("listen.py", "/lines/once", "std_msgs/String", "data", "--name=late_peer")
+    late.wait_line("ready")
+    known("/lines/once", 2)
+    ok(ip, "%pub /lines/once std_msgs/String {data: marker}")
+    late.wait_line("heard 'marker'")
+    assert [line for line in late.lines if line.startswith("heard")][0] == "heard 'marker'", late.lines
+
+    ok(ip, "%pub /lines/kept std_msgs/String {data: kept} --latch")
+    later = peer("listen.py", "/lines/kept", "std_msgs/String", "data", "--name=later_peer", "--latched")
+    later.wait_line("heard 'kept'")
