@@ -266,6 +266,9 @@ class Ros1:
     def node_pid(self, node: str) -> Optional[int]:
         return introspect.node_pid(self.connection.uri, node)
 
+    def node_connections(self, node: str) -> list[tuple[str, str, str, str]]:
+        return introspect.node_connections(self.connection.uri, node)
+
     def ping_node(self, node: str) -> float:
         return introspect.ping_node(self.connection.uri, node)
 

@@ -20,8 +20,8 @@ from urllib.parse import urlparse
 from ..core.errors import IpyrosError
 from .master import master_proxy
 
-__all__ = ["call", "cleanup_nodes", "kill_node", "node_pid", "params_under", "ping_node", "service_type",
-           "topic_endpoints"]
+__all__ = ["call", "cleanup_nodes", "kill_node", "node_connections", "node_pid", "params_under", "ping_node",
+           "service_type", "topic_endpoints"]
 
 CALLER_ID = "/ipyros_introspect"
 
@@ -245,3 +245,26 @@ def cleanup_nodes(master_uri: str, timeout: float = 1.0) -> list[str]:
                 if code == 1:
                     master.unregisterService(node, service, service_uri)
     return gone
+
+
+def node_connections(master_uri: str, node: str, timeout: float = 2.0) -> list[tuple[str, str, str, str]]:
+    """The live connections of ``node`` (as ``rosnode info`` lists them): ``(topic, "in" | "out", peer node,
+    transport)``; a peer the master cannot name is shown by its address."""
+    master = master_proxy(master_uri, timeout)
+    try:
+        _, _, bus = _node_api(master_uri, node, timeout).getBusInfo(CALLER_ID)
+        _, _, state = master.getSystemState(CALLER_ID)
+    except (OSError, xmlrpc.client.Error) as error:
+        raise IpyrosError(f"{node} does not answer ({error})") from None
+    names = {}  # a node's URI → its name: inbound connections name their publisher by URI
+    for peer in {n for part in state for _, listed in part for n in listed}:
+        code, _, uri = master.lookupNode(CALLER_ID, peer)
+        if code == 1:
+            names[uri] = peer
+    found = []
+    for entry in bus:
+        _, destination, direction, transport, topic, connected = entry[:6]
+        if connected:
+            found.append((topic, {"i": "in", "o": "out"}.get(direction, "both"), names.get(destination, destination),
+                          transport))
+    return sorted(found)

@@ -306,6 +306,9 @@ class Ros2:
     def node_pid(self, node: str) -> Optional[int]:
         return None  # ROS 2 discovery does not say
 
+    def node_connections(self, node: str) -> list[tuple[str, str, str, str]]:
+        return []  # DDS matches endpoints, and the graph does not list who is matched with whom
+
     def ping_node(self, node: str) -> float:
         """How long ``node`` takes to answer a call of its parameter services, in ms (ROS 2 has no node ping)."""
         started = time.perf_counter()

@@ -58,3 +58,21 @@ def test_nodes_cleanup_forgets_a_node_that_died_without_unregistering(ip, peer, 
         return
     assert "forgot /listen_peer" in out, out
     assert not graph_has("/listen_peer")
+
+
+def test_node_lists_its_connections_on_ros1(ip, make_node, peer, session, capsys):
+    """As rosnode info: which topic connects to which node, in or out (ROS 1; DDS keeps no such list)."""
+    heard = []
+    make_node("conn_node").new.subscribe("/conn/chatter", lambda m: heard.append(m.data),
+                                         msgType="std_msgs/String").create()
+    talker = peer("talk.py", "/conn/chatter", "std_msgs/String", 20, "data='hi'")
+    talker.wait_line("ready")
+    wait_for(lambda: heard, timeout=20, what="the talker's messages")
+    host = session.process.name if session.backend.name == "ROS 1" else "/conn_node"
+    capsys.readouterr()
+    ok(ip, f"%node {host}")
+    rows = [line for line in capsys.readouterr().out.splitlines() if "connection" in line]
+    if session.backend.name == "ROS 2":
+        assert not rows
+        return
+    assert any("/conn/chatter" in row and "in from /talk_peer" in row and "TCPROS" in row for row in rows), rows

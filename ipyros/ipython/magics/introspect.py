@@ -276,6 +276,9 @@ class IntrospectMagics(ExtensionMagics):
         for action in actions:
             table.add_row("action server" if name in action.servers else "action client", action.name, action.type,
                           internal(action.name, mine))
+        for topic, direction, peer, transport in backend.node_connections(name):  # ROS 1: as rosnode info
+            table.add_row("connection", topic, f"{direction} {'from' if direction == 'in' else 'to'} {peer}",
+                          transport)
         if not table.row_count:
             table.add_row("", "nothing", "", "")
         self.ext.printer.show(table)
