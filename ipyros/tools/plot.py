@@ -94,8 +94,9 @@ class Plot:
         return len(self._samples)
 
     def __repr__(self) -> str:
-        state = "recording" if self.running else "stopped"
-        return (f"<Plot of {self.topic} {', '.join(self.fields)} ({state}): {len(self)} samples; "
+        if self.running:  # shown once, while the count still grows: a number here would be stale at once
+            return f"<Plot of {self.topic} {', '.join(self.fields)} (recording): .data holds the samples as arrays>"
+        return (f"<Plot of {self.topic} {', '.join(self.fields)} (stopped): {counted(len(self), 'sample')}; "
                 ".data holds them as arrays>")
 
 

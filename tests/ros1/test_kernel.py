@@ -133,10 +133,13 @@ def test_plot_in_a_kernel_is_a_figure_redrawn_below_the_cell_and_its_data_stays(
     assert images and base64.b64decode(images[0])[:8] == b"\x89PNG\r\n\x1a\n", "a figure below the cell"
     assert cell.outputs("display_data")[0].get("transient", {}).get("display_id"), "redrawn in place, by its id"
     # the prompt is free while it records; after the duration it stops by itself, and the data stays
+    shown = kernel.ok("p").shown()
+    assert "(recording)" in shown and "samples;" not in shown, "no count that is stale the moment it shows"
     cell = kernel.ok("import time\nwhile p.running: time.sleep(0.1)\n"
                      "print('DATA', len(p.data['t']), list(p.data['data']) == sorted(p.data['data']))")
     found = re.search(r"DATA (\d+) (True|False)", cell.stdout())
     assert found and int(found[1]) >= 20 and found[2] == "True", cell.stdout()
+    assert f"(stopped): {found[1]} samples;" in kernel.ok("p").shown()
 
 
 def test_echo_until_interrupted_in_a_kernel_is_one_rolling_view(kernel, ticks):
