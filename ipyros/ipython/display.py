@@ -262,8 +262,8 @@ def table_html(table: Table) -> str:
             parts.append(f'<span style="{css}">{text}</span>' if css else text)
         return "".join(parts)
 
-    def align(column: Any) -> str:
-        return f' style="text-align:{column.justify}"' if column.justify in ("right", "center") else ""
+    def align(column: Any) -> str:  # always said: JupyterLab's own style right-aligns every cell
+        return f' style="text-align:{column.justify if column.justify in ("right", "center") else "left"}"'
 
     head = "".join(f"<th{align(c)}>{cell(c.header)}</th>" for c in table.columns)
     columns = [list(c.cells) for c in table.columns]
