@@ -174,6 +174,12 @@ def _is_literal(value: Any) -> bool:
     return type(value) is dict and all(_is_literal(k) and _is_literal(v) for k, v in value.items())
 
 
+def _fills(source: str, name: str) -> bool:
+    """Whether ``source`` adds to the container ``name`` (``poses.append(msg)``, ``seen[key] = ...``)."""
+    return re.search(rf"\b{re.escape(name)}\s*(?:\.(?:append|extend|add|update|insert|setdefault|appendleft)\s*\("
+                     rf"|\[[^\]]*\]\s*=(?!=))", source) is not None
+
+
 @dataclass
 class Bindings:
     """What handlers need from outside their own source, sorted into what a file can hold.
@@ -209,6 +215,9 @@ class Bindings:
                 self.functions[name] = f"{name} = {helper}" if value.__name__ == "<lambda>" else \
                     helper if value.__name__ == name else f"{helper}{name} = {value.__name__}\n"
                 self.bind(value, helper, namespace, skip)
+            elif type(value) in (list, dict, set) and _fills(source, name):
+                # what a handler fills is its data, not its configuration: the file starts it empty again
+                self.values[name] = f"{name} = {type(value).__name__}()  # filled by {fn.__name__}: its data is not kept"
             elif value is not _MISSING and _is_literal(value):
                 self.values[name] = f"{name} = {value!r}"
             else:
