@@ -44,9 +44,15 @@ def interactive_shell(config: Optional[Config] = None, load: bool = True) -> Ite
 
 @pytest.fixture
 def ip(session) -> Iterator[InteractiveShell]:
-    """An InteractiveShell with ipyros loaded, on the run's ROS."""
+    """An InteractiveShell with ipyros loaded, on the run's ROS. The nodes its cells created are shut down
+    after the test (as ``make_node``'s are): a node left running would be the next test's."""
+    before = set(session.nodes.values())
     with interactive_shell() as shell:
-        yield shell
+        try:
+            yield shell
+        finally:
+            for engine in [e for e in list(session.nodes.values()) if e not in before and e.created]:
+                engine.shutdown()
 
 
 def run(shell: InteractiveShell, cell: str) -> ExecutionResult:
