@@ -26,7 +26,7 @@ from IPython.core import magic_arguments
 
 __all__ = ["ACTION", "ACTION_TYPE", "DEMO_ROBOT", "DSL_NODE", "EXECUTABLE", "FUNCTION", "GOAL_TEMPLATE",
            "MSG_TEMPLATE", "MSG_TYPE", "NODE", "OWN_TOPIC", "PACKAGE", "REQUEST_TEMPLATE", "SERVICE", "SRV_TYPE",
-           "TIMER", "TOPIC", "Grammar", "Word", "argument", "grammar_of"]
+           "TIMER", "TOPIC", "TRANSITION", "Grammar", "Word", "argument", "grammar_of"]
 
 # What an argument is, i.e. where its completions come from.
 TOPIC = "topic"              # live topics (+ the node's own first, when a node is known)
@@ -46,6 +46,7 @@ REQUEST_TEMPLATE = "request template"  # the request of the service type before 
 ACTION = "action"            # live actions
 ACTION_TYPE = "action type"  # action types (the live action's before it first)
 GOAL_TEMPLATE = "goal template"  # the goal of the action (type) before it, at its defaults
+TRANSITION = "lifecycle transition"  # what a lifecycle manager asks of a managed node (ROS 2)
 
 #: Kinds that complete the first word of their argument only (a whole message, inserted at once).
 _FIRST_WORD_ONLY = {MSG_TEMPLATE, REQUEST_TEMPLATE, GOAL_TEMPLATE}

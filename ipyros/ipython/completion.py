@@ -65,6 +65,7 @@ from .arguments import (
     SRV_TYPE,
     TIMER,
     TOPIC,
+    TRANSITION,
     grammar_of,
 )
 
@@ -457,6 +458,9 @@ class Answerer:
             return [(a.name, a.type) for a in actions_of(snap) if a.name.startswith(_global(frag) if frag else "/")]
         if kind in (ACTION_TYPE, GOAL_TEMPLATE):
             return self._action_words(want, snap)
+        if kind == TRANSITION:  # the standard ones: asking the node which it offers now would wait on it
+            return [(t, kind) for t in ("configure", "cleanup", "activate", "deactivate", "shutdown")
+                    if t.startswith(frag)]
         if kind == PACKAGE:
             return [(p, kind) for p in names_with_prefix(self.catalog.packages(), frag)]
         if kind == DEMO_ROBOT:

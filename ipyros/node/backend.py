@@ -152,6 +152,7 @@ class Backend(Protocol):
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]: ...
     def node_pid(self, node: str) -> Optional[int]: ...
     def ping_node(self, node: str) -> float: ...  # ms to answer (ROS 1: XML-RPC; ROS 2: a parameter call)
+    def lifecycle(self, node: str, transition: Optional[str] = None) -> tuple[str, list[str]]: ...  # ROS 2
     def node_connections(self, node: str) -> list[tuple[str, str, str, str]]: ...  # (topic, in/out, peer, transport)
     def kill_node(self, node: str) -> None: ...  # ask it to end (ROS 1); ROS 2 refuses in one line
     def cleanup_nodes(self) -> list[str]: ...  # forget dead registrations (ROS 1); the names

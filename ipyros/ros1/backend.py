@@ -266,6 +266,9 @@ class Ros1:
     def node_pid(self, node: str) -> Optional[int]:
         return introspect.node_pid(self.connection.uri, node)
 
+    def lifecycle(self, node: str, transition: Optional[str] = None) -> tuple[str, list[str]]:
+        raise IpyrosError("managed (lifecycle) nodes are ROS 2's; ROS 1 nodes run from start to end")
+
     def node_connections(self, node: str) -> list[tuple[str, str, str, str]]:
         return introspect.node_connections(self.connection.uri, node)
 

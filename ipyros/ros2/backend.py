@@ -306,6 +306,11 @@ class Ros2:
     def node_pid(self, node: str) -> Optional[int]:
         return None  # ROS 2 discovery does not say
 
+    def lifecycle(self, node: str, transition: Optional[str] = None) -> tuple[str, list[str]]:
+        """A lifecycle node's state and the transitions it offers, after ``transition`` if given (``%lifecycle``)."""
+        self._graph()
+        return introspect.lifecycle(self.process, node, transition)
+
     def node_connections(self, node: str) -> list[tuple[str, str, str, str]]:
         return []  # DDS matches endpoints, and the graph does not list who is matched with whom
 

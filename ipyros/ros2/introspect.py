@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 import threading
-from typing import Any
+from typing import Any, Optional
 
 from ..core import msgtypes
 from ..core.errors import IpyrosError
@@ -107,3 +107,46 @@ def describe_node_param(process: ProcessNode, node: str, key: str, timeout: floa
     if found.additional_constraints:
         described["constraints"] = found.additional_constraints
     return described
+
+
+#: The transitions a lifecycle manager asks for, by the labels ``ros2 lifecycle set`` takes.
+LIFECYCLE_TRANSITIONS = ("configure", "cleanup", "activate", "deactivate", "shutdown")
+
+
+def lifecycle(process: ProcessNode, node: str, transition: Optional[str] = None,
+              timeout: float = 5.0) -> tuple[str, list[str]]:
+    """A lifecycle node's state and the transitions it offers now, after ``transition`` if one is given (as
+    ``ros2 lifecycle get``/``set``): through its ``~/get_state``, ``~/get_available_transitions`` and
+    ``~/change_state`` services."""
+    from lifecycle_msgs.msg import Transition
+    from lifecycle_msgs.srv import ChangeState, GetAvailableTransitions, GetState
+
+    base = node.rstrip("/")
+    if not any(name == f"{base}/get_state" for name, _ in process.graph().get_service_names_and_types()):
+        raise IpyrosError(f"{node} is not a lifecycle node (it has no {base}/get_state service); %nodes lists "
+                          "the nodes")
+    if transition is not None:
+        offered = _lifecycle_call(process, f"{base}/get_available_transitions", GetAvailableTransitions,
+                                  GetAvailableTransitions.Request(), timeout).available_transitions
+        labels = [t.transition.label for t in offered]
+        if transition not in labels:
+            raise IpyrosError(f"{node} cannot {transition} now; it offers {', '.join(labels) or 'nothing'}")
+        changed = _lifecycle_call(process, f"{base}/change_state", ChangeState,
+                                  ChangeState.Request(transition=Transition(label=transition)), timeout)
+        if not changed.success:
+            raise IpyrosError(f"{node} refused to {transition} (its on_{transition} callback failed)")
+    state = _lifecycle_call(process, f"{base}/get_state", GetState, GetState.Request(), timeout).current_state
+    offered = _lifecycle_call(process, f"{base}/get_available_transitions", GetAvailableTransitions,
+                              GetAvailableTransitions.Request(), timeout).available_transitions
+    return state.label, [t.transition.label for t in offered]
+
+
+def _lifecycle_call(process: ProcessNode, service: str, cls: type, request: Any, timeout: float) -> Any:
+    caller = process.caller()
+    client = caller.create_client(cls, service)
+    try:
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise IpyrosError(f"{service} does not answer; is the node alive? (%nodes lists them)")
+        return _wait(client.call_async(request), timeout, service)
+    finally:
+        caller.destroy_client(client)

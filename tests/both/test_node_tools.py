@@ -40,6 +40,7 @@ def test_node_kill_ends_a_peer_on_ros1_and_is_refused_in_one_line_on_ros2(ip, pe
     if session.backend.name == "ROS 2":
         assert "ROS 2 has no way to ask /listen_peer to end" in str(error_of(ip, "%node /listen_peer --kill"))
         return
+    assert "managed (lifecycle) nodes are ROS 2's" in str(error_of(ip, "%lifecycle /listen_peer"))
     ok(ip, "%node /listen_peer --kill")
     assert listener.proc.wait(20) is not None
 

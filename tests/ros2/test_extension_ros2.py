@@ -298,3 +298,26 @@ def test_services_call_params_and_nodes_at_the_ros2_prompt(ip, capsys):
         _ok(ip, "%node /mi2/echo_node")
         out = capsys.readouterr().out
         assert "/mi2/out" in out and "/mi2/in" in out and "/mi2/check" in out, out
+
+
+def test_lifecycle_shows_and_drives_a_managed_node(ip, capsys):
+    """%lifecycle NODE [TRANSITION]: a managed node's state and transitions (ros2 lifecycle get/set), TAB for both."""
+    from ros2_fixtures import Peer, wait_for
+
+    ip.run_line_magic("load_ext", "ipyros")
+    with Peer("managed_node.py") as peer:
+        peer.wait_line("managed_node ready")
+        wait_for(lambda: "/managed_talker" in _completions(ip, "%lifecycle /managed"), timeout=20,
+                 what="the managed node to complete")
+        assert _completions(ip, "%lifecycle /managed_talker con") == ["configure"]
+        capsys.readouterr()
+        _ok(ip, "%lifecycle /managed_talker")
+        assert "/managed_talker: state unconfigured; it offers configure" in capsys.readouterr().out
+        _ok(ip, "%lifecycle /managed_talker configure")
+        assert "/managed_talker: configure → inactive; it offers" in capsys.readouterr().out
+        peer.wait_line("configured")
+        _ok(ip, "%lifecycle /managed_talker activate")
+        assert "activate → active" in capsys.readouterr().out
+        peer.wait_line("activated")
+        result = ip.run_cell("%lifecycle /managed_talker configure")
+        assert "cannot configure now; it offers" in str(result.error_in_exec)

@@ -37,7 +37,7 @@ from ...core.userdata import load_yaml
 from ...files.atomic import write_atomic
 from ...tools.probe import is_tool, tool_name
 from ..api import global_topic, live_graph, split_head
-from ..arguments import MSG_TYPE, NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, argument
+from ..arguments import MSG_TYPE, NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, TRANSITION, argument
 from .common import ExtensionMagics
 
 
@@ -282,6 +282,24 @@ class IntrospectMagics(ExtensionMagics):
         if not table.row_count:
             table.add_row("", "nothing", "", "")
         self.ext.printer.show(table)
+
+    # -- %lifecycle ----------------------------------------------------------------------------
+    @magic_arguments()
+    @argument("name", complete=NODE, help="the live lifecycle (managed) node")
+    @argument("transition", nargs="?", complete=TRANSITION, help="a transition to trigger: configure, activate, "
+              "deactivate, cleanup, shutdown")
+    @line_magic
+    def lifecycle(self, line: str) -> None:
+        """A managed node's state and the transitions it offers (ros2 lifecycle get); with TRANSITION, trigger it
+        first (ros2 lifecycle set)."""
+        args = parse_argstring(self.lifecycle, line)
+        name = global_topic(args.name)
+        try:
+            state, offered = self._ready().lifecycle(name, args.transition)
+        except IpyrosError as error:
+            raise UsageError(str(error)) from None
+        done = f"{args.transition} → " if args.transition else "state "
+        print(f"{name}: {done}{state}; it offers {', '.join(offered) or 'nothing'}")
 
     def _ping_or_kill(self, backend: Any, name: str, kill: bool, mine: list[Any]) -> None:
         try:
