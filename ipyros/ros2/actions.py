@@ -13,6 +13,7 @@ answered when the goal ends), the topics as bytes through :class:`~ipyros.ros2.r
 from __future__ import annotations
 
 import threading
+import time
 import uuid
 from typing import Any, Callable, Optional
 
@@ -38,6 +39,8 @@ STATES = {GoalStatus.STATUS_UNKNOWN: "pending", GoalStatus.STATUS_ACCEPTED: "act
 
 #: How long a goal sent may wait for the server to show up and to accept it (s).
 ACCEPT_TIMEOUT = 10.0
+#: How long a new client waits, once it sees its server, for the server to see it (s): discovery is two ways.
+SETTLE = 0.5
 
 
 class Goals:
@@ -46,6 +49,7 @@ class Goals:
     def __init__(self, node: Node) -> None:
         self._node = node
         self._clients: dict[tuple[str, type], ActionClient] = {}
+        self._settled: set[ActionClient] = set()  # clients whose server has had its moment to see them
         self._lock = threading.Lock()
 
     def client(self, name: str, cls: type) -> ActionClient:
@@ -61,6 +65,13 @@ class Goals:
         if not client.wait_for_server(timeout_sec=timeout):
             raise IpyrosError(f"no action server {name} answered within {timeout:g} s; see %actions for the "
                               "servers there are")
+        with self._lock:
+            settled = client in self._settled
+            self._settled.add(client)
+        if not settled:
+            # We see the server; it may not see us yet, and a server sends its answer only to a client it has
+            # matched (rmw waits 100 ms for that): a goal sent at once could be taken and its answer lost.
+            time.sleep(SETTLE)
         return Goal(name, cls, client, to_message(cls.Goal, goal, f"the goal of {name}"), feedback, timeout)
 
     def close(self) -> None:

@@ -84,7 +84,10 @@ class ActionCall:
 
     def forward(self, goal):
         """Send goal to the basenode's own server; its feedback goes on to the client; its result comes back."""
-        self._client.wait_for_server()
+        if not getattr(self._client, "settled", False):  # its first goal
+            self._client.wait_for_server()
+            time.sleep(0.5)  # we see the server; give it its moment to see us, or its answer could be lost
+            self._client.settled = True
         accepted, ended = threading.Event(), threading.Event()
         sent = self._client.send_goal_async(goal, feedback_callback=lambda m: self.feedback(m.feedback))
         sent.add_done_callback(lambda _: accepted.set())
@@ -167,7 +170,7 @@ class RclpyScript:
                     "QoSProfile", "ReliabilityPolicy", "DurabilityPolicy", "SingleThreadedExecutor",
                     "MultiThreadedExecutor", "ActionCall", "serve_action", "action_relay", "ActionClient",
                     "ActionServer", "CancelResponse", "Future", "GoalStatus", "GoalStatusArray", "CancelGoal",
-                    "ReentrantCallbackGroup", "qos_profile_action_status_default"}
+                    "ReentrantCallbackGroup", "qos_profile_action_status_default", "time"}
     #: What a wrapped action is remapped by: its name (ROS 2 remaps an action as a whole).
     action_parts = ("",)
 
@@ -190,7 +193,8 @@ class RclpyScript:
 
     @staticmethod
     def stdlib(script: Any, starts_base: bool) -> list[str]:
-        return ["os", "signal", "subprocess", "sys", "threading"] if starts_base else ["sys", "threading"]
+        found = ["os", "signal", "subprocess", "sys", "threading"] if starts_base else ["sys", "threading"]
+        return found + (["time"] if _has(script, planning.ActionServerSpec) else [])
 
     @staticmethod
     def before_imports(script: Any) -> list[str]:
