@@ -337,8 +337,7 @@ def test_plot_in_the_terminal_until_ctrl_c_and_to_a_png(ip, capsys, rate_peer, t
     out = capsys.readouterr().out
     assert "ipyros: plotted" in out and len(p.data["t"]) > 20 and not p.running
     assert "_.data (Out[" in out, "no variable holds it: the message names what does"
-    with ctrl_c_after(1.0):
-        ok(ip, "kept_plot = %plot /mg/rate data")
+    ok(ip, "kept_plot = %plot /mg/rate data --duration 1")
     assert "kept_plot.data holds them" in capsys.readouterr().out
 
     png = tmp_path / "rate.png"

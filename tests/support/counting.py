@@ -10,6 +10,7 @@ the result holds how far it got. Its ``plain_send`` is a client of the ROS's own
 from __future__ import annotations
 
 import threading
+import time
 from pathlib import Path
 from typing import Any, Optional
 
@@ -33,8 +34,21 @@ class Counting:
     def plain_send(self, name: str, n: int, cancel_after: Optional[int] = None,
                    timeout: float = 30.0) -> tuple[str, int, list[int]]:
         """Send "count to n" with the ROS's own client; ``(final state, the result's count, feedbacks seen)``.
-        ``cancel_after``: cancel once that many feedbacks came."""
+        ``cancel_after``: cancel once that many feedbacks came.
+
+        Feedback and result travel apart (two topics; on ROS 2 a topic and a service), so the result
+        may overtake the last feedbacks: the feedback a result of k stands for is waited for (5 s at most).
+        """
         raise NotImplementedError
+
+
+def late_feedback(seen: list[int], reached: int, timeout: float = 5.0) -> list[int]:
+    """``seen`` once it holds the ``reached`` feedbacks a result of ``reached`` comes after (or the timeout);
+    a goal that sent no feedback before its result (a handler that answers at once) is not waited for."""
+    deadline = time.monotonic() + timeout
+    while seen and len(seen) < reached and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return list(seen)
 
 
 class CountingRos1(Counting):
@@ -69,7 +83,8 @@ class CountingRos1(Counting):
             assert client.wait_for_result(rospy.Duration(timeout)), f"no result from {name}"
             state = {GoalStatus.SUCCEEDED: "succeeded", GoalStatus.PREEMPTED: "cancelled",
                      GoalStatus.ABORTED: "aborted"}.get(client.get_state(), str(client.get_state()))
-            return state, client.get_result().result, seen
+            reached = client.get_result().result
+            return state, reached, late_feedback(seen, reached if state == "succeeded" else 0)
         finally:
             client.action_client.stop()
 
@@ -122,7 +137,8 @@ class CountingRos2(Counting):
             assert ended.wait(timeout), f"no result from {name}"
             state = {GoalStatus.STATUS_SUCCEEDED: "succeeded", GoalStatus.STATUS_CANCELED: "cancelled",
                      GoalStatus.STATUS_ABORTED: "aborted"}.get(result.result().status, str(result.result().status))
-            return state, len(result.result().result.sequence), seen
+            reached = len(result.result().result.sequence)
+            return state, reached, late_feedback(seen, reached if state == "succeeded" else 0)
         finally:
             executor.shutdown()
             client.destroy()
