@@ -16,12 +16,9 @@ each); the layers it cannot run are not collected. The fixtures of each ROS are 
 
 from __future__ import annotations
 
-import atexit
 import importlib.util
 import os
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 import pytest
@@ -48,10 +45,14 @@ if ROS == 1:
 elif ROS == 2:
     pytest_plugins = ["ros2_fixtures", "shell"]
 
-# The session history files of the run go to a directory of its own, removed at the end.
-HISTORY_DIR = tempfile.mkdtemp(prefix="ipyros-test-history-")
-os.environ["IPYROS_HISTORY_DIR"] = HISTORY_DIR
-atexit.register(shutil.rmtree, HISTORY_DIR, ignore_errors=True)
+
+@pytest.fixture(scope="session", autouse=True)
+def history_dir(tmp_path_factory):
+    """The session history files of the run, in pytest's own temporary directory: gone with it, even after a
+    run that was killed (a directory of ours in /tmp would stay)."""
+    os.environ["IPYROS_HISTORY_DIR"] = str(tmp_path_factory.mktemp("history"))
+    yield
+    os.environ.pop("IPYROS_HISTORY_DIR", None)
 
 
 

@@ -42,12 +42,19 @@ def service_type(process: ProcessNode, name: str) -> str:
 
 def call(process: ProcessNode, name: str, cls: type, request: Any, timeout: float) -> Any:
     """Call the service ``name`` with ``request``; its response."""
+    return _call_once(process, name, cls, conform(request), timeout,
+                      f"service {name} did not come up within {timeout:g} s; %services lists the live ones")
+
+
+def _call_once(process: ProcessNode, name: str, cls: type, request: Any, timeout: float, absent: str) -> Any:
+    """One call of ``name`` from the caller node, through a client made for it; ``absent``: what to say when no
+    server comes up within ``timeout``."""
     caller = process.caller()
     client = caller.create_client(cls, name)
     try:
         if not client.wait_for_service(timeout_sec=timeout):
-            raise IpyrosError(f"service {name} did not come up within {timeout:g} s; %services lists the live ones")
-        return _wait(client.call_async(conform(request)), timeout, f"service {name}")
+            raise IpyrosError(absent)
+        return _wait(client.call_async(request), timeout, f"service {name}")
     finally:
         caller.destroy_client(client)
 
@@ -58,15 +65,8 @@ def _request(process: ProcessNode, node: str, kind: str, timeout: float, **field
 
     cls = getattr(rcl_interfaces.srv, kind)
     service = node.rstrip("/") + "/" + "_".join(w.lower() for w in re.findall("[A-Z][a-z]*", kind))
-    caller = process.caller()
-    client = caller.create_client(cls, service)
-    try:
-        if not client.wait_for_service(timeout_sec=timeout):
-            raise IpyrosError(f"{node} has no parameter services answering; is it a ROS 2 node, and alive? "
-                              "(%nodes lists them)")
-        return _wait(client.call_async(cls.Request(**fields)), timeout, f"{node}'s parameter service")
-    finally:
-        caller.destroy_client(client)
+    return _call_once(process, service, cls, cls.Request(**fields), timeout,
+                      f"{node} has no parameter services answering; is it a ROS 2 node, and alive? (%nodes lists them)")
 
 
 def node_params(process: ProcessNode, node: str, timeout: float = 3.0) -> dict[str, Any]:
@@ -142,11 +142,5 @@ def lifecycle(process: ProcessNode, node: str, transition: Optional[str] = None,
 
 
 def _lifecycle_call(process: ProcessNode, service: str, cls: type, request: Any, timeout: float) -> Any:
-    caller = process.caller()
-    client = caller.create_client(cls, service)
-    try:
-        if not client.wait_for_service(timeout_sec=timeout):
-            raise IpyrosError(f"{service} does not answer; is the node alive? (%nodes lists them)")
-        return _wait(client.call_async(request), timeout, service)
-    finally:
-        caller.destroy_client(client)
+    return _call_once(process, service, cls, request, timeout,
+                      f"{service} does not answer; is the node alive? (%nodes lists them)")
