@@ -20,6 +20,17 @@ _LEGAL_NAME = re.compile(r"[~/A-Za-z][\w/]*")
 _LEGAL_BASE_NAME = re.compile(r"[A-Za-z]\w*")
 
 
+def tool_name(purpose: str) -> str:
+    """The name of one of ipyros's own helper nodes (``%echo``, ``%pub``, ...): ``ipyros_<purpose>_<pid>``,
+    unique on the graph and recognisable in ``rosnode list``."""
+    return f"ipyros_{purpose}_{os.getpid()}"
+
+
+def is_tool(name: str) -> bool:
+    """Whether ``name`` (base or global) is a helper node's, of any ipyros session: not a node the user made."""
+    return re.fullmatch(r"ipyros_[a-z]+_\d+", name.rsplit(SEP, 1)[-1]) is not None
+
+
 def is_legal_name(name: str) -> bool:
     """A graph name as ROS allows it: ``cmd_vel``, ``/a/b``, ``~status`` (no ``//``; empty is the namespace)."""
     return name == "" or (_LEGAL_NAME.fullmatch(name) is not None and "//" not in name)

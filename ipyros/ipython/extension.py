@@ -31,12 +31,13 @@ from typing import Any, Optional
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError
+from ..core.names import is_tool
 from ..dsl import end_chains, rosNode
 from ..files.export import ExportWarning
 from ..files.savefile import SaveWarning
 from ..node.session import Session, configure, current, started as session_started
 from ..tools.graph import GraphCache
-from ..tools.probe import PromptPublisher, is_tool
+from ..tools.probe import PromptPublisher
 from . import completion, display
 from .magics import (
     ActionMagics,

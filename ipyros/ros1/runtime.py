@@ -37,6 +37,7 @@ from rospy.msg import serialize_message
 
 from ..core.errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
 from ..core.msgbuild import explain_unsendable
+from ..core.names import is_tool
 from ..core.slots import Arrival, HandlerSlot, Pristine, SendFigures
 from . import sending
 from .master import master_proxy
@@ -71,9 +72,16 @@ class ProcessNode:
         return self.name is not None
 
     def start(self, name: str, master_uri: str) -> str:
-        """Start the process node as ``name`` (a global name) unless it already runs."""
+        """Start the process node as ``name`` (a global name) unless it already runs.
+
+        A process node that one of ipyros's helpers started (``%echo`` before any ``create()``)
+        takes the name of the first node the user creates: the user's node keeps its name
+        whatever ran first.
+        """
         with self._lock:
             if self.name is not None:
+                if is_tool(self.name) and not is_tool(name):
+                    self._rename(name)
                 return self.name
             if rospy.core.is_shutdown_requested() or rospy.core.is_initialized():
                 raise NodeStateError("rospy was already initialised or shut down in this process; "
@@ -86,6 +94,40 @@ class ProcessNode:
             _python_warnings_still_shown()
             self.name, self.master_uri = rospy.get_name(), master_uri
             return self.name
+
+    def _rename(self, name: str) -> None:
+        """Go on as ``name``: every registration moves from the old name to the new one.
+
+        rospy cannot start a second node in a process, but a node is, to the master and its
+        peers, a caller id and an XML-RPC address: the address stays, the caller id changes.
+        Connections made already stay up (peers find the same address under the new name).
+        """
+        from roscpp.srv import GetLoggers, SetLoggerLevel
+        from rospy.client import _get_loggers, _set_logger_level
+        from rospy.impl.registration import get_service_manager, get_topic_manager
+
+        refuse_taken_name(self.master_uri, name)
+        old, uri = self.name, rospy.core.get_node_uri()
+        master = master_proxy(self.master_uri, timeout=5.0)
+        services = get_service_manager()
+        for service, _ in services.get_services():  # rospy's own, named after the node: named again below
+            if service in (f"{old}/get_loggers", f"{old}/set_logger_level"):
+                services.get_service(service).shutdown()
+        topics = get_topic_manager()
+        for topic, _ in topics.get_publications():
+            master.unregisterPublisher(old, topic, uri)
+        for topic, _ in topics.get_subscriptions():
+            master.unregisterSubscriber(old, topic, uri)
+        for service, service_uri in services.get_services():
+            master.unregisterService(old, service, service_uri)
+        rospy.names._set_caller_id(name)
+        manager = _registration_manager()
+        if manager is not None:
+            manager.handler.name = name  # what getName answers
+        rospy.Service(f"{name}/get_loggers", GetLoggers, _get_loggers)
+        rospy.Service(f"{name}/set_logger_level", SetLoggerLevel, _set_logger_level)
+        self.name = name
+        self.register_again()
 
     def register_again(self) -> tuple[int, int, int]:
         """Tell a restarted master every publication, subscription and service of this process.

@@ -23,9 +23,9 @@ from collections import deque
 from typing import Any, Optional, Sequence
 
 from ..core.errors import IpyrosError
+from ..core.names import tool_name
 from ..core.text import counted
 from ..dsl import rosNode
-from .probe import tool_name
 
 __all__ = ["Plot", "figure", "text_chart"]
 

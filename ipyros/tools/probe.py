@@ -12,15 +12,14 @@ behind :mod:`ipyros.ros1.runtime`), named ``ipyros_<purpose>_<pid>``:
   ``ros2 topic pub --once`` send it (latched only when asked: ``%pub --latch``). A topic
   that one of the session's own nodes already publishes is written through that node.
 
-All of a session's DSL nodes share the process's one ROS node; if one of these is the
-first node created, that ROS node takes its name (see :mod:`ipyros.node.session`).
+On ROS 1 all of a session's DSL nodes share the process's one ROS node; if one of these
+is the first node created, that ROS node is named after the first node the user creates
+later (see :meth:`ipyros.ros1.runtime.ProcessNode.start`).
 """
 
 from __future__ import annotations
 
-import os
 import queue
-import re
 import statistics
 import time
 from dataclasses import dataclass
@@ -28,19 +27,10 @@ from typing import Any, Mapping, Optional
 
 from ..core import msgtypes
 from ..core.errors import MessageTypeError
+from ..core.names import tool_name
 from ..core.slots import arrival
 from ..dsl import engine_of, rosNode
 from ..node.session import current
-
-
-def tool_name(purpose: str) -> str:
-    """The DSL node name of a probe: unique on the master, recognisable in ``rosnode list``."""
-    return f"ipyros_{purpose}_{os.getpid()}"
-
-
-def is_tool(name: str) -> bool:
-    """Whether ``name`` is a probe's (of any ipyros session): not a node the user made."""
-    return re.fullmatch(r"ipyros_[a-z]+_\d+", name.rsplit("/", 1)[-1]) is not None
 
 
 class Echo:

@@ -12,10 +12,10 @@ import threading
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
+from ..core.names import tool_name
 from ..core.text import counted
 from ..dsl import rosNode
 from ..node.session import current
-from .probe import tool_name
 
 __all__ = ["Recording", "bag_module"]
 

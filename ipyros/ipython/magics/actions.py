@@ -27,7 +27,7 @@ from ...core import msgtypes
 from ...core.errors import IpyrosError
 from ...core.graph import actions_of, name_matches
 from ...core.msgbuild import flow_yaml, parse_data, to_yaml
-from ...tools.probe import tool_name
+from ...core.names import tool_name
 from ..api import global_topic, live_graph, split_head
 from ..arguments import ACTION, ACTION_TYPE, GOAL_TEMPLATE, argument
 from .common import ExtensionMagics

@@ -33,9 +33,9 @@ from ...core import msgtypes
 from ...core.errors import IpyrosError
 from ...core.graph import GraphSnapshot, actions_of, name_matches
 from ...core.msgbuild import build_message, definition, parse_data, to_yaml
+from ...core.names import is_tool, tool_name
 from ...core.userdata import load_yaml
 from ...files.atomic import write_atomic
-from ...tools.probe import is_tool, tool_name
 from ..api import global_topic, live_graph, split_head
 from ..arguments import MSG_TYPE, NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, TRANSITION, argument
 from .common import ExtensionMagics

@@ -16,11 +16,11 @@ from IPython.core.magic import line_cell_magic, line_magic, magics_class
 from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
 from ...core.errors import IpyrosError
+from ...core.names import is_tool
 from ...dsl import engine_of, keeping, restore, rosNode
 from ...files.modelfile import handler_sources
 from ...node.session import current
 from ...tools.editing import EditWatch, PendingEdit, fresh_name, handler_source, lambda_as_def, new_functions
-from ...tools.probe import is_tool
 from ...tools.tryout import try_candidate
 from ..api import evaluate, find_node, split_head
 from ..arguments import DSL_NODE, FUNCTION, OWN_TOPIC, argument
