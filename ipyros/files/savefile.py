@@ -155,21 +155,20 @@ class _SavedFile:
         lines += _base_lines(var, model)
         fn_of = lambda slot: self.slot_names[(id(node), slot)]  # noqa: E731
         for t in model.topics:
-            args = [repr(t.name)]
-            if t.role == "new" and t.direction == "subscribe":
-                args.append(f"handler={fn_of(planning.topic_slot(t.resolved))}")
+            args = [f"handler={fn_of(planning.topic_slot(t.resolved))}"] if t.role == "new" and \
+                t.direction == "subscribe" else []
             args.append(f"msgType={t.type!r}")
             if t.latch:
                 args.append("latch=True")
             if t.qos:
                 args.append(f"qos={t.qos!r}")
-            lines.append(f"{var}.{t.role}.{t.direction}({', '.join(args)})")
+            lines.append(_declaring(f"{var}.{t.role}.{t.direction}", t.name, args))
         for s in model.services:
-            handler = f", handler={fn_of(planning.service_slot(s.resolved))}" if s.role == "new" else ""
-            lines.append(f"{var}.{s.role}.service({s.name!r}, srvType={s.type!r}{handler})")
+            handler = [f"handler={fn_of(planning.service_slot(s.resolved))}"] if s.role == "new" else []
+            lines.append(_declaring(f"{var}.{s.role}.service", s.name, [f"srvType={s.type!r}", *handler]))
         for a in model.actions:
-            handler = f", handler={fn_of(planning.action_slot(a.resolved))}" if a.role == "new" else ""
-            lines.append(f"{var}.{a.role}.action({a.name!r}, type={a.type!r}{handler})")
+            handler = [f"handler={fn_of(planning.action_slot(a.resolved))}"] if a.role == "new" else []
+            lines.append(_declaring(f"{var}.{a.role}.action", a.name, [f"type={a.type!r}", *handler]))
         for timer in model.timers:
             fn = fn_of(planning.timer_slot(timer.name))
             options = (f", name={timer.name!r}" if timer.name != fn else "") + (", oneshot=True" if timer.oneshot else "")
@@ -192,6 +191,17 @@ class _SavedFile:
             lines += [f"    ({v.when!r}, {_python_string(v.source)})," for v in versions]  # type: ignore[arg-type]
             lines.append(f"], current={current})")
         return lines
+
+
+def _declaring(method: str, name: str, args: list[str]) -> str:
+    """One declaration, in the paper's spelling where the name allows it: ``nd.reuse.publish.cmd_vel(...)``
+    for a relative name whose parts are Python names, else ``nd.reuse.publish('/cmd_vel', ...)``.
+    ``args`` are keyword arguments: they read the same in both spellings.
+    """
+    parts = name.split("/")
+    if all(part.isidentifier() and not keyword.iskeyword(part) for part in parts):
+        return f"{method}.{'.'.join(parts)}({', '.join(args)})"
+    return f"{method}({', '.join([repr(name), *args])})"
 
 
 def _base_lines(var: str, model: NodeModel) -> list[str]:

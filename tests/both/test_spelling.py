@@ -33,3 +33,23 @@ def test_tab_after_the_dot_offers_the_graphs_names_there(ip):
     wait_for(lambda: "turtle1" in completions("nd.new.subscribe.tu"), timeout=20, interval=0.3,
              what="the namespace's first name part to complete")
     assert "pose" in completions("nd.new.subscribe.turtle1.po")
+
+
+def test_saving_writes_the_spelling_that_reads_best_and_loads_back(ip, tmp_path):
+    path = tmp_path / "spelled.py"
+    ok(ip, "def keep(msg):\n    return None\n"
+           "sp = rosNode('spell_save')\n"
+           "sp.new.publish.cmd_vel('geometry_msgs/Twist')\n"
+           "sp.new.subscribe('/spell_save/absolute', keep, msgType='std_msgs/String')\n"
+           "sp.new.subscribe.turtle1.pose(keep, msgType='geometry_msgs/Pose')\n"
+           "sp.new.service('~reset', 'std_srvs/Empty', handler=keep)\n"
+           f"sp.save({str(path)!r})")
+    text = path.read_text()
+    twist, string, pose = (ip.user_ns["sp"].model().topics[i].type for i in range(3))
+    assert f"sp.new.publish.cmd_vel(msgType={twist!r})" in text, text
+    assert f"sp.new.subscribe.turtle1.pose(handler=keep, msgType={pose!r})" in text, "relative: the paper's spelling"
+    assert f"sp.new.subscribe('/spell_save/absolute', handler=keep, msgType={string!r})" in text, "global: a string"
+    assert "sp.new.service('~reset', " in text, "a private name is a string"
+    ok(ip, f"loaded = rosNode.load({str(path)!r}, get_ipython().user_ns)")
+    assert ip.user_ns["loaded"].model().topics == ip.user_ns["sp"].model().topics
+    assert ip.user_ns["loaded"].model().services == ip.user_ns["sp"].model().services
