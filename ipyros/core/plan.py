@@ -39,6 +39,8 @@ class PublishSpec:
     type: str
     latch: bool = False
     qos: Qos = Qos()
+    #: The basenode's topic whose latching this one takes (an intercepted output: a latched map stays latched).
+    follows: Optional[str] = None
 
 
 @dataclass(frozen=True)
@@ -141,8 +143,10 @@ def plan(model: NodeModel) -> dict[Spec, None]:
             if t.resolved not in intercepted:
                 specs[RelaySpec(internal_name(model, t.resolved), t.resolved, t.type)] = None
             elif model.topic(t.resolved, "publish", "new") is None:
-                # W takes T over: its handler writes what reaches T (write(T), as in the paper)
-                specs[PublishSpec(t.resolved, t.type, t.latch, qos_of(t.qos))] = None
+                # W takes T over: its handler writes what reaches T (write(T), as in the paper); T is
+                # latched if B's output is, unless the declaration says how T is published
+                follows = None if t.latch or t.qos else internal_name(model, t.resolved)
+                specs[PublishSpec(t.resolved, t.type, t.latch, qos_of(t.qos), follows)] = None
         elif t.resolved not in intercepted:  # reuse subscribe: the world into B
             specs[RelaySpec(t.resolved, internal_name(model, t.resolved), t.type)] = None
 

@@ -575,7 +575,8 @@ class NodeEngine:
         backend, host = self.session.backend, self.fullname
         if isinstance(spec, planning.PublishSpec):
             qos = replace(spec.qos, durability="transient_local") if spec.latch else spec.qos
-            return backend.publication(host, spec.topic, msgtypes.resolve_message(spec.type)[1], qos, self._complain)
+            return backend.publication(host, spec.topic, msgtypes.resolve_message(spec.type)[1], qos, self._complain,
+                                       spec.follows)
         if isinstance(spec, planning.RelaySpec):
             def wrong_type(got: str, spec: planning.RelaySpec = spec) -> None:
                 self.session.notify(f"ipyros: {spec.source} carries {got}, but {self.name} relays it as {spec.type}; "

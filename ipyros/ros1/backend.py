@@ -120,8 +120,9 @@ class Ros1:
     # -- endpoints -----------------------------------------------------------------------
     # TCPROS is reliable and rospy queues are ipyros's own: of a QoS only durability
     # means something here (transient-local is latched); nothing can mismatch.
-    def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain) -> runtime.Publication:
-        return runtime.Publication(topic, cls, qos.latched)
+    def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
+                    follows: Optional[str] = None) -> runtime.Publication:
+        return runtime.Publication(topic, cls, qos.latched, follows)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Complain) -> runtime.Subscription:

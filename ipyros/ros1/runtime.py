@@ -308,11 +308,12 @@ class Publication:
     loses its own oldest messages instead of blocking the writer.
     """
 
-    def __init__(self, topic: str, cls: type, latch: bool = False) -> None:
+    def __init__(self, topic: str, cls: type, latch: bool = False, follows: Optional[str] = None) -> None:
         self.topic, self.cls = topic, cls
         self.count = 0
         self._pub = _publisher(topic, cls, latch)
         self._impl = self._pub.impl
+        self._follows = follows  # a topic whose latching this one takes: latched once a message came latched on it
 
     def write(self, msg: Any) -> None:
         if not isinstance(msg, genpy.Message) or msg._md5sum != self.cls._md5sum:
@@ -336,6 +337,8 @@ class Publication:
                                                  "and ranges"
                 raise MessageTypeError(f"cannot send this {self.cls._type} on {self.topic}: {why}") from None
             impl.seq += 1
+            if self._follows is not None and not impl.is_latch and self._follows in _latched_topics:
+                impl.enable_latch()
             if impl.is_latch:
                 impl.latch = msg  # rospy sends it to a subscriber connecting later
             sending.send_to_all(impl.connections, self.topic, buffer.getvalue()[4:])
@@ -476,6 +479,11 @@ def _message(cls: type, buff: bytes, header: dict) -> Any:
     return msg
 
 
+#: The topics this process has received from a latching publisher: an output taken over from a
+#: basenode (a map, a robot description) stays latched when its source is (:class:`Publication`).
+_latched_topics: set[str] = set()
+
+
 class Subscription:
     """A typed subscriber whose callback is a :class:`HandlerSlot`.
 
@@ -498,6 +506,8 @@ class Subscription:
         first = id(header) not in self._connections  # a latched publisher sends its last message on connecting
         if first:
             self._remember(header)
+            if header.get("latching") == "1":
+                _latched_topics.add(self.topic)
         self.slot.run(_message(self.cls, raw._buff, header),
                       Pristine(functools.partial(_message, self.cls, raw._buff, header)),
                       Arrival(header.get("callerid", "?"), len(raw._buff), first and header.get("latching") == "1"))

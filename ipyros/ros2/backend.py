@@ -60,8 +60,9 @@ class Ros2:
     def close(self) -> None:
         self.process.shutdown()
 
-    def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain) -> runtime.Publication:
-        return runtime.Publication(self.process.host(host), topic, cls, qos, complain)
+    def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
+                    follows: Optional[str] = None) -> runtime.Publication:
+        return runtime.Publication(self.process.host(host), topic, cls, qos, complain, follows and self.process, follows)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Complain) -> runtime.Subscription:

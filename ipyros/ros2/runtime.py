@@ -156,6 +156,8 @@ class ProcessNode:
         self._hosts: dict[str, Node] = {}
         self.hosted: set[str] = set()  # every name this process has had a node at (the graph lags behind)
         self._watchers: list[Callable[[], None]] = []
+        #: Publications that take the QoS of a topic's publishers ({topic: [Publication]}; see Publication).
+        self.followers: dict[str, list[Publication]] = {}
         self._watch_timer: Any = None
         self._looks = 0
         self._typed: list[tuple[str, str, Complain]] = []  # (topic, type, complain): peers of another type are told
@@ -394,14 +396,42 @@ def _made(node: Node, make: Callable[[], Any], patience: float = 2.0) -> Any:
 
 
 class Publication:
-    """A publisher; ``write`` checks the message, then publishes it."""
+    """A publisher; ``write`` checks the message, then publishes it.
+
+    One that ``follows`` a topic (an output of a basenode the node took over) takes that topic's
+    publishers' QoS, so that a transient-local (latched) map stays latched once intercepted. The
+    subscription that hears ``follows`` changes it before it changes itself (:meth:`take`): a
+    latched message it then hears, and the handler writes, goes out on the latched publisher.
+    """
 
     def __init__(self, node: Node, topic: str, cls: type, qos: Qos = Qos(),
-                 complain: Optional[Complain] = None) -> None:
+                 complain: Optional[Complain] = None, process: Optional["ProcessNode"] = None,
+                 follows: Optional[str] = None) -> None:
         self.topic, self.cls, self.count = topic, cls, 0
-        self._node = node
-        self._pub = _made(node, lambda: node.create_publisher(
-            cls, topic, _profile(qos), event_callbacks=_mismatch_report(node, topic, qos, "publication", complain)))
+        self._node, self._complain, self.qos = node, complain, qos
+        self._lock = threading.Lock()
+        self._pub = self._open(qos)
+        self._process, self._follows = process, follows
+        if process is not None and follows is not None:
+            process.followers.setdefault(follows, []).append(self)
+            found = _publishers_qos(node, follows)
+            if found is not None:
+                self.take(found)
+
+    def _open(self, qos: Qos) -> Any:
+        node, topic = self._node, self.topic
+        return _made(node, lambda: node.create_publisher(
+            self.cls, topic, _profile(qos), event_callbacks=_mismatch_report(node, topic, qos, "publication",
+                                                                             self._complain)))
+
+    def take(self, source: Qos) -> None:
+        """Publish as the followed topic's publishers do (``source``: their QoS), if not already."""
+        with self._lock:
+            if _effective(source) == _effective(self.qos):  # a new publisher would lose a moment's messages
+                return
+            old, self.qos = self._pub, source
+            self._pub = self._open(source)
+            self._node.destroy_publisher(old)
 
     def write(self, msg: Any) -> None:
         if isinstance(msg, type):
@@ -424,7 +454,14 @@ class Publication:
         return SendFigures(self.topic, "publish", self.count, self.connections(), 0, 0)
 
     def close(self) -> None:
+        if self._process is not None and self._follows is not None:
+            self._process.followers.get(self._follows, []).remove(self)
         self._node.destroy_publisher(self._pub)
+
+
+def _effective(qos: Qos) -> tuple[str, str, Optional[int]]:
+    """What a subscriber sees of a publisher's QoS: reliability, durability, and the depth kept when latched."""
+    return (qos.reliability or "reliable", qos.durability or "volatile", (qos.depth or 1) if qos.latched else None)
 
 
 def _publishers_qos(node: Node, topic: str) -> Optional[Qos]:
@@ -494,6 +531,8 @@ class Subscription:
             wanted = self._wanted() if self._sub is not None else None
             if wanted is None or wanted == self.qos:  # no publisher yet, or nothing to change
                 return
+            for publication in list(self._process.followers.get(self.topic, ())):
+                publication.take(wanted)  # first: what this one hears next may be written there
             old, self.qos = self._sub, wanted
             self._sub = self._open(wanted)
             self._node.destroy_subscription(old)

@@ -46,8 +46,11 @@ def test_intercepting_an_output_hands_the_basenodes_messages_to_the_handler_and_
     plan = list(planning.plan(wrapper(topic("/cmd_vel", "publish", "reuse"),
                                       topic("/cmd_vel", "subscribe", "new", "h"))))
     assert SubscribeSpec("/w/base/cmd_vel", TWIST, "topic /cmd_vel") in plan
-    assert PublishSpec("/cmd_vel", TWIST) in plan
+    assert PublishSpec("/cmd_vel", TWIST, follows="/w/base/cmd_vel") in plan, "latched if the basenode's is"
     assert not any(isinstance(s, RelaySpec) for s in plan)
+    latched = list(planning.plan(wrapper(topic("/map", "publish", "reuse", latch=True),
+                                         topic("/map", "subscribe", "new", "h"))))
+    assert PublishSpec("/map", TWIST, latch=True) in latched, "declared latched: as declared, following nothing"
 
 
 def test_intercepting_an_input_feeds_the_basenode_through_write():
