@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -308,3 +309,47 @@ def test_discovery_leaves_no_trace_and_no_false_warning(make_node, notices, sess
     assert [(node, kind) for node, kind, *_ in session.backend.topic_endpoints("/cmd_vel")] == [
         ("/mbw2_clean", "publisher")]
     assert not [n for n in notices if "(yet)" in n or "does not use" in n], notices
+
+
+MANAGED_NODE = str(Path(__file__).resolve().parent / "peers" / "managed_node.py")
+
+
+def test_a_wrapped_lifecycle_basenode_is_managed_under_its_own_name(make_node, caller):
+    """A lifecycle manager (a plain rclpy client here) drives a wrapped managed node by its name as before, and
+    the relay follows its state: nothing while inactive, every tick once while active (issue 24)."""
+    from lifecycle_msgs.msg import Transition
+    from lifecycle_msgs.srv import ChangeState, GetState
+
+    ticks = listen(make_node, "lc_listener", "/lc/ticks")
+    w = make_node("lc_wrap")
+    w.baseNode(MANAGED_NODE, name="managed_talker", namespace="lc")
+    w.reuse.publish("ticks", type=String)
+    w.create()
+
+    def change(transition_id: int) -> None:
+        assert caller("/lc/managed_talker/change_state", ChangeState,
+                      ChangeState.Request(transition=Transition(id=transition_id))).success
+
+    def state() -> str:
+        return caller("/lc/managed_talker/get_state", GetState, GetState.Request()).current_state.label
+
+    assert state() == "unconfigured"
+    change(Transition.TRANSITION_CONFIGURE)
+    wait_for(lambda: any("configured" in line for line in w.base.tail()), what="the basenode configured")
+    assert state() == "inactive"
+    change(Transition.TRANSITION_ACTIVATE)
+    wait_for(lambda: len(ticks) >= 5, timeout=20, what="ticks through the relay once active")
+    change(Transition.TRANSITION_DEACTIVATE)
+    assert state() == "inactive"
+    deactivated = len(ticks)
+    time.sleep(0.5)  # a window to see nothing in: the node ticks (10 Hz) without publishing while inactive
+    stopped = len(ticks)
+    assert stopped <= deactivated + 1, "nothing relayed while inactive (but one on its way)"
+    change(Transition.TRANSITION_ACTIVATE)
+    wait_for(lambda: len(ticks) >= stopped + 5, timeout=20, what="ticks again once active again")
+    numbers = [int(t.split()[1]) for t in ticks]
+    assert len(set(numbers)) == len(numbers) and numbers == sorted(numbers), "none doubled, in order"
+    first_again = numbers[stopped] if len(numbers) > stopped else None
+    assert first_again is not None and first_again > numbers[stopped - 1] + 1, \
+        "the ticks counted while inactive were never relayed"
+    w.shutdown()
