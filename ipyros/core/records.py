@@ -92,7 +92,8 @@ class Interface:
     not answer the probe. ``left_out`` names the ROS plumbing that was seen but is not
     part of the interface (e.g. ``"/rosout (publishes)"``); ``not_seen`` the names
     declared for it that it did not use while it was watched (some nodes advertise only
-    after their first input).
+    after their first input); ``not_installed`` the ``name (type)`` of those whose types this
+    Python cannot import, which ``discover()`` left undeclared.
     """
 
     node: str
@@ -102,6 +103,7 @@ class Interface:
     left_out: list[str] = field(default_factory=list)
     not_seen: list[str] = field(default_factory=list)
     actions: list[tuple[str, str]] = field(default_factory=list)  # the action servers, found by fold_actions()
+    not_installed: list[str] = field(default_factory=list)
 
     def fold_actions(self) -> "Interface":
         """Take the actions this node serves out of its topics and services, into ``actions`` (``pkg/Type``).

@@ -18,8 +18,8 @@ import threading
 from pathlib import Path
 from typing import Any, Callable, Optional, Protocol
 
-from ..core import names
-from ..core.errors import BaseNodeError, DeclarationError, TopicTypeConflict, cut
+from ..core import msgtypes, names
+from ..core.errors import BaseNodeError, DeclarationError, MessageTypeError, TopicTypeConflict, cut
 from ..core.model import BaseModel, NodeModel
 from ..core.plan import internal_name
 from ..core.records import Interface
@@ -263,20 +263,25 @@ def declare_interface(node: "NodeEngine", interface: Interface) -> Interface:
     prefix = names.global_ns(base_namespace(model))
     untyped = [name for name, type_ in interface.publications + interface.subscriptions + interface.services
                if not type_]
-    for name, type_ in interface.publications:
-        if type_:
-            reuse.publish(_relative(name, prefix), type=type_)
-    for name, type_ in interface.subscriptions:
-        if type_:
-            reuse.subscribe(_relative(name, prefix), type=type_)
-    for name, type_ in interface.services:
-        if type_:
-            reuse.service(_relative(name, prefix), type=type_)
-    for name, type_ in interface.actions:
-        reuse.action(_relative(name, prefix), type=type_)
+    missing: dict[str, list[str]] = {}  # {what to install: [name (type)]}: declared are all the others
+    for declare, found in ((reuse.publish, interface.publications), (reuse.subscribe, interface.subscriptions),
+                           (reuse.service, interface.services), (reuse.action, interface.actions)):
+        for name, type_ in found:
+            if not type_:
+                continue
+            try:
+                declare(_relative(name, prefix), type=type_)
+            except MessageTypeError:
+                package = type_.split("/", 1)[0]
+                missing.setdefault(msgtypes.install_hint(package), []).append(f"{name} ({type_})")
     if untyped:
         node.session.notify(f"ipyros: {', '.join(untyped)} of {interface.node} have no known type yet "
                              "(nobody publishes them); declare them yourself with type=...")
+    if missing:
+        node.session.notify("ipyros: not declared, their types are not installed here: "
+                            + "; ".join(f"{', '.join(what)}: {how}" for how, what in missing.items())
+                            + f"; the rest of {interface.node} is declared")
+    interface.not_installed = [n for names_ in missing.values() for n in names_]
     return interface
 
 

@@ -137,6 +137,26 @@ def test_discovery_reads_the_basenode_from_the_ros2_graph(make_node):
         ("out", "publish", "reuse"), ("status", "publish", "reuse"), ("in", "subscribe", "reuse")]
 
 
+def test_discovery_declares_all_it_can_and_names_the_types_to_install(make_node, notices, monkeypatch):
+    """A basenode with a type this Python lacks (a workspace's own, a package not installed): discover() declares
+    the rest and says in one line what was left and how to install it (issue 24)."""
+    import sys
+
+    from ipyros.core import msgtypes
+
+    w = make_node("w2_custom")
+    w.baseNode(str(Path(ECHO_NODE).with_name("custom_types.py")), namespace="robot_custom")
+    monkeypatch.setitem(sys.modules, "test_msgs", None)  # as a venv without the package: the import fails
+    monkeypatch.setitem(sys.modules, "test_msgs.msg", None)
+    interface = w.discover()
+    assert [(t.name, t.direction) for t in w.model().topics] == [("plain", "publish"), ("plain_in", "subscribe")]
+    assert interface.not_installed == ["/robot_custom/odd (test_msgs/Builtins)"]
+    said = [n for n in notices if "not declared" in n]
+    assert said == [f"ipyros: not declared, their types are not installed here: /robot_custom/odd "
+                    f"(test_msgs/Builtins): {msgtypes.install_hint('test_msgs')}; the rest of "
+                    "/robot_custom/custom_types is declared"], notices
+
+
 def test_a_basenode_by_package_is_found_in_the_ament_index(make_node, tmp_path, monkeypatch):
     """An installed package, as colcon lays one out: a marker in the resource index, executables in lib/."""
     import os
