@@ -33,7 +33,7 @@ from ..core.errors import (
 from ..core.model import NodeModel, TopicModel
 from ..core.plan import Spec
 from ..core.records import History, NodeStatus, StatusRow, Versions
-from ..core.remapping import base_fullname, check_wrapping, resolve_for
+from ..core.remapping import base_fullname, basenode_remaps, check_wrapping, resolve_for
 from ..core.slots import HandlerSlot, OutputScope, SendFigures
 from ..core.versions import HandlerVersion
 from .session import Session
@@ -209,8 +209,24 @@ class NodeEngine:
                     self._add_version(key, handler)
                 self._handlers[key] = handler
             self._takes_argument.update({k: takes for k, (_, takes) in (handlers or {}).items()})
-            self._model = new_model
+            old_model, self._model = self._model, new_model
             self._writers.clear()
+            if self.created and self.base is not None:
+                self._remap_base(old_model, new_model)
+
+    def _remap_base(self, old: NodeModel, new: NodeModel) -> None:
+        """Start the basenode again when what it must be remapped to changed (a ``reuse`` declared or removed on
+        the running node): a process's remaps are fixed at its start, so this is the only way; it is said."""
+        parts = self.session.backend.action_parts
+        if old.base is None or new.base is None or (basenode_remaps(old, parts), base_fullname(old)) == (
+                basenode_remaps(new, parts), base_fullname(new)):
+            return
+        self.session.notify(f"ipyros: restarting basenode {base_fullname(new)} of {self.called} so that it uses "
+                            "the names declared since it started (remaps are fixed when a process starts; "
+                            "its state starts over)")
+        self.base.stop()
+        self.base = None
+        start_base(self)
 
     def record(self, change: str) -> None:
         """Add ``change`` to the session's history (with the handler version it made, if any)."""
