@@ -190,6 +190,23 @@ class rosNode:  # noqa: N801 - the paper's name
         self._engine.record(f"timer {name} every {float(period):g} s -> {timer.handler}" + (" once" if oneshot else ""))
         return self
 
+    # -- parameters set from outside ------------------------------------------------------
+    def on_param(self, key: str, handler: Optional[Callable[[Any], Any]]) -> "rosNode":
+        """Call ``handler(value)`` whenever someone else sets this node's parameter ``key`` (``~key``).
+
+        A tuning tool, ``rosparam set`` / ``ros2 param set``, a launch of another node: a
+        node usually reads its gains once; this one hears each new value while it runs
+        (ROS 1: the master tells the nodes that subscribed to a parameter; ROS 2: the node's
+        own parameter services). Setting it here, ``nd.params[key] = v``, is not news and calls
+        nothing. ``key`` must have a value first (``nd.params[key] = default``); ``None`` stops
+        the calls. A handler that raises is told at the prompt; the node runs on.
+        """
+        if handler is not None and not callable(handler):
+            raise DeclarationError(f"on_param({key!r}, ...) takes a function of the new value, "
+                                   f"e.g. lambda value: print(value); not {cut(handler)}")
+        self._engine.on_param(self.params._key(key), handler)
+        return self
+
     # -- removal ---------------------------------------------------------------------
     def remove(self, topic: Optional[str] = None, *, timer: Optional[str] = None,
                service: Optional[str] = None, action: Optional[str] = None) -> "rosNode":

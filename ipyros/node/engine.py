@@ -81,6 +81,9 @@ class NodeEngine:
         self._reverting: Optional[int] = None  # set while revert() re-declares an old version
         self._new_version: Optional[tuple[str, HandlerVersion]] = None  # for the next record()
         self._lock = threading.RLock()
+        self._param_handlers: dict[str, Callable[[Any], Any]] = {}  # key → on_param's function
+        self._param_watches: dict[str, Any] = {}  # key → the backend's watch, while created
+        self._param_seen: dict[str, Any] = {}  # key → the last value known (set here, or told)
 
     # -- reading -------------------------------------------------------------------------
     @property
@@ -273,6 +276,8 @@ class NodeEngine:
                 session.require_graph(f"{self.called}.create()")
                 self._check_live_types(self._model.topics)
                 self._set_params(self._model.params)
+                for key in self._param_handlers:
+                    self._watch_param(key)
                 self._output = session.output_scope(self.dsl)
                 for slot in self._slots.values():  # heard again (quietened by a shutdown)
                     slot.closing = False
@@ -293,6 +298,9 @@ class NodeEngine:
             if self.base is not None:
                 self.base.stop()
                 self.base = None
+            for watch in self._param_watches.values():
+                watch.close()
+            self._param_watches.clear()
             for spec in reversed(list(self._live)):
                 try:
                     self._live.pop(spec).close()
@@ -374,6 +382,7 @@ class NodeEngine:
         with self._lock:
             if self.created:
                 self.session.require_graph(f"{self.called}.params[{key!r}] = ...")
+                self._param_seen[key] = value  # set here: not news for on_param
                 backend.set_param(name, value)
             self._model.params[key] = value
             self.record(f"params[{key!r}] = {value!r}")
@@ -394,6 +403,44 @@ class NodeEngine:
         have = ", ".join(repr(k) for k in self._model.params) or "none yet"
         return KeyError(f"{self.name} has no parameter {key!r} (it has {have}); "
                         f"set one with {self.called}.params[{key!r}] = value")
+
+    def on_param(self, key: str, handler: Optional[Callable[[Any], Any]]) -> None:
+        """Call ``handler(value)`` when someone else sets parameter ``key`` (see :meth:`rosNode.on_param
+        <ipyros.dsl.rosnode.rosNode.on_param>`); ``None`` stops it."""
+        with self._lock:
+            watch = self._param_watches.pop(key, None)
+            if watch is not None:
+                watch.close()
+            if handler is None:
+                self._param_handlers.pop(key, None)
+                self.record(f"on_param({key!r}, None)")
+                return
+            if key not in self._model.params:
+                raise NotDeclaredError(f"{self.name} has no parameter {key!r} to watch; give it a value first, "
+                                       f"{self.called}.params[{key!r}] = ..., then {self.called}.on_param({key!r}, fn)")
+            self._param_handlers[key] = handler
+            if self.created:
+                self._watch_param(key)
+            self.record(f"on_param({key!r}, {versions_mod.name_of(handler) or 'handler'})")
+
+    def _watch_param(self, key: str) -> None:
+        self._param_seen[key] = self._model.params.get(key)
+        name = self.resolve("~" + key, "parameter")
+        self._param_watches[key] = self.session.backend.watch_param(name, lambda value: self._param_set(key, value))
+
+    def _param_set(self, key: str, value: Any) -> None:
+        """A parameter was set (told by the backend, from whatever thread): the handler runs if it changed."""
+        if value == self._param_seen.get(key):  # this session set it, or it was set to what it was
+            return
+        self._param_seen[key] = value
+        handler = self._param_handlers.get(key)
+        if handler is None:
+            return
+        try:
+            handler(value)
+        except Exception as error:  # noqa: BLE001 - a handler's crash never takes the node down
+            self._complain(f"on_param({key!r}) handler {versions_mod.name_of(handler) or ''} raised "
+                           f"{type(error).__name__}: {error} (the parameter is {value!r}; the node runs on)")
 
     def _set_params(self, params: dict[str, Any]) -> None:
         for key, value in params.items():

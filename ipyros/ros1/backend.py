@@ -175,6 +175,9 @@ class Ros1:
     has_param = staticmethod(runtime.has_param)
     delete_param = staticmethod(runtime.delete_param)
 
+    def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
+        return runtime.ParamWatch(name, tell)
+
     def forget_params(self, names: list[str]) -> None:
         """Delete what nodes that ended left on the parameter server (a demo robot's launch params)."""
         introspect.forget_params(self.connection.uri, names)

@@ -731,3 +731,38 @@ def has_param(name: str) -> bool:
 
 def delete_param(name: str) -> None:
     rospy.delete_param(name)
+
+
+class ParamWatch:
+    """Tell ``tell(value)`` each time the parameter ``name`` (a global name) is set, by anyone.
+
+    The master calls a node's ``paramUpdate`` for the parameters it subscribed to
+    (``subscribeParam``, which ``rospy.get_param_cached`` makes); rospy keeps them in its
+    parameter cache, whose one notifier this module dispatches to the watches by name.
+    """
+
+    _lock = threading.Lock()
+    _watches: dict[str, list["ParamWatch"]] = {}
+
+    def __init__(self, name: str, tell: Callable[[Any], None]) -> None:
+        from rospy.impl.paramserver import get_param_server_cache
+
+        self.name, self.tell = name.rstrip("/"), tell
+        with ParamWatch._lock:
+            get_param_server_cache().set_notifier(ParamWatch._notify)
+            ParamWatch._watches.setdefault(self.name, []).append(self)
+        rospy.get_param_cached(self.name)  # subscribes: from now on the master tells this process
+
+    @staticmethod
+    def _notify(key: str, value: Any) -> None:
+        with ParamWatch._lock:
+            watches = list(ParamWatch._watches.get(key.rstrip("/"), ()))
+        for watch in watches:
+            watch.tell(value)
+
+    def close(self) -> None:
+        with ParamWatch._lock:
+            watches = ParamWatch._watches.get(self.name, [])
+            if self in watches:
+                watches.remove(self)
+

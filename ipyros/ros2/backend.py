@@ -162,6 +162,10 @@ class Ros2:
         node, key = self._owner(name)
         node.undeclare_parameter(key)
 
+    def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
+        node, key = self._owner(name)
+        return runtime.ParamWatch(node, key, tell)
+
     def forget_params(self, names: list[str]) -> None:
         """Nothing to delete: a ROS 2 node's parameters end with it."""
 

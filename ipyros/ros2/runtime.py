@@ -602,6 +602,11 @@ class Relay:
             self.qos = wanted
             self._skip = self._last  # a transient-local source sends its last message again
             self._pub, self._sub = self._endpoints(wanted)
+            if self._last is not None and wanted.latched:
+                # The last message came before the swap, on the volatile endpoints: the new publisher must
+                # hold it for later subscribers. Written now, before any reader has matched this new writer,
+                # it is kept in its history and not delivered a second time to the readers that had it.
+                self._pub.publish(self._last)
             self._node.destroy_subscription(old[1])
             self._node.destroy_publisher(old[0])
 
@@ -952,3 +957,21 @@ def check_param(name: str, value: Any) -> None:
                                "(bool, int, float or str)")
     raise DeclarationError(f"parameter {name} = {value!r:.60} is a {type(value).__name__}: a ROS 2 parameter "
                            "holds bool, int, float, str, bytes or a list of one of those")
+
+
+class ParamWatch:
+    """Tell ``tell(value)`` each time the parameter ``key`` of ``node`` (a node of this process) is set, by
+    anyone: a ``ros2 param set``, another node's SetParameters call, or this session (rclpy's post-set callback)."""
+
+    def __init__(self, node: Node, key: str, tell: Callable[[Any], None]) -> None:
+        self._node, self.key, self.tell = node, key, tell
+        node.add_post_set_parameters_callback(self._set)
+
+    def _set(self, parameters: list[Any]) -> None:
+        for parameter in parameters:
+            if parameter.name == self.key:
+                self.tell(parameter.value)
+
+    def close(self) -> None:
+        self._node.remove_post_set_parameters_callback(self._set)
+

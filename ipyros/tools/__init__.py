@@ -5,9 +5,10 @@
   :mod:`.plot`: topic fields drawn live;
 - :mod:`.tryout`: a candidate handler run beside the live one; :mod:`.editing`: a handler's
   source to edit, and the edit put live;
-- :mod:`.wrap`: a node wrapped in one call; :mod:`.robot`: the demo robot.
+- :mod:`.wrap`: a node wrapped in one call; :mod:`.robot`: the demo robot;
+- :mod:`.paramwatch`: parameters watched as they change.
 
 May import: core, processes, node, dsl (never the IPython face).
 """
 
-__all__ = ["editing", "graph", "plot", "probe", "record", "robot", "tryout", "wrap"]
+__all__ = ["editing", "graph", "paramwatch", "plot", "probe", "record", "robot", "tryout", "wrap"]

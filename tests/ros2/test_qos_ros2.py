@@ -105,3 +105,25 @@ def test_topics_verbose_shows_deadline_and_liveliness(make_node, session):
         assert shown[0][3] == "reliable volatile deadline 0.25 s liveliness manual-by-topic lease 2 s", shown
     finally:
         node.destroy_publisher(publisher)
+
+
+STATUS_ONCE = str(Path(__file__).resolve().parents[1] / "both" / "peers" / "status_once.py")
+
+
+def test_a_relayed_latched_message_reaches_a_late_subscriber_every_run(make_node):
+    """A basenode publishes its status once, transient-local, at start; the reuse relay takes its QoS when its
+    publisher shows up. Whether the relay's first (volatile) subscription heard the message before the swap or
+    its new one hears it again after, a subscriber that joins later gets it, and gets it once (issue 24)."""
+    w = make_node("latch_relay")
+    w.baseNode(STATUS_ONCE, namespace="latch_relay_robot")
+    w.reuse.publish("status", type=String)
+    for run in range(5):  # the race is in each start: each run is a trial of it
+        w.create()
+        wait_for(lambda: any("ready" in line for line in w.base.tail()), what="the basenode's one status")
+        heard: list[str] = []
+        late = make_node(f"latch_late_{run}").new.subscribe("/latch_relay_robot/status", heard.append, type=String,
+                                                            qos="transient_local").create()
+        wait_for(lambda: heard, timeout=15, what=f"the latched status (run {run + 1} of 5)")
+        late.shutdown()
+        w.shutdown()
+        assert len(heard) == 1, f"run {run + 1}: heard {len(heard)} times"

@@ -19,6 +19,7 @@ marked as such, so they are not mistaken for the robot's.
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +37,7 @@ from ...core.msgbuild import build_message, definition, parse_data, to_yaml
 from ...core.names import is_tool, tool_name
 from ...core.userdata import load_yaml
 from ...files.atomic import write_atomic
+from ...tools import paramwatch
 from ..api import global_topic, live_graph, split_head
 from ..arguments import MSG_TYPE, NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, TRANSITION, argument
 from .common import ExtensionMagics
@@ -142,6 +144,9 @@ class IntrospectMagics(ExtensionMagics):
     @argument("--dump", metavar="FILE", help="write them to a YAML file, {global name: value}, instead of showing "
               "them (as rosparam dump / ros2 param dump)")
     @argument("--load", metavar="FILE", help="set every parameter a --dump file holds (as rosparam load)")
+    @argument("-w", "--watch", action="store_true", help="show each change as it happens (a parameter set, added "
+              "or deleted, by anyone) until Ctrl-C")
+    @argument("-n", type=int, metavar="N", help="with --watch: stop after N changes")
     @line_magic
     def params(self, line: str) -> None:
         """List the parameters under NAMESPACE with their values (ROS 2: the parameters of the nodes there)."""
@@ -150,6 +155,21 @@ class IntrospectMagics(ExtensionMagics):
         backend = self._ready()
         if args.load:
             self._load_params(backend, args.load, namespace)
+            return
+
+        def read() -> dict[str, Any]:
+            found = backend.params_under(namespace)
+            return found if args.all else {k: v for k, v in found.items()
+                                           if k.rsplit("/", 1)[-1] not in backend.standard_params}
+
+        if args.watch:
+            print(f"watching the parameters under {namespace}" + (f" for {args.n} change{'s' * (args.n != 1)}" if args.n else "")
+                  + " (Ctrl-C stops)", flush=True)
+            try:
+                paramwatch.watch(read, lambda name, old, new: print(
+                    f"{time.strftime('%H:%M:%S')} {name}: {_short(old)} → {_short(new)}", flush=True), count=args.n)
+            except KeyboardInterrupt:
+                print("stopped")
             return
         values = backend.params_under(namespace)
         standard = {name for name in values if name.rsplit("/", 1)[-1] in backend.standard_params}
