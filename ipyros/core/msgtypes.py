@@ -14,7 +14,7 @@ import re
 import sys
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterable
 
 from .errors import MessageTypeError
 
@@ -225,6 +225,18 @@ def known_message_types() -> list[str]:
 def known_service_types() -> list[str]:
     """Every service type whose Python class is importable here, as "pkg/Type", sorted."""
     return [f"{p}/{t}" for p, types in _index("srv").items() for t in types]
+
+
+def not_installed(type_names: Iterable[str]) -> dict[str, str]:
+    """``{type: how to install it}`` for each message type of ``type_names`` this Python cannot import (a
+    workspace's own type, a package the venv lacks); the graph still lists such topics."""
+    missing = {}
+    for name in sorted(set(filter(None, type_names))):
+        try:
+            resolve_message(name)
+        except MessageTypeError:
+            missing[name] = install_hint(name.split("/", 1)[0])
+    return missing
 
 
 def install_hint(package: str) -> str:

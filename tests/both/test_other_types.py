@@ -33,3 +33,23 @@ def test_topics_v_shows_each_endpoints_type(ip, make_node, peer, capsys):  # noq
         return "std_msgs/String" in out and "geometry_msgs/Point" in out and "nothing passes" in out
 
     wait_for(shown, timeout=20, interval=0.5, what="%topics -v to show both types")
+
+
+def test_topics_says_which_types_are_not_installed_and_how_to_install_them(ip, peer, capsys, monkeypatch):
+    """A topic whose type this Python lacks (a workspace's own, a package not installed) is listed all the same,
+    and one line says what to install (issue 24)."""
+    import sys
+
+    from ipyros.core import msgtypes
+
+    peer("talk.py", "/nit/point", "geometry_msgs/Point", 10).wait_line("ready")
+    ok(ip, "%load_ext ipyros")
+    wait_for(lambda: ok(ip, "%topics /nit") and "/nit/point" in capsys.readouterr().out, timeout=20, interval=0.3,
+             what="the peer's topic")
+    monkeypatch.setitem(sys.modules, "geometry_msgs", None)  # as a venv without the package: the import fails
+    monkeypatch.setitem(sys.modules, "geometry_msgs.msg", None)
+    ok(ip, "%topics /nit")
+    out = capsys.readouterr().out
+    assert "/nit/point" in out, "still listed"
+    assert ("ipyros: types not installed here (their topics cannot be echoed or handled in this session): "
+            f"geometry_msgs/Point ({msgtypes.install_hint('geometry_msgs')})") in out, out

@@ -115,6 +115,10 @@ class TopicMagics(ExtensionMagics):
         rates = measure_rates({t: snap.topics[t] for t in found}, window) if args.hz else None
         self.ext.printer.show(topics_table(as_dsl_nodes(snap, self.ext.session), found, rates, window,
                                             self.ext.graph.where))
+        missing = msgtypes.not_installed(snap.topics[t] for t in found)
+        if missing:  # listed all the same: the graph has them; what cannot be read here is said, with the cure
+            print("ipyros: types not installed here (their topics cannot be echoed or handled in this session): "
+                  + "; ".join(f"{name} ({how})" for name, how in missing.items()))
 
     # -- %echo ---------------------------------------------------------------------------
     @magic_arguments()
