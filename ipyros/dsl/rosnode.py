@@ -110,7 +110,9 @@ class rosNode:  # noqa: N801 - the paper's name
         """Wrap the basenode run by ``executable`` (its package is given by :meth:`basePackage`).
 
         Options: ``name`` (node name, default the executable's), ``namespace``, ``remaps``
-        (dict), ``params`` (private parameters), ``args`` (list of arguments).
+        (dict), ``params`` (private parameters), ``args`` (list of arguments), ``env`` (dict of
+        environment variables it gets beside the session's). A Python script whose ``#!`` line
+        names an interpreter of its own (a workspace's venv) runs with that one.
         """
         set_base(self._engine, executable=executable, **options)
         return self

@@ -216,7 +216,7 @@ def _base_lines(var: str, model: NodeModel) -> list[str]:
         args = f", args={base.launch_args!r}" if base.launch_args else ""
         return [f"{var}.baseLaunch({base.launch!r}, {base.launch_node!r}{args})"]
     options = {"name": base.node_name, "namespace": base.namespace, "remaps": base.remaps or None,
-               "params": base.params or None, "args": base.args or None}
+               "params": base.params or None, "args": base.args or None, "env": base.env or None}
     text = "".join(f", {k}={v!r}" for k, v in options.items() if v)
     lines = [f"{var}.baseNode({base.executable!r}{text})"] if base.executable else []
     return lines + ([f"{var}.basePackage({base.package!r})"] if base.package else [])

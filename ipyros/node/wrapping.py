@@ -14,6 +14,7 @@ Running it, reading its interface and finding its package are the backend's
 from __future__ import annotations
 
 import os
+import re
 import threading
 from pathlib import Path
 from typing import Any, Callable, Optional, Protocol
@@ -42,7 +43,8 @@ class NodeEngine(Protocol):
     def model(self) -> NodeModel: ...
     def apply(self, edit: Callable[[NodeModel], None], change: str) -> None: ...
 
-_BASE_OPTIONS = {"name": "node_name", "namespace": "namespace", "remaps": "remaps", "params": "params", "args": "args"}
+_BASE_OPTIONS = {"name": "node_name", "namespace": "namespace", "remaps": "remaps", "params": "params", "args": "args",
+                 "env": "env"}
 
 
 # -- declarations --------------------------------------------------------------------------
@@ -96,6 +98,11 @@ def _check_base_options(fields: dict[str, Any], backend: Any) -> None:
     if args is not None and (isinstance(args, (str, bytes)) or not isinstance(args, (list, tuple))
                              or not all(isinstance(a, str) for a in args)):
         raise DeclarationError(f"baseNode(args={cut(args)}): give a list of strings, e.g. args=['--rate', '5']")
+    env = fields.get("env")
+    if env is not None and (not isinstance(env, dict) or not all(
+            isinstance(k, str) and re.fullmatch(r"[A-Za-z_]\w*", k) and isinstance(v, str) for k, v in env.items())):
+        raise DeclarationError(f"baseNode(env={cut(env)}): give a dict of variable names and string values, "
+                               "e.g. env={'ROBOT_MODE': 'sim'}")
     params = fields.get("params")
     if params is not None:
         if not isinstance(params, dict) or not all(isinstance(k, str) and k for k in params):

@@ -36,7 +36,7 @@ import yaml
 from ..core.errors import BaseNodeError, NodeStateError
 from .process import spawn, stop_process
 
-__all__ = ["BaseProcess", "OnExit", "exit_reason", "is_executable_file", "log_dir", "param_value", "plain",
+__all__ = ["BaseProcess", "OnExit", "child_env", "exit_reason", "is_executable_file", "log_dir", "param_value", "plain",
            "python_command", "refuse_path_with_package", "script_command", "stop_all", "temp_log"]
 
 
@@ -52,20 +52,55 @@ def refuse_path_with_package(executable: str) -> None:
 
 
 def python_command(path: Path, args: Sequence[str] = ()) -> tuple[Path, list[str]]:
-    """How to run an executable: a Python script with this interpreter, anything else as it is.
+    """How to run an executable: a Python script for "a python3" with this interpreter, anything else as it is.
 
-    This interpreter imports ROS (ipyros does), whatever the script's ``#!`` line names:
-    so a node written for Debian's python3 runs in a venv (ROS 2 from PyPI) or a conda
-    (RoboStack) environment as well.
+    A script whose ``#!`` line asks for the system's python (``/usr/bin/env python3``,
+    ``/usr/bin/python3``) runs with this interpreter, which imports ROS (ipyros does): so a
+    node written for Debian's python3 runs in a venv (ROS 2 from PyPI) or a conda (RoboStack)
+    environment as well. One that names an interpreter of its own (a workspace's venv) runs
+    with that one, which has the workspace's packages.
     """
     try:
         with open(path, "rb") as f:
             first = f.readline(200)
     except OSError:
         first = b""
-    if first.startswith(b"#!") and b"python" in first:
-        return Path(sys.executable), [str(path), *args]
-    return path, list(args)
+    if not (first.startswith(b"#!") and b"python" in first):
+        return path, list(args)
+    interpreter = first[2:].decode(errors="replace").split()
+    own = interpreter and Path(interpreter[0]).name.startswith("python") and \
+        not interpreter[0].startswith(("/usr/bin/", "/bin/", "/usr/local/bin/"))
+    if own and is_executable_file(Path(interpreter[0])):
+        return Path(interpreter[0]), [*interpreter[1:], str(path), *args]
+    return Path(sys.executable), [str(path), *args]
+
+
+#: What a ROS 2 wheels venv's bootstrap sets in its own environment (it re-executes Python with them): a child
+#: that runs another interpreter must not inherit them, or it loads this venv's libraries instead of its own.
+_BOOTSTRAP_GUARD = "_ROS_WHEELS_BOOTSTRAP_COMPLETE"
+
+
+def child_env(argv0: str, extra: Optional[Mapping[str, str]] = None) -> dict[str, str]:
+    """The environment of a child process: this one's, then ``extra``.
+
+    When the child is not this interpreter (a workspace's venv, the system python, a
+    binary), what this venv's bootstrap added for itself alone is left out: its guard and
+    its library folders on ``LD_LIBRARY_PATH`` (a child of this interpreter keeps them, and
+    starts at once).
+    """
+    env = dict(os.environ)
+    if _BOOTSTRAP_GUARD in env and Path(argv0) != Path(sys.executable):
+        del env[_BOOTSTRAP_GUARD]
+        prefixes = (sys.prefix, str(Path(sys.prefix).resolve()))
+        kept = [p for p in env.get("LD_LIBRARY_PATH", "").split(os.pathsep) if p and not (
+            p in (os.path.join(prefix, "lib") for prefix in prefixes)
+            or p.startswith(prefixes) and "/site-packages/ros_" in p and p.endswith(".libs"))]
+        if kept:
+            env["LD_LIBRARY_PATH"] = os.pathsep.join(kept)
+        else:
+            env.pop("LD_LIBRARY_PATH", None)
+    env.update(extra or {})
+    return env
 
 
 def script_command(executable: str, args: Sequence[str] = ()) -> tuple[Path, list[str]]:
@@ -80,9 +115,10 @@ def script_command(executable: str, args: Sequence[str] = ()) -> tuple[Path, lis
                             f"or give the path of the file to run, e.g. baseNode('./{executable}')")
     path = Path(executable).expanduser().absolute()
     if is_executable_file(path):
-        return path, list(args)
+        return python_command(path, args)
     if path.is_file() and path.suffix == ".py":
-        return Path(sys.executable), [str(path), *args]
+        program, rest = python_command(path, args)
+        return (program, rest) if program != path else (Path(sys.executable), [str(path), *args])
     raise BaseNodeError(f"basenode {executable!r} is not an executable file or a .py script"
                         f"{' (no such file)' if not path.exists() else ''}; give the path of the node to run, "
                         "or its package with basePackage('...')")
@@ -165,7 +201,7 @@ class BaseProcess:
         self.argv: list[str] = [str(word) for word in argv]
         self.executable = Path(self.argv[0])
         self.node_name = node_name
-        self.env = {**os.environ, **(env or {}), "PYTHONUNBUFFERED": "1"}  # a Python node's prints reach the log now
+        self.env = {**child_env(self.argv[0], env), "PYTHONUNBUFFERED": "1"}  # a Python node's prints reach the log now
         self.log_path = Path(log_path) if log_path else temp_log(node_name or self.executable.name)
         self.on_exit = on_exit
         self._run: Optional[_Run] = None

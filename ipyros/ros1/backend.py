@@ -217,7 +217,8 @@ class Ros1:
 
     def note_link(self, base: BaseModel, process: BaseProcess) -> Optional[str]:
         """Where a package's executable really is, if a link takes it out of the package (rosrun follows it)."""
-        return nodes.link_outside(base.package, process.executable) if base.package else None
+        return nodes.link_outside(base.package, nodes.find_executable(base.package, base.executable)) \
+            if base.package and base.executable else None
 
     def wait_for_node(self, name: str, timeout: float = 10.0, alive: Optional[Callable[[], bool]] = None,
                       settle: float = 0.5) -> Interface:

@@ -32,7 +32,13 @@ from typing import Iterable, Optional
 from ..core.errors import BaseNodeError, did_you_mean
 from ..core.model import BaseModel
 from ..demo import DEMO_DIR
-from ..processes.basenode import is_executable_file, param_value, refuse_path_with_package, script_command
+from ..processes.basenode import (
+    is_executable_file,
+    param_value,
+    python_command,
+    refuse_path_with_package,
+    script_command,
+)
 
 __all__ = ["command", "find_executable", "link_outside", "list_executables", "list_packages", "refresh_packages"]
 
@@ -42,8 +48,8 @@ def command(base: BaseModel) -> list[str]:
     if not base.executable:
         raise BaseNodeError("no basenode executable declared: call baseNode('executable') and basePackage('package')")
     args = list(base.args)
-    if base.package:
-        path = find_executable(base.package, base.executable)
+    if base.package:  # a Python node for "a python3" runs on this one, which has rospy (see python_command)
+        path, args = python_command(find_executable(base.package, base.executable), args)
     else:
         path, args = script_command(base.executable, args)
     argv = [str(path), *args]

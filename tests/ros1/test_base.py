@@ -149,7 +149,8 @@ def test_a_basenode_given_by_its_path_runs_as_a_script(tmp_path):
     script.write_text(echo_node().read_text())  # a .py file, not executable: run with this interpreter
     argv = command(BaseModel(executable=str(script), node_name="scripted"))
     assert argv[:2] == [sys.executable, str(script)] and "__name:=scripted" in argv
-    assert command(BaseModel(executable=str(echo_node())))[0] == str(echo_node())
+    assert command(BaseModel(executable=str(echo_node())))[:2] == [sys.executable, str(echo_node())], \
+        "an executable Python script for 'a python3' runs on this one, which has rospy, whatever comes first on PATH"
     with pytest.raises(BaseNodeError, match=r"basenode 'echo_node' needs its package: add .basePackage"):
         command(BaseModel(executable="echo_node"))
 
@@ -158,7 +159,7 @@ def test_the_command_line_looks_the_executable_up_and_adds_the_remaps_and_params
     model = BaseModel(executable="echo_node", package="ipyros_test_nodes", node_name="b", namespace="/ns",
                       remaps={"/ns/x": "/y", "/ns/in": "/w/base/in"}, params={"rate": 2.5, "label": "5"},
                       args=["--prefix", "P"])
-    assert command(model) == [str(echo_node()), "--prefix", "P", "__name:=b", "__ns:=/ns", "/ns/x:=/y",
+    assert command(model) == [sys.executable, str(echo_node()), "--prefix", "P", "__name:=b", "__ns:=/ns", "/ns/x:=/y",
                               "/ns/in:=/w/base/in", "_rate:=2.5", "_label:='5'"]
     with pytest.raises(BaseNodeError, match="no executable 'echo'"):
         command(BaseModel(executable="echo", package="ipyros_test_nodes"))

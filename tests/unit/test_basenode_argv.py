@@ -10,7 +10,15 @@ import pytest
 
 from ipyros.core.errors import BaseNodeError
 from ipyros.core.model import BaseModel
-from ipyros.processes.basenode import BaseProcess, exit_reason, param_value, plain, python_command, script_command
+from ipyros.processes.basenode import (
+    BaseProcess,
+    child_env,
+    exit_reason,
+    param_value,
+    plain,
+    python_command,
+    script_command,
+)
 from ipyros.ros1 import nodes as ros1_nodes
 from ipyros.ros2 import nodes as ros2_nodes
 
@@ -76,6 +84,31 @@ def test_python_scripts_run_with_this_interpreter(tmp_path: Path):
     binary = tmp_path / "node"
     binary.write_bytes(b"\x7fELF...")
     assert python_command(binary, ["a"]) == (binary, ["a"])
+
+
+def test_a_script_that_names_an_interpreter_of_its_own_runs_on_it(tmp_path: Path):
+    other = tmp_path / "ws" / "bin" / "python3"
+    other.parent.mkdir(parents=True)
+    other.write_text("#!/bin/sh\n")
+    other.chmod(0o755)
+    script = tmp_path / "ws_node.py"
+    script.write_text(f"#!{other} -u\nprint('hi')\n")
+    assert python_command(script, ["a"]) == (other, ["-u", str(script), "a"])
+    assert script_command(str(script)) == (other, ["-u", str(script)]), "not executable: still its interpreter"
+    script.write_text(f"#!{tmp_path / 'gone' / 'python3'}\n")  # a stale #! line: this interpreter runs it
+    assert python_command(script) == (Path(sys.executable), [str(script)])
+
+
+def test_a_child_on_another_interpreter_leaves_this_venvs_bootstrap_out(monkeypatch):
+    mine = [os.path.join(sys.prefix, "lib"), os.path.join(sys.prefix, "lib", "python3.11", "site-packages",
+                                                          "ros_rclpy.libs"), "/opt/vendor/lib"]
+    monkeypatch.setenv("_ROS_WHEELS_BOOTSTRAP_COMPLETE", "1")
+    monkeypatch.setenv("LD_LIBRARY_PATH", os.pathsep.join(mine))
+    other = child_env("/home/me/ws/.venv/bin/python", {"ROBOT_MODE": "sim"})
+    assert "_ROS_WHEELS_BOOTSTRAP_COMPLETE" not in other and other["LD_LIBRARY_PATH"] == "/opt/vendor/lib"
+    assert other["ROBOT_MODE"] == "sim"
+    same = child_env(sys.executable)
+    assert same["_ROS_WHEELS_BOOTSTRAP_COMPLETE"] == "1" and same["LD_LIBRARY_PATH"] == os.pathsep.join(mine)
 
 
 def test_a_script_by_path(tmp_path: Path):
