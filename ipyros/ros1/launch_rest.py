@@ -34,6 +34,7 @@ from typing import Any, Optional
 
 from ..core.errors import BaseNodeError, IpyrosError
 from ..core.model import BaseModel
+from ..demo import DEMO_DIR
 from ..processes.basenode import BaseProcess, OnExit, temp_log
 from . import launchfile
 from .launchfile import fullname
@@ -52,6 +53,13 @@ RUNNER_STOP_TIMEOUT = 3 * (NODE_SIGINT_TIMEOUT + NODE_SIGTERM_TIMEOUT)
 
 
 # -- the session's side ---------------------------------------------------------------------
+
+def package_path() -> str:
+    """``ROS_PACKAGE_PATH`` for roslaunch: the session's, then ipyros_demo's folder, which ipyros finds by itself
+    (a launch file may run the demo robot beside the wrapped node)."""
+    parts = [p for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
+    return os.pathsep.join([*parts, str(DEMO_DIR)] if str(DEMO_DIR) not in parts else parts)
+
 
 class LaunchBase:
     """A basenode from a launch file together with the rest of that file: started and stopped as one.
@@ -77,7 +85,7 @@ class LaunchBase:
         self.rest = BaseProcess(
             [sys.executable, "-m", "ipyros.ros1.launch_rest", base.launch,
              *[f"{name}:={value}" for name, value in base.launch_args.items()], "--exclude", base.launch_node],
-            env={"ROS_MASTER_URI": master_uri}, on_exit=self._rest_exited,
+            env={"ROS_MASTER_URI": master_uri, "ROS_PACKAGE_PATH": package_path()}, on_exit=self._rest_exited,
             log_path=temp_log(f"rest-of-{Path(base.launch).stem}"),
         )
 

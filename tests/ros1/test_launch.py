@@ -317,3 +317,22 @@ def test_discovery_of_a_launch_node_finds_its_names_after_the_launch_remaps(make
     declared = {(t.name, t.resolved, t.direction) for t in nd.model().topics}
     assert {("in", "/robot1/in", "subscribe"), ("plan", "/robot1/plan", "publish")} <= declared
     assert basenode_remaps(nd.model())["/robot1/out"] == "/robot1/planner_disc_wrap/base/robot1/plan"
+
+
+def test_a_sibling_from_ipyros_demo_starts_with_the_rest(make_node, tmp_path, ros_session):
+    """The rest of a launch file may run ipyros_demo's robot beside the wrapped node: roslaunch finds the package
+    as ipyros does (issue 24)."""
+    launch = tmp_path / "with_demo.launch"
+    launch.write_text('<launch>\n'
+                      '  <node pkg="ipyros_demo" type="turtle_sim" name="sibling_turtle"/>\n'
+                      '  <node pkg="ipyros_test_nodes" type="echo_node" name="sibling_echo"/>\n'
+                      '</launch>\n')
+    nd = make_node("sibling_wrap").baseLaunch(str(launch), "sibling_echo")
+    nd.create()
+    try:
+        wait_for(lambda: "/sibling_turtle" in node_names(), timeout=30,
+                 what=f"the demo turtle of the rest (its log: {nd.base.rest.tail(8)})")
+        assert not nd.base.not_started
+    finally:
+        nd.shutdown()
+    wait_for(lambda: "/sibling_turtle" not in node_names(), timeout=15, what="the sibling to stop")
