@@ -83,6 +83,9 @@ class Ros1:
         if not session.config.start_master:
             return (f"no ROS master answers at {uri}; start roscore there, "
                     "or let ipyros start one: %config RosMagics.start_master = True")
+        if not master_mod.is_this_host(uri):
+            return (f"no ROS master answers at {uri}, on another machine; start roscore there (ipyros can start "
+                    "one only on this machine), or point ROS_MASTER_URI at this one")
         if wait:
             return connection.attach(session).describe()
         import threading

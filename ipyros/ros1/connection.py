@@ -54,6 +54,9 @@ class MasterConnection:
                 self.master = master_mod.attach(session.config.master_uri, session.config.start_master)
                 if self.master.started:
                     session.config.announce(f"ipyros: {self.master.describe()}")
+                advice = master_mod.callback_advice(self.master.uri)
+                if advice is not None:
+                    session.config.announce(advice)
             return self.master
 
     def check_config(self, session: Any, master_uri: Optional[str]) -> None:

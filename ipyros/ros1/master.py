@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import socket
 import subprocess
 import sys
 import time
@@ -63,6 +64,53 @@ def configured_uri() -> str:
     return os.environ.get("ROS_MASTER_URI") or DEFAULT_URI
 
 
+def is_this_host(uri: str) -> bool:
+    """Whether ``uri`` names this machine: a loopback name or address, its host name, or an address of one of its
+    interfaces (one this process can bind to: the kernel's own answer, with no list of interfaces to read)."""
+    host = urlparse(uri).hostname or ""
+    if host in ("localhost", os.uname().nodename) or host.startswith("127.") or host == "::1":
+        return True
+    try:
+        addresses = {info[4][0] for info in socket.getaddrinfo(host, None, socket.AF_INET)}
+    except OSError:
+        return False
+    for address in addresses:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            try:
+                probe.bind((address, 0))
+                return True
+            except OSError:
+                continue
+    return False
+
+
+def address_towards(uri: str) -> Optional[str]:
+    """This machine's address on the way to ``uri``'s host (what peers there can call back), if there is a route."""
+    parsed = urlparse(uri)
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            probe.connect((parsed.hostname or "", parsed.port or 11311))  # UDP: nothing is sent, a route is chosen
+            return probe.getsockname()[0]
+    except OSError:
+        return None
+
+
+def callback_advice(uri: str) -> Optional[str]:
+    """One line when the master is on another machine and nothing says how its peers reach this one, else None.
+
+    A ROS 1 node gives the master a URI to call back at: ``ROS_IP``, else ``ROS_HOSTNAME``, else
+    this machine's host name, which the other machine often cannot resolve (then topics
+    connect in one direction only, and nothing says why).
+    """
+    if is_this_host(uri) or os.environ.get("ROS_IP") or os.environ.get("ROS_HOSTNAME"):
+        return None
+    mine = address_towards(uri)
+    example = f"export ROS_IP={mine}" if mine else "export ROS_IP=<this machine's address on that network>"
+    return (f"ipyros: the master {uri} is on another machine and neither ROS_IP nor ROS_HOSTNAME is set: its peers "
+            f"will call this session back at '{os.uname().nodename}', which they may not resolve; before starting "
+            f"ipyros: {example}")
+
+
 @dataclass
 class MasterHandle:
     """The master this session uses; ``process`` is set when ipyros started it."""
@@ -70,10 +118,12 @@ class MasterHandle:
     uri: str
     started: bool
     processes: list[subprocess.Popen] = field(default_factory=list)
+    local_only: bool = True  # a master ipyros started at a loopback address listens there only
 
     def describe(self) -> str:
-        how = ("started by ipyros, local: listening on 127.0.0.1 only; it stops when this session exits"
-               if self.started else "found running")
+        where = "local: listening on 127.0.0.1 only" if self.local_only else \
+            f"listening on this machine's network ({os.environ.get('ROS_IP')}) for the robot's other machines"
+        how = f"started by ipyros, {where}; it stops when this session exits" if self.started else "found running"
         return f"ROS master {self.uri} ({how})"
 
     def stop(self) -> None:
@@ -98,20 +148,24 @@ def attach(uri: Optional[str] = None, start: bool = True, timeout: float = 15.0)
         raise MasterError(f"no ROS master answers at {uri}; start roscore there, "
                           "or allow ipyros to start one (c.RosMagics.start_master = True)")
     parsed = urlparse(uri)
-    if parsed.hostname not in ("localhost", "127.0.0.1", "::1", os.uname().nodename):
-        raise MasterError(f"no ROS master answers at {uri} and ipyros can only start one on this machine; "
-                          "start roscore on that host or point ROS_MASTER_URI at localhost")
+    if not is_this_host(uri):
+        raise MasterError(f"no ROS master answers at {uri}, on another machine, and ipyros can start one only on "
+                          "this one; start roscore there, or point ROS_MASTER_URI at this machine")
     if shutil.which("rosmaster") is None:
         raise MasterError("no ROS master answers and 'rosmaster' is not installed; "
                           "apt-get install python3-rosmaster (or run: bash run.sh)")
     port = parsed.port or 11311
-    # The master ipyros starts is this machine's alone: it, rosout, this session's node and the
+    host = parsed.hostname or LOOPBACK
+    # A master at a loopback name is this machine's alone: it, rosout, this session's node and the
     # basenodes it starts all listen on loopback (ROS binds to 127.0.0.1 when ROS_IP is a loopback
-    # address, else to every interface, where anyone on the network could set parameters).
+    # address, else to every interface, where anyone on the network could set parameters). One
+    # at this machine's network address is meant for the robot's other machines: peers are told
+    # that address (ROS_IP), and it listens where they can reach it.
+    loopback = host == "localhost" or host.startswith("127.") or host == "::1"
     os.environ.pop("ROS_HOSTNAME", None)  # it would win over ROS_IP
-    os.environ["ROS_IP"] = LOOPBACK
+    os.environ["ROS_IP"] = LOOPBACK if loopback else (address_towards(uri) or host)
     env = {**os.environ, "ROS_MASTER_URI": uri}
-    handle = MasterHandle(uri, started=True)
+    handle = MasterHandle(uri, started=True, local_only=loopback)
     handle.processes.append(spawn(["rosmaster", "--core", "-p", str(port), "-w", "3"], env=env))
     deadline = time.monotonic() + timeout
     while not answers(uri, timeout=0.5):
