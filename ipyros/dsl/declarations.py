@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import inspect
+import re
 import weakref
 from collections.abc import MutableMapping
 from typing import Any, Callable, Iterator, Optional
@@ -176,7 +177,7 @@ class TopicHandler:
     def _subscribe(self, topic: str, handler: Optional[Callable[..., Any]], msg_type: Any, qos: Any) -> "TopicHandler":
         node, role = self._node, self._role
         resolved = node.resolve_as(role, topic, "topic")
-        type_name, _ = msgtypes.resolve_message(msg_type)
+        type_name = self._type_name(msg_type, relayed=role == "reuse" and handler is None)
         given = self._qos(qos, f"{role}.subscribe({topic!r})")
         if role == "reuse":
             check_reuse(node.model(), resolved, "subscribe")
@@ -212,7 +213,7 @@ class TopicHandler:
     def _publish(self, topic: str, msg_type: Any, latch: bool, qos: Any) -> "TopicHandler":
         node = self._node
         resolved = node.resolve_as(self._role, topic, "topic")
-        type_name, _ = msgtypes.resolve_message(msg_type)
+        type_name = self._type_name(msg_type, relayed=self._role == "reuse")
         where = f"{self._role}.publish({topic!r})"
         given = self._qos(qos, where)
         if latch and given.durability == "volatile":
@@ -224,6 +225,18 @@ class TopicHandler:
         node.change(_replace_topic(entry), check=(entry,))
         self._did(f"publish {resolved} [{type_name}]")
         return self
+
+    def _type_name(self, msg_type: Any, relayed: bool) -> str:
+        """The declared type's name; a type this Python cannot import is taken, as ``pkg/Type``, only for a relay on a
+        ROS that relays bytes of any type (ROS 1): a handler or a publisher needs its class."""
+        try:
+            return msgtypes.resolve_message(msg_type)[0]
+        except MessageTypeError:
+            if not (relayed and isinstance(msg_type, str) and self._node.session.backend.relays_any_type
+                    and re.fullmatch(r"\w+/(msg/)?\w+", msg_type.strip())):
+                raise
+            package, _, name = msg_type.strip().partition("/")
+            return f"{package}/{name.rsplit('/', 1)[-1]}"
 
     def _qos(self, value: Any, where: str) -> qos_mod.Qos:
         """``qos=`` checked; refused on reuse, whose relays take the QoS of what they relay."""

@@ -645,8 +645,13 @@ class NodeEngine:
                 self.session.notify(f"ipyros: {spec.source} carries {got}, but {self.name} relays it as {spec.type}; "
                                     f"messages are dropped: declare type={got!r}")
 
-            return backend.relay(host, spec.source, spec.target, msgtypes.resolve_message(spec.type)[1], wrong_type,
-                                 self._complain)
+            try:
+                cls = msgtypes.resolve_message(spec.type)[1]
+            except MessageTypeError:
+                if not backend.relays_any_type:
+                    raise
+                return backend.raw_relay(host, spec.source, spec.target, spec.type, wrong_type, self._complain)
+            return backend.relay(host, spec.source, spec.target, cls, wrong_type, self._complain)
         if isinstance(spec, planning.ServiceRelaySpec):
             return backend.service_relay(host, spec.source, spec.target, msgtypes.resolve_service(spec.type)[1],
                                          self._complain)

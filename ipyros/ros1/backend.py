@@ -135,6 +135,13 @@ class Ros1:
               on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.Relay:
         return runtime.Relay(source, target, cls, on_wrong_type, complain)
 
+    #: TCPROS carries bytes: a topic of a type this Python cannot import is relayed all the same.
+    relays_any_type = True
+
+    def raw_relay(self, host: str, source: str, target: str, type_name: str,
+                  on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.RawRelay:
+        return runtime.RawRelay(source, target, type_name, on_wrong_type, complain)
+
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
               complain: Optional[Complain] = None) -> runtime.Timer:
         return runtime.Timer(period, slot, oneshot)  # rospy gives each timer a thread of its own

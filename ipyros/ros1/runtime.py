@@ -608,6 +608,55 @@ class Relay:
         self._pub.unregister()
 
 
+class RawRelay(Relay):
+    """A relay of a type this Python cannot import (a workspace's own, a package not installed here).
+
+    TCPROS carries bytes: they are forwarded as they came, and the target is advertised with
+    the type, md5 and definition of the publisher the first message came from (its connection
+    header says them), as topic_tools' relay does; so the target shows up with that message.
+    """
+
+    def __init__(self, source: str, target: str, type_name: str,
+                 on_wrong_type: Optional[Callable[[str], None]] = None,
+                 complain: Optional[Callable[[str], None]] = None) -> None:
+        self.source, self.target, self.cls = source, target, None
+        self._complain, self._on_wrong_type = complain, on_wrong_type
+        self.count = self.dropped = 0
+        self._type = type_name
+        self._header_seen: Optional[dict] = None
+        self._pub: Any = None
+        self._impl: Any = None
+        # Subscribed as "any md5" under the declared type: the master and rosnode show the type.
+        stand_in = type("Unknown", (rospy.AnyMsg,), {"__slots__": (), "_type": type_name, "_md5sum": "*",
+                                                     "_full_text": "", "_has_header": False})
+        self._sub = _subscribe_bytes(source, stand_in, self._forward)
+        _OtherTypes.watch(source, type_name, complain)
+
+    def _forward(self, raw: rospy.AnyMsg) -> None:
+        if self._pub is None:
+            header = raw._connection_header
+            if header.get("type") != self._type:
+                self._wrong_type(header.get("type", "?"))
+                return
+            described = type("Described", (rospy.AnyMsg,), {
+                "__slots__": (), "_type": header["type"], "_md5sum": header.get("md5sum", "*"),
+                "_full_text": header.get("message_definition", ""), "_has_header": False})
+            self._pub = _publisher(self.target, described)
+            self._impl = self._pub.impl
+        super()._forward(raw)
+
+    def figures(self) -> SendFigures:
+        if self._impl is None:
+            return SendFigures(self.target, "relay", 0, 0, 0, self.dropped)
+        return super().figures()
+
+    def close(self) -> None:
+        _OtherTypes.unwatch(self.source, self._complain)
+        self._sub.unregister()
+        if self._pub is not None:
+            self._pub.unregister()
+
+
 class Timer:
     """A periodic (or one-shot) callback through a :class:`HandlerSlot`."""
 

@@ -10,7 +10,7 @@ from rclpy._rclpy_pybind11 import RCLError
 from rclpy.exceptions import NameValidationException
 
 from ..core import msgtypes
-from ..core.errors import DeclarationError, IpyrosError, NodeStateError, first_line
+from ..core.errors import DeclarationError, IpyrosError, MessageTypeError, NodeStateError, first_line
 from ..core.graph import GraphSnapshot
 from ..core.model import BaseModel
 from ..core.qos import Qos
@@ -71,6 +71,14 @@ class Ros2:
     def relay(self, host: str, source: str, target: str, cls: type,
               on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.Relay:
         return runtime.Relay(self.process, self.process.host(host), source, target, cls, on_wrong_type, complain)
+
+    #: rclpy needs the type's Python package to subscribe at all, even to bytes.
+    relays_any_type = False
+
+    def raw_relay(self, host: str, source: str, target: str, type_name: str,
+                  on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> Any:
+        raise MessageTypeError(f"ROS 2 relays only types this Python has; install {type_name.split('/')[0]} "
+                               f"({msgtypes.install_hint(type_name.split('/')[0])})")
 
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
               complain: Optional[Complain] = None) -> runtime.Timer:

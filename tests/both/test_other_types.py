@@ -53,3 +53,32 @@ def test_topics_says_which_types_are_not_installed_and_how_to_install_them(ip, p
     assert "/nit/point" in out, "still listed"
     assert ("ipyros: types not installed here (their topics cannot be echoed or handled in this session): "
             f"geometry_msgs/Point ({msgtypes.install_hint('geometry_msgs')})") in out, out
+
+
+def test_a_type_this_python_lacks_is_relayed_where_the_transport_allows(make_node, peer, session, monkeypatch):
+    """ROS 1 relays the bytes of any type: a reuse of a type the session cannot import works, advertised as its
+    publisher's type; ROS 2 needs the type's package, and says which to install (issue 24)."""
+    import sys
+    from pathlib import Path
+
+    import pytest
+
+    from ipyros.core import msgtypes
+    from ipyros.core.errors import MessageTypeError
+
+    talker = Path(__file__).parent / "peers" / "talk.py"
+    w = make_node("raw_wrap")
+    w.baseNode(str(talker), namespace="raw_robot", args=["point", "geometry_msgs/Point", "10", "x=1.5"])
+    monkeypatch.setitem(sys.modules, "geometry_msgs", None)  # as a venv without the package: the import fails
+    monkeypatch.setitem(sys.modules, "geometry_msgs.msg", None)
+    if not session.backend.relays_any_type:
+        with pytest.raises(MessageTypeError, match=msgtypes.install_hint("geometry_msgs")):
+            w.reuse.publish("point", type="geometry_msgs/Point")
+        return
+    w.reuse.publish("point", type="geometry_msgs/Point")
+    listener = peer("listen.py", "/raw_robot/point", "geometry_msgs/Point", "x", "--name=raw_ear")
+    w.create()
+    try:
+        listener.wait_line("heard 1.5", timeout=30)
+    finally:
+        w.shutdown()

@@ -10,7 +10,7 @@ from anyros import DemoNode, field, message_class
 topic, type_name, rate = sys.argv[1], sys.argv[2], float(sys.argv[3])
 node = DemoNode("talk_peer")
 msg = message_class(type_name)()
-for assignment in (a for a in sys.argv[4:] if "=" in a and not a.startswith("-")):
+for assignment in (a for a in sys.argv[4:] if "=" in a and ":=" not in a and not a.startswith("-")):
     path, _, value = assignment.partition("=")
     owner, _, name = path.rpartition(".")
     setattr(field(msg, owner), name, ast.literal_eval(value))
