@@ -198,6 +198,11 @@ def _index(kind: str) -> dict[str, tuple[str, ...]]:
 _EXPORTED = re.compile(r"^from \S+\._\w+ import (\w+)", re.M)  # ROS 2: from pkg.msg._twist import Twist
 
 
+def forget_index() -> None:
+    """Read the installed message packages again next time (a package was just built or installed)."""
+    _index.cache_clear()
+
+
 def _type_names(init: Path) -> set[str]:
     """The types a generated ``pkg/msg/__init__.py`` exports (ROS 1: one ``_Type.py`` module each)."""
     names = {m.stem[1:] for m in init.parent.glob("_*.py") if m.name != "__init__.py" and m.stem[1:2].isupper()}

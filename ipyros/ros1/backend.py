@@ -185,6 +185,11 @@ class Ros1:
     has_param = staticmethod(runtime.has_param)
     delete_param = staticmethod(runtime.delete_param)
 
+    def build_messages(self, package_dir: Any, into: Any) -> list[str]:
+        from .msggen import build_messages
+
+        return build_messages(package_dir, into)
+
     def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
         return runtime.ParamWatch(name, tell)
 
