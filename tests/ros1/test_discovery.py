@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from helpers import use_test_nodes
 from rich.console import Console
-from ros1_fixtures import free_port, ros1_process
+from ros1_fixtures import free_port, ros1_process, wait_for
 
 from ipyros.core.errors import BaseNodeError, MasterError
 from ipyros.core.records import Interface
@@ -58,11 +58,15 @@ def test_python_node_in_a_namespace_with_a_remap(ros_master, launch):
 def test_the_demo_robot_as_the_paper_session_would_discover_it(ros_master, launch):
     launch("ipyros_demo", "turtle_sim")
     launch("ipyros_demo", "move_base")
-    sim = wait_for_node(ros_master, "turtle_sim")  # a name without namespace is global
+    # Settled is not complete on a loaded machine (a node may register its last endpoint later): what is
+    # checked here is what discovery reads once the node has registered everything.
+    sim = wait_for(lambda: (found := wait_for_node(ros_master, "turtle_sim")).subscriptions and found,
+                           timeout=30, what="turtle_sim's whole interface")  # a name without namespace is global
     assert sim.publications == [("/turtle1/pose", "geometry_msgs/Pose"), ("/turtle1/speed_exceeded", "std_msgs/Bool")]
     assert sim.subscriptions == [("/turtle1/cmd_vel", "geometry_msgs/Twist")]
     assert sim.services == []
-    nav = wait_for_node(ros_master, "/move_base")
+    nav = wait_for(lambda: len((found := wait_for_node(ros_master, "/move_base")).subscriptions) == 2
+                           and found.services and found, timeout=30, what="move_base's whole interface")
     assert nav.publications == [("/cmd_vel", "geometry_msgs/Twist")]
     assert nav.subscriptions == [("/move_base_simple/goal", "geometry_msgs/PoseStamped"),
                                  ("/turtle1/pose", "geometry_msgs/Pose")]
