@@ -24,7 +24,8 @@ ros1_setup() {
     python3-rospy python3-rostopic python3-rosgraph python3-rosnode python3-rosmaster
     python3-roslaunch python3-rosservice python3-rosparam rosout rosbash topic-tools
     python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-std-srvs
-    python3-rosgraph-msgs python3-rosbag python3-actionlib python3-actionlib-msgs tmux
+    python3-rosgraph-msgs python3-rosbag python3-actionlib python3-actionlib-msgs python3-dynamic-reconfigure
+    python3-genpy tmux
   )
 
   local missing=() p stamp

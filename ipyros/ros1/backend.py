@@ -11,7 +11,7 @@ from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
-from . import bagfile, introspect, master as master_mod, nodes, runtime
+from . import bagfile, introspect, master as master_mod, nodes, reconfigure, runtime
 from .connection import MasterConnection
 from .discovery import wait_for_node
 from .export import RospyScript
@@ -267,15 +267,42 @@ class Ros1:
         return introspect.params_under(self.connection.uri, namespace)
 
     read_param = staticmethod(runtime.get_param)
+
     def describe_param(self, name: str) -> dict[str, Any]:
-        """What ROS 1 knows of a parameter: the type of its value (the parameter server keeps no more)."""
+        """What ROS 1 knows of a parameter: the type of its value (the parameter server keeps no more), and a
+        dynamic_reconfigure server's type, range, default and description when one serves it."""
+        served = self._reconfigurable(name)
+        if served is not None:
+            return {k: v for k, v in served.items() if v not in (None, "")}
         return {"type": type(self.read_param(name)).__name__}
+
+    def param_ranges(self, namespace: str) -> dict[str, str]:
+        """``{global name: "double 0..10"}`` for the parameters under ``namespace`` that a dynamic_reconfigure
+        server serves (%params shows them in a column of their own)."""
+        found: dict[str, str] = {}
+        for server in reconfigure.servers(self.graph_snapshot().topics, namespace):
+            try:
+                found.update({name: reconfigure.range_text(d) for name, d in reconfigure.describe(server).items()})
+            except IpyrosError:  # a server that does not answer: its values are listed all the same
+                continue
+        return found
+
+    def _reconfigurable(self, name: str) -> Optional[dict[str, Any]]:
+        """The dynamic_reconfigure description of parameter ``name``, if a server of the graph serves it."""
+        server = name.rsplit("/", 1)[0]
+        if server not in reconfigure.servers(self.graph_snapshot().topics, server.rsplit("/", 1)[0] or "/"):
+            return None
+        return reconfigure.describe(server).get(name)
 
     #: Parameters every node has, which %params leaves out unless asked: none on ROS 1.
     standard_params: tuple[str, ...] = ()
 
     def write_param(self, name: str, value: Any) -> Any:
-        """Set the parameter ``name`` on the parameter server; the value set."""
+        """Set the parameter ``name``: through its dynamic_reconfigure server when one serves it (the running
+        node reads the parameter server only at start), else on the parameter server; the value set."""
+        if self._reconfigurable(name) is not None:
+            server, key = name.rsplit("/", 1)
+            return reconfigure.set_value(server, key, value)
         runtime.set_param(name, value)
         return value
 

@@ -170,6 +170,10 @@ class Ros2:
         node, key = self._owner(name)
         node.undeclare_parameter(key)
 
+    def param_ranges(self, namespace: str) -> dict[str, str]:
+        """Nothing for the table: a ROS 2 parameter's range is in its descriptor (``%param NAME --describe``)."""
+        return {}
+
     def build_messages(self, package_dir: Any, into: Any) -> list[str]:
         raise MessageTypeError("on ROS 2 a message package's Python types need its C type support, which colcon "
                                "builds (rosidl from PyPI has no compiler step): colcon build it and put its "

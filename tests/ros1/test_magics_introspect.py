@@ -62,3 +62,27 @@ def test_services_call_params_and_nodes_at_the_prompt(ip, capsys):
         assert "no live node /nobody; %nodes lists them" in str(error_of(ip, "%node /nobody"))
     finally:
         ok(ip, "srv.shutdown()")
+
+
+def test_a_dynamic_reconfigure_server_is_shown_with_its_ranges_and_set_through(ip, capsys):
+    """ROS 1: %params shows a dynamic_reconfigure server's parameters with their ranges, and %param sets them
+    through the server, so the running node hears them (the parameter server it reads only at start) (issue 24)."""
+    from ros1_fixtures import Peer, wait_for
+
+    with Peer("reconfigurable.py", "dr_node") as server:
+        server.wait_line("ready")
+        ip.run_line_magic("load_ext", "ipyros")
+        wait_for(lambda: ip.run_line_magic("params", "/dr_node") is None and "dynamic_reconfigure" in
+                 (out := capsys.readouterr().out) and out, timeout=20, interval=0.3, what="the server's parameters")
+        capsys.readouterr()
+        ip.run_line_magic("params", "/dr_node")
+        table = capsys.readouterr().out
+        assert "/dr_node/int_" in table and "int -10..10" in table and "double -2..10" in table, table
+        ip.run_line_magic("param", "/dr_node/int_ 5")
+        assert "ipyros: /dr_node/int_ = 5" in capsys.readouterr().out
+        server.wait_line("reconfigured int_=5")
+        ip.run_line_magic("param", "/dr_node/int_ 50")
+        assert "ipyros: /dr_node/int_ = 10" in capsys.readouterr().out, "the server keeps it in its range"
+        ip.run_line_magic("param", "/dr_node/double_ --describe")
+        described = capsys.readouterr().out
+        assert described.startswith("/dr_node/double_: type double, min -2.0, max 10.0, default 0.0"), described

@@ -184,12 +184,15 @@ class IntrospectMagics(ExtensionMagics):
             print(f"no parameters under {namespace}" + (f" but the {len(standard)} every node has (--all shows them)"
                                                          if standard else ""))
             return
+        ranges = backend.param_ranges(namespace)
         table = Table(title=f"{len(values)} parameter{'s' * (len(values) != 1)} under {namespace}",
                       title_justify="left")
         table.add_column("parameter", overflow="fold")
         table.add_column("value", overflow="fold")
+        if ranges:  # set through their dynamic_reconfigure server by %param, within these
+            table.add_column("dynamic_reconfigure", overflow="fold")
         for name, value in values.items():
-            table.add_row(name, _short(value))
+            table.add_row(name, _short(value), *([ranges.get(name, "")] if ranges else []))
         self.ext.printer.show(table)
 
     def _load_params(self, backend: Any, path: str, namespace: str) -> None:
