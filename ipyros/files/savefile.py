@@ -141,6 +141,10 @@ class _SavedFile:
         parts.append("with restoring():  # if a line below fails, the nodes it started are stopped again\n"
                      + "\n".join(f"    {line}" if line else "" for line in body))
         parts.append('if __name__ == "__main__":  # run as a script: keep the nodes up until Ctrl-C\n    spin()')
+        watched = [f"{n.name} {key!r}" for n in self.nodes for key in n.param_handlers()]
+        if watched:  # said, not lost: the file has no on_param line yet
+            warn_user(f"ipyros: the on_param handlers of {', '.join(watched)} are not in the saved file; declare them "
+                      "again after loading it (nd.on_param(key, fn))", SaveWarning)
         if b.unbound:
             warn_user(f"ipyros: the saved file needs {', '.join(b.unbound)} defined before it runs "
                       "(listed at its top): " + "; ".join(f"{k} is {v.split(', ', 1)[1]}" for k, v in

@@ -127,6 +127,11 @@ class NodeEngine:
         with self._lock:
             return dict(self._handlers)
 
+    def param_handlers(self) -> dict[str, Callable[[Any], Any]]:
+        """The functions ``on_param`` calls, by parameter key."""
+        with self._lock:
+            return dict(self._param_handlers)
+
     def handler(self, name: str) -> Optional[Callable[..., Any]]:
         """The function now serving subscription ``name`` (or the service or timer of that name)."""
         try:

@@ -33,3 +33,14 @@ def test_on_param_needs_a_value_first(make_node):
     with pytest.raises(NotDeclaredError, match=r"has no parameter 'gain' to watch; give it a value first, "
                                                r"\w+\.params\['gain'\] = \.\.\., then \w+\.on_param"):
         nd.on_param("gain", print)
+
+
+def test_saving_a_node_with_on_param_says_what_the_file_leaves_out(make_node, tmp_path):
+    from ipyros.files.savefile import SaveWarning
+
+    nd = make_node("op_saved")
+    nd.params["gain"] = 1.0
+    nd.on_param("gain", print)
+    with pytest.warns(SaveWarning, match=r"the on_param handlers of op_saved 'gain' are not in the saved file; "
+                                         r"declare them again after loading it"):
+        nd.save(tmp_path / "op_saved.py")
