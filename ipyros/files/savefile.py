@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, Iterable, Optional, Sequence
 
 from ..core import plan as planning
-from ..core.code import WRITER, Bindings, container_of, handler_slots
+from ..core.code import WRITER, Bindings, container_of, handler_slots, handler_source
 from ..core.errors import IpyrosError, warn_user
 from ..core.model import NodeModel
 from .atomic import write_atomic
@@ -72,12 +72,16 @@ class _SavedFile:
         self.slot_names: dict[tuple[int, str], str] = {}  # (node id, slot) → function name in the file
         self.sources = handler_sources(self.nodes, namespace)
         self.variables = self._variables()
+        self.watches: dict[int, list[tuple[str, str]]] = {}  # node id → (parameter key, function name) of on_param
+        self.unwatched: list[str] = []  # on_param handlers without a source: said when saving
         for node in self.nodes:
             for slot, _ in handler_slots(node.model()):
                 self._handler(node, slot)
                 for version in node.slot_versions(slot)[0]:  # what an earlier version needs, to revert to it
                     if isinstance(version.function, types.FunctionType) and version.source:
                         self.bindings.bind(version.function, version.source, self.namespace, self._skip)
+            for key, fn in node.param_handlers().items():
+                self._param_handler(node, key, fn)
 
     # -- names ------------------------------------------------------------------------------
     def _variables(self) -> dict[int, str]:
@@ -120,6 +124,25 @@ class _SavedFile:
         if isinstance(fn, types.FunctionType):
             self.bindings.bind(fn, source, self.namespace, self._skip)
 
+    def _param_handler(self, node: KeptNode, key: str, fn: Any) -> None:
+        """An ``on_param`` handler, kept as a handler is; one without a source is said, not saved."""
+        try:
+            source = handler_source(fn, f"{node.name} on_param {key!r}", self.namespace)
+        except IpyrosError:
+            self.unwatched.append(f"{node.name} {key!r}")
+            return
+        name = getattr(fn, "__name__", "<lambda>")
+        if name == "<lambda>" or not isinstance(fn, types.FunctionType):
+            name = _identifier(f"on_{key.replace('/', '_')}")
+            source = f"{name} = {source}"
+        if self.handlers.get(name, source) != source:
+            raise IpyrosError(f"nothing saved: two different handlers are named {name}; rename one "
+                              "(def another_name(value): ...), declare it again, then save")
+        self.handlers[name] = source
+        self.watches.setdefault(id(node), []).append((key, name))
+        if isinstance(fn, types.FunctionType):
+            self.bindings.bind(fn, source, self.namespace, self._skip)
+
     # -- the text ----------------------------------------------------------------------------
     def render(self, stem: str, made_on: str) -> str:
         names = ", ".join(n.fullname for n in self.nodes)
@@ -141,10 +164,9 @@ class _SavedFile:
         parts.append("with restoring():  # if a line below fails, the nodes it started are stopped again\n"
                      + "\n".join(f"    {line}" if line else "" for line in body))
         parts.append('if __name__ == "__main__":  # run as a script: keep the nodes up until Ctrl-C\n    spin()')
-        watched = [f"{n.name} {key!r}" for n in self.nodes for key in n.param_handlers()]
-        if watched:  # said, not lost: the file has no on_param line yet
-            warn_user(f"ipyros: the on_param handlers of {', '.join(watched)} are not in the saved file; declare them "
-                      "again after loading it (nd.on_param(key, fn))", SaveWarning)
+        if self.unwatched:  # said, not lost
+            warn_user(f"ipyros: the on_param handlers of {', '.join(self.unwatched)} have no source and are not in the "
+                      "saved file; give them a def and declare them again (nd.on_param(key, fn))", SaveWarning)
         if b.unbound:
             warn_user(f"ipyros: the saved file needs {', '.join(b.unbound)} defined before it runs "
                       "(listed at its top): " + "; ".join(f"{k} is {v.split(', ', 1)[1]}" for k, v in
@@ -178,6 +200,7 @@ class _SavedFile:
             options = (f", name={timer.name!r}" if timer.name != fn else "") + (", oneshot=True" if timer.oneshot else "")
             lines.append(f"{var}.timer({timer.period!r}, {fn}{options})")
         lines += [f"{var}.params[{key!r}] = {value!r}" for key, value in model.params.items()]
+        lines += [f"{var}.on_param({key!r}, {name})" for key, name in self.watches.get(id(node), [])]
         lines += self._versions(node, var, model)
         lines.append(f"{var}.create()" if node.created else f"# {var}.create()  (it was not running when saved)")
         return lines + [""]

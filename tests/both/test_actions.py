@@ -175,15 +175,18 @@ def test_action_watch_shows_the_goals_others_send(ip, make_node, counting, capsy
     make_node("act_watched").new.action("/act_watched/count", counting.type, counter(counting, step=0.1)).create()
     wait_for(lambda: "/act_watched/count" in {a.name for a in _actions(ip)}, timeout=20, what="the action in the graph")
 
-    def other_client():
-        time.sleep(1.0)  # after the watch has subscribed: it shows goals from then on
-        counting.plain_send("/act_watched/count", 3)
+    watched = threading.Event()
+
+    def other_client():  # goals until the watch has seen one end: it shows goals from its start on
+        while not watched.is_set():
+            counting.plain_send("/act_watched/count", 3)
 
     sender = threading.Thread(target=other_client)
     sender.start()
     try:
         ok(ip, "%action --watch /act_watched/count -n 1")
     finally:
+        watched.set()
         sender.join(60)
     out = capsys.readouterr().out
     assert "watching /act_watched/count" in out and "] goal" in out and "] succeeded" in out

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import pytest
+from shell import ok
 from support import wait_for
 
 from ipyros.core.errors import NotDeclaredError
+from ipyros.dsl import engine_of
+from ipyros.files.savefile import SaveWarning
 
 
 def test_a_parameter_set_from_outside_reaches_the_handler(make_node, peer, notices):
@@ -35,12 +38,19 @@ def test_on_param_needs_a_value_first(make_node):
         nd.on_param("gain", print)
 
 
-def test_saving_a_node_with_on_param_says_what_the_file_leaves_out(make_node, tmp_path):
-    from ipyros.files.savefile import SaveWarning
-
-    nd = make_node("op_saved")
-    nd.params["gain"] = 1.0
-    nd.on_param("gain", print)
-    with pytest.warns(SaveWarning, match=r"the on_param handlers of op_saved 'gain' are not in the saved file; "
-                                         r"declare them again after loading it"):
-        nd.save(tmp_path / "op_saved.py")
+def test_a_saved_node_keeps_its_on_param_handlers(ip, tmp_path, capsys):
+    path = tmp_path / "op_saved.py"
+    ok(ip, "tuned = []\n"
+           "def on_gain(value):\n    tuned.append(value)\n"
+           "saved = rosNode('op_saved')\nsaved.params['gain'] = 1.0\nsaved.on_param('gain', on_gain)\n"
+           "other = rosNode('op_unsaved')\nother.params['rate'] = 2\nother.on_param('rate', print)\n"
+           "saved.create(); other.create()")
+    with pytest.warns(SaveWarning, match=r"the on_param handlers of op_unsaved 'rate' have no source and are not in "
+                                         r"the saved file; give them a def"):
+        ok(ip, f"from ipyros import save_session\nsave_session({str(path)!r})")
+    text = path.read_text()
+    assert "def on_gain(value):" in text and "saved.on_param('gain', on_gain)" in text, text
+    ok(ip, "saved.shutdown(); other.shutdown()")
+    ok(ip, f"%load_nodes {path}")
+    loaded = ip.user_ns["rosNode"].running("/op_saved")
+    assert engine_of(loaded).param_handlers()["gain"].__name__ == "on_gain"
