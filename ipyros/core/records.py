@@ -8,7 +8,7 @@ for these types when the extension loads.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Iterator, Optional
 
 __all__ = ["History", "Interface", "NodeStatus", "Rows", "StatusRow", "Versions"]
@@ -106,7 +106,8 @@ class Interface:
     not_installed: list[str] = field(default_factory=list)
 
     def fold_actions(self) -> "Interface":
-        """Take the actions this node serves out of its topics and services, into ``actions`` (``pkg/Type``).
+        """This interface with the actions the node serves taken out of its topics and services, into
+        ``actions`` (``pkg/Type``); the interface itself is left as it was.
 
         An action is a set of topics (ROS 1: ``NAME/goal`` of a ``pkg/TypeActionGoal`` and
         four more; ROS 2: ``NAME/_action/feedback`` of a ``pkg/Type_FeedbackMessage``, the
@@ -125,11 +126,9 @@ class Interface:
             head, _, tail = entry[0].rpartition("/")
             return head.removesuffix("/_action") in found and (head.endswith("/_action") or tail in _ROS1_PARTS)
 
-        self.publications = [e for e in self.publications if not part(e)]
-        self.subscriptions = [e for e in self.subscriptions if not part(e)]
-        self.services = [e for e in self.services if not part(e)]
-        self.actions = sorted(found.items())
-        return self
+        return replace(self, publications=[e for e in self.publications if not part(e)],
+                       subscriptions=[e for e in self.subscriptions if not part(e)],
+                       services=[e for e in self.services if not part(e)], actions=sorted(found.items()))
 
 
 #: The topics of a ROS 1 action under its name (actionlib's).

@@ -283,27 +283,7 @@ class TopicHandler:
             return link._service(name, one_type(srvType, type, name), handler)
 
     def _service(self, name: str, srv_type: Any, handler: Optional[Callable[..., Any]]) -> "TopicHandler":
-        node, role = self._node, self._role
-        resolved = node.resolve_as(role, name, "service")
-        type_name, _ = msgtypes.resolve_service(srv_type)
-        handlers = {}
-        if role == "new":
-            if handler is None:
-                raise HandlerError(f"new.service({name!r}) needs handler=...: called with each request, "
-                                   "returns the response")
-            handlers[planning.service_slot(resolved)] = (handler, call_arity(handler, "service", f"{node.name} {resolved}"))
-        elif handler is not None:
-            raise HandlerError(f"reuse.service({name!r}) relays the basenode's service and takes no handler; "
-                               "to answer it yourself use new.service(..., handler=...)")
-        entry = ServiceModel(name, resolved, type_name, role, name_of(handler))
-
-        def edit(model: NodeModel) -> None:
-            model.services = [s for s in model.services if not (s.resolved == resolved and s.role == role)]
-            model.services.append(entry)
-
-        node.change(edit, handlers)
-        self._did(f"service {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
-        return self
+        return self._served("service", name, msgtypes.resolve_service(srv_type)[0], handler)
 
 
     def action(self, name: str, type: Any = UNSET, handler: Optional[Callable[..., Any]] = None,
@@ -319,31 +299,44 @@ class TopicHandler:
             return link._action(name, one_type(actionType, type, name), handler)
 
     def _action(self, name: str, action_type: Any, handler: Optional[Callable[..., Any]]) -> "TopicHandler":
+        return self._served("action", name, msgtypes.resolve_action(action_type)[0], handler)
+
+    #: What each served kind is called with, returns, and how the reuse of it is changed instead (for its errors).
+    _SERVED = {"service": ("called with each request, returns the response", "to answer it yourself"),
+               "action": ("called with each goal, returns the result", "to serve or change its goals")}
+
+    def _served(self, kind: str, name: str, type_name: str, handler: Optional[Callable[..., Any]]) -> "TopicHandler":
+        """A service or an action: served by ``handler`` (new) or relayed from the basenode (reuse).
+
+        Both are a name, a type and a handler slot; declared again they swap the handler live, and a
+        ``new`` and a ``reuse`` of one name must agree on its type.
+        """
         node, role = self._node, self._role
-        resolved = node.resolve_as(role, name, "action")
-        type_name, _ = msgtypes.resolve_action(action_type)
+        resolved = node.resolve_as(role, name, kind)
+        slot = (planning.service_slot if kind == "service" else planning.action_slot)(resolved)
+        does, instead = self._SERVED[kind]
         handlers = {}
         if role == "new":
             if handler is None:
-                raise HandlerError(f"new.action({name!r}) needs handler=...: called with each goal, returns the "
-                                   "result")
-            handlers[planning.action_slot(resolved)] = (handler, call_arity(handler, "action", f"{node.name} {resolved}"))
+                raise HandlerError(f"new.{kind}({name!r}) needs handler=...: {does}")
+            handlers[slot] = (handler, call_arity(handler, kind, f"{node.name} {resolved}"))
         elif handler is not None:
-            raise HandlerError(f"reuse.action({name!r}) relays the basenode's action and takes no handler; to serve "
-                               "or change its goals use new.action(..., handler=...)")
-        entry = ActionModel(name, resolved, type_name, role, name_of(handler))
+            raise HandlerError(f"reuse.{kind}({name!r}) relays the basenode's {kind} and takes no handler; "
+                               f"{instead} use new.{kind}(..., handler=...)")
+        entry = (ServiceModel if kind == "service" else ActionModel)(name, resolved, type_name, role, name_of(handler))
+        field = "services" if kind == "service" else "actions"
 
         def edit(model: NodeModel) -> None:
-            other = model.action(resolved)
-            if other is not None and other.type != type_name:
-                raise TopicTypeConflict(f"action {resolved} is already declared as {other.role}.action with "
+            declared = getattr(model, field)
+            other = next((d for d in declared if d.resolved == resolved and d.type != type_name), None)
+            if other is not None:
+                raise TopicTypeConflict(f"{kind} {resolved} is already declared as {other.role}.{kind} with "
                                         f"{other.type}; use the same type, or remove it first "
-                                        f"({model.name}.remove(action={name!r}))")
-            model.actions = [a for a in model.actions if not (a.resolved == resolved and a.role == role)]
-            model.actions.append(entry)
+                                        f"({model.name}.remove({kind}={name!r}))")
+            setattr(model, field, [d for d in declared if not (d.resolved == resolved and d.role == role)] + [entry])
 
         node.change(edit, handlers)
-        self._did(f"action {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
+        self._did(f"{kind} {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
         return self
 
 

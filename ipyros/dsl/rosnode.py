@@ -213,38 +213,27 @@ class rosNode:  # noqa: N801 - the paper's name
     def remove(self, topic: Optional[str] = None, *, timer: Optional[str] = None,
                service: Optional[str] = None, action: Optional[str] = None) -> "rosNode":
         """Remove every declaration of ``topic``, or the named ``timer``, ``service`` or ``action``."""
-        engine, model = self._engine, self._engine.model()
-        if topic is not None:
-            resolved = engine.resolve(topic)
-            if not any(t.resolved == resolved for t in model.topics):
-                raise NotDeclaredError(f"{self.name} has no topic {resolved}; {engine.called}.model() lists what "
-                                       "it has")
-            engine.change(lambda m: setattr(m, "topics", [t for t in m.topics if t.resolved != resolved]),
-                          drop=[planning.topic_slot(resolved)])
-            engine.record(f"remove {resolved}")
-        if timer is not None:
-            if model.timer(timer) is None:
-                known = ", ".join(t.name for t in model.timers) or "none"
-                raise NotDeclaredError(f"{self.name} has no timer {timer!r} (timers: {known})")
-            engine.change(lambda m: setattr(m, "timers", [t for t in m.timers if t.name != timer]),
-                          drop=[planning.timer_slot(timer)])
-            engine.record(f"remove timer {timer}")
-        if service is not None:
-            resolved = engine.resolve(service, "service")
-            if not any(s.resolved == resolved for s in model.services):
-                raise NotDeclaredError(f"{self.name} has no service {resolved}")
-            engine.change(lambda m: setattr(m, "services", [s for s in m.services if s.resolved != resolved]),
-                          drop=[planning.service_slot(resolved)])
-            engine.record(f"remove service {resolved}")
-        if action is not None:
-            resolved = engine.resolve(action, "action")
-            if model.action(resolved) is None:
-                known = ", ".join(a.resolved for a in model.actions) or "none"
-                raise NotDeclaredError(f"{self.name} has no action {resolved} (actions: {known})")
-            engine.change(lambda m: setattr(m, "actions", [a for a in m.actions if a.resolved != resolved]),
-                          drop=[planning.action_slot(resolved)])
-            engine.record(f"remove action {resolved}")
+        for kind, name in (("topic", topic), ("timer", timer), ("service", service), ("action", action)):
+            if name is not None:
+                self._remove(kind, name)
         return self
+
+    #: Each kind's list in the model and its handler slot (a timer is found by its name, the rest by global name).
+    _REMOVABLE = {"topic": ("topics", planning.topic_slot), "timer": ("timers", planning.timer_slot),
+                  "service": ("services", planning.service_slot), "action": ("actions", planning.action_slot)}
+
+    def _remove(self, kind: str, name: str) -> None:
+        engine = self._engine
+        field, slot = self._REMOVABLE[kind]
+        key = name if kind == "timer" else engine.resolve(name, kind)
+        of = (lambda entry: entry.name) if kind == "timer" else (lambda entry: entry.resolved)
+        declared = getattr(engine.model(), field)
+        if not any(of(entry) == key for entry in declared):
+            known = ", ".join(dict.fromkeys(of(entry) for entry in declared)) or "none"
+            shown = repr(key) if kind == "timer" else key
+            raise NotDeclaredError(f"{self.name} has no {kind} {shown} ({field}: {known})")
+        engine.change(lambda m: setattr(m, field, [e for e in getattr(m, field) if of(e) != key]), drop=[slot(key)])
+        engine.record(f"remove {'' if kind == 'topic' else kind + ' '}{key}")
 
     # -- actions as a client ----------------------------------------------------------
     def send_goal(self, name: str, goal: Any = None, type: Any = None,  # noqa: A002 - as for topics

@@ -100,3 +100,19 @@ def test_a_rejected_declaration_leaves_the_running_node_alone(make_node):
     wait_for(lambda: engine_of(nd).writer("/err_keep")[0].connections(), timeout=20, what="connection")
     nd.write("/err_keep", UInt32(data=7))
     wait_for(lambda: [m.data for m in seen] == [7], what="the old handler to still run")
+
+
+def test_a_service_or_action_declared_with_two_types_is_one_line(make_node, counting):
+    """new and reuse of one service (or action) must agree on its type, as topics must."""
+    nd = make_node("err_two_types")
+    nd.baseNode("base_exe").basePackage("some_pkg")
+    nd.reuse.service("reset", type="std_srvs/Empty")
+    with pytest.raises(errors.TopicTypeConflict, match=r"service .*/reset is already declared as reuse.service with "
+                                                       r"std_srvs/Empty; use the same type, or remove it first "
+                                                       r"\(\w+\.remove\(service='reset'\)\)"):
+        nd.new.service("reset", "std_srvs/SetBool", handler=lambda request: None)
+    nd.reuse.action("count", type=counting.type)
+    other = {"actionlib/Test": "actionlib/TwoInts"}.get(counting.type, "test_msgs/NestedMessage")
+    with pytest.raises(errors.TopicTypeConflict, match=r"action .*/count is already declared as reuse.action"):
+        nd.new.action("count", other, lambda goal: None)
+    assert [s.type for s in nd.model().services] == ["std_srvs/Empty"], "the refused declaration changed nothing"
