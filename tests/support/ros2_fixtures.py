@@ -63,18 +63,31 @@ def _shm_in_use() -> set[str]:
     return used
 
 
+def _remove_unused_fast_dds_files(shm: Path, names: set[str]) -> None:
+    for name in names - _shm_in_use():
+        try:
+            (shm / name).unlink(missing_ok=True)
+        except PermissionError:  # another user's: theirs to clean
+            continue
+
+
 @pytest.fixture(scope="session", autouse=True)
 def fast_dds_memory_freed():
     """Fast DDS frees its shared memory when a participant is deleted; a node that crashes (some tests
-    crash basenodes on purpose) leaves it in /dev/shm. What this run made and nobody uses is removed."""
+    crash basenodes on purpose) leaves it in /dev/shm. What this run made and nobody uses is removed.
+
+    Before the run, so are the Fast DDS files nobody uses that a killed process left (an earlier run
+    stopped half-way, a crashed program): a stale port keeps its lock, and a new participant that is
+    given that port number is never seen by the others (its node does not show up in the graph).
+    """
     shm = Path("/dev/shm")
+    if shm.is_dir():
+        _remove_unused_fast_dds_files(shm, {p.name for p in shm.iterdir() if "fastdds" in p.name})
     before = {p.name for p in shm.iterdir()} if shm.is_dir() else set()
     yield
     if not shm.is_dir():
         return
-    made = {p.name for p in shm.iterdir() if "fastdds" in p.name} - before
-    for name in made - _shm_in_use():
-        (shm / name).unlink(missing_ok=True)
+    _remove_unused_fast_dds_files(shm, {p.name for p in shm.iterdir() if "fastdds" in p.name} - before)
 
 
 @pytest.fixture(scope="session")
