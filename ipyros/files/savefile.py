@@ -105,24 +105,8 @@ class _SavedFile:
 
     # -- handlers ----------------------------------------------------------------------------
     def _handler(self, node: KeptNode, slot: str) -> None:
-        fn, source = node.handlers()[slot], self.sources[(id(node), slot)]
-        name = fn.__name__
-        held = container_of(fn, self.namespace)
-        if held is not None:  # poses.append: kept as the lambda calling it; the list starts empty again
-            container, value = held
-            self.bindings.values.setdefault(container, f"{container} = {type(value).__name__}()  # filled by "
-                                                       f"{node.name}'s handler: its data is not kept")
-            name = "<lambda>"
-        if name == "<lambda>":  # a name of its own: on_cmd_vel, timer_tick, ...
-            name = _identifier(re.sub(r"\W+", "_", slot.replace("topic ", "on ", 1)).strip("_"))
-            source = f"{name} = {source}"
-        if self.handlers.get(name, source) != source:
-            raise IpyrosError(f"nothing saved: two different handlers are named {name}; rename one "
-                              "(def another_name(msg): ...), declare it again, then save")
-        self.handlers[name] = source
-        self.slot_names[(id(node), slot)] = name
-        if isinstance(fn, types.FunctionType):
-            self.bindings.bind(fn, source, self.namespace, self._skip)
+        own = _identifier(re.sub(r"\W+", "_", slot.replace("topic ", "on ", 1)).strip("_"))  # on_cmd_vel, timer_tick
+        self.slot_names[(id(node), slot)] = self._keep(node, node.handlers()[slot], self.sources[(id(node), slot)], own)
 
     def _param_handler(self, node: KeptNode, key: str, fn: Any) -> None:
         """An ``on_param`` handler, kept as a handler is; one without a source is said, not saved."""
@@ -131,17 +115,27 @@ class _SavedFile:
         except IpyrosError:
             self.unwatched.append(f"{node.name} {key!r}")
             return
+        name = self._keep(node, fn, source, _identifier(f"on_{key.replace('/', '_')}"))
+        self.watches.setdefault(id(node), []).append((key, name))
+
+    def _keep(self, node: KeptNode, fn: Any, source: str, own: str) -> str:
+        """Keep handler ``fn`` (its ``source``) in the file under its name, or ``own`` for a lambda; the name."""
         name = getattr(fn, "__name__", "<lambda>")
-        if name == "<lambda>" or not isinstance(fn, types.FunctionType):
-            name = _identifier(f"on_{key.replace('/', '_')}")
-            source = f"{name} = {source}"
+        held = container_of(fn, self.namespace)
+        if held is not None:  # poses.append: kept as the lambda calling it; the list starts empty again
+            container, value = held
+            self.bindings.values.setdefault(container, f"{container} = {type(value).__name__}()  # filled by "
+                                                       f"{node.name}'s handler: its data is not kept")
+            name = "<lambda>"
+        if name == "<lambda>":  # a name of its own
+            name, source = own, f"{own} = {source}"
         if self.handlers.get(name, source) != source:
             raise IpyrosError(f"nothing saved: two different handlers are named {name}; rename one "
-                              "(def another_name(value): ...), declare it again, then save")
+                              "(def another_name(msg): ...), declare it again, then save")
         self.handlers[name] = source
-        self.watches.setdefault(id(node), []).append((key, name))
         if isinstance(fn, types.FunctionType):
             self.bindings.bind(fn, source, self.namespace, self._skip)
+        return name
 
     # -- the text ----------------------------------------------------------------------------
     def render(self, stem: str, made_on: str) -> str:

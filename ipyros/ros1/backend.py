@@ -271,7 +271,8 @@ class Ros1:
     def describe_param(self, name: str) -> dict[str, Any]:
         """What ROS 1 knows of a parameter: the type of its value (the parameter server keeps no more), and a
         dynamic_reconfigure server's type, range, default and description when one serves it."""
-        served = self._reconfigurable(name)
+        server = self._reconfigure_server(name)
+        served = reconfigure.describe(server).get(name) if server else None
         if served is not None:
             return {k: v for k, v in served.items() if v not in (None, "")}
         return {"type": type(self.read_param(name)).__name__}
@@ -287,12 +288,10 @@ class Ros1:
                 continue
         return found
 
-    def _reconfigurable(self, name: str) -> Optional[dict[str, Any]]:
-        """The dynamic_reconfigure description of parameter ``name``, if a server of the graph serves it."""
+    def _reconfigure_server(self, name: str) -> Optional[str]:
+        """The node owning parameter ``name`` if it is a dynamic_reconfigure server of the graph."""
         server = name.rsplit("/", 1)[0]
-        if server not in reconfigure.servers(self.graph_snapshot().topics, server.rsplit("/", 1)[0] or "/"):
-            return None
-        return reconfigure.describe(server).get(name)
+        return server if reconfigure.is_server(self.graph_snapshot().topics, server) else None
 
     #: Parameters every node has, which %params leaves out unless asked: none on ROS 1.
     standard_params: tuple[str, ...] = ()
@@ -300,9 +299,10 @@ class Ros1:
     def write_param(self, name: str, value: Any) -> Any:
         """Set the parameter ``name``: through its dynamic_reconfigure server when one serves it (the running
         node reads the parameter server only at start), else on the parameter server; the value set."""
-        if self._reconfigurable(name) is not None:
-            server, key = name.rsplit("/", 1)
-            return reconfigure.set_value(server, key, value)
+        server = self._reconfigure_server(name)
+        kept = reconfigure.set_value(server, name.rsplit("/", 1)[1], value) if server else None
+        if kept is not None:
+            return kept
         runtime.set_param(name, value)
         return value
 

@@ -68,7 +68,7 @@ def is_this_host(uri: str) -> bool:
     """Whether ``uri`` names this machine: a loopback name or address, its host name, or an address of one of its
     interfaces (one this process can bind to: the kernel's own answer, with no list of interfaces to read)."""
     host = urlparse(uri).hostname or ""
-    if host in ("localhost", os.uname().nodename) or host.startswith("127.") or host == "::1":
+    if _loopback(host) or host == os.uname().nodename:
         return True
     try:
         addresses = {info[4][0] for info in socket.getaddrinfo(host, None, socket.AF_INET)}
@@ -82,6 +82,10 @@ def is_this_host(uri: str) -> bool:
             except OSError:
                 continue
     return False
+
+
+def _loopback(host: str) -> bool:
+    return host == "localhost" or host.startswith("127.") or host == "::1"
 
 
 def address_towards(uri: str) -> Optional[str]:
@@ -161,7 +165,7 @@ def attach(uri: Optional[str] = None, start: bool = True, timeout: float = 15.0)
     # address, else to every interface, where anyone on the network could set parameters). One
     # at this machine's network address is meant for the robot's other machines: peers are told
     # that address (ROS_IP), and it listens where they can reach it.
-    loopback = host == "localhost" or host.startswith("127.") or host == "::1"
+    loopback = _loopback(host)
     os.environ.pop("ROS_HOSTNAME", None)  # it would win over ROS_IP
     os.environ["ROS_IP"] = LOOPBACK if loopback else (address_towards(uri) or host)
     env = {**os.environ, "ROS_MASTER_URI": uri}

@@ -8,11 +8,11 @@ parameter server, but reads that only at start: a value must be set through the 
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import Any, Mapping, Optional
 
 from ..core.errors import IpyrosError
 
-__all__ = ["DESCRIPTIONS_TYPE", "describe", "servers", "set_value"]
+__all__ = ["DESCRIPTIONS_TYPE", "describe", "is_server", "range_text", "servers", "set_value"]
 
 DESCRIPTIONS_TYPE = "dynamic_reconfigure/ConfigDescription"
 _SUFFIX = "/parameter_descriptions"
@@ -24,6 +24,11 @@ def servers(topics: Mapping[str, str], namespace: str = "/") -> list[str]:
     prefix = namespace.rstrip("/") + "/"
     return sorted(topic[: -len(_SUFFIX)] for topic, type_name in topics.items()
                   if type_name == DESCRIPTIONS_TYPE and topic.endswith(_SUFFIX) and topic.startswith(prefix))
+
+
+def is_server(topics: Mapping[str, str], node: str) -> bool:
+    """Whether ``node`` is a dynamic_reconfigure server (it publishes its descriptions)."""
+    return topics.get(node + _SUFFIX) == DESCRIPTIONS_TYPE
 
 
 def _client(server: str, timeout: float) -> Any:
@@ -47,11 +52,13 @@ def describe(server: str, timeout: float = 5.0) -> dict[str, dict[str, Any]]:
             for p in found}
 
 
-def set_value(server: str, key: str, value: Any, timeout: float = 5.0) -> Any:
+def set_value(server: str, key: str, value: Any, timeout: float = 5.0) -> Optional[Any]:
     """Set ``key`` through ``server`` (it checks and clamps the value, and the node's callback runs);
-    the value the server keeps."""
+    the value the server keeps, or None when ``key`` is not one of its parameters."""
     client = _client(server, timeout)
     try:
+        if key not in {p["name"] for p in client.get_parameter_descriptions(timeout=timeout) or []}:
+            return None
         config = client.update_configuration({key: value})
     except Exception as error:  # noqa: BLE001 - dynamic_reconfigure's own words, made one line
         raise IpyrosError(f"{server} refused {key}={value!r}: {str(error).strip().splitlines()[0]}") from None

@@ -605,7 +605,8 @@ class Relay:
     def close(self) -> None:
         _OtherTypes.unwatch(self.source, self._complain)
         self._sub.unregister()
-        self._pub.unregister()
+        if self._pub is not None:  # a RawRelay advertises at its first message
+            self._pub.unregister()
 
 
 class RawRelay(Relay):
@@ -649,12 +650,6 @@ class RawRelay(Relay):
         if self._impl is None:
             return SendFigures(self.target, "relay", 0, 0, 0, self.dropped)
         return super().figures()
-
-    def close(self) -> None:
-        _OtherTypes.unwatch(self.source, self._complain)
-        self._sub.unregister()
-        if self._pub is not None:
-            self._pub.unregister()
 
 
 class Timer:

@@ -62,7 +62,7 @@ class Ros2:
 
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
                     follows: Optional[str] = None) -> runtime.Publication:
-        return runtime.Publication(self.process.host(host), topic, cls, qos, complain, follows and self.process, follows)
+        return runtime.Publication(self.process.host(host), topic, cls, qos, complain, self.process, follows)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Complain) -> runtime.Subscription:

@@ -412,7 +412,7 @@ class Publication:
         self._lock = threading.Lock()
         self._pub = self._open(qos)
         self._process, self._follows = process, follows
-        if process is not None and follows is not None:
+        if process is not None and follows is not None:  # see the class docstring
             process.followers.setdefault(follows, []).append(self)
             found = _publishers_qos(node, follows)
             if found is not None:
