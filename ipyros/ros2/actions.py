@@ -195,9 +195,12 @@ class ActionRelay:
                                            ("get_result", cls.Impl.GetResultService, None)):
                 parts.append(ServiceRelay(process, node, f"{source}/_action/{part}", f"{target}/_action/{part}",
                                           service, complain, timeout))
+            # Feedback and status are read on the caller node, whose one thread also takes the basenode's
+            # results: a goal's last feedback is passed on before its result (an rclpy client drops
+            # feedback that comes after the result, and a busy session thread could delay it that long).
             for part, message in (("feedback", cls.Impl.FeedbackMessage), ("status", GoalStatusArray)):
                 parts.append(Relay(process, node, f"{source}/_action/{part}", f"{target}/_action/{part}", message,
-                                   on_wrong_type, complain))
+                                   on_wrong_type, complain, reader=process.caller()))
         except BaseException:
             for opened in parts:
                 opened.close()

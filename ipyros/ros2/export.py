@@ -150,10 +150,14 @@ def action_relay(node, caller, source, target, action_class):
             return future.result() if done.wait(patience) and future.result() is not None else response
 
         node.create_service(srv_class, f"{target}/_action/{part}", answer, callback_group=group)
-    relay(node, f"{source}/_action/feedback", f"{target}/_action/feedback", action_class.Impl.FeedbackMessage)
+    # Feedback and status are read by the caller, whose one thread also takes the results: a goal's
+    # last feedback goes on before its result (an rclpy client drops feedback that comes after it).
+    feedback = node.create_publisher(action_class.Impl.FeedbackMessage, f"{target}/_action/feedback", qos())
+    caller.create_subscription(action_class.Impl.FeedbackMessage, f"{source}/_action/feedback", feedback.publish,
+                               qos(), raw=True)
     status = node.create_publisher(GoalStatusArray, f"{target}/_action/status", qos_profile_action_status_default)
-    node.create_subscription(GoalStatusArray, f"{source}/_action/status", status.publish,
-                             qos_profile_action_status_default, raw=True)
+    caller.create_subscription(GoalStatusArray, f"{source}/_action/status", status.publish,
+                               qos_profile_action_status_default, raw=True)
 '''
 
 
@@ -221,7 +225,7 @@ class RclpyScript:
 
     @staticmethod
     def helpers(script: Any) -> list[str]:
-        found = [_RELAY_ROS2] if _has(script, planning.RelaySpec, planning.ActionRelaySpec) else []
+        found = [_RELAY_ROS2] if _has(script, planning.RelaySpec) else []
         if _has(script, planning.ServiceRelaySpec):
             found.append(_SERVICE_RELAY_ROS2)
         if _has(script, planning.ActionServerSpec, planning.ActionRelaySpec):

@@ -562,12 +562,16 @@ class Relay:
     relay, so its QoS is known only once its publisher shows up: the process's graph
     watch tells the relay, which then opens endpoints with that QoS in place of its
     default ones (reliable, volatile).
+
+    ``reader``: the node that subscribes to ``source`` (``node`` unless given), so that its
+    executor is the one that passes the messages on (see :class:`ipyros.ros2.actions.ActionRelay`).
     """
 
     def __init__(self, process: ProcessNode, node: Node, source: str, target: str, cls: type,
-                 on_wrong_type: Optional[Callable[[str], None]] = None, complain: Optional[Complain] = None) -> None:
+                 on_wrong_type: Optional[Callable[[str], None]] = None, complain: Optional[Complain] = None,
+                 reader: Optional[Node] = None) -> None:
         self.source, self.target, self.cls, self.count, self.dropped = source, target, cls, 0, 0
-        self._process, self._node, self._complain = process, node, complain
+        self._process, self._node, self._reader, self._complain = process, node, reader or node, complain
         self._lock = threading.Lock()  # the watch and close() may swap endpoints from two threads
         self.qos = Qos(None, "reliable", "volatile")  # rclpy's, until the source's publishers show up
         self._last: Optional[bytes] = None
@@ -585,7 +589,8 @@ class Relay:
         # mended by _follow_source: no warning for it.
         from rclpy.event_handler import SubscriptionEventCallbacks
 
-        sub = _made(node, lambda: node.create_subscription(
+        reader = self._reader
+        sub = _made(reader, lambda: reader.create_subscription(
             self.cls, self.source, self._forward, _profile(qos), raw=True,
             event_callbacks=SubscriptionEventCallbacks(incompatible_qos=lambda _: None)))
         return pub, sub
@@ -607,7 +612,7 @@ class Relay:
                 # hold it for later subscribers. Written now, before any reader has matched this new writer,
                 # it is kept in its history and not delivered a second time to the readers that had it.
                 self._pub.publish(self._last)
-            self._node.destroy_subscription(old[1])
+            self._reader.destroy_subscription(old[1])
             self._node.destroy_publisher(old[0])
 
     def _forward(self, raw: bytes) -> None:
@@ -634,7 +639,7 @@ class Relay:
         self._process.unwatch_types(self._complain, self.source)
         with self._lock:
             if self._sub is not None:
-                self._node.destroy_subscription(self._sub)
+                self._reader.destroy_subscription(self._sub)
                 self._node.destroy_publisher(self._pub)
                 self._sub = None
 
