@@ -198,8 +198,8 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
     from_launch = model.base.launch is not None
     base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
                         "namespace": base_namespace(model), "remaps": basenode_remaps(model, backend.action_parts),
-                        # from a launch file, the params go on the parameter server as roslaunch puts them
-                        "params": {} if from_launch else model.base.params})
+                        # from a ROS 1 launch file, the params go on the parameter server as roslaunch puts them
+                        "params": {} if from_launch and backend.launch_params_on_server else model.base.params})
 
     starting = threading.Event()  # while set, an exit is create()'s error to raise, not a notice
     starting.set()
@@ -229,7 +229,7 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
     node.base = handle
     handle.start()
     if getattr(handle, "not_started", None):
-        session.notify(f"ipyros: roslaunch could not start {', '.join(handle.not_started)} of {model.base.launch} "
+        session.notify(f"ipyros: could not start {', '.join(handle.not_started)} of {model.base.launch} "
                        f"(the rest runs without); why: {node.called}.base.rest.tail()")
     try:
         interface = backend.wait_for_node(base_fullname(model), timeout=settle_timeout or REGISTRATION_TIMEOUT,

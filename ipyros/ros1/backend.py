@@ -137,6 +137,7 @@ class Ros1:
 
     #: TCPROS carries bytes: a topic of a type this Python cannot import is relayed all the same.
     relays_any_type = True
+    launch_params_on_server = True  # a launch file's params go on the parameter server, as roslaunch puts them
 
     def raw_relay(self, host: str, source: str, target: str, type_name: str,
                   on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.RawRelay:

@@ -36,6 +36,7 @@ from ..core.errors import BaseNodeError, IpyrosError
 from ..core.model import BaseModel
 from ..demo import DEMO_DIR
 from ..processes.basenode import BaseProcess, OnExit, temp_log
+from ..processes.launched import LaunchedBase
 from . import launchfile
 from .launchfile import fullname
 from .master import master_proxy
@@ -61,35 +62,27 @@ def package_path() -> str:
     return os.pathsep.join([*parts, str(DEMO_DIR)] if str(DEMO_DIR) not in parts else parts)
 
 
-class LaunchBase:
+class LaunchBase(LaunchedBase):
     """A basenode from a launch file together with the rest of that file: started and stopped as one.
 
-    Behaves like the :class:`~ipyros.processes.basenode.BaseProcess` of the basenode (``tail``,
-    ``restart``, ``running``, ``pid``, ``log_path`` are the basenode's); ``rest`` is the
-    runner of the rest of the launch file, with a log of its own (``rest.tail()``).
+    ``rest`` is the runner of the rest of the launch file, with a log of its own
+    (``rest.tail()``); the rest is :class:`~ipyros.processes.launched.LaunchedBase`'s.
     """
 
     def __init__(self, base: BaseModel, basenode: BaseProcess, *, node: str, master_uri: str,
                  on_rest_exit: Optional[OnExit] = None) -> None:
         """``base`` as declared (launch file, node in it, params); ``basenode`` its process, running as ``node``."""
-        if not base.launch or not base.launch_node:
-            raise BaseNodeError("this basenode was not read from a launch file; declare it with baseLaunch(file, node)")
-        self.launch = base.launch
-        self.node = node
+        super().__init__(base, basenode, node=node, on_rest_exit=on_rest_exit)
         self.params = dict(base.params)
         self.master_uri = master_uri
-        self.basenode = basenode
-        self.on_rest_exit = on_rest_exit
-        self._up = False  # an exit during start() is raised by start(), not reported as well
         self.not_started: list[str] = []  # nodes of the rest that roslaunch could not start (it goes on without)
         self.rest = BaseProcess(
-            [sys.executable, "-m", "ipyros.ros1.launch_rest", base.launch,
-             *[f"{name}:={value}" for name, value in base.launch_args.items()], "--exclude", base.launch_node],
+            [sys.executable, "-m", "ipyros.ros1.launch_rest", self.launch,
+             *[f"{name}:={value}" for name, value in base.launch_args.items()], "--exclude", base.launch_node or ""],
             env={"ROS_MASTER_URI": master_uri, "ROS_PACKAGE_PATH": package_path()}, on_exit=self._rest_exited,
-            log_path=temp_log(f"rest-of-{Path(base.launch).stem}"),
+            log_path=temp_log(f"rest-of-{Path(self.launch).stem}"),
         )
 
-    # -- lifecycle ------------------------------------------------------------
     def start(self, timeout: float = 30.0) -> "LaunchBase":
         """Start the rest, wait until it runs, set the basenode's params, start the basenode.
 
@@ -103,37 +96,8 @@ class LaunchBase:
         self.basenode.start()
         return self
 
-    def stop(self, timeout: float = 5.0) -> Optional[int]:
-        """Stop the basenode, then the rest of the launch; return the basenode's exit code."""
-        try:
-            return self.basenode.stop(timeout)
-        finally:
-            self.rest.stop(max(timeout, RUNNER_STOP_TIMEOUT))
-
-    def restart(self, timeout: float = 5.0) -> "LaunchBase":
-        """Restart the basenode alone; the rest of the launch keeps running."""
-        self.basenode.restart(timeout)
-        return self
-
-    def tail(self, n: int = 20) -> list[str]:
-        """The last ``n`` lines of the basenode's log (``rest.tail(n)`` for the rest's)."""
-        return self.basenode.tail(n)
-
-    @property
-    def running(self) -> bool:
-        return self.basenode.running
-
-    @property
-    def pid(self) -> Optional[int]:
-        return self.basenode.pid
-
-    @property
-    def returncode(self) -> Optional[int]:
-        return self.basenode.returncode
-
-    @property
-    def log_path(self) -> Path:
-        return self.basenode.log_path
+    def rest_stop_timeout(self, timeout: float) -> float:
+        return max(timeout, RUNNER_STOP_TIMEOUT)  # roslaunch's own patience with each node
 
     def __repr__(self) -> str:
         rest = f"running, pid {self.rest.pid}" if self.rest.running else "not running"
@@ -141,10 +105,6 @@ class LaunchBase:
                f"log {self.rest.log_path}>"
 
     # -- steps ------------------------------------------------------------------
-    def _rest_exited(self, proc: BaseProcess, returncode: int, last_lines: list[str]) -> None:
-        if self._up and self.on_rest_exit is not None:
-            self.on_rest_exit(proc, returncode, last_lines)
-
     def _wait_until_running(self, timeout: float) -> None:
         """Block until the runner says the rest runs; raise its one-line failure if it ends first."""
         deadline = time.monotonic() + timeout

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 from ..core import names
 from ..core.errors import BaseNodeError
 from ..core.model import BaseModel
+from ..processes.launched import launch_file
 
 if TYPE_CHECKING:
     from roslaunch.config import ROSLaunchConfig
@@ -57,13 +58,7 @@ def launch_path(launch: str) -> Path:
                                 "on ROS_PACKAGE_PATH; check the name, or give the file's path") from None
         except Exception as error:  # roslaunch's SubstitutionException and its kin
             raise BaseNodeError(f"cannot resolve launch file {launch!r}: {one_line(error)}") from None
-    path = Path(text).expanduser()
-    path = path if path.is_absolute() else Path.cwd() / path
-    if not path.is_file():
-        where = "" if Path(text).expanduser().is_absolute() else f" (relative to {Path.cwd()})"
-        raise BaseNodeError(f"launch file {launch!r} not found{where}; give its path, "
-                            "or '$(find package)/launch/name.launch'")
-    return path
+    return launch_file(text, launch, "$(find package)/launch/name.launch")
 
 
 def stored_path(launch: str) -> str:

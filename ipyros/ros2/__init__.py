@@ -7,6 +7,8 @@
   :mod:`.actions`: rclpy.action servers (goals on threads of their own), clients, relays, watches;
 - :mod:`.nodes`: a package's executables as ``ros2 run`` finds them (the ament index), and
   a node's command line; :mod:`.fastdds`: ipyros's Fast DDS profile;
+- :mod:`.launchfile`: XML and YAML launch files read without the launch package;
+  :mod:`.launch_rest`: a launch file's other nodes started beside the wrapped one;
 - :mod:`.introspect`: services, parameters and nodes of the graph, for the magics;
 - :mod:`.bagfile`, :mod:`.bag_player`: bags written and played; :mod:`.export`: rclpy scripts.
 
@@ -14,4 +16,5 @@ May import: core, processes, demo (the demo package's ament prefix). Nothing abo
 node layer imports it: the node layer chooses it.
 """
 
-__all__ = ["actions", "backend", "bag_player", "bagfile", "export", "fastdds", "graph", "introspect", "nodes", "runtime"]
+__all__ = ["actions", "backend", "bag_player", "bagfile", "export", "fastdds", "graph", "introspect", "launch_rest",
+           "launchfile", "nodes", "runtime"]

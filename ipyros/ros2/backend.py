@@ -17,9 +17,10 @@ from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
-from . import actions, bagfile, fastdds, introspect, nodes, runtime
+from . import actions, bagfile, fastdds, introspect, launchfile, nodes, runtime
 from .export import RclpyScript
 from .graph import snapshot
+from .launch_rest import LaunchBase
 from .runtime import Complain
 
 __all__ = ["Ros2"]
@@ -74,6 +75,7 @@ class Ros2:
 
     #: rclpy needs the type's Python package to subscribe at all, even to bytes.
     relays_any_type = False
+    launch_params_on_server = False  # a launch file's params go on the basenode's command line
 
     def raw_relay(self, host: str, source: str, target: str, type_name: str,
                   on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> Any:
@@ -225,11 +227,10 @@ class Ros2:
         return None
 
     def read_launch(self, launch: Any, node: str, args: Optional[dict[str, Any]]) -> tuple[BaseModel, list[str]]:
-        raise DeclarationError("baseLaunch reads ROS 1 launch files, and this session runs ROS 2; give the node "
-                               "itself: baseNode('/path/to/node', namespace=..., params=...)")
+        return launchfile.read_base(launch, node, args)
 
     def launch_base(self, base: BaseModel, process: BaseProcess, node: str, on_rest_exit: Any) -> Any:
-        raise DeclarationError("a basenode from a launch file is ROS 1's here; declare the node with baseNode(...)")
+        return LaunchBase(base, process, node=node, on_rest_exit=on_rest_exit)
 
     list_packages = staticmethod(nodes.list_packages)
     list_executables = staticmethod(nodes.list_executables)

@@ -15,13 +15,14 @@ from __future__ import annotations
 import os
 import sys
 from pathlib import Path
+from typing import Optional
 
 from ..core.errors import BaseNodeError, did_you_mean
 from ..core.model import BaseModel
 from ..demo import AMENT_PREFIX as DEMO_PREFIX
 from ..processes.basenode import param_value, python_command, refuse_path_with_package, script_command
 
-__all__ = ["command", "find_executable", "list_executables", "list_packages", "prefixes"]
+__all__ = ["command", "find_executable", "list_executables", "list_packages", "package_prefix", "prefixes"]
 
 
 def command(base: BaseModel) -> list[str]:
@@ -56,6 +57,11 @@ def _packages() -> dict[str, Path]:
             for marker in index.iterdir():
                 found.setdefault(marker.name, prefix)
     return found
+
+
+def package_prefix(package: str) -> Optional[Path]:
+    """The ament prefix that has ``package`` (its files under ``share/<package>``), or None."""
+    return _packages().get(package)
 
 
 def list_packages() -> list[str]:

@@ -126,6 +126,6 @@ def test_bad_input_is_the_same_line_as_on_ros1(make_node):
         nd.new.publish("/r2/x", msgType="std_srvs/SetBool")
     with pytest.raises(errors.DeclarationError, match="but has no basenode"):
         nd.reuse.publish("/r2/y", msgType=String)
-    with pytest.raises(errors.DeclarationError, match="baseLaunch reads ROS 1 launch files, and this session runs ROS 2"):
+    with pytest.raises(errors.BaseNodeError, match=r"launch file 'robot.launch' not found \(relative to "):
         make_node("bad_launch").baseLaunch("robot.launch", "planner")
     assert nd.model().topics == [] and nd.model().timers == []

@@ -157,9 +157,11 @@ def test_a_model_made_on_ros1_loads_on_ros2_and_says_so(tmp_path, ros2_session, 
                  what="the loaded handler to hear the topic")
     finally:
         node.shutdown()
+    ros1_launch = tmp_path / "robot.launch"  # roslaunch's XML: ROS 2 names the executable exec=, not type=
+    ros1_launch.write_text('<launch><node pkg="ipyros_demo" type="turtle_sim" name="turtle_sim"/></launch>')
     launch = tmp_path / "launched.yaml"
     launch.write_text(ROS1_MODEL.replace("base: null", "base: {executable: turtle_sim, package: ipyros_demo, "
-                                                      "launch: /opt/robot.launch, launch_node: /turtle_sim}"))
-    with pytest.raises(errors.IpyrosError, match="launched.yaml: baseLaunch reads ROS 1 launch files, and this "
-                                                 "session runs ROS 2"):
+                                                      f"launch: {ros1_launch}, launch_node: /turtle_sim}}"))
+    with pytest.raises(errors.IpyrosError, match="launched.yaml: robot.launch: a <node> without exec=... "
+                                                 r"\(that is ROS 1's spelling: ROS 2 names it exec=\)"):
         rosNode.load(str(launch), {"heard": heard}, trust=True)
