@@ -55,7 +55,8 @@ ros1_setup() {
 venv2="$here/.venv-ros2"
 ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs ros-rcl-interfaces
                ros-action-msgs ros-test-msgs  # actions: test_msgs/action/Fibonacci serves the tests and the README
-               rosbags)  # rosbags: ROS 2 bags (%record, baseBag); rosbag2 is not on PyPI
+               rosbags  # rosbags: ROS 2 bags (%record, baseBag); rosbag2 is not on PyPI
+               catkin_pkg)  # build_messages: rosidl_adapter reads .msg files with it
 ros2_venv() {
   if ! /usr/bin/python3 -c "import ensurepip" 2>/dev/null; then  # Debian splits venv support out
     echo "run.sh: installing python3-venv" >&2

@@ -203,6 +203,34 @@ def forget_index() -> None:
     _index.cache_clear()
 
 
+# -- a workspace's own message packages, built at the prompt (each ROS's msggen) -------------
+
+def messages_dir(into: "str | os.PathLike[str] | None" = None) -> Path:
+    """Where built message packages go: ``into``, else ``$IPYROS_MESSAGES_DIR``, else ``~/.ipyros/messages``."""
+    return Path(into or os.environ.get("IPYROS_MESSAGES_DIR") or Path.home() / ".ipyros" / "messages").expanduser()
+
+
+def package_name_of(package_dir: Path) -> str:
+    """A message package's name: its package.xml's ``<name>``, else its folder's."""
+    manifest = package_dir / "package.xml"
+    if manifest.is_file():
+        found = re.search(r"<name>\s*([A-Za-z][\w]*)\s*</name>", manifest.read_text(errors="replace"))
+        if found:
+            return found.group(1)
+    return package_dir.name
+
+
+def import_from(root: Path) -> None:
+    """Make the packages under ``root`` importable here and in the processes started from here."""
+    path = str(root)
+    if path not in sys.path:
+        sys.path.insert(0, path)
+    parts = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p and p != path]
+    os.environ["PYTHONPATH"] = os.pathsep.join([path, *parts])
+    forget_index()
+    importlib.invalidate_caches()
+
+
 def _type_names(init: Path) -> set[str]:
     """The types a generated ``pkg/msg/__init__.py`` exports (ROS 1: one ``_Type.py`` module each)."""
     names = {m.stem[1:] for m in init.parent.glob("_*.py") if m.name != "__init__.py" and m.stem[1:2].isupper()}

@@ -11,14 +11,13 @@ from __future__ import annotations
 
 import os
 import re
-import sys
 import tempfile
 from pathlib import Path
 
 from ..core import msgtypes
 from ..core.errors import MessageTypeError
 
-__all__ = ["build_messages", "messages_dir"]
+__all__ = ["build_messages"]
 
 _SEPARATOR = re.compile(r"^={10,}\s*$", re.M)
 _BUILTIN = {"bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
@@ -37,12 +36,12 @@ def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLi
     from genmsg import MsgContext
 
     package_dir = Path(package_dir).expanduser().resolve()
-    package = _package_name(package_dir)
+    package = msgtypes.package_name_of(package_dir)
     files = {kind: sorted((package_dir / kind).glob(f"*.{kind}")) for kind in ("msg", "srv")}
     if not any(files.values()):
         raise MessageTypeError(f"{package_dir} has no msg/*.msg or srv/*.srv files; give the folder of a message "
                                "package (the one with package.xml, msg/ and srv/)")
-    root = messages_dir(into)
+    root = msgtypes.messages_dir(into)
     built: list[str] = []
     with tempfile.TemporaryDirectory(prefix="ipyros-msgdeps-") as deps:
         search = _dependencies(package, [f for kind in files.values() for f in kind], Path(deps))
@@ -62,18 +61,8 @@ def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLi
                 built.append(full)
             genpy.generate_initpy.write_modules(str(out))
         (root / package / "__init__.py").touch()
-    _import_from(root)
+    msgtypes.import_from(root)
     return built
-
-
-def _package_name(package_dir: Path) -> str:
-    """The package's name: its package.xml's ``<name>``, else the folder's."""
-    manifest = package_dir / "package.xml"
-    if manifest.is_file():
-        found = re.search(r"<name>\s*([A-Za-z][\w]*)\s*</name>", manifest.read_text(errors="replace"))
-        if found:
-            return found.group(1)
-    return package_dir.name
 
 
 def _dependencies(package: str, files: list[Path], folder: Path) -> dict[str, list[str]]:
@@ -114,21 +103,3 @@ def _used_types(text: str) -> set[str]:
             continue
         found.add("std_msgs/Header" if base == "Header" else base)
     return {t for t in found if "/" in t}
-
-
-def _import_from(root: Path) -> None:
-    """Make ``root`` importable here and in the processes started from here; forget the type index."""
-    path = str(root)
-    if path not in sys.path:
-        sys.path.insert(0, path)
-    parts = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p and p != path]
-    os.environ["PYTHONPATH"] = os.pathsep.join([path, *parts])
-    msgtypes.forget_index()
-    import importlib
-
-    importlib.invalidate_caches()
-
-
-def messages_dir(into: "str | os.PathLike[str] | None" = None) -> Path:
-    """Where built message packages go: ``into``, else ``$IPYROS_MESSAGES_DIR``, else ``~/.ipyros/messages``."""
-    return Path(into or os.environ.get("IPYROS_MESSAGES_DIR") or Path.home() / ".ipyros" / "messages").expanduser()

@@ -9,6 +9,7 @@
   a node's command line; :mod:`.fastdds`: ipyros's Fast DDS profile;
 - :mod:`.launchfile`: XML and YAML launch files read without the launch package;
   :mod:`.launch_rest`: a launch file's other nodes started beside the wrapped one;
+- :mod:`.msggen`: a workspace's message package built (rosidl generators, the C compiler);
 - :mod:`.introspect`: services, parameters and nodes of the graph, for the magics;
 - :mod:`.bagfile`, :mod:`.bag_player`: bags written and played; :mod:`.export`: rclpy scripts.
 
@@ -17,4 +18,4 @@ node layer imports it: the node layer chooses it.
 """
 
 __all__ = ["actions", "backend", "bag_player", "bagfile", "export", "fastdds", "graph", "introspect", "launch_rest",
-           "launchfile", "nodes", "runtime"]
+           "launchfile", "msggen", "nodes", "runtime"]

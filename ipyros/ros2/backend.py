@@ -177,9 +177,9 @@ class Ros2:
         return {}
 
     def build_messages(self, package_dir: Any, into: Any) -> list[str]:
-        raise MessageTypeError("on ROS 2 a message package's Python types need its C type support, which colcon "
-                               "builds (rosidl from PyPI has no compiler step): colcon build it and put its "
-                               "install/ on AMENT_PREFIX_PATH and PYTHONPATH, or pip install its wheel")
+        from .msggen import build_messages
+
+        return build_messages(package_dir, into)
 
     def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
         node, key = self._owner(name)

@@ -1,0 +1,205 @@
+"""A workspace's own ``.msg``, ``.srv`` and ``.action`` files made importable at the prompt, without colcon (ROS 2).
+
+On ROS 2 a message type is Python classes *and* C type support: rclpy hands messages to
+the middleware through compiled libraries. colcon builds them with CMake; here the same
+rosidl generators (on PyPI, installed with rclpy) write the same C and Python sources, and
+the machine's C compiler builds them against the headers and libraries the wheels
+installed, as ``rosidl_generate_interfaces`` would:
+
+==============================================  =============================================
+library (under ``<into>/lib``)                  what it is
+==============================================  =============================================
+``lib<pkg>__rosidl_generator_c.so``             the C structs and their functions
+``lib<pkg>__rosidl_typesupport_introspection_c``  field layout, for generic readers
+``lib<pkg>__rosidl_typesupport_fastrtps_c.so``  serialisation for Fast DDS
+``lib<pkg>__rosidl_typesupport_c.so``           the dispatch rmw asks, which loads the above
+``lib<pkg>__rosidl_generator_py.so``            Python object ⇄ C struct conversion
+==============================================  =============================================
+
+and the Python package under ``<into>/python/<pkg>``, with its three ``<pkg>_s__*.so``
+extension modules. ``<into>/python`` goes on ``sys.path`` and ``PYTHONPATH``,
+``<into>/lib`` on ``LD_LIBRARY_PATH`` (read when the dispatch looks a library up), so the
+types work at once, here and in the processes started after. A build takes a few seconds.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import io
+import os
+import re
+import shutil
+import subprocess
+import sys
+import sysconfig
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from ..core import msgtypes
+from ..core.errors import MessageTypeError
+from . import nodes
+
+__all__ = ["build_messages"]
+
+#: The generators, each writing into a folder of its own (the key), and the libraries built from what they write.
+_GENERATORS = {"c": "rosidl_generator_c", "ts_c": "rosidl_typesupport_c",
+               "introspection_c": "rosidl_typesupport_introspection_c",
+               "fastrtps_c": "rosidl_typesupport_fastrtps_c", "py": "rosidl_generator_py"}
+_KINDS = {"msg": ".msg", "srv": ".srv", "action": ".action"}
+#: What services and actions use beside the package's own fields (their event and goal messages).
+_IMPLIED = {"srv": ("service_msgs", "builtin_interfaces"),
+            "action": ("action_msgs", "unique_identifier_msgs", "builtin_interfaces", "service_msgs")}
+_INCLUDE = re.compile(r'^#include "(\w+)/(?:msg|srv|action)/\w+\.idl"', re.M)
+
+
+def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLike[str] | None" = None) -> list[str]:
+    """Build the package at ``package_dir`` (its ``msg/``, ``srv/``, ``action/``) and make it importable.
+
+    Built under ``into`` (default ``$IPYROS_MESSAGES_DIR``, else ``~/.ipyros/messages``, in
+    a ``ros2`` folder). Returns the types built (``pkg/Type``).
+    """
+    package_dir = Path(package_dir).expanduser().resolve()
+    package = msgtypes.package_name_of(package_dir)
+    files = [path for kind, suffix in _KINDS.items() for path in sorted((package_dir / kind).glob(f"*{suffix}"))]
+    if not files:
+        raise MessageTypeError(f"{package_dir} has no msg/*.msg, srv/*.srv or action/*.action files; give the "
+                               "folder of a message package (the one with package.xml and msg/)")
+    compilers = [shutil.which("gcc"), shutil.which("g++")]
+    if not all(compilers) or not (Path(sysconfig.get_paths()["include"]) / "Python.h").is_file():
+        raise MessageTypeError("building ROS 2 message types needs a C compiler and Python's headers: "
+                               f"apt-get install gcc g++ python3-dev (for {sys.executable}), then build again")
+    _check_field_types(package, files)
+    root = msgtypes.messages_dir(into) / "ros2"
+    with tempfile.TemporaryDirectory(prefix="ipyros-rosidl-") as work:
+        out = Path(work)
+        _generate(package, package_dir, files, out)
+        libs, python = root / "lib", root / "python" / package
+        shutil.rmtree(python, ignore_errors=True)
+        libs.mkdir(parents=True, exist_ok=True)
+        _compile(package, _dependencies(package, out, files), out, libs, python)
+    _import_from(root, package)
+    return [f"{package}/{path.stem}" for path in files]
+
+
+_BUILTIN = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32",
+            "int64", "uint64", "string", "wstring"}
+
+
+def _check_field_types(package: str, files: list[Path]) -> None:
+    """Refuse, naming the file and the type, a field whose type is neither built in nor the package's own.
+
+    rosidl takes such a name for one of the package's own and fails later with a missing file;
+    the usual case is ROS 1's ``Header``, which ROS 2 spells ``std_msgs/Header``.
+    """
+    own = {path.stem for path in files if path.suffix == ".msg"}
+    for path in files:
+        for line in path.read_text(errors="replace").splitlines():
+            words = line.split("#", 1)[0].split()
+            if len(words) < 2 or words[0] == "---" or "=" in words[1] or "=" in words[0]:
+                continue
+            base = re.split(r"[\[<]", words[0], maxsplit=1)[0]
+            if "/" in base or base in _BUILTIN or base in own:
+                continue
+            spelled = "std_msgs/Header" if base == "Header" else f"its_package/{base}"
+            raise MessageTypeError(f"cannot build {package}/{path.stem} from {path}: {base} is neither a built-in "
+                                   f"type nor a message of {package}; ROS 2 names another package's type with "
+                                   f"its package ({spelled})")
+
+
+def _generate(package: str, package_dir: Path, files: list[Path], out: Path) -> None:
+    """Each generator's sources for the package under ``out/<key>/<package>``; its one-line error if one fails."""
+    import importlib
+
+    interface_files = [f"{package_dir}:{path.relative_to(package_dir)}" for path in files]
+    shares = [str(share) for prefix in nodes.prefixes() for share in [prefix / "share"] if share.is_dir()
+              for share in share.iterdir() if any(share.glob("*/*.idl"))]  # every installed package's .idl files
+    chatter = io.StringIO()  # the generators print each file they read and write, and rosidl_cli its entry points
+    for key, generator in _GENERATORS.items():
+        module = importlib.import_module(f"{generator}.cli")
+        name = next(n for n in dir(module) if n.startswith("Generate") and n != "GenerateCommandExtension")
+        try:
+            with contextlib.redirect_stdout(chatter), contextlib.redirect_stderr(chatter):
+                getattr(module, name)(name).generate(package, interface_files, shares, out / key / package)
+        except Exception as error:  # noqa: BLE001 - rosidl's parsers raise plain exceptions naming the file
+            raise MessageTypeError(f"cannot build {package} from {package_dir}: {' '.join(str(error).split())}") \
+                from None
+
+
+def _dependencies(package: str, out: Path, files: list[Path]) -> list[str]:
+    """The message packages the built types use: named in the generated ``.idl`` files, and what a service or
+    action always uses."""
+    used = {found for idl in (out / "c" / package).rglob("*.idl") for found in _INCLUDE.findall(idl.read_text())}
+    for path in files:
+        used.update(_IMPLIED.get(path.parent.name, ()))
+    used.discard(package)
+    missing = sorted(p for p in used if nodes.package_prefix(p) is None)
+    if missing:
+        raise MessageTypeError(f"{package} uses {', '.join(missing)}, not installed here: pip install "
+                               f"{' '.join('ros-' + p.replace('_', '-') for p in missing)}, then build again")
+    return sorted(used)
+
+
+def _compile(package: str, deps: list[str], out: Path, libs: Path, python: Path) -> None:
+    """The five libraries into ``libs``, the Python package (sources and extension modules) into ``python``."""
+    import numpy
+
+    prefixes = nodes.prefixes()
+    includes = [f"-I{out / key}" for key in _GENERATORS] + [f"-I{sysconfig.get_paths()['include']}",
+                                                            f"-I{numpy.get_include()}"]
+    for prefix in prefixes:
+        if (prefix / "include").is_dir():
+            includes += [f"-I{prefix / 'include'}", *(f"-I{d}" for d in (prefix / "include").iterdir() if d.is_dir())]
+    searched = [libs, *(prefix / "lib" for prefix in prefixes if (prefix / "lib").is_dir())]
+
+    def build(target: Path, sources: list[Path], links: list[str], cxx: bool = False) -> None:
+        command = ["g++" if cxx else "gcc", "-shared", "-fPIC", "-O2", "-w", "-o", str(target), *map(str, sources),
+                   *includes, *(f"-L{d}" for d in searched), *(f"-l{lib}" for lib in links),
+                   f"-Wl,-rpath,{':'.join(map(str, searched))}", f"-Wl,-soname,{target.name}"]
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            first = next((line for line in done.stderr.splitlines() if "error" in line), done.stderr.strip()[-300:])
+            raise MessageTypeError(f"cannot compile {target.name} for {package}: {first.strip()}")
+
+    def sources(key: str, pattern: str) -> list[Path]:
+        return sorted(p for p in (out / key / package).rglob(pattern) if "_s.ep." not in p.name)
+
+    def each(kind: str) -> list[str]:
+        return [f"{dep}__{kind}" for dep in deps]
+
+    c = f"{package}__rosidl_generator_c"
+    build(libs / f"lib{c}.so", sources("c", "*.c"), [*each("rosidl_generator_c"), "rosidl_runtime_c", "rcutils"])
+    for kind, key, runtime, cxx in (
+            ("rosidl_typesupport_introspection_c", "introspection_c", "rosidl_typesupport_introspection_c", False),
+            ("rosidl_typesupport_fastrtps_c", "fastrtps_c", "rosidl_typesupport_fastrtps_c", True),
+            ("rosidl_typesupport_c", "ts_c", "rosidl_typesupport_c", True)):
+        pattern = "*.cpp" if cxx else "*.c"
+        build(libs / f"lib{package}__{kind}.so", sources(key, pattern),
+              [c, *each(kind), runtime, *(["fastcdr", "rcutils"] if key == "fastrtps_c" else []), "rosidl_runtime_c"],
+              cxx)
+    py = f"{package}__rosidl_generator_py"
+    build(libs / f"lib{py}.so", sources("py", "*.c"), [c, *each("rosidl_generator_py"), "rosidl_runtime_c"])
+    generated = out / "py" / package
+    shutil.copytree(generated, python, ignore=shutil.ignore_patterns("*.c", "tmp"))
+    (python / "__init__.py").touch()
+    for kind in ("rosidl_typesupport_c", "rosidl_typesupport_introspection_c", "rosidl_typesupport_fastrtps_c"):
+        build(python / f"{package}_s__{kind}.so", [generated / f"_{package}_s.ep.{kind}.c"],
+              [py, f"{package}__{kind}", c, "rosidl_runtime_c"])
+
+
+def _import_from(root: Any, package: str) -> None:
+    """Make the built packages importable here and in the processes started from here.
+
+    The type support dispatch loads a library by its bare name (``dlopen``), which searches the
+    ``LD_LIBRARY_PATH`` this process started with: here the package's libraries are loaded
+    first, and a library already loaded under that name (its soname) is the one found.
+    Processes started from here find them on their ``LD_LIBRARY_PATH``.
+    """
+    libs = root / "lib"
+    parts = [p for p in os.environ.get("LD_LIBRARY_PATH", "").split(os.pathsep) if p and p != str(libs)]
+    os.environ["LD_LIBRARY_PATH"] = os.pathsep.join([str(libs), *parts])
+    for kind in ("rosidl_generator_c", "rosidl_typesupport_introspection_c", "rosidl_typesupport_fastrtps_c",
+                 "rosidl_typesupport_c", "rosidl_generator_py"):
+        ctypes.CDLL(str(libs / f"lib{package}__{kind}.so"), mode=ctypes.RTLD_GLOBAL)
+    msgtypes.import_from(root / "python")
