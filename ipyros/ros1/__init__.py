@@ -12,7 +12,9 @@ rospy or speaks to a ROS 1 master:
 - :mod:`.master`, :mod:`.masterwatch`, :mod:`.connection`, :mod:`.rosout`: finding or
   starting the master (local only), watching it go and come back, a rosout on loopback;
 - :mod:`.graph`, :mod:`.discovery`, :mod:`.introspect`: the graph as a snapshot, a running
-  node's interface, services, parameters and nodes for the magics;
+  node's interface, services, parameters and nodes for the magics; :mod:`.reconfigure`:
+  dynamic_reconfigure servers' parameters, ranges and settings;
+- :mod:`.msggen`: a workspace's message package built with genpy;
 - :mod:`.nodes`: executables found as rosrun finds them, and a node's command line;
 - :mod:`.launchfile`, :mod:`.launch_rest`: a node of a launch file as a basenode, and
   the rest of the file run by roslaunch;
@@ -24,4 +26,5 @@ layer chooses it.
 """
 
 __all__ = ["actions", "backend", "bag_player", "bagfile", "connection", "discovery", "export", "graph", "introspect",
-           "launch_rest", "launchfile", "master", "masterwatch", "nodes", "rosout", "runtime", "sending"]
+           "launch_rest", "launchfile", "master", "masterwatch", "msggen", "nodes", "reconfigure", "rosout", "runtime",
+           "sending"]
