@@ -222,7 +222,8 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
 
         def rest_died(proc: Any, returncode: int, last_lines: list[str]) -> None:
             tail = "\n    ".join(last_lines[-8:])
-            session.notify(f"ipyros: the rest of {launch} (run for {node.name}) {exit_reason(returncode)}; "
+            what = f"node {proc.node_name}" if getattr(proc, "node_name", None) else "the rest"  # ROS 2: each node
+            session.notify(f"ipyros: {what} of {launch} (run for {node.name}) {exit_reason(returncode)}; "
                            f"run it again with {node.called}.shutdown() and {node.called}.create()\n    {tail}")
 
         handle = backend.launch_base(model.base, process, base_fullname(model), rest_died)

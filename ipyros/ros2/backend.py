@@ -36,6 +36,7 @@ class Ros2:
     def __init__(self) -> None:
         #: Which Fast DDS configuration this session (and what it starts) runs with, in words.
         self.transport = fastdds.prepare()  # before rclpy starts, and before any child is started
+        fastdds.remove_stale_files()  # what killed processes left would hide this session's nodes
         self.process = runtime.ProcessNode()
         self._goals: Optional[actions.Goals] = None  # the session's action clients, made with the first goal sent
 

@@ -16,6 +16,12 @@ interface when the session is local. The processes ipyros starts (basenodes, bag
 the demo robot) inherit the environment, and so the profile. A user who configured Fast DDS
 (a profile file, builtin transports, another middleware) is left alone, and the load line
 says which applies.
+
+Fast DDS frees its shared memory when a participant is deleted; a process that is killed
+(SIGKILL, a crash) leaves its files in ``/dev/shm``, a port's lock still taken. A new
+participant given that port is then never seen by the others (its node does not show up
+in the graph). So a session removes, before it starts, the Fast DDS files that no living
+process uses (:func:`remove_stale_files`).
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ import os
 from pathlib import Path
 from typing import Optional
 
-__all__ = ["SEGMENT", "USER_SETTINGS", "local", "prepare", "profile_xml"]
+__all__ = ["SEGMENT", "USER_SETTINGS", "local", "prepare", "profile_xml", "remove_stale_files"]
 
 #: The shared-memory segment of each participant: room for a few 16 MiB point clouds in flight.
 SEGMENT = 64 * 1024 * 1024
@@ -119,3 +125,43 @@ def _write(text: str) -> Optional[Path]:
     except OSError:
         return None
     return path
+
+
+SHM = Path("/dev/shm")
+
+
+def _in_use() -> set[str]:
+    """The names of the files of /dev/shm that a living process has mapped or open (those this user may see)."""
+    used: set[str] = set()
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            used.update(line.split()[-1].rsplit("/", 1)[-1] for line in (proc / "maps").read_text().splitlines()
+                        if "/dev/shm/" in line)
+            fds = list((proc / "fd").iterdir())
+        except OSError:  # gone meanwhile, or another user's (whose files this user cannot remove either)
+            continue
+        for fd in fds:
+            try:
+                target = os.readlink(fd)
+            except OSError:  # closed meanwhile (the listing's own descriptor, for one)
+                continue
+            if target.startswith("/dev/shm/"):
+                used.add(target.rsplit("/", 1)[-1])
+    return used
+
+
+def remove_stale_files(names: "Optional[set[str]]" = None, shm: Path = SHM) -> list[str]:
+    """Remove the Fast DDS files of ``shm`` (or those of ``names``) that no living process uses; return their names."""
+    if not shm.is_dir():
+        return []
+    candidates = {p.name for p in shm.iterdir() if "fastdds" in p.name} if names is None else set(names)
+    removed = []
+    for name in sorted(candidates - _in_use()):
+        try:
+            (shm / name).unlink()
+            removed.append(name)
+        except OSError:  # another user's, or removed meanwhile
+            continue
+    return removed

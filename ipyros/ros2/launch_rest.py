@@ -88,9 +88,13 @@ class LaunchBase(LaunchedBase):
         return self.rest.not_started
 
     def start(self, timeout: float = 30.0) -> "LaunchBase":
-        """Start the rest, then the basenode; on failure what started runs until :meth:`stop`."""
-        self.rest.start()
+        """Start the rest, then the basenode; on failure what started runs until :meth:`stop`.
+
+        Nothing waits for the rest (``ros2 launch`` does not either): a node of it that ends,
+        even at once, is told through ``on_rest_exit``.
+        """
         self._up = True
+        self.rest.start()
         self.basenode.start()
         return self
 

@@ -12,6 +12,7 @@ from ros2_fixtures import wait_for
 from sensor_msgs.msg import Image
 
 from ipyros.dsl import engine_of
+from ipyros.ros2 import fastdds
 
 
 def receiving_sockets(pid: int) -> list[tuple[str, int]]:
@@ -83,3 +84,27 @@ def test_a_large_best_effort_topic_is_delivered(make_node, peer):
         return sum(line.startswith("heard") for line in listener.lines) >= 10
 
     wait_for(heard_ten, timeout=30, interval=0.05, what="ten 1 MiB images sent best effort")
+
+
+def test_fast_dds_files_nobody_uses_are_removed_and_used_ones_kept():
+    """What a killed participant leaves in /dev/shm is removed before a session starts; a file that a living
+    process maps or holds open (the session's own, a peer's) is kept. Files of the test's own, by name."""
+    import mmap
+
+    stale, mapped, held = (fastdds.SHM / f"fastdds_ipyros_test_{os.getpid()}_{what}"
+                           for what in ("stale", "mapped", "held"))
+    for path in (stale, mapped, held):
+        path.write_bytes(b"\0" * 4096)
+    try:
+        with open(mapped, "r+b") as f, open(held, "rb"):
+            view = mmap.mmap(f.fileno(), 4096)
+            f.close()  # mapped, no longer open: as Fast DDS keeps its ports
+            try:
+                removed = fastdds.remove_stale_files({stale.name, mapped.name, held.name})
+            finally:
+                view.close()
+        assert removed == [stale.name]
+        assert not stale.exists() and mapped.exists() and held.exists()
+    finally:
+        for path in (stale, mapped, held):
+            path.unlink(missing_ok=True)

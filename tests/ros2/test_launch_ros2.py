@@ -15,6 +15,7 @@ from ros2_fixtures import wait_for
 from std_msgs.msg import String
 
 from ipyros.core import errors
+from ipyros.dsl import rosNode
 from ipyros.ros2 import launchfile
 
 ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
@@ -97,6 +98,18 @@ def test_wrapping_a_node_of_a_launch_file_runs_the_rest_as_children(make_node, r
     assert failures == []
 
 
+def test_a_launch_wrapped_node_is_kept_and_brought_back(make_node, robot, tmp_path):
+    w = make_node("l2_kept")
+    w.baseLaunch(robot, "first", prefix="K:")
+    w.reuse.subscribe("in", type=String)
+    path = w.save(tmp_path / "kept.yaml")
+    loaded = rosNode.load(str(path), {}, trust=True)
+    base = loaded.model().base
+    assert (base.launch, base.launch_node, base.launch_args, base.params) == \
+        (robot, "/robot7/first", {"prefix": "K:"}, {"prefix": "K:"})
+    assert "baseLaunch(" in w.save(tmp_path / "kept.py").read_text()
+
+
 @pytest.mark.parametrize("name, text, message", [
     ("robot.launch.py", "from launch import LaunchDescription\n", "is a Python launch file"),
     ("ros1.launch", '<launch><node pkg="p" type="t" name="n"/></launch>', "ROS 1's spelling: ROS 2 names it exec="),
@@ -121,3 +134,24 @@ def test_an_arg_the_file_does_not_declare_is_refused_with_the_ones_it_does(make_
     with pytest.raises(errors.BaseNodeError, match=r"has no argument 'prefx'; did you mean prefix\? its arguments: "
                                                    r"prefix, second"):
         make_node("l2_arg").baseLaunch(robot, "first", prefx="W:")
+
+
+def test_a_node_of_the_rest_that_cannot_start_or_ends_is_told(make_node, tmp_path, notices):
+    path = tmp_path / "shaky.launch.yaml"
+    path.write_text(f"""launch:
+- node: {{exec: {ECHO_NODE}, name: steady, namespace: robot8}}
+- node: {{pkg: ipyros_demo, exec: no_such_node, name: ghost}}
+- node: {{exec: /bin/false, name: quitter}}
+""")
+    w = make_node("l2_shaky")
+    w.baseLaunch(str(path), "steady")
+    w.create()
+    try:
+        assert w.base.not_started == ["/ghost"]
+        wait_for(lambda: any("node quitter of " in n and "exited with code 1" in n for n in notices), timeout=20,
+                 what="the notice of the quitter")
+        assert any("could not start /ghost of " in n and "l2_shaky.base.rest.tail()" in n for n in notices)
+        assert any("/ghost: " in line and "no_such_node" in line for line in w.base.rest.tail())
+        assert w.base.running  # the wrapped node runs on
+    finally:
+        w.shutdown()

@@ -25,6 +25,8 @@ PEERS = TESTS / "ros2" / "peers"
 from peer import Peer as SharedPeer  # noqa: E402
 from support import node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
 
+from ipyros.ros2 import fastdds  # noqa: E402 - no rclpy in it
+
 # Set before rclpy starts: the backend, a domain no other run on this machine uses, and
 # discovery kept to this machine.
 os.environ["IPYROS_ROS"] = "2"
@@ -47,30 +49,6 @@ class Peer(SharedPeer):
     PEERS = PEERS
 
 
-def _shm_in_use() -> set[str]:
-    """The files of /dev/shm that a living process has mapped or open."""
-    used: set[str] = set()
-    for proc in Path("/proc").iterdir():
-        if not proc.name.isdigit():
-            continue
-        try:
-            used.update(line.split()[-1].rsplit("/", 1)[-1] for line in (proc / "maps").read_text().splitlines()
-                        if "/dev/shm/" in line)
-            used.update(os.readlink(fd).rsplit("/", 1)[-1] for fd in (proc / "fd").iterdir()
-                        if os.readlink(fd).startswith("/dev/shm/"))
-        except OSError:
-            continue
-    return used
-
-
-def _remove_unused_fast_dds_files(shm: Path, names: set[str]) -> None:
-    for name in names - _shm_in_use():
-        try:
-            (shm / name).unlink(missing_ok=True)
-        except PermissionError:  # another user's: theirs to clean
-            continue
-
-
 @pytest.fixture(scope="session", autouse=True)
 def fast_dds_memory_freed():
     """Fast DDS frees its shared memory when a participant is deleted; a node that crashes (some tests
@@ -80,14 +58,12 @@ def fast_dds_memory_freed():
     stopped half-way, a crashed program): a stale port keeps its lock, and a new participant that is
     given that port number is never seen by the others (its node does not show up in the graph).
     """
-    shm = Path("/dev/shm")
-    if shm.is_dir():
-        _remove_unused_fast_dds_files(shm, {p.name for p in shm.iterdir() if "fastdds" in p.name})
+    shm = fastdds.SHM
+    fastdds.remove_stale_files()
     before = {p.name for p in shm.iterdir()} if shm.is_dir() else set()
     yield
-    if not shm.is_dir():
-        return
-    _remove_unused_fast_dds_files(shm, {p.name for p in shm.iterdir() if "fastdds" in p.name} - before)
+    if shm.is_dir():
+        fastdds.remove_stale_files({p.name for p in shm.iterdir() if "fastdds" in p.name} - before)
 
 
 @pytest.fixture(scope="session")
