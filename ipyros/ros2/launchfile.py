@@ -330,8 +330,12 @@ class _Reader:
 
 
 def _join(namespace: str, name: Any) -> str:
-    text = str(name).strip("/") if not str(name).startswith("/") else str(name).rstrip("/")
-    return (text or "/") if str(name).startswith("/") else names.join(namespace, text) if text else namespace
+    """A namespace ``name`` pushed inside ``namespace``: an absolute one replaces it, a relative one goes inside."""
+    text = str(name)
+    if text.startswith("/"):
+        return text.rstrip("/") or "/"
+    text = text.strip("/")
+    return names.join(namespace, text) if text else namespace
 
 
 def _typed(value: Any) -> Any:

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import importlib
+import importlib.util
 import io
 import os
 import re
@@ -70,6 +72,10 @@ def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLi
     if not all(compilers) or not (Path(sysconfig.get_paths()["include"]) / "Python.h").is_file():
         raise MessageTypeError("building ROS 2 message types needs a C compiler and Python's headers: "
                                f"apt-get install gcc g++ python3-dev (for {sys.executable}), then build again")
+    missing = [name for name in ("catkin_pkg", *_GENERATORS.values()) if importlib.util.find_spec(name) is None]
+    if missing:
+        raise MessageTypeError(f"building ROS 2 message types needs {', '.join(missing)} in this Python: pip install "
+                               f"{' '.join(n if n == 'catkin_pkg' else 'ros-' + n.replace('_', '-') for n in missing)}")
     _check_field_types(package, files)
     root = msgtypes.messages_dir(into) / "ros2"
     with tempfile.TemporaryDirectory(prefix="ipyros-rosidl-") as work:
@@ -110,11 +116,10 @@ def _check_field_types(package: str, files: list[Path]) -> None:
 
 def _generate(package: str, package_dir: Path, files: list[Path], out: Path) -> None:
     """Each generator's sources for the package under ``out/<key>/<package>``; its one-line error if one fails."""
-    import importlib
-
     interface_files = [f"{package_dir}:{path.relative_to(package_dir)}" for path in files]
-    shares = [str(share) for prefix in nodes.prefixes() for share in [prefix / "share"] if share.is_dir()
-              for share in share.iterdir() if any(share.glob("*/*.idl"))]  # every installed package's .idl files
+    # where the types the package uses are found: every installed package that has .idl files
+    shares = [str(folder) for prefix in nodes.prefixes() if (prefix / "share").is_dir()
+              for folder in (prefix / "share").iterdir() if any(folder.glob("*/*.idl"))]
     chatter = io.StringIO()  # the generators print each file they read and write, and rosidl_cli its entry points
     for key, generator in _GENERATORS.items():
         module = importlib.import_module(f"{generator}.cli")
