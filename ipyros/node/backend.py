@@ -127,6 +127,7 @@ class Backend(Protocol):
     def forget_params(self, names: list[str]) -> None: ...
     def watch_param(self, name: str, tell: Callable[[Any], None]) -> Any: ...  # tell(value) on each set; close()
     def build_messages(self, package_dir: Any, into: Any) -> list[str]: ...  # a package's .msg/.srv, importable
+    def build_types_of(self, node: str, wanted: dict[str, str]) -> list[str]: ...  # from a running node's own
     def refuse_taken_name(self, name: str) -> None: ...
 
     # the graph

@@ -318,6 +318,7 @@ def discover(node: "NodeEngine", timeout: float = 10.0) -> Interface:
     probe = session.backend.basenode(base).start()
     try:
         interface = session.backend.wait_for_node(base_fullname(model), timeout=timeout, alive=lambda: probe.running)
+        _build_its_own_types(node, interface)  # asked of the basenode while it runs
     except BaseNodeError:
         if not probe.running:
             raise _ended_at_start(model, probe) from None
@@ -337,6 +338,28 @@ def discover(node: "NodeEngine", timeout: float = 10.0) -> Interface:
 
 
 _LATE = "a node may advertise only after its first input (topic_tools throttle and mux do)"
+
+
+def _build_its_own_types(node: "NodeEngine", interface: Interface) -> None:
+    """Make the message types the basenode uses and this Python lacks importable, from the basenode itself where
+    the backend can (ROS 2: its type descriptions, then a build); say what was built, or why not, in one line."""
+    wanted: dict[str, str] = {}
+    for name, type_ in interface.publications + interface.subscriptions:
+        try:
+            if type_:
+                msgtypes.resolve_message(type_)
+        except MessageTypeError:
+            wanted.setdefault(type_, name)
+    if not wanted:
+        return
+    try:
+        built = node.session.backend.build_types_of(interface.node, wanted)
+    except MessageTypeError as error:
+        node.session.notify(f"ipyros: {error}")
+        return
+    if built:
+        node.session.notify(f"ipyros: built {', '.join(built)} from {interface.node}'s own type descriptions "
+                            "(not installed here); they are declared and relayed like the others")
 
 
 def _uses(interface: Interface, direction: str, name: str) -> bool:

@@ -191,6 +191,10 @@ class Ros1:
 
         return build_messages(package_dir, into)
 
+    def build_types_of(self, node: str, wanted: dict[str, str]) -> list[str]:
+        """Nothing to build: a ROS 1 relay forwards bytes of any type (a handler needs the package installed)."""
+        return []
+
     def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
         return runtime.ParamWatch(name, tell)
 

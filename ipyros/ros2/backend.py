@@ -182,6 +182,12 @@ class Ros2:
 
         return build_messages(package_dir, into)
 
+    def build_types_of(self, node: str, wanted: dict[str, str]) -> list[str]:
+        """Build the types ``wanted`` (type → a topic it is used on) from the running ``node``'s descriptions."""
+        from .msggen import build_from_node
+
+        return build_from_node(self.process.caller(), node, wanted)
+
     def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
         node, key = self._owner(name)
         return runtime.ParamWatch(node, key, tell)

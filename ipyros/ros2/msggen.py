@@ -43,13 +43,13 @@ from ..core import msgtypes
 from ..core.errors import MessageTypeError
 from . import nodes
 
-__all__ = ["build_messages"]
+__all__ = ["build_from_node", "build_messages"]
 
 #: The generators, each writing into a folder of its own (the key), and the libraries built from what they write.
 _GENERATORS = {"c": "rosidl_generator_c", "ts_c": "rosidl_typesupport_c",
                "introspection_c": "rosidl_typesupport_introspection_c",
                "fastrtps_c": "rosidl_typesupport_fastrtps_c", "py": "rosidl_generator_py"}
-_KINDS = {"msg": ".msg", "srv": ".srv", "action": ".action"}
+_KINDS = {"msg": ".msg", "srv": ".srv", "action": ".action"}  # and .idl in each, as a node's type description gives
 #: What services and actions use beside the package's own fields (their event and goal messages).
 _IMPLIED = {"srv": ("service_msgs", "builtin_interfaces"),
             "action": ("action_msgs", "unique_identifier_msgs", "builtin_interfaces", "service_msgs")}
@@ -64,7 +64,8 @@ def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLi
     """
     package_dir = Path(package_dir).expanduser().resolve()
     package = msgtypes.package_name_of(package_dir)
-    files = [path for kind, suffix in _KINDS.items() for path in sorted((package_dir / kind).glob(f"*{suffix}"))]
+    files = [path for kind in _KINDS if (package_dir / kind).is_dir()
+             for path in sorted((package_dir / kind).iterdir()) if path.suffix in (_KINDS[kind], ".idl")]
     if not files:
         raise MessageTypeError(f"{package_dir} has no msg/*.msg, srv/*.srv or action/*.action files; give the "
                                "folder of a message package (the one with package.xml and msg/)")
@@ -99,8 +100,8 @@ def _check_field_types(package: str, files: list[Path]) -> None:
     rosidl takes such a name for one of the package's own and fails later with a missing file;
     the usual case is ROS 1's ``Header``, which ROS 2 spells ``std_msgs/Header``.
     """
-    own = {path.stem for path in files if path.suffix == ".msg"}
-    for path in files:
+    own = {path.stem for path in files if path.parent.name == "msg"}
+    for path in (f for f in files if f.suffix != ".idl"):  # IDL names every type in full
         for line in path.read_text(errors="replace").splitlines():
             words = line.split("#", 1)[0].split()
             if len(words) < 2 or words[0] == "---" or "=" in words[1] or "=" in words[0]:
@@ -135,7 +136,8 @@ def _generate(package: str, package_dir: Path, files: list[Path], out: Path) -> 
 def _dependencies(package: str, out: Path, files: list[Path]) -> list[str]:
     """The message packages the built types use: named in the generated ``.idl`` files, and what a service or
     action always uses."""
-    used = {found for idl in (out / "c" / package).rglob("*.idl") for found in _INCLUDE.findall(idl.read_text())}
+    idls = [*(out / "c" / package).rglob("*.idl"), *(path for path in files if path.suffix == ".idl")]
+    used = {found for idl in idls for found in _INCLUDE.findall(idl.read_text())}
     for path in files:
         used.update(_IMPLIED.get(path.parent.name, ()))
     used.discard(package)
@@ -208,3 +210,68 @@ def _import_from(root: Any, package: str) -> None:
                  "rosidl_typesupport_c", "rosidl_generator_py"):
         ctypes.CDLL(str(libs / f"lib{package}__{kind}.so"), mode=ctypes.RTLD_GLOBAL)
     msgtypes.import_from(root / "python")
+
+
+# -- a type that only a running node has -------------------------------------------------------
+
+def build_from_node(caller: Any, node: str, wanted: dict[str, str], into: "str | os.PathLike[str] | None" = None,
+                    patience: float = 5.0) -> list[str]:
+    """Build the types ``wanted`` (``pkg/Type`` → a topic ``node`` uses it on) from ``node``'s own descriptions.
+
+    A ROS 2 node answers ``~/get_type_description`` (REP 2011) with each type's definition as
+    it was built (``type_sources``: IDL or ``.msg``), and those of the types it uses. Those of
+    packages no ament prefix here has are written as a package and built (:func:`build_messages`);
+    a package the machine has is never built again. ``caller`` is a node whose executor spins.
+    Returns the types built.
+    """
+    from type_description_interfaces.srv import GetTypeDescription
+
+    client = caller.create_client(GetTypeDescription, f"{node}/get_type_description")
+    sources: dict[str, tuple[str, str]] = {}  # pkg/msg/Type: (encoding, text)
+    try:
+        if not client.wait_for_service(timeout_sec=patience):
+            raise MessageTypeError(f"{node} does not answer get_type_description, so its own types cannot be "
+                                   "learnt from it; build their package with build_messages(folder)")
+        for type_name, topic in sorted(wanted.items()):
+            full = type_name if type_name.count("/") == 2 else type_name.replace("/", "/msg/", 1)
+            hashes = [str(e.topic_type_hash) for e in (*caller.get_publishers_info_by_topic(topic),
+                                                        *caller.get_subscriptions_info_by_topic(topic))
+                      if e.topic_type == full]
+            answer = _call(client, GetTypeDescription.Request(type_name=full, type_hash=hashes[0] if hashes else "",
+                                                              include_type_sources=True), patience)
+            if answer is None or not answer.successful:
+                why = answer.failure_reason if answer is not None else f"no answer within {patience:g} s"
+                raise MessageTypeError(f"{node} did not describe {type_name}: {why}")
+            sources.update({s.type_name: (s.encoding, s.raw_file_contents) for s in answer.type_sources})
+    finally:
+        caller.destroy_client(client)
+    missing = {name: source for name, source in sources.items()
+               if nodes.package_prefix(name.split("/", 1)[0]) is None}
+    packages = sorted({name.split("/", 1)[0] for name in missing})
+    if len(packages) > 1:
+        raise MessageTypeError(f"{node}'s types come from {len(packages)} packages this machine lacks "
+                               f"({', '.join(packages)}), which ipyros builds one at a time only: build each with "
+                               "build_messages(folder), those used by the others first")
+    built: list[str] = []
+    with tempfile.TemporaryDirectory(prefix="ipyros-described-") as work:
+        for package in packages:
+            for name, (encoding, text) in missing.items():
+                _, kind, stem = name.split("/")
+                path = Path(work) / package / kind / f"{stem}.{'idl' if encoding == 'idl' else kind}"
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(text)
+            built += build_messages(Path(work) / package, into)
+    return built
+
+
+def _call(client: Any, request: Any, patience: float) -> Any:
+    """The answer to ``request``, or None after ``patience`` seconds (the caller's executor takes it)."""
+    import threading
+
+    done = threading.Event()
+    future = client.call_async(request)
+    future.add_done_callback(lambda _: done.set())
+    if not done.wait(patience):
+        client.remove_pending_request(future)
+        return None
+    return future.result()

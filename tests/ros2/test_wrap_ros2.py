@@ -373,3 +373,64 @@ def test_a_wrapped_lifecycle_basenode_is_managed_under_its_own_name(make_node, c
     assert first_again is not None and first_again > numbers[stopped - 1] + 1, \
         "the ticks counted while inactive were never relayed"
     w.shutdown()
+
+
+ODD_NODE = """
+import rclpy
+from std_msgs.msg import String
+from ws_odd_msgs.msg import Odd
+
+rclpy.init()
+node = rclpy.create_node("odd_node")
+odd, plain = node.create_publisher(Odd, "odd", 10), node.create_publisher(String, "plain", 10)
+node.create_timer(0.1, lambda: (odd.publish(Odd(x=7, note="n")), plain.publish(String(data="p"))))
+print("odd_node ready", flush=True)
+try:
+    rclpy.spin(node)
+except KeyboardInterrupt:
+    pass
+"""
+
+
+def test_discovery_builds_a_type_only_the_basenode_has_and_relays_it(make_node, notices, monkeypatch, tmp_path):
+    """A basenode from a workspace whose message package this session lacks (built for the basenode alone, in
+    another process): discover() learns the type from the basenode's own description (REP 2011), builds it, and
+    declares it; the relay carries it and this session can read it (issue 24)."""
+    import os
+    import subprocess
+    import sys
+
+    package = tmp_path / "src" / "ws_odd_msgs"
+    (package / "msg").mkdir(parents=True)
+    (package / "msg" / "Odd.msg").write_text("int32 x\nstring note\ngeometry_msgs/Point where\n")
+    theirs = tmp_path / "theirs"
+    subprocess.run([sys.executable, "-c", "from ipyros.ros2.msggen import build_messages; import sys; "
+                    "build_messages(sys.argv[1], sys.argv[2])", str(package), str(theirs)],
+                   check=True, timeout=180, capture_output=True)
+    script = tmp_path / "odd_node.py"
+    script.write_text(ODD_NODE)
+    env = {"PYTHONPATH": str(theirs / "ros2" / "python"),
+           "LD_LIBRARY_PATH": os.pathsep.join([str(theirs / "ros2" / "lib"), os.environ.get("LD_LIBRARY_PATH", "")])}
+    monkeypatch.setattr(sys, "path", list(sys.path))  # what the build adds here is taken back after the test
+    for name in ("PYTHONPATH", "LD_LIBRARY_PATH"):
+        monkeypatch.setenv(name, os.environ.get(name, ""))
+    monkeypatch.setenv("IPYROS_MESSAGES_DIR", str(tmp_path / "ours"))
+    with pytest.raises(ImportError):
+        import ws_odd_msgs  # noqa: F401 - this session lacks it
+
+    w = make_node("w2_odd")
+    w.baseNode(str(script), namespace="robot_odd", env=env)
+    interface = w.discover()
+    assert interface.not_installed == []
+    assert sorted((t.name, t.direction, t.type) for t in w.model().topics) == \
+        [("odd", "publish", "ws_odd_msgs/Odd"), ("plain", "publish", "std_msgs/String")]
+    assert any(n.startswith("ipyros: built ws_odd_msgs/Odd from /robot_odd/odd_node's own type descriptions")
+               for n in notices), notices
+    from ws_odd_msgs.msg import Odd
+
+    got: list = []
+    make_node("w2_odd_listener").new.subscribe("/robot_odd/odd", handler=lambda m: got.append((m.x, m.note)),
+                                               msgType=Odd).create()
+    w.create()
+    wait_for(lambda: (7, "n") in got, timeout=30, what="the basenode's own type through the relay")
+    w.shutdown()
