@@ -45,8 +45,13 @@ a basenode               ``basenode(base, log_path, on_exit)``: its process (loo
                          command line as rosrun / ros2 run); ``wait_for_node(name, timeout,
                          alive, settle)``: its :class:`~ipyros.core.records.Interface` once
                          settled; ``launch_base(...)`` and ``read_launch(...)``: a node of
-                         a launch file; ``note_link(base, process)``
+                         a launch file (``launch_params_on_server``: who sets its params);
+                         ``note_link(base, process)``
 packages                 ``list_packages()``, ``list_executables(package)``
+message types            ``build_messages(package_dir, into)``: a workspace's package made
+                         importable; ``build_types_of(node, wanted)``: the types a running
+                         node uses and this Python lacks, from the node itself (ROS 2);
+                         ``relays_any_type`` / ``raw_relay(...)``: bytes of any type (ROS 1)
 bags                     ``bags()``: reading, playing and writing bags of this ROS
 exports                  ``export_flavour()``: how a node is written as a script of this ROS
 %services, %call         ``service_type(name)``, ``call(name, cls, request, timeout)``
