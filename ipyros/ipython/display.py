@@ -40,7 +40,7 @@ def node_table(node: rosNode) -> Table:
     state = "[green]running[/]" if node.created else "[yellow]declared[/]"
     title = f"rosNode [bold]{node.fullname}[/] ({state})"
     if model.base is not None:
-        title += f" wrapping [bold]{model.base.package or '?'}/{model.base.executable or '?'}[/]"
+        title += f" wrapping [bold]{escape(model.base.describe())}[/]"  # a package's, a file's, a launch file's
     table = Table(title=title, title_justify="left", show_lines=False)
     for column in ("kind", "name", "type", "role", "handler"):
         table.add_column(column)

@@ -4,7 +4,7 @@ Loading:
 
 * registers the magics (:mod:`ipyros.ipython.magics`) and the tab completer (:mod:`ipyros.ipython.completion`,
   answered from a :class:`~ipyros.tools.graph.GraphCache` refreshed in the background);
-* puts ``rosNode`` in the user namespace;
+* puts ``rosNode`` and ``build_messages`` in the user namespace;
 * shows an :class:`~ipyros.core.errors.IpyrosError` raised at the prompt as one line, not a traceback;
 * prints handler failures from ROS threads without wrecking the prompt
   (:func:`ipyros.ipython.magics.output.failure_report`);
@@ -32,7 +32,7 @@ from typing import Any, Optional
 from ..core import plan as planning
 from ..core.errors import IpyrosError
 from ..core.names import is_tool
-from ..dsl import end_chains, rosNode
+from ..dsl import build_messages, end_chains, rosNode
 from ..files.export import ExportWarning
 from ..files.savefile import SaveWarning
 from ..node.session import Session, configure, current, started as session_started
@@ -96,7 +96,7 @@ class Extension:
         line = self._configure_session()
         for magics in self.magics:
             shell.register_magics(magics)
-        shell.push({"rosNode": rosNode}, interactive=False)
+        shell.push(_NAMES, interactive=False)
         self._saved["custom_exc"] = (shell.custom_exceptions, shell.CustomTB)
         previous_tb = shell.CustomTB
         shell.set_custom_exc((*shell.custom_exceptions, IpyrosError),
@@ -280,10 +280,14 @@ class Extension:
         shell.custom_exceptions, shell.CustomTB = self._saved["custom_exc"]
         if "atexit_once" in self._saved:
             del shell._atexit_once  # the class's method again
-        shell.drop_by_id({"rosNode": rosNode})
+        shell.drop_by_id(_NAMES)
         for magics in self.magics:
             _unregister(shell, magics)
         self.publisher.close()
+
+
+#: What the extension puts in the user's namespace (and takes back, if the user has not rebound them).
+_NAMES = {"rosNode": rosNode, "build_messages": build_messages}
 
 
 def _output_below_the_cell(node: rosNode) -> Optional[cell_output.NodeOutput]:

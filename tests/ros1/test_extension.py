@@ -17,7 +17,7 @@ from ros1_fixtures import free_port, wait_for
 from shell import error_of, interactive_shell, ok
 from traitlets.config import Config
 
-from ipyros import IpyrosError, rosNode
+from ipyros import IpyrosError, build_messages, rosNode
 from ipyros.ipython.completion import IDENTIFIER
 from ipyros.ipython.extension import _loaded
 from ipyros.ipython.magics import RosMagics
@@ -38,7 +38,7 @@ def test_load_registers_everything_and_prints_one_line(ros_session, ros_master, 
         assert lines == [f"ipyros: ROS master {ros_master} (found running)"]
         for kind, names in MAGICS.items():
             assert names <= set(shell.magics_manager.magics[kind])
-        assert shell.user_ns["rosNode"] is rosNode
+        assert shell.user_ns["rosNode"] is rosNode and shell.user_ns["build_messages"] is build_messages
         assert any(isinstance(c, RosMagics) for c in shell.configurables)
         assert len(ipyros_matchers(shell)) == 1
         assert IpyrosError in shell.custom_exceptions and before_exc == ()
@@ -61,7 +61,7 @@ def test_unload_takes_everything_back(ros_session):
         assert not {"RosMagics", "TopicMagics", "NodeMagics", "WrapMagics"} & set(shell.magics_manager.registry)
         assert not [c for c in shell.configurables if type(c).__module__.startswith("ipyros")]
         assert not ipyros_matchers(shell)
-        assert "rosNode" not in shell.user_ns
+        assert "rosNode" not in shell.user_ns and "build_messages" not in shell.user_ns
         assert shell.custom_exceptions == ()
         assert shell.events.callbacks["post_run_cell"] == callbacks
         assert ros_session.report is report and ros_session.config.announce is announce
