@@ -186,7 +186,7 @@ class Ros2:
         """Build the types ``wanted`` (type → a topic it is used on) from the running ``node``'s descriptions."""
         from .msggen import build_from_node
 
-        return build_from_node(self.process.caller(), node, wanted)
+        return build_from_node(self.process, node, wanted)
 
     def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
         node, key = self._owner(name)

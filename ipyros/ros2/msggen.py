@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core import msgtypes
-from ..core.errors import MessageTypeError
+from ..core.errors import IpyrosError, MessageTypeError
 from . import nodes
 
 __all__ = ["build_from_node", "build_messages"]
@@ -214,37 +214,38 @@ def _import_from(root: Any, package: str) -> None:
 
 # -- a type that only a running node has -------------------------------------------------------
 
-def build_from_node(caller: Any, node: str, wanted: dict[str, str], into: "str | os.PathLike[str] | None" = None,
+def build_from_node(process: Any, node: str, wanted: dict[str, str], into: "str | os.PathLike[str] | None" = None,
                     patience: float = 5.0) -> list[str]:
     """Build the types ``wanted`` (``pkg/Type`` → a topic ``node`` uses it on) from ``node``'s own descriptions.
 
     A ROS 2 node answers ``~/get_type_description`` (REP 2011) with each type's definition as
     it was built (``type_sources``: IDL or ``.msg``), and those of the types it uses. Those of
     packages no ament prefix here has are written as a package and built (:func:`build_messages`);
-    a package the machine has is never built again. ``caller`` is a node whose executor spins.
-    Returns the types built.
+    a package the machine has is never built again. ``process`` is the session's
+    :class:`~ipyros.ros2.runtime.ProcessNode`. Returns the types built.
     """
     from type_description_interfaces.srv import GetTypeDescription
 
-    client = caller.create_client(GetTypeDescription, f"{node}/get_type_description")
+    from .introspect import call
+
+    graph = process.graph()
     sources: dict[str, tuple[str, str]] = {}  # pkg/msg/Type: (encoding, text)
-    try:
-        if not client.wait_for_service(timeout_sec=patience):
-            raise MessageTypeError(f"{node} does not answer get_type_description, so its own types cannot be "
-                                   "learnt from it; build their package with build_messages(folder)")
-        for type_name, topic in sorted(wanted.items()):
-            full = type_name if type_name.count("/") == 2 else type_name.replace("/", "/msg/", 1)
-            hashes = [str(e.topic_type_hash) for e in (*caller.get_publishers_info_by_topic(topic),
-                                                        *caller.get_subscriptions_info_by_topic(topic))
-                      if e.topic_type == full]
-            answer = _call(client, GetTypeDescription.Request(type_name=full, type_hash=hashes[0] if hashes else "",
-                                                              include_type_sources=True), patience)
-            if answer is None or not answer.successful:
-                why = answer.failure_reason if answer is not None else f"no answer within {patience:g} s"
-                raise MessageTypeError(f"{node} did not describe {type_name}: {why}")
-            sources.update({s.type_name: (s.encoding, s.raw_file_contents) for s in answer.type_sources})
-    finally:
-        caller.destroy_client(client)
+    for type_name, topic in sorted(wanted.items()):
+        full = type_name if type_name.count("/") == 2 else type_name.replace("/", "/msg/", 1)
+        hashes = [str(e.topic_type_hash) for e in (*graph.get_publishers_info_by_topic(topic),
+                                                    *graph.get_subscriptions_info_by_topic(topic))
+                  if e.topic_type == full]
+        request = GetTypeDescription.Request(type_name=full, type_hash=hashes[0] if hashes else "",
+                                             include_type_sources=True)
+        try:
+            answer = call(process, f"{node}/get_type_description", GetTypeDescription, request, patience)
+        except IpyrosError as error:
+            raise MessageTypeError(f"cannot learn {type_name} from {node}: {error}; build its package with "
+                                   "build_messages(folder)") from None
+        if not answer.successful:
+            raise MessageTypeError(f"{node} did not describe {type_name}: {answer.failure_reason}; build its "
+                                   "package with build_messages(folder)")
+        sources.update({s.type_name: (s.encoding, s.raw_file_contents) for s in answer.type_sources})
     missing = {name: source for name, source in sources.items()
                if nodes.package_prefix(name.split("/", 1)[0]) is None}
     packages = sorted({name.split("/", 1)[0] for name in missing})
@@ -262,16 +263,3 @@ def build_from_node(caller: Any, node: str, wanted: dict[str, str], into: "str |
                 path.write_text(text)
             built += build_messages(Path(work) / package, into)
     return built
-
-
-def _call(client: Any, request: Any, patience: float) -> Any:
-    """The answer to ``request``, or None after ``patience`` seconds (the caller's executor takes it)."""
-    import threading
-
-    done = threading.Event()
-    future = client.call_async(request)
-    future.add_done_callback(lambda _: done.set())
-    if not done.wait(patience):
-        client.remove_pending_request(future)
-        return None
-    return future.result()
