@@ -164,6 +164,26 @@ class ActionServer:
             self._goals.close()
 
 
+class _StatusRelay(Relay):
+    """An action's status relay: it forwards only while ``ready()`` says the rest of the relay is connected.
+
+    A client takes the server's status as "the server is there" (actionlib's ``wait_for_server``)
+    and sends its goal at once; a goal that comes before the relay's goal topic is connected to
+    the basenode is lost, and the client waits for its result forever. The server repeats its
+    status (5 Hz), so holding it back until then loses nothing.
+    """
+
+    def __init__(self, source: str, target: str, ready: Callable[[], bool],
+                 on_wrong_type: Optional[Callable[[str], None]],
+                 complain: Optional[Callable[[str], None]]) -> None:
+        self._ready = ready  # before the subscription: a message may come at once
+        super().__init__(source, target, GoalStatusArray, on_wrong_type, complain)
+
+    def _forward(self, raw: rospy.AnyMsg) -> None:
+        if self._ready():
+            super()._forward(raw)
+
+
 class ActionRelay:
     """Relay action ``source`` (the basenode's, remapped) as ``target``: its five topics, as bytes, as one unit."""
 
@@ -172,22 +192,26 @@ class ActionRelay:
                  complain: Optional[Callable[[str], None]] = None) -> None:
         self.source, self.target, self.cls = source, target, cls
         parts = _parts(cls)
-        relays: list[Relay] = []
+        self._inward: list[Relay] = []
+        self._outward: list[Relay] = []
         try:
-            for part, message, inward in (("goal", parts["ActionGoal"], True), ("cancel", GoalID, True),
-                                          ("status", GoalStatusArray, False),
-                                          ("feedback", parts["ActionFeedback"], False),
-                                          ("result", parts["ActionResult"], False)):
-                ends = (f"{target}/{part}", f"{source}/{part}")
-                relays.append(Relay(*(ends if inward else ends[::-1]), message, on_wrong_type, complain))
+            for part, message in (("goal", parts["ActionGoal"]), ("cancel", GoalID)):
+                self._inward.append(Relay(f"{target}/{part}", f"{source}/{part}", message, on_wrong_type, complain))
+            for part, message in (("feedback", parts["ActionFeedback"]), ("result", parts["ActionResult"])):
+                self._outward.append(Relay(f"{source}/{part}", f"{target}/{part}", message, on_wrong_type, complain))
+            self._outward.append(_StatusRelay(f"{source}/status", f"{target}/status", self._connected,
+                                              on_wrong_type, complain))
         except BaseException:
-            for opened in relays:
-                opened.close()
+            self.close()
             raise
-        self._relays = relays
+
+    def _connected(self) -> bool:
+        """Whether goals and cancels reach the basenode and its feedback and results come back."""
+        return (all(relay.peers()[1] for relay in self._inward)
+                and all(relay.peers()[0] for relay in self._outward))
 
     def close(self) -> None:
-        for relay in self._relays:
+        for relay in self._inward + self._outward:
             relay.close()
 
 

@@ -37,11 +37,14 @@ class NodeHandle:
 '''
 
 _RELAY = '''
-def relay(source, target, msg_class):
-    """Forward source to target unchanged: read as bytes (AnyMsg), written as bytes, never parsed."""
+def relay(source, target, msg_class, ready=None):
+    """Forward source to target unchanged: read as bytes (AnyMsg), written as bytes, never parsed.
+    ready(), if given, must say yes for a message to go on. Returns the publisher and the subscriber."""
     pub = rospy.Publisher(target, msg_class, queue_size=10)  # advertised now: nothing lost at start
 
     def forward(raw):
+        if ready is not None and not ready():
+            return
         if raw._connection_header.get("latching") == "1" and not pub.impl.is_latch:
             pub.impl.enable_latch()  # latching follows the source
         pub.impl.acquire()
@@ -50,7 +53,26 @@ def relay(source, target, msg_class):
         finally:
             pub.impl.release()
 
-    return rospy.Subscriber(source, rospy.AnyMsg, forward)
+    return pub, rospy.Subscriber(source, rospy.AnyMsg, forward)
+'''
+
+_ACTION_RELAY = '''
+def relay_action(source, target, goal, cancel, status, feedback, result):
+    """Relay action source as target: its five topics, given their message classes.
+
+    A client sends its goal as soon as it hears the server's status, so the status goes on only once
+    goals and cancels reach the basenode and its feedback and results come back; else a goal sent
+    at once would be lost. The server repeats its status, so nothing is lost by holding it back.
+    """
+    inward = [relay(f"{target}/{part}", f"{source}/{part}", cls) for part, cls in (("goal", goal), ("cancel", cancel))]
+    outward = [relay(f"{source}/{part}", f"{target}/{part}", cls)
+               for part, cls in (("feedback", feedback), ("result", result))]
+
+    def connected():
+        return (all(pub.get_num_connections() for pub, _ in inward)
+                and all(sub.get_num_connections() for _, sub in outward))
+
+    relay(f"{source}/status", f"{target}/status", status, ready=connected)
 '''
 
 
@@ -72,14 +94,27 @@ class ActionCall:
 
     def forward(self, goal):
         """Send goal to the basenode's own server; its feedback goes on to the client; its result comes back."""
-        client = actionlib.SimpleActionClient(self._forward_to, self._spec)
-        client.wait_for_server()
-        client.send_goal(goal, feedback_cb=self.feedback)
-        while not client.wait_for_result(rospy.Duration(0.05)):
-            if self.cancelled:
-                client.cancel_goal()
-        self.forwarded = client.get_state()
-        return client.get_result()
+        # actionlib.ActionClient, not SimpleActionClient: the simple one drops what comes back before
+        # its send_goal returns, so a quick server's first feedback could be lost
+        client = actionlib.ActionClient(self._forward_to, self._spec)
+        try:
+            client.wait_for_server()
+            done = threading.Event()
+
+            def transition(handle):
+                if handle.get_comm_state() == actionlib.CommState.DONE:
+                    done.set()
+
+            handle = client.send_goal(goal, transition_cb=transition, feedback_cb=lambda _, fb: self.feedback(fb))
+            cancel_sent = False
+            while not done.wait(0.05):
+                if self.cancelled and not cancel_sent:
+                    handle.cancel()
+                    cancel_sent = True
+            self.forwarded = handle.get_goal_status()
+            return handle.get_result()
+        finally:
+            client.stop()
 
 
 def serve_action(name, spec, result_class, feedback_class, handler, takes_action, forward_to=None):
@@ -120,19 +155,13 @@ def _actions_in(script: Any) -> bool:
     return any(isinstance(s, planning.ActionServerSpec) for s in script.plan())
 
 
-def _action_relay(script: Any, spec: Any) -> list[str]:
+def _action_relay(script: Any, spec: Any) -> str:
     """Relay a basenode's action: its five topics, goals and cancels in, status, feedback and results out."""
     package, stem = spec.type.split("/")
-    lines = []
-    for part, type_name, inward in (("goal", f"{package}/{stem}ActionGoal", True),
-                                    ("cancel", "actionlib_msgs/GoalID", True),
-                                    ("status", "actionlib_msgs/GoalStatusArray", False),
-                                    ("feedback", f"{package}/{stem}ActionFeedback", False),
-                                    ("result", f"{package}/{stem}ActionResult", False)):
-        ends = (f"{spec.target}/{part}", f"{spec.source}/{part}")
-        source, target = ends if inward else ends[::-1]
-        lines.append(f"relay({source!r}, {target!r}, {script.cls(type_name)})")
-    return lines
+    classes = ", ".join(script.cls(type_name) for type_name in (
+        f"{package}/{stem}ActionGoal", "actionlib_msgs/GoalID", "actionlib_msgs/GoalStatusArray",
+        f"{package}/{stem}ActionFeedback", f"{package}/{stem}ActionResult"))
+    return f"relay_action({spec.source!r}, {spec.target!r}, {classes})"
 
 
 def _action_server(script: Any, spec: Any) -> str:
@@ -149,7 +178,7 @@ class RospyScript:
     #: Names the generated script defines itself; a handler global with one of them would clash.
     SCRIPT_NAMES = {"rospy", "os", "signal", "subprocess", "NodeHandle", "relay", "main", "BASENODE",
                     "BASENODE_ENV", "start_basenode", "stop_basenode", "threading", "actionlib", "GoalStatus",
-                    "ActionCall", "serve_action"}
+                    "ActionCall", "serve_action", "relay_action"}
     #: What a wrapped action is remapped by: each of its topics (ROS 1 remaps names, not namespaces).
     action_parts = ("/goal", "/cancel", "/status", "/feedback", "/result")
 
@@ -206,6 +235,7 @@ class RospyScript:
         """The helpers the plan's relays need."""
         plan = script.plan()
         found = [_RELAY] if any(isinstance(s, (planning.RelaySpec, planning.ActionRelaySpec)) for s in plan) else []
+        found += [_ACTION_RELAY] if any(isinstance(s, planning.ActionRelaySpec) for s in plan) else []
         return [h.strip("\n") for h in found + ([_ACTIONS] if _actions_in(script) else [])]
 
     @staticmethod
@@ -236,7 +266,7 @@ class RospyScript:
             elif isinstance(spec, planning.ActionServerSpec):
                 lines.append(_action_server(script, spec))
             elif isinstance(spec, planning.ActionRelaySpec):
-                lines += _action_relay(script, spec)
+                lines.append(_action_relay(script, spec))
             else:  # ServiceRelaySpec: answer with the basenode's own service
                 srv = script.cls(spec.type, "srv")
                 lines.append(f"rospy.Service({spec.target!r}, {srv}, rospy.ServiceProxy({spec.source!r}, {srv}))")

@@ -602,6 +602,10 @@ class Relay:
     def figures(self) -> SendFigures:
         return _send_figures(self.target, "relay", self.count, self._impl)
 
+    def peers(self) -> tuple[int, int]:
+        """How many publishers of the source it reads and subscribers of the target it writes to, now."""
+        return len(self._sub.impl.connections), len(self._impl.connections) if self._impl is not None else 0
+
     def close(self) -> None:
         _OtherTypes.unwatch(self.source, self._complain)
         self._sub.unregister()
