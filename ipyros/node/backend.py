@@ -59,6 +59,8 @@ exports                  ``export_flavour()``: how a node is written as a script
                          ``write_param(name, value)``: any node's (the value set: ROS 2
                          makes an int a double for a double parameter); ``standard_params``
 %topics -v               ``topic_endpoints(topic)``: each endpoint with its type and QoS
+%bw                      ``size_note(size)``: one line when messages of that size are slow or
+                         lost with the transport's defaults (ROS 2's Fast DDS), else None
 %node                    ``node_pid(name)``: None where the ROS does not say (ROS 2);
                          ``ping_node``, ``kill_node``, ``cleanup_nodes`` (``%nodes --cleanup``)
 =======================  =================================================================
@@ -164,6 +166,7 @@ class Backend(Protocol):
     def describe_param(self, name: str) -> dict[str, Any]: ...
     def param_ranges(self, namespace: str) -> dict[str, str]: ...  # ROS 1: dynamic_reconfigure's, for %params  # its type (ROS 2: description, range)
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]: ...
+    def size_note(self, size: float) -> Optional[str]: ...  # %bw: a word on messages this large (ROS 2)
     def node_pid(self, node: str) -> Optional[int]: ...
     def ping_node(self, node: str) -> float: ...  # ms to answer (ROS 1: XML-RPC; ROS 2: a parameter call)
     def lifecycle(self, node: str, transition: Optional[str] = None) -> tuple[str, list[str]]: ...  # ROS 2

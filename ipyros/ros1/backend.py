@@ -298,6 +298,11 @@ class Ros1:
         server = name.rsplit("/", 1)[0]
         return server if reconfigure.is_server(self.graph_snapshot().topics, server) else None
 
+    @staticmethod
+    def size_note(size: float) -> Optional[str]:
+        """Nothing to say: TCPROS carries a message of any size in one piece."""
+        return None
+
     #: Parameters every node has, which %params leaves out unless asked: none on ROS 1.
     standard_params: tuple[str, ...] = ()
 

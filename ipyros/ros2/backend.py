@@ -301,6 +301,10 @@ class Ros2:
             raise DeclarationError(f"{node} has no parameter {key!r}; it has: {', '.join(values) or 'none'}")
         return values[key]
 
+    @staticmethod
+    def size_note(size: float) -> Optional[str]:
+        return fastdds.size_note(size)
+
     #: Parameters every rclpy node has, which %params leaves out unless asked.
     standard_params = ("use_sim_time", "start_type_description_service")
 

@@ -31,10 +31,14 @@ import os
 from pathlib import Path
 from typing import Optional
 
-__all__ = ["SEGMENT", "USER_SETTINGS", "local", "prepare", "profile_xml", "remove_stale_files"]
+__all__ = ["DEFAULT_SEGMENT", "SEGMENT", "USER_SETTINGS", "local", "prepare", "profile_xml", "remove_stale_files",
+           "size_note", "write_profile"]
 
 #: The shared-memory segment of each participant: room for a few 16 MiB point clouds in flight.
 SEGMENT = 64 * 1024 * 1024
+
+#: Fast DDS's own shared-memory segment (a process with its defaults): larger messages leave shared memory.
+DEFAULT_SEGMENT = 512 * 1024
 
 #: What a user sets to configure Fast DDS themselves; any of them means "leave it alone".
 USER_SETTINGS = ("FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_BUILTIN_TRANSPORTS",
@@ -99,11 +103,25 @@ def prepare() -> str:
     given = next((f"{name}={os.environ[name]}" for name in USER_SETTINGS if os.environ.get(name)), None)
     if given is not None:
         return f"Fast DDS as you configured it ({given})"
-    path = _write(profile_xml(loopback_only=local()))
+    path = write_profile(loopback_only=local())
     if path is None:
         return "Fast DDS's defaults (ipyros could not write its profile)"
     os.environ["FASTDDS_DEFAULT_PROFILES_FILE"] = str(path)
     return _describe(str(path))
+
+
+def size_note(size: float) -> Optional[str]:
+    """One line for a topic whose messages are ``size`` bytes, if that is more than Fast DDS's defaults carry in
+    shared memory: where it goes instead, what that costs, and how to give the publisher ipyros's profile."""
+    if size <= DEFAULT_SEGMENT:
+        return None
+    mine = os.environ.get("FASTDDS_DEFAULT_PROFILES_FILE", "")
+    fix = (f"start the publisher with FASTDDS_DEFAULT_PROFILES_FILE={mine} (ipyros's profile, which the processes "
+           "ipyros starts have)" if _MARK in Path(mine).name else
+           f"give the publisher a Fast DDS profile whose shared-memory segment holds a few messages (ipyros's has "
+           f"{SEGMENT >> 20} MiB: ipyros/ros2/fastdds.py)")
+    return (f"messages over {DEFAULT_SEGMENT >> 10} KiB leave Fast DDS's default shared memory: from a publisher "
+            f"with the defaults they go fragmented over UDP (about 5x slower; best-effort ones can be lost); {fix}")
 
 
 def _describe(path: str) -> str:
@@ -111,11 +129,12 @@ def _describe(path: str) -> str:
     return f"Fast DDS with ipyros's profile (shared memory up to {SEGMENT >> 20} MiB, {where}; {path})"
 
 
-def _write(text: str) -> Optional[Path]:
-    """The profile in a file of ipyros's (named by its content, so sessions share one and never race)."""
-    folder = Path(os.environ.get("ROS_HOME") or Path.home() / ".ros").expanduser() / "ipyros"
-    kind = "loopback" if "<allowlist>" in text else "any"
-    path = folder / f"{_MARK}-{kind}-{hashlib.sha1(text.encode()).hexdigest()[:10]}.xml"
+def write_profile(loopback_only: bool, folder: Optional[Path] = None) -> Optional[Path]:
+    """ipyros's profile in a file (``$ROS_HOME/ipyros`` unless ``folder`` is given), named by its content
+    so that sessions share one and never race; None if it cannot be written."""
+    text = profile_xml(loopback_only)
+    folder = folder or Path(os.environ.get("ROS_HOME") or Path.home() / ".ros").expanduser() / "ipyros"
+    path = folder / f"{_MARK}-{'loopback' if loopback_only else 'any'}-{hashlib.sha1(text.encode()).hexdigest()[:10]}.xml"
     try:
         if not path.exists():
             folder.mkdir(parents=True, exist_ok=True)

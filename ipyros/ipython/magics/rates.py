@@ -70,8 +70,9 @@ def _bytes(size: float) -> str:
 
 
 def report(what: str, topics: dict[str, str], rates: dict[str, Optional[Rate]], listened: float,
-           where: str, columns: Columns) -> Table:
-    """The table of one report: a row per topic."""
+           where: str, columns: Columns, size_note: Callable[[float], Optional[str]] = lambda size: None) -> Table:
+    """The table of one report: a row per topic. ``size_note(size)``: a line to add under the table for
+    topics whose largest message is that big (the transport's word on it), or None."""
     names, cells = columns
     table = Table(title=f"{what} over {listened:.1f} s at {where}", title_justify="left")
     # Names stay whole (they are what you copy); %topics shows the types.
@@ -80,8 +81,15 @@ def report(what: str, topics: dict[str, str], rates: dict[str, Optional[Rate]], 
         table.add_column(name, justify="right")
     for topic, rate in rates.items():
         table.add_row(topic, *cells(topics[topic], rate, listened))
+    captions = []
     if any(rate is not None and rate.hz is None and rate.count for rate in rates.values()):
-        table.caption = "< N: one message per publisher so far; listen longer for a rate"
+        captions.append("< N: one message per publisher so far; listen longer for a rate")
+    large = [topic for topic, rate in rates.items() if rate is not None and rate.count and size_note(rate.sizes[1])]
+    if large:
+        largest = max(rates[topic].sizes[1] for topic in large)  # type: ignore[union-attr]
+        captions.append(f"{', '.join(large)}: {size_note(largest)}")
+    if captions:
+        table.caption = "\n".join(captions)
         table.caption_justify = "left"
     return table
 
@@ -112,8 +120,9 @@ class RateMagics(ExtensionMagics):
         topics = {topic: live_type(self.ext, topic, snap=snap) for topic in map(global_topic, args.topic)}
         where = self.ext.graph.where
         with RateMeter(topics) as meter:
-            self.ext.printer.repeat(lambda listened: report(what, topics, meter.rates(), listened, where, columns),
-                                    args.window, args.count)
+            note = self.ext.session.backend.size_note if columns is BW else (lambda size: None)
+            self.ext.printer.repeat(lambda listened: report(what, topics, meter.rates(), listened, where, columns,
+                                                            note), args.window, args.count)
 
     @_options("the live topics to measure, together")
     @line_magic
