@@ -343,6 +343,8 @@ _LATE = "a node may advertise only after its first input (topic_tools throttle a
 def _build_its_own_types(node: "NodeEngine", interface: Interface) -> None:
     """Make the message types the basenode uses and this Python lacks importable, from the basenode itself where
     the backend can (ROS 2: its type descriptions, then a build); say what was built, or why not, in one line."""
+    if node.session.backend.relays_any_type:  # ROS 1 relays the bytes of any type: nothing to build, nor to look for
+        return
     wanted: dict[str, str] = {}
     for name, type_ in interface.publications + interface.subscriptions:
         try:

@@ -22,7 +22,7 @@ from typing import Optional
 
 from ..core.errors import BaseNodeError
 from ..core.model import BaseModel
-from ..processes.basenode import BaseProcess, OnExit, temp_log
+from ..processes.basenode import BaseProcess, OnExit, stop_together, temp_log
 from ..processes.launched import LaunchedBase
 from . import launchfile, nodes
 
@@ -34,26 +34,29 @@ class Rest:
 
     def __init__(self, launched: list[BaseModel], on_exit: OnExit) -> None:
         self.processes: dict[str, BaseProcess] = {}
-        self.not_started: list[str] = []  # nodes whose executable was not found: said, the rest runs without
-        self.why: dict[str, str] = {}
+        self.why: dict[str, str] = {}  # why a node did not start (its executable not found): the rest runs without
         for node in launched:
             name = node.launch_node or node.executable or "?"
             try:
                 argv = nodes.command(node)
             except BaseNodeError as error:
-                self.not_started.append(name)
                 self.why[name] = str(error)
                 continue
             self.processes[name] = BaseProcess(argv, node_name=node.node_name, env=node.env, on_exit=on_exit,
                                                log_path=temp_log(f"launched-{name}"))
+
+    @property
+    def not_started(self) -> list[str]:
+        """The nodes that could not start (said once; the others run without them)."""
+        return list(self.why)
 
     def start(self) -> None:
         for process in self.processes.values():
             process.start()
 
     def stop(self, timeout: float = 5.0) -> None:
-        for process in reversed(list(self.processes.values())):
-            process.stop(timeout)
+        """Stop every node of the rest, together (a file of many nodes slow to stop takes the slowest one's time)."""
+        stop_together(list(self.processes.values()), timeout)
 
     @property
     def running(self) -> bool:
