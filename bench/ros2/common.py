@@ -15,6 +15,14 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 #: Every endpoint of the bench: what ipyros declares by default (reliable, volatile, 1000 deep).
 QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 
+#: A camera's best-effort stream (as sensor drivers publish), for the publisher and the subscriber.
+BEST_EFFORT = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT, durability=DurabilityPolicy.VOLATILE)
+
+
+def qos(name: str) -> QoSProfile:
+    """The QoS named on a node's command line: ``reliable`` (default) or ``best_effort``."""
+    return BEST_EFFORT if name == "best_effort" else QOS
+
 
 def say(*words: object) -> None:
     sys.stdout.write(" ".join(str(w) for w in words) + "\n")

@@ -1,6 +1,6 @@
 """The bench's publisher: serialized messages on TOPIC, paced, then flat out.
 
-    pub.py TOPIC KIND
+    pub.py TOPIC KIND [reliable|best_effort]
 
 ``go RATE PACED FLAT``: wait for a subscription to match, publish PACED messages at RATE Hz
 (indices 0..PACED-1), say ``paced``, then FLAT as fast as rclpy takes them, say ``flat SENT``.
@@ -18,9 +18,10 @@ import common
 import wire2
 
 topic, kind = sys.argv[1:3]
+reliability = sys.argv[3] if len(sys.argv) > 3 else "reliable"
 rclpy.init()
 node = rclpy.create_node("bench_pub")
-pub = node.create_publisher(wire2.message_class(kind), topic, common.QOS)
+pub = node.create_publisher(wire2.message_class(kind), topic, common.qos(reliability))
 buff = wire2.template(kind)
 
 

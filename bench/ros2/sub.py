@@ -1,6 +1,6 @@
 """The bench's subscriber: raw bytes on TOPIC; for each, the index and the one-way latency.
 
-    sub.py TOPIC KIND
+    sub.py TOPIC KIND [reliable|best_effort]
 
 Commands: ``publishers`` (how many publishers match), ``count``, ``report PACED WARMUP WINDOW``
 (a JSON line: latencies of paced messages after the warm-up, messages of the first WINDOW
@@ -20,6 +20,7 @@ import common
 import wire2
 
 topic, kind = sys.argv[1:3]
+reliability = sys.argv[3] if len(sys.argv) > 3 else "reliable"
 rclpy.init()
 node = rclpy.create_node("bench_sub")
 arrived: list[tuple[int, float, float]] = []  # index, latency s, arrival (monotonic)
@@ -33,7 +34,7 @@ def on_message(raw: bytes) -> None:
     last[:] = [raw]
 
 
-sub = node.create_subscription(wire2.message_class(kind), topic, on_message, common.QOS, raw=True)
+sub = node.create_subscription(wire2.message_class(kind), topic, on_message, common.qos(reliability), raw=True)
 executor = common.spin_in_background(node)
 
 

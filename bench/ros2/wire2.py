@@ -26,12 +26,16 @@ def _twist() -> Any:
     return TwistStamped()
 
 
-def _image() -> Any:
-    from sensor_msgs.msg import Image
+def _image(rows: int = 512) -> Callable[[], Any]:
+    """Images of 512 x rows RGBA pixels: 2 KiB a row, so 512 rows make 1 MiB."""
+    def sample() -> Any:
+        from sensor_msgs.msg import Image
 
-    msg = Image(height=512, width=512, encoding="rgba8", step=2048)
-    msg.data = bytes(512 * 2048)  # 1 MiB
-    return msg
+        msg = Image(height=rows, width=512, encoding="rgba8", step=2048)
+        msg.data = bytes(rows * 2048)
+        return msg
+
+    return sample
 
 
 def _twist_handle(msg: Any) -> None:
@@ -42,10 +46,17 @@ def _image_handle(msg: Any) -> None:
     msg.is_bigendian = 1
 
 
+def _image_kind(rows: int) -> tuple[str, Callable[[], Any], Callable[[Any], None], Callable[[Any], bool]]:
+    return "sensor_msgs/msg/Image", _image(rows), _image_handle, lambda m: m.is_bigendian == 1
+
+
 KINDS: dict[str, tuple[str, Callable[[], Any], Callable[[Any], None], Callable[[Any], bool]]] = {
     # kind: (type, a sample, the handler's one change, whether a message carries it)
     "twist": ("geometry_msgs/msg/TwistStamped", _twist, _twist_handle, lambda m: m.twist.angular.z == 1.0),
-    "image": ("sensor_msgs/msg/Image", _image, _image_handle, lambda m: m.is_bigendian == 1),
+    "image": _image_kind(512),  # 1 MiB, a camera's
+    "image256k": _image_kind(128),
+    "image4m": _image_kind(2048),
+    "image16m": _image_kind(8192),  # a point cloud's size
 }
 
 
