@@ -1,17 +1,17 @@
-"""Completion benchmark: how long a TAB takes with 1,000 live topics, and with the master gone.
+"""Completion benchmark: how long a TAB takes with 10,000 live topics (``--topics N``), and with the master gone.
 
-    python -m bench.completion            # full run (about 30 s)
+    python -m bench.completion            # full run (about a minute)
     python -m bench.completion --quick    # fewer repeats
 
 On ROS 2 (run with the ROS 2 venv, ``bash run.sh bench`` does), the peer is an rclpy node
-advertising the same 1,000 topics (bench/ros2/many_topics.py) in a DDS domain of the bench's
+advertising the same topics (bench/ros2/many_topics.py) in a DDS domain of the bench's
 own, the cache reads ROS 2 discovery (ipyros.ros2.graph), and the phases are: "warming"
-(timed at once, while discovery is still finding the topics), "up" (all 1,000 found) and
+(timed at once, while discovery is still finding the topics), "up" (all found) and
 "gone" (the peer stopped). Targets (issue 11): warm p99 <= 10 ms, cold <= 50 ms.
 
 Starts a rosmaster of its own on a free port and one node process that advertises
-1,000 topics (``/bench/t0000`` ... ``/bench/t0999``, tests/nodes/many_topics.py), points a
-GraphCache at the master, and times completions for topic prefixes (1,000, 100, 1 and 0
+N topics (``/bench/t0000`` ... as wide as the last index, tests/nodes/many_topics.py), points a
+GraphCache at the master, and times completions for topic prefixes (all, 100, 1 and 0
 matches), DSL string arguments and message types, two ways:
 
 - **matcher**: the ipyros matcher called directly with a CompletionContext (ipyros's own cost);
@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator
 
-from IPython.core.completer import CompletionContext, provisionalcompleter
+from IPython.core.completer import MATCHES_LIMIT, CompletionContext, provisionalcompleter
 from IPython.core.interactiveshell import InteractiveShell
 from traitlets.config import Config
 
@@ -52,29 +52,41 @@ ROOT = Path(__file__).resolve().parent.parent
 SCRIPT = ROOT / "tests" / "nodes" / "many_topics.py"
 RESULTS = Path(__file__).resolve().parent / "results"
 TARGET_MS = 50.0
-TOPICS = 1000
+TOPICS = 10_000  # a robot with many nodes (issue 26; issues 4 and 11 measured 1,000)
 
-#: (label, text before the cursor): what a user would press TAB after.
-CASES = [
-    ("%topics /            (1000 topics)", "%topics /"),
-    ("%topics /bench/t05   (100)", "%topics /bench/t05"),
-    ("%topics /bench/t0999 (1)", "%topics /bench/t0999"),
-    ("%topics /nothing     (0)", "%topics /nothing"),
-    ('nd.new.subscribe(topic="/bench/t01', 'nd.new.subscribe(topic="/bench/t01'),
-    ('nd.write("  (own first, 1000 live)', 'nd.write("'),
-    ("%topics --type geometry_msgs/Tw", "%topics --type geometry_msgs/Tw"),
-    ('x.publish("/a", msgType="Tw', 'x.publish("/a", msgType="Tw'),
-    ("%wrap topic_tools r", "%wrap topic_tools r"),
-]
+
+def topic(index: int, topics: int) -> str:
+    """The name of the peer's topic ``index`` of ``topics``: /bench/t0000 ... (as wide as the last index)."""
+    return f"/bench/t{index:0{max(4, len(str(topics - 1)))}d}"
+
+
+def cases(topics: int) -> list[tuple[str, str]]:
+    """(label, text before the cursor): what a user would press TAB after; prefixes matching 100 and 1 topic."""
+    hundred = topic(500, topics)[:-2]  # /bench/t05 at 1,000 topics: t0500 ... t0599
+    last = topic(topics - 1, topics)
+    return [
+        (f"%topics /            ({topics} topics)", "%topics /"),
+        (f"%topics {hundred}   (100)", f"%topics {hundred}"),
+        (f"%topics {last} (1)", f"%topics {last}"),
+        ("%topics /nothing     (0)", "%topics /nothing"),
+        (f'nd.new.subscribe(topic="{topic(100, topics)[:-2]}', f'nd.new.subscribe(topic="{topic(100, topics)[:-2]}'),
+        (f'nd.write("  (own first, {topics} live)', 'nd.write("'),
+        ("%topics --type geometry_msgs/Tw", "%topics --type geometry_msgs/Tw"),
+        ('x.publish("/a", msgType="Tw', 'x.publish("/a", msgType="Tw'),
+        ("%wrap topic_tools r", "%wrap topic_tools r"),
+    ]
 
 
 class DslNode:
     """A stand-in for a DSL node in user_ns: completion only calls ``model()``."""
 
+    def __init__(self, topics: int) -> None:
+        self.subscribed = topic(100, topics)
+
     def model(self) -> NodeModel:
         return NodeModel(name="nd", topics=[
             TopicModel("/bench/mine", "/bench/mine", "publish", "std_msgs/String"),
-            TopicModel("/bench/t0100", "/bench/t0100", "subscribe", "std_msgs/String", "new", "show"),
+            TopicModel(self.subscribed, self.subscribed, "subscribe", "std_msgs/String", "new", "show"),
         ])
 
 
@@ -116,12 +128,14 @@ def context(text: str) -> CompletionContext:
     token = text.split()[-1] if text and not text[-1].isspace() else ""
     for delim in "\"'(=":
         token = token.rsplit(delim, 1)[-1]
-    return CompletionContext(token=token, full_text=text, cursor_position=len(text), cursor_line=0, limit=None)
+    # as IPython asks: at most MATCHES_LIMIT (500) completions, which is all it shows
+    return CompletionContext(token=token, full_text=text, cursor_position=len(text), cursor_line=0,
+                             limit=MATCHES_LIMIT)
 
 
-def measure(phase: str, shell: InteractiveShell, matcher: RosMatcher, repeats: int) -> list[Row]:
+def measure(phase: str, shell: InteractiveShell, matcher: RosMatcher, repeats: int, topics: int) -> list[Row]:
     rows = []
-    for label, text in CASES:
+    for label, text in cases(topics):
         ctx = context(text)
         ways = {
             "matcher": lambda: sum(1 for c in matcher(ctx)["completions"] if c.text),
@@ -143,13 +157,13 @@ def table(rows: list[Row]) -> str:
 
 
 @contextmanager
-def completing_shell(graph: GraphCache) -> Iterator[tuple[InteractiveShell, RosMatcher]]:
+def completing_shell(graph: GraphCache, topics: int) -> Iterator[tuple[InteractiveShell, RosMatcher]]:
     """An IPython shell with ipyros's completer on ``graph`` (and a DSL node ``nd``), and the matcher
     itself; taken away again after."""
     config = Config()
     config.HistoryManager.hist_file = ":memory:"
     shell = InteractiveShell.instance(config=config)
-    shell.user_ns["nd"] = DslNode()
+    shell.user_ns["nd"] = DslNode(topics)
     catalog = default_catalog()
     catalog.warm()  # done before install(), whose background warm-up then finds it cached
     handle = install(shell, graph, catalog)
@@ -165,7 +179,7 @@ def completing_shell(graph: GraphCache) -> Iterator[tuple[InteractiveShell, RosM
         InteractiveShell.clear_instance()
 
 
-def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]:
+def run(repeats: int, say: Callable[[str], None], topics: int = TOPICS) -> tuple[list[Row], list[str]]:
     from ipyros.ros1.graph import fetch_snapshot  # ROS 1's own graph reader: this venv has rospy
 
     rows: list[Row] = []
@@ -175,24 +189,24 @@ def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]
         master = Master(workdir)
         publisher = graph = None
         try:
-            say(f"master at {master.uri}; advertising {TOPICS} topics ...")
+            say(f"master at {master.uri}; advertising {topics} topics ...")
             started = time.monotonic()
-            publisher = Child("many_topics", [sys.executable, str(SCRIPT), "bench_topics", str(TOPICS),
+            publisher = Child("many_topics", [sys.executable, str(SCRIPT), "bench_topics", str(topics),
                                               "--prefix", "/bench/t"], master.env, workdir)
-            publisher.expect("ready", 180)
-            notes.append(f"{TOPICS} publishers registered in {time.monotonic() - started:.1f} s")
+            publisher.expect("ready", 180 + topics / 20)
+            notes.append(f"{topics} publishers registered in {time.monotonic() - started:.1f} s")
             graph = GraphCache(lambda timeout: fetch_snapshot(master.uri, timeout), lambda: f"ROS master {master.uri}",
                                period=1.0).start()
-            wait_until(lambda: len(graph.snapshot.topics_with_prefix("/bench/t")) == TOPICS, 30,
+            wait_until(lambda: len(graph.snapshot.topics_with_prefix("/bench/t")) == topics, 30 + topics / 200,
                        "the graph cache to see every topic", 0.05)
             started = time.perf_counter()
             graph.refresh_now()
             notes.append(f"one graph refresh (getSystemState + getTopicTypes) with master up: "
                          f"{(time.perf_counter() - started) * 1000:.1f} ms")
 
-            with completing_shell(graph) as (shell, matcher):
+            with completing_shell(graph, topics) as (shell, matcher):
                 say("timing with the master up ...")
-                rows += measure("up", shell, matcher, repeats)
+                rows += measure("up", shell, matcher, repeats, topics)
                 say("stopping the master ...")
                 publisher.stop()
                 master.stop()
@@ -201,7 +215,7 @@ def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]
                 graph.refresh_now()
                 notes.append(f"one graph refresh with the master down: {(time.perf_counter() - started) * 1000:.1f} ms")
                 say("timing with the master down ...")
-                rows += measure("down", shell, matcher, repeats)
+                rows += measure("down", shell, matcher, repeats, topics)
         finally:
             if graph is not None:
                 graph.stop()
@@ -211,8 +225,8 @@ def run(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]
     return rows, notes
 
 
-def run_ros2(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[str]]:
-    """The same cases on ROS 2: a peer process with 1,000 topics, ROS 2 discovery as the graph."""
+def run_ros2(repeats: int, say: Callable[[str], None], topics: int = TOPICS) -> tuple[list[Row], list[str]]:
+    """The same cases on ROS 2: a peer process with ``topics`` topics, ROS 2 discovery as the graph."""
     import os
 
     from bench.relay_ros2 import NODES, environment
@@ -229,30 +243,30 @@ def run_ros2(repeats: int, say: Callable[[str], None]) -> tuple[list[Row], list[
     publisher = None
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-completion-") as tmp:
         try:
-            with completing_shell(graph) as (shell, matcher):
-                say(f"starting a peer with {TOPICS} topics in ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']} ...")
+            with completing_shell(graph, topics) as (shell, matcher):
+                say(f"starting a peer with {topics} topics in ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']} ...")
                 started = time.monotonic()
-                publisher = Child("many_topics", [sys.executable, str(NODES / "many_topics.py"), str(TOPICS),
+                publisher = Child("many_topics", [sys.executable, str(NODES / "many_topics.py"), str(topics),
                                                   "/bench/t"], env, Path(tmp))
-                publisher.expect("ready", 180)
-                rows += measure("warming", shell, matcher, max(10, repeats // 4))
-                notes.append(f"'warming': timed as soon as the peer had made its {TOPICS} publishers; the cache "
+                publisher.expect("ready", 180 + topics / 20)
+                rows += measure("warming", shell, matcher, max(10, repeats // 4), topics)
+                notes.append(f"'warming': timed as soon as the peer had made its {topics} publishers; the cache "
                              f"then held {len(graph.snapshot.topics_with_prefix('/bench/t'))} of them")
-                wait_until(lambda: len(graph.snapshot.topics_with_prefix("/bench/t")) == TOPICS, 60,
+                wait_until(lambda: len(graph.snapshot.topics_with_prefix("/bench/t")) == topics, 60 + topics / 50,
                            "the graph cache to see every topic", 0.05)
-                notes.append(f"all {TOPICS} topics in the cache {time.monotonic() - started:.1f} s after the peer "
+                notes.append(f"all {topics} topics in the cache {time.monotonic() - started:.1f} s after the peer "
                              "started (its start included)")
                 started_refresh = time.perf_counter()
                 graph.refresh_now()
-                notes.append(f"one graph refresh from ROS 2 discovery with {TOPICS} topics: "
+                notes.append(f"one graph refresh from ROS 2 discovery with {topics} topics: "
                              f"{(time.perf_counter() - started_refresh) * 1000:.1f} ms (on the cache's thread)")
                 say("timing with every topic discovered ...")
-                rows += measure("up", shell, matcher, repeats)
+                rows += measure("up", shell, matcher, repeats, topics)
                 publisher.stop()
                 wait_until(lambda: not graph.snapshot.topics_with_prefix("/bench/t"), 30,
                            "the graph cache to see the peer gone", 0.05)
                 say("timing with the peer gone ...")
-                rows += measure("gone", shell, matcher, repeats)
+                rows += measure("gone", shell, matcher, repeats, topics)
         finally:
             graph.stop()
             if publisher is not None:
@@ -267,13 +281,14 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
     parser.add_argument("--repeats", type=int, help="warm calls per case through the matcher (default 200, quick 40)")
     parser.add_argument("--out", type=Path, help="where to save the table (default bench/results/completion.md)")
+    parser.add_argument("--topics", type=int, default=TOPICS, help=f"live topics of the peer (default {TOPICS:,})")
     opts, _ = parser.parse_known_args(argv)  # `bash run.sh bench` passes the relay benches' options too
     repeats = opts.repeats or (40 if opts.quick else 200)
     import importlib.util
 
     ros2 = importlib.util.find_spec("rospy") is None
     try:
-        rows, notes = (run_ros2 if ros2 else run)(repeats, lambda line: print(line, flush=True))
+        rows, notes = (run_ros2 if ros2 else run)(repeats, lambda line: print(line, flush=True), opts.topics)
     except BenchError as e:
         print(f"completion bench failed: {e}", file=sys.stderr)
         return 1
@@ -287,7 +302,7 @@ def main(argv=None) -> int:
         ok = all(r.ok for r in rows)
         target = (f"Target (issue 4): every warm completion <= {TARGET_MS:.0f} ms: {'PASS' if ok else 'FAIL'} "
                   f"(slowest: {worst.max_ms:.2f} ms, {worst.way}, `{worst.case.strip()}`, master {worst.phase}).\n")
-    text = (f"Completion latency on {'ROS 2' if ros2 else 'ROS 1'}, {TOPICS} live topics, {repeats} warm calls "
+    text = (f"Completion latency on {'ROS 2' if ros2 else 'ROS 1'}, {opts.topics:,} live topics, {repeats} warm calls "
             f"per case through the matcher ({max(10, repeats // 4)} through the shell)\n\n" + table(rows) + "\n\n"
             + "\n".join(f"- {n}" for n in notes) + "\n\n" + target)
     out = opts.out or RESULTS / ("completion_ros2.md" if ros2 else "completion.md")

@@ -405,20 +405,25 @@ class Answerer:
         self.graph = graph
         self.catalog = catalog
 
-    def completions(self, want: Want, user_ns: Mapping[str, Any]) -> list[SimpleCompletion]:
-        found = self._found(want, user_ns)
+    def completions(self, want: Want, user_ns: Mapping[str, Any],
+                    limit: Optional[int] = None) -> list[SimpleCompletion]:
+        """The completions, the first ``limit`` of them if given (IPython shows 500 at most: with 10,000
+        live topics, making the other 9,500 would be most of a TAB's time)."""
+        found = self._found(want, user_ns, limit)
         seen: set[str] = set()
         out = []
         for text, meta in found:
             if text not in seen:  # the node's own name first, the live duplicate dropped
                 seen.add(text)
                 out.append(SimpleCompletion(text, type=meta))
+                if len(out) == limit:
+                    break
         return out
 
-    def _found(self, want: Want, user_ns: Mapping[str, Any]) -> list[tuple[str, str]]:
+    def _found(self, want: Want, user_ns: Mapping[str, Any], limit: Optional[int] = None) -> list[tuple[str, str]]:
         snap, frag, kind = self.graph.snapshot, want.fragment, want.kind
         if kind in (TOPIC, OWN_TOPIC):
-            return self._topics(want, snap)
+            return self._topics(want, snap, limit)
         if kind == SERVICE:
             return self._services(want, snap)
         if kind == TIMER:
@@ -489,13 +494,14 @@ class Answerer:
         except Exception:  # an unknown type: %action itself will say so, in one line
             return []
 
-    def _topics(self, want: Want, snap: GraphSnapshot) -> list[tuple[str, str]]:
+    def _topics(self, want: Want, snap: GraphSnapshot, limit: Optional[int] = None) -> list[tuple[str, str]]:
         model, frag = want.model, want.fragment
         namespace = model.namespace if model is not None else default_namespace()
         own = _own(model.topics if model else [], want.direction, frag, namespace)
         if want.kind == OWN_TOPIC and model is not None:
             return own
-        live = _relative_or_global(snap.topic_names, frag, namespace)
+        # enough live names for the limit even if each of the node's own is among them (dropped as a duplicate)
+        live = _relative_or_global(snap.topic_names, frag, namespace, None if limit is None else limit + len(own))
         return own + [(text, _stale(snap.topics[name] or TOPIC, snap)) for text, name in live]
 
     def _services(self, want: Want, snap: GraphSnapshot) -> list[tuple[str, str]]:
@@ -538,15 +544,16 @@ def _as_typed(name: str, resolved: str, fragment: str, namespace: str) -> str:
     return name
 
 
-def _relative_or_global(sorted_names: Sequence[str], fragment: str, namespace: str) -> list[tuple[str, str]]:
-    """(text, global name) pairs: global names for ``""`` or ``/x``; for a relative ``x``,
-    the names in ``namespace`` that it starts, written relative to it."""
+def _relative_or_global(sorted_names: Sequence[str], fragment: str, namespace: str,
+                        limit: Optional[int] = None) -> list[tuple[str, str]]:
+    """(text, global name) pairs, the first ``limit`` if given: global names for ``""`` or ``/x``; for a
+    relative ``x``, the names in ``namespace`` that it starts, written relative to it."""
     if not fragment or fragment.startswith("/"):
-        return [(n, n) for n in names_with_prefix(sorted_names, fragment)]
+        return [(n, n) for n in names_with_prefix(sorted_names, fragment)[:limit]]
     if fragment.startswith("~"):
         return []  # private names only make sense for the node's own declarations
     ns = names.global_ns(namespace)
-    return [(n[len(ns):], n) for n in names_with_prefix(sorted_names, ns + fragment)]
+    return [(n[len(ns):], n) for n in names_with_prefix(sorted_names, ns + fragment)[:limit]]
 
 
 _LONG_TYPE = re.compile(r"(\w+)/(msg|srv)/(.*)")
@@ -603,7 +610,7 @@ class RosMatcher:
             want = self.want(context)
             if want is None:
                 return SimpleMatcherResult(completions=[], suppress=False)
-            completions = self.answerer.completions(want, self.shell.user_ns)
+            completions = self.answerer.completions(want, self.shell.user_ns, context.limit)
             if self.kinds_only:
                 completions = [SimpleCompletion(c.text, type=want.kind) for c in completions]
         except Exception:  # TAB must never show a traceback; say why at debug level
@@ -615,8 +622,6 @@ class RosMatcher:
             # when the master is down). One empty completion replacing nothing says
             # "nothing" and keeps them out: the terminal skips empty texts.
             return SimpleMatcherResult(completions=[NOTHING], matched_fragment="", suppress=True)
-        if context.limit is not None:
-            completions = completions[: context.limit]
         return SimpleMatcherResult(
             completions=completions, matched_fragment=want.fragment, suppress=True, ordered=True
         )

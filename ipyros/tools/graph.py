@@ -20,20 +20,29 @@ from __future__ import annotations
 import dataclasses
 import logging
 import threading
+import time
 from typing import Callable, Optional
 
 from ..core.graph import EMPTY, GraphSnapshot
 
-__all__ = ["GraphCache"]
+__all__ = ["REST", "GraphCache"]
 
 log = logging.getLogger(__name__)
+
+
+#: How many times as long as a refresh took the refresh thread waits before the next one (at least ``period``).
+REST = 5.0
 
 
 class GraphCache:
     """Keeps :attr:`snapshot` fresh from a background thread; reading it never blocks.
 
-    ``period`` is the time between refreshes; ``timeout`` bounds each master call, so
-    :meth:`stop` returns within about ``timeout`` seconds even if the master hangs.
+    ``period`` is the time between refreshes, or more on a large graph: the thread rests
+    :data:`REST` times as long as its last refresh took (:attr:`refresh_seconds`), so that
+    refreshing takes at most a sixth of a core (ROS 1 with 10,000 topics: about 0.4 s a
+    refresh, most of it Python work that would otherwise compete with the prompt's).
+    ``timeout`` bounds each master call, so :meth:`stop` returns within about ``timeout``
+    seconds even if the master hangs.
     Usable as a context manager (``with GraphCache(source, where) as graph: ...``).
     """
 
@@ -49,6 +58,8 @@ class GraphCache:
         self._stop = threading.Event()
         self._first = threading.Event()
         self._thread: Optional[threading.Thread] = None
+        #: How long the last background refresh took (s): what a refresh of this graph costs.
+        self.refresh_seconds = 0.0
 
     # -- reading ---------------------------------------------------------------
     @property
@@ -119,8 +130,10 @@ class GraphCache:
 
     def _loop(self) -> None:
         while not self._stop.is_set():
+            started = time.monotonic()
             self._publish(self._fetch(self.timeout))
-            self._stop.wait(self.period)
+            self.refresh_seconds = time.monotonic() - started
+            self._stop.wait(max(self.period, REST * self.refresh_seconds))
 
     def __enter__(self) -> "GraphCache":
         return self.start()
