@@ -163,11 +163,12 @@ case "$cmd" in
   unit)     cd "$here" && unit_venv && exec "$venv0/bin/python" -m pytest tests/unit "$@" ;;
   test-ros1) cd "$here" && exec "$venv/bin/python" -m pytest tests/both tests/ros1 "$@" ;;
   test-ros2) cd "$here" && ros2_venv && exec "$venv2/bin/python" -m pytest tests/both tests/ros2 "$@" ;;
-  bench)    # ROS 1's benchmarks, then ROS 2's relay bench in its venv (side by side in one run)
+  bench)    # ROS 1's benchmarks, then ROS 2's in its venv (side by side in one run)
             cd "$here" && status=0
             "$venv/bin/python" -m bench "$@" || status=$?
             ros2_venv && "$venv2/bin/python" -m bench.relay_ros2 "$@" || status=$?
             "$venv2/bin/python" -m bench.completion "$@" || status=$?
+            "$venv2/bin/python" -m bench.scale "$@" || status=$?
             exit "$status" ;;
   *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|unit|test-ros1|test-ros2|bench] [args...]" >&2
      exit 2 ;;

@@ -12,10 +12,10 @@ import sys
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    from bench import completion, relay
+    from bench import completion, relay, scale
 
     status = 0
-    for bench in (relay, completion):
+    for bench in (relay, completion, scale):
         print(f"\n=== {bench.__name__} ===", flush=True)
         status |= bench.main(argv) or 0
     return status
