@@ -88,10 +88,14 @@ class ActionCall:
             self._client.wait_for_server()
             time.sleep(0.5)  # we see the server; give it its moment to see us, or its answer could be lost
             self._client.settled = True
-        accepted, ended = threading.Event(), threading.Event()
-        sent = self._client.send_goal_async(goal, feedback_callback=lambda m: self.feedback(m.feedback))
-        sent.add_done_callback(lambda _: accepted.set())
-        accepted.wait()
+        for _ in range(5):  # right after discovery the server's reply can be lost: sent again, as ROS 2 clients do
+            accepted, ended = threading.Event(), threading.Event()
+            sent = self._client.send_goal_async(goal, feedback_callback=lambda m: self.feedback(m.feedback))
+            sent.add_done_callback(lambda _: accepted.set())
+            if accepted.wait(3.0):
+                break
+        else:
+            raise RuntimeError("the basenode's action server did not answer the goal")  # aborted, not hung
         result = sent.result().get_result_async()
         result.add_done_callback(lambda _: ended.set())
         asked = False
