@@ -88,11 +88,15 @@ class ActionCall:
             self._client.wait_for_server()
             time.sleep(0.5)  # we see the server; give it its moment to see us, or its answer could be lost
             self._client.settled = True
-        for _ in range(5):  # right after discovery the server's reply can be lost: sent again, as ROS 2 clients do
+        tries = []
+        for attempt in range(5):  # right after discovery the server's reply can be lost: sent again, as ROS 2
+            # clients do; only the latest attempt's feedback goes on (an earlier goal may run all the same)
+            tries.append(attempt)
             accepted, ended = threading.Event(), threading.Event()
-            sent = self._client.send_goal_async(goal, feedback_callback=lambda m: self.feedback(m.feedback))
+            sent = self._client.send_goal_async(
+                goal, feedback_callback=lambda m, k=attempt: self.feedback(m.feedback) if tries[-1] == k else None)
             sent.add_done_callback(lambda _: accepted.set())
-            if accepted.wait(3.0):
+            if accepted.wait(10.0):
                 break
         else:
             raise RuntimeError("the basenode's action server did not answer the goal")  # aborted, not hung
