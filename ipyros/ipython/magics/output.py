@@ -25,7 +25,7 @@ from rich.protocol import rich_cast
 from rich.table import Table
 
 from ...core.slots import HandlerFailure
-from ..display import render_html, render_plain, renderable
+from ..display import is_large, render_html, render_plain, renderable, table_text
 
 
 class Printer:
@@ -44,7 +44,9 @@ class Printer:
         console = self.console()
         for shown in renderables:
             shown = renderable(shown)  # a record's table (see ipyros.ipython.display)
-            if console.is_jupyter and isinstance(rich_cast(shown), Table):
+            if is_large(shown) and not console.is_jupyter:  # rich would take seconds to lay it out
+                sys.stdout.write(table_text(rich_cast(shown)) + "\n")
+            elif console.is_jupyter and isinstance(rich_cast(shown), Table):
                 from IPython.display import display
 
                 display(mime_bundle(shown), raw=True)
