@@ -12,7 +12,8 @@
 #   bash run.sh test-ros1 the ROS 1 layers alone;  bash run.sh test-ros2  the ROS 2 layers alone
 #   bash run.sh ros2      the same as bash run.sh, on ROS 2 (rclpy from PyPI, no ROS from apt), in
 #                         the DDS domain of ROS_DOMAIN_ID (0 if unset)
-#   bash run.sh bench     install what is missing, then run the benchmarks (ROS 1, then ROS 2's relay bench)
+#   bash run.sh bench     install what is missing, then run the benchmarks (ROS 1's, then ROS 2's) and print
+#                         one table of every figure beside its anchor (bench/results/summary.md)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 venv="$here/.venv"
@@ -163,12 +164,12 @@ case "$cmd" in
   unit)     cd "$here" && unit_venv && exec "$venv0/bin/python" -m pytest tests/unit "$@" ;;
   test-ros1) cd "$here" && exec "$venv/bin/python" -m pytest tests/both tests/ros1 "$@" ;;
   test-ros2) cd "$here" && ros2_venv && exec "$venv2/bin/python" -m pytest tests/both tests/ros2 "$@" ;;
-  bench)    # ROS 1's benchmarks, then ROS 2's in its venv (side by side in one run)
+  bench)    # ROS 1's benchmarks, then ROS 2's in its venv, then one table of every figure beside its anchor
             cd "$here" && status=0
+            rm -rf "$here/bench/results/figures"  # the table is this run's alone
             "$venv/bin/python" -m bench "$@" || status=$?
-            ros2_venv && "$venv2/bin/python" -m bench.relay_ros2 "$@" || status=$?
-            "$venv2/bin/python" -m bench.completion "$@" || status=$?
-            "$venv2/bin/python" -m bench.scale "$@" || status=$?
+            ros2_venv && "$venv2/bin/python" -m bench "$@" || status=$?
+            "$venv/bin/python" -m bench.figures || status=$?
             exit "$status" ;;
   *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|unit|test-ros1|test-ros2|bench] [args...]" >&2
      exit 2 ;;

@@ -1,18 +1,26 @@
-"""Run every benchmark in one go: ``python -m bench [--quick]``.
+"""Run every benchmark of the ROS this venv has, in one go: ``python -m bench [--quick]``.
 
-Each benchmark starts its own rosmaster on a free port, prints a table, saves it under
-bench/results/, and stops everything it started. The exit code is non-zero if a
+ROS 1 (a venv that sees rospy): the relay bench against topic_tools, completion, scale; ROS 2
+(rclpy): the same three on rclpy. Each bench starts what it needs (a rosmaster on a free port, or
+a DDS domain of its own), prints a table, saves it under bench/results/, keeps its figures for
+``python -m bench.figures`` and stops everything it started. The exit code is non-zero if a
 target was missed.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import sys
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    from bench import completion, relay, scale
+    from bench import completion, scale
+
+    if importlib.util.find_spec("rospy") is None:
+        from bench import relay_ros2 as relay
+    else:
+        from bench import relay
 
     status = 0
     for bench in (relay, completion, scale):

@@ -34,10 +34,13 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Optional
 
+from bench.figures import Figure, keep
 from bench.relay import BenchError, Master, stop_cleanly_on_sigterm, wait_until
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
+#: Why a ROS 2 run of many basenodes can stop short (measured apart; README, "A session with many nodes").
+DISCOVERY_LIMIT = "more than about 30 processes with ipyros's Fast DDS profile do not all discover each other"
 
 
 def rss_mib(pid: int) -> float:
@@ -64,13 +67,16 @@ def timed(action: Callable[[], Any]) -> float:
     return time.perf_counter() - started
 
 
-def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]) -> tuple[list[tuple[str, str]], bool]:
+def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]
+        ) -> tuple[list[tuple[str, str]], bool, list[Figure]]:
     from std_msgs.msg import String
 
     from ipyros.dsl import rosNode
     from ipyros.node.session import current
 
     rows: list[tuple[str, str]] = []
+    ros = "ROS 2" if ros2 else "ROS 1"
+    figures: list[Figure] = []
     ok = True
     heard: dict[int, threading.Event] = {i: threading.Event() for i in range(nodes)}
     dsl: list[Any] = []
@@ -98,6 +104,9 @@ def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]) -> t
                                                           f"{max(times) * 1000:.1f} ms"),
                  ("session memory per DSL node", f"{(after_nodes - start_mib) / max(1, nodes - 1) * 1024:.0f} KiB "
                                                  f"({start_mib:.0f} MiB with one node, {after_nodes:.0f} with all)")]
+        figures += [Figure(ros, "create() of a DSL node, median", statistics.median(times) * 1000, "ms"),
+                    Figure(ros, "session memory per DSL node", (after_nodes - start_mib) / max(1, nodes - 1) * 1024,
+                           "KiB")]
 
         say(f"wrapping {basenodes} basenodes ...")
         times = []
@@ -120,6 +129,10 @@ def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]) -> t
                   f"{(after_wrap - after_nodes) / max(1, basenodes) * 1024:.0f} KiB"),
                  ("a basenode process's memory, median", f"{statistics.median(children):.0f} MiB" if children else "-")]
         ok &= all(alive(pid) for pid in pids)
+        figures += [Figure(ros, "session memory per wrapping node", (after_wrap - after_nodes) / max(1, basenodes) * 1024,
+                           "KiB")]
+        if children:
+            figures.append(Figure(ros, "a basenode process's memory, median", statistics.median(children), "MiB"))
 
         say("a message through every DSL node ...")
         started = time.monotonic()
@@ -130,6 +143,7 @@ def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]) -> t
                        f"node {(i + 1) % nodes} to hear node {i}", 0.0)
         rows.append(("a message heard through each of the DSL nodes", f"{nodes} of {nodes} in "
                                                                      f"{time.monotonic() - started:.1f} s"))
+        figures.append(Figure(ros, "DSL nodes a message went through", nodes, "", "asked", nodes, least=1.0))
     except BenchError as error:
         rows.append(("failed", str(error)))
         ok = False
@@ -144,8 +158,12 @@ def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]) -> t
         rows += [("shutdown() of every node", f"{took:.1f} s"),
                  ("basenode processes left after shutdown", f"{len(left)}")]
         ok &= not left
+        figures += [Figure(ros, "wrapped basenodes started", len(pids), "", "asked", basenodes, least=1.0,
+                           note=DISCOVERY_LIMIT if ros2 else ""),
+                    Figure(ros, f"shutdown() of {len(dsl) + len(wrapping)} nodes", took, "s"),
+                    Figure(ros, "basenode processes left after shutdown", len(left), "", most=0)]
         current().close()
-    return rows, ok
+    return rows, ok, figures
 
 
 def main(argv: Optional[list[str]] = None) -> int:
@@ -177,7 +195,7 @@ def main(argv: Optional[list[str]] = None) -> int:
                 p for p in (str(HERE / "nodes"), os.environ.get("ROS_PACKAGE_PATH")) if p)
         os.environ.update(ROS_HOME=str(workdir), ROS_LOG_DIR=str(workdir / "log"))
         try:
-            rows, ok = run(opts.nodes, opts.basenodes, ros2, say)
+            rows, ok, figures = run(opts.nodes, opts.basenodes, ros2, say)
         finally:
             if master is not None:
                 master.stop()
@@ -185,6 +203,7 @@ def main(argv: Optional[list[str]] = None) -> int:
             f"basenodes in one session, {os.cpu_count()} cores\n\n| what | measured |\n|---|---|\n"
             + "\n".join(f"| {what} | {value} |" for what, value in rows)
             + f"\n\nStarted, worked and stopped cleanly: {'PASS' if ok else 'FAIL'}\n")
+    keep("ros2_scale" if ros2 else "ros1_scale", figures)
     RESULTS.mkdir(exist_ok=True)
     out = RESULTS / ("scale_ros2.md" if ros2 else "scale_ros1.md")
     out.write_text(text)
