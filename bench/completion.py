@@ -51,6 +51,7 @@ from bench.figures import Figure, keep, target_lines
 from bench.relay import BenchError, Child, Master, stop_cleanly_on_sigterm, wait_until
 from ipyros.ipython import magics
 from ipyros.ipython.completion import RosMatcher, default_catalog, install, uninstall
+from ipyros.tools import collector
 from ipyros.tools.graph import GraphCache
 from ipyros.core.model import NodeModel, TopicModel
 
@@ -215,6 +216,8 @@ def completing_shell(graph: GraphCache, topics: int) -> Iterator[tuple[Interacti
     catalog = default_catalog()
     catalog.warm()  # done before install(), whose background warm-up then finds it cached
     handle = install(shell, graph, catalog)
+    # as %load_ext ipyros does (RosMagics.freeze_gc): what the session loaded leaves full collections
+    freezer = collector.Freezer(lambda t: (handle.warming.join(t), not handle.warming.is_alive())[1], graph.wait_first)
     for name in magics.__all__:  # each magic's own parser is its grammar, as when the extension is loaded
         if name != "RosMagics":
             shell.register_magics(getattr(magics, name)(shell, None))
@@ -223,6 +226,7 @@ def completing_shell(graph: GraphCache, topics: int) -> Iterator[tuple[Interacti
             warnings.simplefilter("ignore")
             yield shell, RosMatcher(shell, graph, catalog)
     finally:
+        freezer.thaw()
         uninstall(shell, handle)
         InteractiveShell.clear_instance()
 

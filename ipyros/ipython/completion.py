@@ -633,6 +633,7 @@ class Installed:
 
     matcher: Callable[[CompletionContext], SimpleMatcherResult]  # the function in custom_matchers
     ros: RosMatcher
+    warming: threading.Thread  # the catalog's first scans; joined, it is warm
 
 
 def install(shell: Any, graph: GraphCache, catalog: Optional[Catalog] = None) -> Installed:
@@ -641,7 +642,8 @@ def install(shell: Any, graph: GraphCache, catalog: Optional[Catalog] = None) ->
     The catalog's disk scans start at once in a short-lived background thread.
     """
     catalog = catalog or default_catalog()
-    threading.Thread(target=catalog.warm, name="ipyros-catalog-warm", daemon=True).start()
+    warming = threading.Thread(target=catalog.warm, name="ipyros-catalog-warm", daemon=True)
+    warming.start()
     ros = RosMatcher(shell, graph, catalog)
 
     # A plain function: IPython reads __qualname__ and the attributes context_matcher sets.
@@ -650,7 +652,7 @@ def install(shell: Any, graph: GraphCache, catalog: Optional[Catalog] = None) ->
         return ros(context)
 
     shell.Completer.custom_matchers.append(ipyros_matcher)
-    return Installed(ipyros_matcher, ros)
+    return Installed(ipyros_matcher, ros, warming)
 
 
 def uninstall(shell: Any, handle: Installed) -> None:

@@ -36,6 +36,7 @@ from ..dsl import build_messages, end_chains, rosNode
 from ..files.export import ExportWarning
 from ..files.savefile import SaveWarning
 from ..node.session import Session, configure, current, started as session_started
+from ..tools import collector
 from ..tools.graph import GraphCache
 from ..tools.probe import PromptPublisher
 from . import completion, display
@@ -78,6 +79,7 @@ class Extension:
                        self.node_magics, WrapMagics(shell, self), self.plot_magics, self.record_magics,
                        DemoMagics(shell, self), ActionMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
+        self._freezer: Optional[collector.Freezer] = None  # takes what the session loaded out of full collections
         self._log_handler = StderrLogHandler()
         self._report = failure_report(lambda: self.settings.handler_tracebacks)
         self._saved: dict[str, Any] = {}
@@ -121,6 +123,10 @@ class Extension:
         self.settings.observe(self._setting_changed, names=_LIVE_SETTINGS)
         self.graph.start()
         self._completion = completion.install(shell, self.graph)
+        if self.settings.freeze_gc:  # once the catalog is warm and the graph read (ipyros.tools.collector)
+            warming = self._completion.warming
+            self._freezer = collector.Freezer(lambda t: (warming.join(t), not warming.is_alive())[1],
+                                              self.graph.wait_first)
         self._stop_nodes_before_namespace_goes()
         print(f"ipyros: {line or self._attach()}")
 
@@ -245,6 +251,9 @@ class Extension:
         if self._completion is not None:
             completion.uninstall(shell, self._completion)
             self._completion = None
+        if self._freezer is not None:
+            self._freezer.thaw()
+            self._freezer = None
         self.graph.stop()
         self.plot_magics.stop_live()
         self.record_magics.stop()

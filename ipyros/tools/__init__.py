@@ -6,9 +6,10 @@
 - :mod:`.tryout`: a candidate handler run beside the live one; :mod:`.editing`: a handler's
   source to edit, and the edit put live;
 - :mod:`.wrap`: a node wrapped in one call; :mod:`.robot`: the demo robot;
-- :mod:`.paramwatch`: parameters watched as they change.
+- :mod:`.paramwatch`: parameters watched as they change;
+- :mod:`.collector`: Python's garbage collector kept from stalling the prompt.
 
 May import: core, processes, node, dsl (never the IPython face).
 """
 
-__all__ = ["editing", "graph", "paramwatch", "plot", "probe", "record", "robot", "tryout", "wrap"]
+__all__ = ["collector", "editing", "graph", "paramwatch", "plot", "probe", "record", "robot", "tryout", "wrap"]

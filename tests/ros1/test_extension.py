@@ -74,6 +74,24 @@ def test_unload_takes_everything_back(ros_session):
         assert len(ipyros_matchers(shell)) == 1
 
 
+def test_what_the_session_loaded_leaves_full_collections_while_loaded_and_only_then(ros_session):
+    """A full garbage collection walked every object for 70-105 ms and stalled a TAB: once the session has
+    loaded, its objects are frozen out of the collector's walk; unloading gives them back, and the setting
+    turns it off (ipyros.tools.collector)."""
+    import gc
+
+    assert gc.get_freeze_count() == 0
+    with interactive_shell(load=False) as shell:
+        shell.run_line_magic("load_ext", "ipyros")
+        wait_for(lambda: gc.get_freeze_count() > 0, timeout=60, what="the loaded objects to be frozen")
+        shell.run_line_magic("unload_ext", "ipyros")
+        assert gc.get_freeze_count() == 0
+    config = Config()
+    config.RosMagics.freeze_gc = False
+    with interactive_shell(config) as shell:
+        assert _loaded[id(shell)]._freezer is None and gc.get_freeze_count() == 0
+
+
 def test_unload_keeps_a_rosnode_the_user_rebound(ros_session):
     with interactive_shell() as shell:
         ok(shell, "rosNode = 42")
