@@ -308,6 +308,18 @@ def stop_cleanly_on_sigterm() -> None:
     signal.signal(signal.SIGTERM, stop)
 
 
+def memory_mib(pid: int, field: str = "VmRSS") -> Optional[float]:
+    """A field of ``/proc/PID/status`` in MiB: resident memory now (``VmRSS``) or at its peak (``VmHWM``);
+    None if the process is gone."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return None
+
+
 class BenchError(RuntimeError):
     """A scenario could not run; the message names the process and its log's last lines."""
 

@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Optional
 
 from bench.figures import Figure, keep, machine, target_lines
-from bench.relay import BenchError, Child, stop_cleanly_on_sigterm, wait_until
+from bench.relay import BenchError, Child, memory_mib, stop_cleanly_on_sigterm, wait_until
 
 HERE = Path(__file__).resolve().parent
 NODES = HERE / "ros2"
@@ -120,17 +120,6 @@ def ipyros_env(env: dict[str, str], workdir: Path) -> dict[str, str]:
     return {**env, "FASTDDS_DEFAULT_PROFILES_FILE": str(profile)}
 
 
-def peak_mib(pid: int) -> Optional[float]:
-    """The process's peak resident memory (VmHWM), MiB."""
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024
-    except OSError:
-        pass
-    return None
-
-
 def run_once(path: Path_, load: Load, env: dict[str, str], logdir: Path) -> Run:
     procs: list[Child] = []
 
@@ -172,7 +161,7 @@ def run_once(path: Path_, load: Load, env: dict[str, str], logdir: Path) -> Run:
         return Run(p50=statistics.median(latency), p99=latency[min(len(latency) - 1, int(len(latency) * 0.99))],
                    start_lost=record["start_lost"], window=window, paced_lost=load.paced - record["paced_received"],
                    flat_per_s=record["flat_per_s"], flat_lost=load.flat - record["flat_received"], flat=load.flat,
-                   relay_peak_mib=peak_mib(relay.proc.pid) if relay else None, handled=record["handled"])
+                   relay_peak_mib=memory_mib(relay.proc.pid, "VmHWM") if relay else None, handled=record["handled"])
     finally:
         for proc in reversed(procs):
             proc.stop()

@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any, Callable, Optional
 
 from bench.figures import Figure, keep
-from bench.relay import BenchError, Master, stop_cleanly_on_sigterm, wait_until
+from bench.relay import BenchError, Master, memory_mib, stop_cleanly_on_sigterm, wait_until
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -44,14 +44,8 @@ DISCOVERY_LIMIT = "more than about 30 processes with ipyros's Fast DDS profile d
 
 
 def rss_mib(pid: int) -> float:
-    """A process's resident memory now (VmRSS), MiB; 0 if it is gone."""
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    except OSError:
-        pass
-    return 0.0
+    """A process's resident memory now, MiB; 0 if it is gone."""
+    return memory_mib(pid) or 0.0
 
 
 def alive(pid: int) -> bool:
@@ -71,6 +65,7 @@ def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]
         ) -> tuple[list[tuple[str, str]], bool, list[Figure]]:
     from std_msgs.msg import String
 
+    from ipyros.core.errors import IpyrosError
     from ipyros.dsl import rosNode
     from ipyros.node.session import current
 
@@ -144,8 +139,8 @@ def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]
         rows.append(("a message heard through each of the DSL nodes", f"{nodes} of {nodes} in "
                                                                      f"{time.monotonic() - started:.1f} s"))
         figures.append(Figure(ros, "DSL nodes a message went through", nodes, "", "asked", nodes, least=1.0))
-    except BenchError as error:
-        rows.append(("failed", str(error)))
+    except (BenchError, IpyrosError) as error:  # said in the table; what did start is stopped below
+        rows.append(("failed", str(error).split(" (nodes seen")[0]))  # the list of every node seen is long
         ok = False
     finally:
         say("shutting every node down ...")
