@@ -305,7 +305,8 @@ def run_ros2(repeats: int, say: Callable[[str], None], topics: int = TOPICS,
         try:
             with completing_shell(graph, topics) as (shell, matcher):
                 nodes = max(1, topics // TOPICS_A_NODE)
-                say(f"starting a peer with {topics} topics over {nodes} nodes in ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']} ...")
+                say(f"starting a peer with {topics} topics over {nodes} nodes "
+                    f"in ROS_DOMAIN_ID {env['ROS_DOMAIN_ID']} ...")
                 started = time.monotonic()
                 publisher = Child("many_topics", [sys.executable, str(NODES / "many_topics.py"), str(topics),
                                                   "/bench/t", str(nodes)], env, Path(tmp))

@@ -124,8 +124,8 @@ def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]
                   f"{(after_wrap - after_nodes) / max(1, basenodes) * 1024:.0f} KiB"),
                  ("a basenode process's memory, median", f"{statistics.median(children):.0f} MiB" if children else "-")]
         ok &= all(alive(pid) for pid in pids)
-        figures += [Figure(ros, "session memory per wrapping node", (after_wrap - after_nodes) / max(1, basenodes) * 1024,
-                           "KiB")]
+        per_wrapping_kib = (after_wrap - after_nodes) / max(1, basenodes) * 1024
+        figures += [Figure(ros, "session memory per wrapping node", per_wrapping_kib, "KiB")]
         if children:
             figures.append(Figure(ros, "a basenode process's memory, median", statistics.median(children), "MiB"))
 

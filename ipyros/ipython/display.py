@@ -30,8 +30,9 @@ from ..tools.probe import Rate
 from ..tools.robot import DemoRobot
 from ..tools.tryout import TrialReport, one_line
 
-__all__ = ["LARGE_TABLE", "RENDERERS", "interface_table", "is_large", "node_table", "register", "render_html", "render_plain", "render_text",
-           "renderable", "session_table", "status_table", "topics_table", "endpoints_table", "table_html", "table_text", "unregister"]
+__all__ = ["LARGE_TABLE", "RENDERERS", "endpoints_table", "interface_table", "is_large", "node_table", "register",
+           "render_html", "render_plain", "render_text", "renderable", "session_table", "status_table", "table_html",
+           "table_text", "topics_table", "unregister"]
 
 
 def node_table(node: rosNode) -> Table:

@@ -52,8 +52,10 @@ def snapshot(graph: Any) -> GraphSnapshot:
         for found, into in ((published, pubs), (subscribed, subs), (served, srvs)):
             for topic, _ in found:
                 into.setdefault(topic, []).append(fullname)
+    # a topic whose endpoints disagree on its type has none: nothing passes between them
+    topics = {name: short_name(next(iter(found))) if len(found) == 1 else "" for name, found in types.items()}
     return GraphSnapshot(
-        topics=frozen({name: short_name(next(iter(found))) if len(found) == 1 else "" for name, found in types.items()}),
+        topics=frozen(topics),
         publishers=frozen({t: tuple(sorted(set(n))) for t, n in pubs.items()}),
         subscribers=frozen({t: tuple(sorted(set(n))) for t, n in subs.items()}),
         services=frozen({s: tuple(sorted(set(n))) for s, n in srvs.items()}),
