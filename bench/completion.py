@@ -217,7 +217,7 @@ def completing_shell(graph: GraphCache, topics: int) -> Iterator[tuple[Interacti
     catalog.warm()  # done before install(), whose background warm-up then finds it cached
     handle = install(shell, graph, catalog)
     # as %load_ext ipyros does (RosMagics.freeze_gc): what the session loaded leaves full collections
-    freezer = collector.Freezer(lambda t: (handle.warming.join(t), not handle.warming.is_alive())[1], graph.wait_first)
+    freezer = collector.Freezer(handle.warm, graph.wait_first)
     for name in magics.__all__:  # each magic's own parser is its grammar, as when the extension is loaded
         if name != "RosMagics":
             shell.register_magics(getattr(magics, name)(shell, None))

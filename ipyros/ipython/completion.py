@@ -635,6 +635,11 @@ class Installed:
     ros: RosMatcher
     warming: threading.Thread  # the catalog's first scans; joined, it is warm
 
+    def warm(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for the catalog's first scans; True once they are done."""
+        self.warming.join(timeout)
+        return not self.warming.is_alive()
+
 
 def install(shell: Any, graph: GraphCache, catalog: Optional[Catalog] = None) -> Installed:
     """Add the ipyros matcher to ``shell``'s completer (the real catalog if none is given).

@@ -124,9 +124,7 @@ class Extension:
         self.graph.start()
         self._completion = completion.install(shell, self.graph)
         if self.settings.freeze_gc:  # once the catalog is warm and the graph read (ipyros.tools.collector)
-            warming = self._completion.warming
-            self._freezer = collector.Freezer(lambda t: (warming.join(t), not warming.is_alive())[1],
-                                              self.graph.wait_first)
+            self._freezer = collector.Freezer(self._completion.warm, self.graph.wait_first)
         self._stop_nodes_before_namespace_goes()
         print(f"ipyros: {line or self._attach()}")
 
