@@ -8,6 +8,7 @@ node's :class:`~ipyros.node.engine.NodeEngine` an edit of the model.
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import inspect
 import re
 import weakref
@@ -227,15 +228,17 @@ class TopicHandler:
         return self
 
     def _type_name(self, msg_type: Any, relayed: bool) -> str:
-        """The declared type's name; a type this Python cannot import is taken, as ``pkg/Type``, only for a relay on a
-        ROS that relays bytes of any type (ROS 1): a handler or a publisher needs its class."""
+        """The declared type's name; a type this Python cannot import is taken, as ``pkg/Type``, only for a relay: a
+        handler or a publisher needs its class, a relay does not (ROS 1 relays bytes of any type) or gets it from
+        the basenode before it opens (ROS 2: :func:`~ipyros.node.wrapping.learn_relayed_types`)."""
         try:
             return msgtypes.resolve_message(msg_type)[0]
         except MessageTypeError:
-            if not (relayed and isinstance(msg_type, str) and self._node.session.backend.relays_any_type
-                    and re.fullmatch(r"\w+/(msg/)?\w+", msg_type.strip())):
+            if not (relayed and isinstance(msg_type, str) and re.fullmatch(r"\w+/(msg/)?\w+", msg_type.strip())):
                 raise
             package, _, name = msg_type.strip().partition("/")
+            if not self._node.session.backend.relays_any_type and importlib.util.find_spec(package) is not None:
+                raise  # the package is here, the name is wrong: the error says which names it has
             return f"{package}/{name.rsplit('/', 1)[-1]}"
 
     def _qos(self, value: Any, where: str) -> qos_mod.Qos:

@@ -37,7 +37,7 @@ from ..core.remapping import base_fullname, basenode_remaps, check_wrapping, res
 from ..core.slots import HandlerSlot, OutputScope, SendFigures
 from ..core.versions import HandlerVersion
 from .session import Session
-from .wrapping import start_base
+from .wrapping import learn_relayed_types, start_base
 
 #: A slot key's new handler and whether it takes the message (or timer event) as its argument.
 Handlers = dict[str, tuple[Callable[..., Any], bool]]
@@ -629,6 +629,7 @@ class NodeEngine:
               takes_arg: Optional[dict[str, bool]] = None) -> None:
         handlers = self._handlers if handlers is None else handlers
         takes_arg = self._takes_argument if takes_arg is None else takes_arg
+        learn_relayed_types(self, [s for s in specs if isinstance(s, planning.RelaySpec)])
         for spec in specs:
             try:
                 self._live[spec] = self._open_one(spec, handlers, takes_arg)

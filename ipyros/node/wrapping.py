@@ -22,7 +22,7 @@ from typing import Any, Callable, Optional, Protocol
 from ..core import msgtypes, names
 from ..core.errors import BaseNodeError, DeclarationError, MessageTypeError, TopicTypeConflict, cut
 from ..core.model import BaseModel, NodeModel
-from ..core.plan import internal_name
+from ..core.plan import RelaySpec, internal_name
 from ..core.records import Interface
 from ..core.remapping import base_fullname, base_namespace, base_node_name, basenode_remaps, check_wrapping, reresolve
 from ..processes.basenode import exit_reason
@@ -272,12 +272,20 @@ def declare_interface(node: "NodeEngine", interface: Interface) -> Interface:
     untyped = [name for name, type_ in interface.publications + interface.subscriptions + interface.services
                if not type_]
     missing: dict[str, list[str]] = {}  # {what to install: [name (type)]}: declared are all the others
-    for declare, found in ((reuse.publish, interface.publications), (reuse.subscribe, interface.subscriptions),
-                           (reuse.service, interface.services), (reuse.action, interface.actions)):
+    # A relay of a type this Python lacks is declarable (ROS 2 learns it at create()), but discovery has just
+    # tried that (_build_its_own_types): what is still lacking stays undeclared and named.
+    lacking = {} if node.session.backend.relays_any_type else msgtypes.not_installed(
+        type_ for _, type_ in interface.publications + interface.subscriptions)
+    for declare, found, relayed in ((reuse.publish, interface.publications, True),
+                                    (reuse.subscribe, interface.subscriptions, True),
+                                    (reuse.service, interface.services, False),
+                                    (reuse.action, interface.actions, False)):
         for name, type_ in found:
             if not type_:
                 continue
             try:
+                if relayed and type_ in lacking:
+                    raise MessageTypeError(lacking[type_])
                 declare(_relative(name, prefix), type=type_)
             except MessageTypeError:
                 package = type_.split("/", 1)[0]
@@ -311,20 +319,8 @@ def discover(node: "NodeEngine", timeout: float = 10.0) -> Interface:
     check_wrapping(model)
     if node.created:
         raise DeclarationError(f"{node.name} is already running; discover() its basenode before create()")
-    session = node.session
-    session.start_process_node(node.fullname)  # the graph is read by this session's own ROS side
-    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),  # type: ignore[union-attr]
-                        "namespace": base_namespace(model)})
-    probe = session.backend.basenode(base).start()
-    try:
-        interface = session.backend.wait_for_node(base_fullname(model), timeout=timeout, alive=lambda: probe.running)
-        _build_its_own_types(node, interface)  # asked of the basenode while it runs
-    except BaseNodeError:
-        if not probe.running:
-            raise _ended_at_start(model, probe) from None
-        raise
-    finally:
-        probe.stop()
+    node.session.start_process_node(node.fullname)  # the graph is read by this session's own ROS side
+    interface = _run_as_it_is(node, timeout, lambda found: _build_its_own_types(node, found))
     # Without the wrapping remaps, the basenode used the public names themselves.
     interface.not_seen = [f"{t.resolved} ({t.direction})" for t in model.topics
                           if t.role == "reuse" and not _uses(interface, t.direction, t.resolved)]
@@ -338,6 +334,67 @@ def discover(node: "NodeEngine", timeout: float = 10.0) -> Interface:
 
 
 _LATE = "a node may advertise only after its first input (topic_tools throttle and mux do)"
+
+
+def _run_as_it_is(node: "NodeEngine", timeout: float, ask: Callable[[Interface], None]) -> Interface:
+    """Run the basenode briefly as it is (no remaps), ``ask`` its interface while it runs, and stop it."""
+    model = node.model()
+    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),  # type: ignore[union-attr]
+                        "namespace": base_namespace(model)})
+    probe = node.session.backend.basenode(base).start()
+    try:
+        interface = node.session.backend.wait_for_node(base_fullname(model), timeout=timeout,
+                                                       alive=lambda: probe.running)
+        ask(interface)
+        return interface
+    except BaseNodeError:
+        if not probe.running:
+            raise _ended_at_start(model, probe) from None
+        raise
+    finally:
+        probe.stop()
+
+
+def learn_relayed_types(node: "NodeEngine", relays: list[RelaySpec], timeout: float = 10.0) -> None:
+    """Make importable the types of ``relays`` that this Python lacks, from the basenode's own descriptions,
+    before the relays open (ROS 2, whose relays need each type's class).
+
+    A running basenode is asked as it runs; else it is run briefly as it is, as :func:`discover` does, so
+    that the relays still open before it starts wrapped and nothing it sends at start is lost. A type that
+    cannot be learnt is refused in one line naming the package to install.
+    """
+    backend = node.session.backend
+    if backend.relays_any_type:  # ROS 1 relays the bytes of any type
+        return
+    lacking = msgtypes.not_installed(relay.type for relay in relays)
+    if not lacking:
+        return
+    model = node.model()
+    # Each type → the public name of a relay of it: what the basenode uses unremapped (run as it is, or before the
+    # restart that remaps it to a reuse declared on the running node).
+    wanted = {relay.type: relay.source if internal_name(model, relay.source) == relay.target else relay.target
+              for relay in relays if relay.type in lacking}
+    listed, hint = ", ".join(lacking), "; ".join(sorted(set(lacking.values())))
+
+    def build(interface: Interface) -> None:
+        try:
+            built = backend.build_types_of(interface.node, wanted)
+        except MessageTypeError as error:
+            raise MessageTypeError(f"{listed} not installed here, and {error}; or {hint}") from None
+        if built:
+            node.session.notify(f"ipyros: built {', '.join(built)} from {interface.node}'s own type descriptions "
+                                "(not installed here) to relay them")
+
+    if node.base is not None and node.base.running:
+        build(Interface(node=base_fullname(model)))
+    else:
+        node.session.notify(f"ipyros: running basenode {base_fullname(model)} briefly as it is, to learn "
+                            f"{listed} (not installed here) before relaying")
+        _run_as_it_is(node, timeout, build)
+    left = list(msgtypes.not_installed(wanted))
+    if left:
+        raise MessageTypeError(f"{', '.join(left)} not installed here, and not made from basenode "
+                               f"{base_fullname(model)}'s own descriptions: {hint}")
 
 
 def _build_its_own_types(node: "NodeEngine", interface: Interface) -> None:

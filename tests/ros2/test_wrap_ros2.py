@@ -10,6 +10,7 @@ import pytest
 from ros2_fixtures import wait_for
 from std_msgs.msg import String
 
+from ipyros.core.errors import MessageTypeError
 from ipyros.dsl import engine_of
 
 ECHO_NODE = str(Path(__file__).resolve().parent / "peers" / "echo_node.py")
@@ -378,7 +379,7 @@ def test_a_wrapped_lifecycle_basenode_is_managed_under_its_own_name(make_node, c
 ODD_NODE = """
 import rclpy
 from std_msgs.msg import String
-from ws_odd_msgs.msg import Odd
+from {package}.msg import Odd
 
 rclpy.init()
 node = rclpy.create_node("odd_node")
@@ -392,15 +393,14 @@ except KeyboardInterrupt:
 """
 
 
-def test_discovery_builds_a_type_only_the_basenode_has_and_relays_it(make_node, notices, monkeypatch, tmp_path):
-    """A basenode from a workspace whose message package this session lacks (built for the basenode alone, in
-    another process): discover() learns the type from the basenode's own description (REP 2011), builds it, and
-    declares it; the relay carries it and this session can read it (issue 24)."""
+def _their_node(package_name: str, monkeypatch, tmp_path) -> tuple:
+    """A basenode whose message package this session lacks: built for the basenode alone, in another process;
+    returns its script and the environment it runs with. What a build here adds is taken back after the test."""
     import os
     import subprocess
     import sys
 
-    package = tmp_path / "src" / "ws_odd_msgs"
+    package = tmp_path / "src" / package_name
     (package / "msg").mkdir(parents=True)
     (package / "msg" / "Odd.msg").write_text("int32 x\nstring note\ngeometry_msgs/Point where\n")
     theirs = tmp_path / "theirs"
@@ -408,16 +408,23 @@ def test_discovery_builds_a_type_only_the_basenode_has_and_relays_it(make_node, 
                     "build_messages(sys.argv[1], sys.argv[2])", str(package), str(theirs)],
                    check=True, timeout=180, capture_output=True)
     script = tmp_path / "odd_node.py"
-    script.write_text(ODD_NODE)
+    script.write_text(ODD_NODE.format(package=package_name))
     env = {"PYTHONPATH": str(theirs / "ros2" / "python"),
            "LD_LIBRARY_PATH": os.pathsep.join([str(theirs / "ros2" / "lib"), os.environ.get("LD_LIBRARY_PATH", "")])}
-    monkeypatch.setattr(sys, "path", list(sys.path))  # what the build adds here is taken back after the test
+    monkeypatch.setattr(sys, "path", list(sys.path))
     for name in ("PYTHONPATH", "LD_LIBRARY_PATH"):
         monkeypatch.setenv(name, os.environ.get(name, ""))
     monkeypatch.setenv("IPYROS_MESSAGES_DIR", str(tmp_path / "ours"))
     with pytest.raises(ImportError):
-        import ws_odd_msgs  # noqa: F401 - this session lacks it
+        __import__(package_name)  # this session lacks it
+    return script, env
 
+
+def test_discovery_builds_a_type_only_the_basenode_has_and_relays_it(make_node, notices, monkeypatch, tmp_path):
+    """A basenode from a workspace whose message package this session lacks: discover() learns the type from the
+    basenode's own description (REP 2011), builds it, and declares it; the relay carries it and this session can
+    read it (issue 24)."""
+    script, env = _their_node("ws_odd_msgs", monkeypatch, tmp_path)
     w = make_node("w2_odd")
     w.baseNode(str(script), namespace="robot_odd", env=env)
     interface = w.discover()
@@ -433,4 +440,36 @@ def test_discovery_builds_a_type_only_the_basenode_has_and_relays_it(make_node, 
                                                msgType=Odd).create()
     w.create()
     wait_for(lambda: (7, "n") in got, timeout=30, what="the basenode's own type through the relay")
+    w.shutdown()
+
+
+def test_a_reuse_declared_by_hand_of_a_type_only_the_basenode_has_is_learnt_at_create(make_node, notices, monkeypatch,
+                                                                                      tmp_path):
+    """reuse.publish(type=) of a type this session lacks is taken on ROS 2 too: create() runs the basenode briefly
+    as it is to learn the type from its own descriptions, builds it, and opens the relay before the basenode starts
+    wrapped. Declared on the running node, a type the running basenode does not describe is refused in one line
+    naming the package, and the node runs on as it was (issue 24)."""
+    script, env = _their_node("ws_hand_msgs", monkeypatch, tmp_path)
+    w = make_node("w2_hand")
+    w.baseNode(str(script), namespace="robot_hand", env=env)
+    w.reuse.publish("odd", type="ws_hand_msgs/Odd")
+    w.reuse.publish("plain", type="std_msgs/String")
+    got: list = []
+    w.create()
+    assert any(n.startswith("ipyros: running basenode /robot_hand/odd_node briefly as it is, to learn "
+                            "ws_hand_msgs/Odd") for n in notices), notices
+    assert any(n.startswith("ipyros: built ws_hand_msgs/Odd from /robot_hand/odd_node's own type descriptions")
+               for n in notices), notices
+    from ws_hand_msgs.msg import Odd
+
+    make_node("w2_hand_listener").new.subscribe("/robot_hand/odd", handler=lambda m: got.append((m.x, m.note)),
+                                                msgType=Odd).create()
+    wait_for(lambda: (7, "n") in got, timeout=30, what="the basenode's own type through the hand-declared relay")
+    probes = sum("briefly as it is" in n for n in notices)
+    with pytest.raises(MessageTypeError, match=r"ws_none_msgs/Odd not installed here.*pip install ros-ws-none-msgs"):
+        w.reuse.publish("late", type="ws_none_msgs/Odd")  # declared on the running node: asked of the running basenode
+    assert sum("briefly as it is" in n for n in notices) == probes, "the running basenode was asked, not run again"
+    assert [t.name for t in w.model().topics] == ["odd", "plain"], "the refused declaration left nothing behind"
+    count = len(got)
+    wait_for(lambda: len(got) > count + 3, timeout=30, what="the relay still carrying after the refusal")
     w.shutdown()
