@@ -39,9 +39,6 @@ from bench.relay import BenchError, Master, memory_mib, stop_cleanly_on_sigterm,
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
-#: Why a ROS 2 run of many basenodes can stop short (measured apart; README, "A session with many nodes").
-DISCOVERY_LIMIT = "more than about 30 processes with ipyros's Fast DDS profile do not all discover each other"
-
 
 def rss_mib(pid: int) -> float:
     """A process's resident memory now, MiB; 0 if it is gone."""
@@ -153,8 +150,7 @@ def run(nodes: int, basenodes: int, ros2: bool, say: Callable[[str], None]
         rows += [("shutdown() of every node", f"{took:.1f} s"),
                  ("basenode processes left after shutdown", f"{len(left)}")]
         ok &= not left
-        figures += [Figure(ros, "wrapped basenodes started", len(pids), "", "asked", basenodes, least=1.0,
-                           note=DISCOVERY_LIMIT if ros2 else ""),
+        figures += [Figure(ros, "wrapped basenodes started", len(pids), "", "asked", basenodes, least=1.0),
                     Figure(ros, f"shutdown() of {len(dsl) + len(wrapping)} nodes", took, "s"),
                     Figure(ros, "basenode processes left after shutdown", len(left), "", most=0)]
         current().close()

@@ -178,8 +178,13 @@ def set_bag(node: "NodeEngine", path: Any, rate: float, loop: bool, topics: Opti
 
 # -- the basenode process ------------------------------------------------------------------
 
-#: How long a basenode may take to register all it declares (s); a basenode that ends sooner is told at once.
-REGISTRATION_TIMEOUT = 10.0
+#: How long a running basenode may take to show up in the graph (s); one that ends sooner is told at once. Long,
+#: because a start can be slow for good reasons (a map loaded; on ROS 2, discovery in a graph of many processes:
+#: the 41st basenode of one session took over 10 s on 2 cores); the wait is said once it takes a while.
+REGISTRATION_TIMEOUT = 45.0
+
+#: After how long (s) a basenode still starting is said at the prompt, with how to stop waiting.
+SLOW_START_NOTICE = 5.0
 
 
 def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> None:
@@ -232,9 +237,18 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
     if getattr(handle, "not_started", None):
         session.notify(f"ipyros: could not start {', '.join(handle.not_started)} of {model.base.launch} "
                        f"(the rest runs without); why: {node.called}.base.rest.tail()")
+    timeout = settle_timeout or REGISTRATION_TIMEOUT
+
+    def slow() -> None:
+        if starting.is_set() and process.running:
+            session.notify(f"ipyros: basenode {base_fullname(model)} of {node.called} runs but is not in the graph "
+                           f"yet; waiting up to {timeout:g} s (Ctrl-C stops it and {node.called})")
+
+    notice = threading.Timer(SLOW_START_NOTICE, slow)
+    notice.daemon = True
+    notice.start()
     try:
-        interface = backend.wait_for_node(base_fullname(model), timeout=settle_timeout or REGISTRATION_TIMEOUT,
-                                                 alive=lambda: process.running)
+        interface = backend.wait_for_node(base_fullname(model), timeout=timeout, alive=lambda: process.running)
         starting.clear()
         if not process.running:  # it ended after settling, before a notice could be sent
             raise BaseNodeError("ended")
@@ -242,6 +256,8 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
         if not process.running:
             raise _ended_at_start(model, process, f" (nothing of {node.called} was left running)") from None
         raise
+    finally:
+        notice.cancel()
     check_base_types(model, interface)
     report_unused_reuses(node, model, interface)
 

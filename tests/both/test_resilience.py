@@ -121,3 +121,38 @@ def test_a_chain_that_fails_before_create_changes_nothing_either(make_node):
     with pytest.raises(errors.IpyrosError, match="call 3 of the chain"):
         nd.new.publish("/chain/x", msgType=UInt32).publish("/chain/y", msgType=UInt32).subscribe("/chain/z")
     assert nd.model().topics == []
+
+
+SLOW_START = """
+import runpy, sys, time
+time.sleep(2.5)  # a basenode that takes its time before it is a node (a map to load, a crowded graph)
+sys.path.insert(0, {peers!r})
+sys.argv = [{talk!r}] + sys.argv[1:]
+runpy.run_path({talk!r}, run_name="__main__")
+"""
+
+
+def test_a_basenode_slow_to_show_up_is_waited_for_and_said(make_node, notices, monkeypatch, tmp_path):
+    """A running basenode that is slow to appear in the graph is waited for (not failed after a few seconds), and
+    the wait is said at the prompt with how to stop it; the wrapping node then runs."""
+    from pathlib import Path
+
+    from ipyros.node import wrapping
+
+    peers = Path(__file__).parent / "peers"
+    script = tmp_path / "slow_talker.py"
+    script.write_text(SLOW_START.format(peers=str(peers), talk=str(peers / "talk.py")))
+    monkeypatch.setattr(wrapping, "SLOW_START_NOTICE", 0.5)
+    w = make_node("slow_wrap")
+    w.baseNode(str(script), name="talk_peer", namespace="slow_robot", args=["level", "std_msgs/UInt32", "10",
+                                                                            "data=7"])
+    w.reuse.publish("level", type=UInt32)
+    heard: list[int] = []
+    make_node("slow_listener").new.subscribe("/slow_robot/level", handler=lambda m: heard.append(m.data),
+                                             msgType=UInt32).create()
+    w.create()
+    said = [n for n in notices if "not in the graph yet" in n]
+    assert said == [f"ipyros: basenode /slow_robot/talk_peer of slow_wrap runs but is not in the graph yet; waiting "
+                    f"up to {wrapping.REGISTRATION_TIMEOUT:g} s (Ctrl-C stops it and slow_wrap)"], notices
+    wait_for(lambda: 7 in heard, timeout=30, what="the slow basenode's messages through the relay")
+    w.shutdown()
