@@ -13,6 +13,7 @@ Running it, reading its interface and finding its package are the backend's
 
 from __future__ import annotations
 
+import difflib
 import os
 import re
 import threading
@@ -20,7 +21,7 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Protocol
 
 from ..core import msgtypes, names
-from ..core.errors import BaseNodeError, DeclarationError, MessageTypeError, TopicTypeConflict, cut
+from ..core.errors import BaseNodeError, DeclarationError, IpyrosError, MessageTypeError, TopicTypeConflict, cut
 from ..core.model import BaseModel, NodeModel
 from ..core.plan import RelaySpec, internal_name
 from ..core.records import Interface
@@ -255,11 +256,25 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
     except BaseNodeError:
         if not process.running:
             raise _ended_at_start(model, process, f" (nothing of {node.called} was left running)") from None
-        raise
+        raise _never_seen(node, model, timeout) from None
     finally:
         notice.cancel()
     check_base_types(model, interface)
     report_unused_reuses(node, model, interface)
+
+
+def _never_seen(node: "NodeEngine", model: NodeModel, timeout: float) -> BaseNodeError:
+    """The one line for a basenode that ran but never showed up in the graph (create() then stops it): the
+    graph's nodes of a name like the one it was given, in case it took another."""
+    backend, name = node.session.backend, base_fullname(model)
+    try:
+        seen = [n for n in backend.graph_snapshot().nodes if n not in node.session.nodes]  # not its own
+    except IpyrosError:
+        seen = []
+    like = difflib.get_close_matches(name, seen, n=3, cutoff=0.5)
+    return BaseNodeError(f"basenode {name} of {node.called} ran {timeout:g} s without showing up in the graph "
+                         f"({backend.where()}), so it was stopped; is it a ROS node that keeps the name it is given?"
+                         + (f" nodes of a name like it: {', '.join(like)}" if like else ""))
 
 
 def _ended_at_start(model: NodeModel, process: Any, what_now: str = "") -> BaseNodeError:

@@ -156,3 +156,35 @@ def test_a_basenode_slow_to_show_up_is_waited_for_and_said(make_node, notices, m
                     f"up to {wrapping.REGISTRATION_TIMEOUT:g} s (Ctrl-C stops it and slow_wrap)"], notices
     wait_for(lambda: 7 in heard, timeout=30, what="the slow basenode's messages through the relay")
     w.shutdown()
+
+
+def test_a_basenode_that_runs_but_never_shows_up_fails_create_in_one_line_and_is_stopped(make_node, monkeypatch,
+                                                                                      tmp_path):
+    """A basenode that is no ROS node (or takes another name than it is given) is stopped once the wait ends, and
+    create() says so in one line; nothing of the wrapping node is left running."""
+    import os
+    from pathlib import Path
+
+    from ipyros.node import wrapping
+
+    script = tmp_path / "not_a_node.py"
+    script.write_text("import time\nprint('up', flush=True)\ntime.sleep(600)\n")
+    monkeypatch.setattr(wrapping, "REGISTRATION_TIMEOUT", 2.0)
+    w = make_node("absent_wrap")
+    w.baseNode(str(script), name="absent_base")
+    w.reuse.publish("level", type=UInt32)
+    with pytest.raises(errors.BaseNodeError) as caught:
+        w.create()
+    message = str(caught.value)
+    assert "\n" not in message and message.startswith(
+        "basenode /absent_base of absent_wrap ran 2 s without showing up in the graph ("), message
+    assert message.endswith("so it was stopped; is it a ROS node that keeps the name it is given?"), message
+    assert not w.created and w.base is None
+    def command(pid: str) -> str:
+        try:
+            return Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace")
+        except OSError:  # gone meanwhile
+            return ""
+
+    assert [pid for pid in os.listdir("/proc") if pid.isdigit() and str(script) in command(pid)] == [], \
+        "the basenode was stopped"
