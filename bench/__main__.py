@@ -1,6 +1,7 @@
 """Run every benchmark of the ROS this venv has, in one go: ``python -m bench [--quick]``.
 
-ROS 1 (a venv that sees rospy): the relay bench against topic_tools, completion, scale; ROS 2
+ROS 1 (a venv that sees rospy): the relay bench against topic_tools, where a handler's time goes,
+completion, scale; ROS 2
 (rclpy): the same three on rclpy. Each bench starts what it needs (a rosmaster on a free port, or
 a DDS domain of its own), prints a table, saves it under bench/results/, keeps its figures for
 ``python -m bench.figures`` and stops everything it started. The exit code is non-zero if a
@@ -19,11 +20,13 @@ def main(argv: list[str] | None = None) -> int:
 
     if importlib.util.find_spec("rospy") is None:
         from bench import relay_ros2 as relay
+        benches = (relay, completion, scale)
     else:
-        from bench import relay
+        from bench import handler_cost, relay
+        benches = (relay, handler_cost, completion, scale)
 
     status = 0
-    for bench in (relay, completion, scale):
+    for bench in benches:
         print(f"\n=== {bench.__name__} ===", flush=True)
         status |= bench.main(argv) or 0
     return status
