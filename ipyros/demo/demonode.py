@@ -16,6 +16,7 @@ Callbacks run on a thread of their own while ``run`` steps on the main one, on b
 
 from __future__ import annotations
 
+import atexit
 import importlib.util
 import os
 import sys
@@ -44,6 +45,7 @@ class DemoNode:
             self._executor.add_node(self._node)
             self._spinner = threading.Thread(target=self._spin, daemon=True)
             self._spinner.start()
+            atexit.register(self.close)  # however the script ends: after run(), or a script of its own
         else:
             import rospy
 
@@ -166,9 +168,18 @@ class DemoNode:
         except KeyboardInterrupt:
             pass
         finally:
-            # The spinning thread must be gone before the interpreter is: rclpy aborts the process
-            # (SIGABRT) if it finds it still waiting, and Fast DDS's shared memory is then never freed.
-            rclpy.try_shutdown()
-            self._executor.shutdown()
-            self._spinner.join(timeout=5.0)
-            self._node.destroy_node()
+            self.close()
+
+    def close(self) -> None:
+        """Stop spinning and destroy the node (ROS 2; once, and again at exit). The spinning thread must be
+        gone before the interpreter is: rclpy aborts the process (SIGABRT) if it finds it still waiting,
+        and Fast DDS's shared memory (a 64 MiB segment with ipyros's profile) is then never freed."""
+        if not self.ros2 or self._node is None:
+            return
+        import rclpy
+
+        rclpy.try_shutdown()
+        self._executor.shutdown()
+        self._spinner.join(timeout=5.0)
+        self._node.destroy_node()
+        self._node = None

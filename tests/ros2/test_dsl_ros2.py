@@ -110,6 +110,7 @@ def test_timers_params_and_services(make_node, failures):
         client_node.destroy_node()
     finally:
         rclpy.try_shutdown(context=context)
+        context.destroy()  # its participant deleted now: else its Fast DDS ports outlive the process
 
 
 def test_bad_input_is_the_same_line_as_on_ros1(make_node):

@@ -148,6 +148,8 @@ class CountingRos2(Counting):
             return state, reached, late_feedback(seen, reached if state == "succeeded" else 0)
         finally:
             executor.shutdown()
+            spinner.join(timeout=5.0)
             client.destroy()
             node.destroy_node()
             context.try_shutdown()
+            context.destroy()  # its participant deleted now: else its Fast DDS ports outlive the process

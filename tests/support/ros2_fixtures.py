@@ -138,6 +138,7 @@ def caller():
     executor.shutdown()
     node.destroy_node()
     rclpy.try_shutdown(context=context)
+    context.destroy()  # its participant deleted now: else its Fast DDS ports outlive the process
 
 
 @pytest.fixture
