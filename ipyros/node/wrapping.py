@@ -407,21 +407,21 @@ def learn_relayed_types(node: "NodeEngine", relays: list[RelaySpec], timeout: fl
               for relay in relays if relay.type in lacking}
     listed, hint = ", ".join(lacking), "; ".join(sorted(set(lacking.values())))
 
-    def build(interface: Interface) -> None:
+    def build(running: str) -> None:
         try:
-            built = backend.build_types_of(interface.node, wanted)
+            built = backend.build_types_of(running, wanted)
         except MessageTypeError as error:
             raise MessageTypeError(f"{listed} not installed here, and {error}; or {hint}") from None
         if built:
-            node.session.notify(f"ipyros: built {', '.join(built)} from {interface.node}'s own type descriptions "
+            node.session.notify(f"ipyros: built {', '.join(built)} from {running}'s own type descriptions "
                                 "(not installed here) to relay them")
 
     if node.base is not None and node.base.running:
-        build(Interface(node=base_fullname(model)))
+        build(base_fullname(model))
     else:
         node.session.notify(f"ipyros: running basenode {base_fullname(model)} briefly as it is, to learn "
                             f"{listed} (not installed here) before relaying")
-        _run_as_it_is(node, timeout, build)
+        _run_as_it_is(node, timeout, lambda interface: build(interface.node))
     left = list(msgtypes.not_installed(wanted))
     if left:
         raise MessageTypeError(f"{', '.join(left)} not installed here, and not made from basenode "
