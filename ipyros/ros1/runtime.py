@@ -39,7 +39,7 @@ from ..core.errors import DeclarationError, HandlerError, MasterError, MessageTy
 from ..core.msgbuild import explain_unsendable
 from ..core.names import is_tool
 from ..core.slots import Arrival, HandlerSlot, Pristine, SendFigures
-from . import sending
+from . import cutthrough, sending
 from .master import master_proxy
 
 
@@ -54,6 +54,9 @@ def _publisher(topic: str, cls: type, latch: bool = False) -> rospy.Publisher:
 # 128 KiB on glibc serves it with mmap/munmap (~15 µs a read, per small message); just
 # under costs ~1.5 µs and still reads a 1 MiB image in 8 calls (bench/README.md).
 _BUFF_SIZE = 127 * 1024
+#: How long a relay's message waits for another connection's message going out in parts
+#: (a 1 MiB image takes milliseconds; a publisher stalled in mid-message must not stall this one for ever).
+_PARTS_WAIT = 2.0
 
 
 class ProcessNode:
@@ -362,6 +365,27 @@ def _send_figures(topic: str, kind: str, count: int, impl: Any) -> SendFigures:
     return SendFigures(topic, kind, count, len(impl.connections), backlog.messages, backlog.dropped)
 
 
+def _offer_again(topic: str, type_name: str) -> None:
+    """Register this process's publication of ``topic`` with the master again, in a moment and once more later.
+
+    The master then sends every subscriber of ``topic`` the list of its publishers, and one
+    whose connection to this process was just closed connects again: rospy subscribers do not
+    by themselves when a publisher closes their connection (roscpp ones do). Its first try waits
+    for the subscriber to notice the closed connection; the second is for one busy in a callback.
+    """
+    def offer() -> None:
+        try:
+            master_proxy(os.environ["ROS_MASTER_URI"], timeout=5.0).registerPublisher(
+                rospy.get_name(), topic, type_name, rospy.core.get_node_uri())
+        except Exception:  # noqa: BLE001 - the master is away: when it is back, everything is registered again
+            pass
+
+    for delay in (0.5, 5.0):
+        timer = threading.Timer(delay, offer)
+        timer.daemon = True
+        timer.start()
+
+
 def _first_line(error: BaseException) -> str:
     text = str(error).strip().splitlines()
     return text[0] if text else type(error).__name__
@@ -569,22 +593,44 @@ class Relay:
         self._pub = _publisher(target, cls)
         self._impl = self._pub.impl
         try:
-            self._sub = _subscribe_bytes(source, cls, self._forward)
+            self._read(source, cls)
         except DeclarationError:
             self._pub.unregister()
             raise
         _OtherTypes.watch(source, cls._type, complain)
 
-    def _forward(self, raw: rospy.AnyMsg) -> None:
-        header = raw._connection_header
+    def _read(self, source: str, cls: type) -> None:
+        """Subscribe to ``source`` as bytes; large messages go on while they arrive (:mod:`.cutthrough`)."""
+        self._sending = threading.Lock()  # held while a message goes out in parts
+        self._sent_in_parts: set[int] = set()  # ids of whole messages whose bytes already went out
+        self._sub = _subscribe_bytes(source, cls, self._forward)
+        self._uncut = cutthrough.install(self._sub.impl, self)
+
+    def _accepts(self, header: dict) -> bool:
+        """Whether messages of the incoming connection of ``header`` are forwarded."""
         if header is not self._header_seen:  # once per incoming connection, not per message
             if header.get("type") != self._type:
                 self._wrong_type(header.get("type", "?"))
-                return
+                return False
             if header.get("latching") == "1" and not self._impl.is_latch:
                 self._impl.enable_latch()
             self._header_seen = header
+        return True
+
+    def _forward(self, raw: rospy.AnyMsg) -> None:
         impl = self._impl
+        if id(raw) in self._sent_in_parts:
+            self._sent_in_parts.discard(id(raw))
+            if impl.is_latch:
+                impl.latch = raw
+            self.count += 1
+            return
+        if not self._accepts(raw._connection_header):
+            return
+        # A message going out in parts from another connection keeps the outgoing streams until it ends.
+        if not self._sending.acquire(timeout=_PARTS_WAIT):
+            sending.count_dropped(self.target)
+            return
         impl.acquire()
         try:
             if impl.is_latch:
@@ -592,7 +638,35 @@ class Relay:
             sending.send_to_all(impl.connections, self.target, raw._buff)
         finally:
             impl.release()
+            self._sending.release()
         self.count += 1
+
+    # -- cutthrough.FrameSink: a large message sent on while it arrives -----------------------
+    def begin(self, header: dict, size: int) -> Optional[sending.Frame]:
+        impl = self._impl
+        if impl is None or len(self._sub.impl.connections) != 1 or not self._accepts(header):
+            return None
+        if not self._sending.acquire(blocking=False):
+            return None
+        impl.acquire()
+        try:
+            frame = sending.Frame(impl.connections, self.target, size) if impl.connections else None
+        finally:
+            impl.release()
+        if frame is None:
+            self._sending.release()
+        return frame
+
+    def end(self, frame: sending.Frame, message: Any) -> None:
+        frame.close()
+        self._sent_in_parts.add(id(message))
+        self._sending.release()
+
+    def abort(self, frame: sending.Frame) -> None:
+        frame.abort()  # the subscribers' connections are closed: their streams were cut mid-message
+        sending.count_dropped(self.target)
+        self._sending.release()
+        _offer_again(self.target, self._impl.type)
 
     def _wrong_type(self, got: str) -> None:
         self.dropped += 1
@@ -608,6 +682,7 @@ class Relay:
 
     def close(self) -> None:
         _OtherTypes.unwatch(self.source, self._complain)
+        self._uncut()
         self._sub.unregister()
         if self._pub is not None:  # a RawRelay advertises at its first message
             self._pub.unregister()
@@ -634,7 +709,7 @@ class RawRelay(Relay):
         # Subscribed as "any md5" under the declared type: the master and rosnode show the type.
         stand_in = type("Unknown", (rospy.AnyMsg,), {"__slots__": (), "_type": type_name, "_md5sum": "*",
                                                      "_full_text": "", "_has_header": False})
-        self._sub = _subscribe_bytes(source, stand_in, self._forward)
+        self._read(source, stand_in)
         _OtherTypes.watch(source, type_name, complain)
 
     def _forward(self, raw: rospy.AnyMsg) -> None:

@@ -16,6 +16,11 @@ subscriber of the topic. So each connection gets an :class:`Outbox`:
   ``queue_size``. A message that has begun to go out is never dropped: the stream would
   be cut in the middle of a frame.
 
+A message may also be sent while it still arrives (a relay forwarding a large image as
+its parts come in, :mod:`.cutthrough`): a :class:`Frame` opens it on every connection,
+sends its parts as they come and closes it. Until it is closed, nothing else goes out on
+those connections ahead of its remaining parts.
+
 Counts are kept per topic (:func:`dropped`, :func:`backlog`), for ``%status``.
 """
 
@@ -26,13 +31,18 @@ import struct
 import threading
 import weakref
 from collections import deque
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, Iterable
+
+__all__ = ["Backlog", "Frame", "Outbox", "backlog", "count_dropped", "dropped", "outbox", "send_to_all"]
 
 #: Messages a slow connection may have waiting before its oldest are dropped.
 LIMIT = 100
 #: Bytes a slow connection may have waiting (1 MiB images: 32 of them).
 LIMIT_BYTES = 32 * 1024 * 1024
+#: How long the writer of a message still arriving waits for its next part before it
+#: checks again (the part's sender wakes it at once; this only bounds a lost wake-up).
+_PART_WAIT = 0.5
 
 _outboxes: "weakref.WeakKeyDictionary[Any, Outbox]" = weakref.WeakKeyDictionary()
 _outboxes_lock = threading.Lock()
@@ -50,14 +60,30 @@ class Backlog:
     dropped: int  # dropped on this topic so far
 
 
+@dataclass(eq=False)
+class _Waiting:
+    """One message in a backlog: the parts not sent yet (the first may be partly sent)."""
+
+    parts: deque = field(default_factory=deque)
+    size: int = 0  # the whole message's bytes, length prefix included
+    complete: bool = True  # False while its parts still arrive
+    begun: bool = False  # some of it is on the wire: it must go out whole
+
+    @property
+    def pending(self) -> int:
+        return sum(len(p) for p in self.parts)
+
+
 class Outbox:
     """The sending side of one subscriber connection (a rospy ``TCPROSTransport``)."""
 
     def __init__(self, conn: Any, topic: str, limit: int = LIMIT, limit_bytes: int = LIMIT_BYTES) -> None:
         self.conn, self.topic = conn, topic
         self.limit, self.limit_bytes = limit, limit_bytes
-        self._waiting: deque[memoryview] = deque()  # the head may be partly sent already
-        self._head_started = False
+        self._waiting: deque[_Waiting] = deque()
+        self._open: _Waiting | None = None  # the message being sent in parts, when it waits here
+        self._opened = False  # a message is being sent in parts (queued or not)
+        self._open_size = 0
         self._bytes = 0
         self._lock = threading.Lock()
         self._wake = threading.Condition(self._lock)
@@ -69,75 +95,143 @@ class Outbox:
 
     def send(self, parts: tuple[bytes, ...], size: int) -> None:
         """Send one length-prefixed message (``parts`` joined are ``size`` bytes); never blocks."""
-        sock = getattr(self.conn, "socket", None)
-        if sock is None or getattr(self.conn, "done", False):
+        sock = self._socket()
+        if sock is None:
             return
         with self._lock:
-            if not self._waiting:
-                try:
-                    sent = sock.sendmsg(parts, (), socket.MSG_DONTWAIT)
-                except BlockingIOError:
-                    sent = 0
-                except OSError:
-                    self._close()
-                    return
-                if sent == size:
-                    self._count(size)
+            if not self._waiting and not self._opened:
+                sent = self._try_send(sock, parts)
+                if sent is None or sent == size:
+                    if sent == size:
+                        self._count(size)
                     return
                 rest = memoryview(b"".join(parts))[sent:]
-                self._head_started = sent > 0
-                self._push(rest)
+                self._queue(_Waiting(deque([rest]), size, begun=sent > 0))
             else:
-                self._push(memoryview(b"".join(parts)))
+                if self._opened and self._open is None:  # the open message's rest must stay ahead of this one
+                    self._open = self._queue(_Waiting(size=self._open_size, complete=False, begun=True))
+                self._queue(_Waiting(deque([memoryview(b"".join(parts))]), size))
             self._start_writer()
-            self._wake.notify()
 
-    def _push(self, data: memoryview) -> None:
-        self._waiting.append(data)
-        self._bytes += len(data)
+    # -- a message sent in parts ------------------------------------------------------------
+    def open(self, size: int) -> None:
+        """A message of ``size`` bytes (length prefix included) will come in parts (:meth:`part`)."""
+        with self._lock:
+            self._opened, self._open_size = True, size
+
+    def part(self, data: memoryview) -> None:
+        """Send the open message's next bytes; what the socket does not take now waits (copied)."""
+        sock = self._socket()
+        if sock is None:
+            return
+        with self._lock:
+            if not self._opened:
+                return
+            if self._open is None and not self._waiting:
+                sent = self._try_send(sock, (data,))
+                if sent is None or sent == len(data):
+                    return
+                self._open = self._queue(_Waiting(size=self._open_size, complete=False, begun=True))
+                data = data[sent:]
+            elif self._open is None:  # behind earlier messages: none of it is sent yet
+                self._open = self._queue(_Waiting(size=self._open_size, complete=False))
+            self._open.parts.append(memoryview(bytes(data)))
+            self._bytes += len(data)
+            self._start_writer()
+
+    def close_frame(self) -> None:
+        """All of the open message has been given: it is counted once it is all sent."""
+        with self._lock:
+            if not self._opened:
+                return
+            if self._open is None:
+                self._count(self._open_size)
+            else:
+                self._open.complete = True
+                self._wake.notify()
+            self._open, self._opened = None, False
+
+    def abort_frame(self) -> None:
+        """The open message will never be whole: the subscriber's stream is cut, so the connection is closed
+        (its subscriber connects again and gets the next message whole)."""
+        with self._lock:
+            opened = self._opened
+            self._open, self._opened = None, False
+            self._waiting.clear()
+            self._bytes = 0
+            self._wake.notify()
+        if opened:
+            self._close()
+
+    # -- the backlog --------------------------------------------------------------------------
+    def _socket(self) -> Any:
+        sock = getattr(self.conn, "socket", None)
+        return None if sock is None or getattr(self.conn, "done", False) else sock
+
+    def _try_send(self, sock: Any, parts: tuple) -> int | None:
+        """What the socket takes now without waiting; None when the connection is broken (then closed)."""
+        try:
+            return sock.sendmsg(parts, (), socket.MSG_DONTWAIT)
+        except BlockingIOError:
+            return 0
+        except OSError:
+            self._close()
+            return None
+
+    def _queue(self, item: _Waiting) -> _Waiting:
+        self._waiting.append(item)
+        self._bytes += item.pending
         while len(self._waiting) > self.limit or self._bytes > self.limit_bytes:
-            first = 1 if self._head_started else 0  # a begun head must go out whole
-            if len(self._waiting) - first <= 1:
-                break  # the newest message always stays
-            dropped = self._waiting[first]
-            del self._waiting[first]
-            self._bytes -= len(dropped)
-            with _counts_lock:
-                _dropped[self.topic] = _dropped.get(self.topic, 0) + 1
+            # The oldest message not begun and not still arriving goes; the newest always stays.
+            droppable = [w for w in list(self._waiting)[:-1] if not w.begun and w.complete]
+            if not droppable:
+                break
+            self._waiting.remove(droppable[0])
+            self._bytes -= droppable[0].pending
+            count_dropped(self.topic)
+        return item
 
     def _start_writer(self) -> None:
         if self._writer is None or not self._writer.is_alive():
             self._writer = threading.Thread(target=self._drain, name=f"ipyros-outbox {self.topic}", daemon=True)
             self._writer.start()
+        self._wake.notify()
 
     def _drain(self) -> None:
         """The writer thread: blocking sends of the backlog, head first, until it is empty."""
         sock = self.conn.socket
         while True:
             with self._lock:
+                while self._waiting and not self._waiting[0].parts and not self._waiting[0].complete:
+                    self._wake.wait(_PART_WAIT)  # the head still arrives: its next part comes
                 if not self._waiting:
                     self._writer = None
                     return
                 head = self._waiting[0]
+                if not head.parts:  # whole and all sent
+                    self._waiting.popleft()
+                    self._count(head.size)
+                    continue
+                data = head.parts[0]
             try:
-                sent = sock.send(head)  # blocks until the peer reads: only this thread waits
+                sent = sock.send(data)  # blocks until the peer reads: only this thread waits
             except OSError:
                 with self._lock:
                     self._waiting.clear()
                     self._bytes = 0
+                    self._open, self._opened = None, False
                     self._writer = None
                 self._close()
                 return
             with self._lock:
-                if sent == len(head):
-                    self._waiting.popleft()
-                    self._bytes -= len(head)
-                    self._head_started = False
-                    self._count(0)
+                if not self._waiting or self._waiting[0] is not head:
+                    continue  # aborted meanwhile
+                head.begun = True
+                self._bytes -= sent
+                if sent == len(data):
+                    head.parts.popleft()
                 else:
-                    self._waiting[0] = head[sent:]
-                    self._bytes -= sent
-                    self._head_started = True
+                    head.parts[0] = data[sent:]
 
     def _count(self, size: int) -> None:
         self.conn.stat_bytes += size
@@ -167,6 +261,37 @@ def send_to_all(connections: Any, topic: str, body: bytes) -> None:
     size = len(body) + 4
     for conn in connections:
         outbox(conn, topic).send(parts, size)
+
+
+class Frame:
+    """One message sent to the connections of ``topic`` in parts, as it arrives (length prefix first).
+
+    The connections are those of the moment it opens: one that connects meanwhile gets the
+    next message, whole.
+    """
+
+    def __init__(self, connections: Iterable[Any], topic: str, size: int) -> None:
+        self.boxes = [outbox(conn, topic) for conn in connections]
+        for box in self.boxes:
+            box.open(size)
+
+    def part(self, data: memoryview) -> None:
+        for box in self.boxes:
+            box.part(data)
+
+    def close(self) -> None:
+        for box in self.boxes:
+            box.close_frame()
+
+    def abort(self) -> None:
+        for box in self.boxes:
+            box.abort_frame()
+
+
+def count_dropped(topic: str) -> None:
+    """One message of ``topic`` was dropped before it went out."""
+    with _counts_lock:
+        _dropped[topic] = _dropped.get(topic, 0) + 1
 
 
 def dropped(topic: str) -> int:
