@@ -1,39 +1,41 @@
-"""Relaying a large message while it still arrives (cut-through), read straight into one buffer.
+"""Reading a large message straight into one buffer, and relaying it while it still arrives (cut-through).
 
 rospy reads a message in ``buff_size`` pieces (127 KiB here, :mod:`.runtime`), each a new
-bytes object appended to a growing buffer, and copies the message out once it is whole; a
-relay then sends it on. For a 1 MiB image that is three copies and fresh memory for each
-in the relay, and the relay's hop starts only once the first hop has ended.
+bytes object appended to a growing buffer, and copies the message out once it is whole:
+three copies of a 1 MiB image, each into fresh memory, before a handler parses it or a
+relay sends it on; and a relay's hop starts only once the first hop has ended.
 
-This module takes over, on the connections of a relayed topic, the step where rospy looks
-for a whole message in what it has read (the protocol's ``read_messages``, which rospy lets
-read more from the socket itself): once a message's length says it is large, the rest of it
-is read straight from the socket into one buffer of its size, and each piece is sent on to
-the relay's subscribers as it lands (:class:`~.sending.Frame`). The whole message is still
-handed to the topic's readers as before (the relay only counts and latches it; a handler or
-``%echo`` on the same topic parse it).
+This module takes over, on the connections of every subscription of the session, the step
+where rospy looks for a whole message in what it has read (the protocol's ``read_messages``,
+which rospy lets read more from the socket itself): once a message's length says it is
+large, the rest of it is read straight from the socket into one buffer of its size. When a
+relay reads the topic (:attr:`Reading.sink`), each piece also goes on to the relay's
+subscribers as it lands (:class:`~.sending.Frame`), so both hops run together; the relay
+then only counts and latches the whole message, which the topic's other readers (a handler,
+``%echo``) are handed as before.
 
-It applies to a relay fed by one publisher connection (the wrapped basenode): pieces of
-two incoming messages must never mix on an outgoing stream, so while one message is sent
+Only a relay fed by one publisher connection (the wrapped basenode) sends pieces: pieces of
+two incoming messages must never mix on an outgoing stream, so while one message goes out
 in pieces, a message from another connection waits for it and goes whole. If the incoming
-connection breaks in the middle, the subscribers' streams are cut: their connections are
-closed, and they connect again (rospy and roscpp subscribers do) and get the next message whole.
+connection breaks in the middle, the subscribers' streams are cut: the relay closes their
+connections and has them connect again (:meth:`~.runtime.Relay.abort`).
 """
 
 from __future__ import annotations
 
+import functools
 import struct
-from typing import Any, Callable, Optional, Protocol
+from typing import Any, Optional, Protocol
 
 from rospy.exceptions import TransportTerminated
 
 from .sending import Frame
 
-__all__ = ["CUT_THROUGH_BYTES", "FrameSink", "install"]
+__all__ = ["LARGE_BYTES", "FrameSink", "Reading", "reading"]
 
-#: Messages from this size (length prefix included) are read and sent on this way; a smaller
-#: one mostly comes in one read, and its time is in the per-message work, not in copies.
-CUT_THROUGH_BYTES = 256 * 1024
+#: Messages from this size (length prefix included) are read this way; a smaller one mostly
+#: comes in one read, and its time is in the per-message work, not in copies.
+LARGE_BYTES = 256 * 1024
 _LENGTH = struct.Struct("<I")
 
 
@@ -50,66 +52,37 @@ class FrameSink(Protocol):
         """``frame`` will never be whole."""
 
 
-def install(sub_impl: Any, sink: FrameSink) -> Callable[[], None]:
-    """Read large messages of ``sub_impl``'s connections (now and later) through to ``sink``.
+class Reading:
+    """How one subscription (a rospy ``_SubscriberImpl``) reads large messages; ``sink`` is the relay
+    that sends them on as they arrive, if any (one per topic: a second relay of it sends whole messages)."""
 
-    Returns what takes it away again. One sink per topic: a second relay of the same source
-    sends whole messages.
-    """
-    if "_ipyros_cut_through" in sub_impl.__dict__:
-        return lambda: None
-    sub_impl._ipyros_cut_through = sink
-    add_connection = sub_impl.add_connection
+    def __init__(self, sub_impl: Any) -> None:
+        self.sub_impl = sub_impl
+        self.sink: Optional[FrameSink] = None
 
-    def add_and_watch(conn: Any) -> bool:
-        _Reader.watch(conn, sub_impl, sink)
-        return add_connection(conn)
-
-    sub_impl.add_connection = add_and_watch
-    for conn in list(sub_impl.connections):
-        _Reader.watch(conn, sub_impl, sink)
-
-    def remove() -> None:
-        sub_impl.__dict__.pop("add_connection", None)
-        sub_impl.__dict__.pop("_ipyros_cut_through", None)
-        for conn in list(sub_impl.connections):
-            conn.protocol.__dict__.pop("read_messages", None)
-
-    return remove
-
-
-class _Reader:
-    """Stands in for one connection's ``protocol.read_messages``; rospy calls it after each read, with
-    the bytes read since the last whole message at the start of ``b``."""
-
-    def __init__(self, conn: Any, sub_impl: Any, sink: FrameSink) -> None:
-        self.conn, self.sub_impl, self.sink = conn, sub_impl, sink
-        self.read_whole = conn.protocol.read_messages
-
-    @classmethod
-    def watch(cls, conn: Any, sub_impl: Any, sink: FrameSink) -> None:
-        if "read_messages" not in conn.protocol.__dict__:
-            conn.protocol.read_messages = cls(conn, sub_impl, sink).read_messages
-
-    def read_messages(self, b: Any, msg_queue: list, sock: Any) -> None:
+    def read_messages(self, conn: Any, read_whole: Any, b: Any, msg_queue: list, sock: Any) -> None:
+        """rospy's step after each read, for ``conn``: the bytes read since its last whole message are at
+        the start of ``b``; ``read_whole`` is rospy's own step."""
+        read_whole(b, msg_queue, sock)  # whole messages first: small ones pay nothing more
         have = b.tell()
-        if have >= 4:
-            with b.getbuffer() as view:
-                (length,) = _LENGTH.unpack_from(view, 0)
-            if CUT_THROUGH_BYTES <= length + 4 and have < length + 4:
-                frame = self.sink.begin(self.conn.header, length + 4)
-                if frame is not None:
-                    msg_queue.append(self._read_through(b, have, length, sock, frame))
-                    return
-        self.read_whole(b, msg_queue, sock)
+        if msg_queue or have < 4:
+            return
+        with b.getbuffer() as view:
+            (length,) = _LENGTH.unpack_from(view, 0)
+        if LARGE_BYTES <= length + 4 and have < length + 4:
+            sink = self.sink
+            frame = sink.begin(conn.header, length + 4) if sink is not None else None
+            msg_queue.append(self._read_rest(conn, b, have, length, sock, sink, frame))
 
-    def _read_through(self, b: Any, have: int, length: int, sock: Any, frame: Frame) -> Any:
-        """The rest of the message read into its own buffer, each piece sent on as it lands."""
+    def _read_rest(self, conn: Any, b: Any, have: int, length: int, sock: Any,
+                   sink: Optional[FrameSink], frame: Optional[Frame]) -> Any:
+        """The message, its rest read into its own buffer; each piece sent on as it lands when ``frame``."""
         body = bytearray(length)
         into = memoryview(body)
         try:
             with b.getbuffer() as view:
-                _send(frame, view[:have])
+                if frame is not None:
+                    _send(frame, view[:have])
                 into[:have - 4] = view[4:have]
             b.seek(0)
             b.truncate(0)
@@ -118,19 +91,47 @@ class _Reader:
                 got = sock.recv_into(into[at:])
                 if not got:
                     raise TransportTerminated("unable to receive data from sender, check sender's logs for details")
-                _send(frame, into[at:at + got])
+                if frame is not None:
+                    _send(frame, into[at:at + got])
                 at += got
         except BaseException:
-            self.sink.abort(frame)
+            if frame is not None:
+                sink.abort(frame)
             raise
         finally:
             into.release()
-        self.conn.stat_bytes += length + 4 - have  # rospy counts only what it reads itself
-        message = self.conn.protocol.recv_data_class()
-        # The relay alone reads this topic: it only sends the buffer on (or latches it); others parse bytes.
-        message._buff = body if len(self.sub_impl.callbacks) == 1 else bytes(body)
-        self.sink.end(frame, message)
+        conn.stat_bytes += length + 4 - have  # rospy counts only what it reads itself
+        message = conn.protocol.recv_data_class()
+        # A relay alone on the topic only sends the buffer on (or latches it); other readers parse bytes.
+        alone = sink is not None and len(self.sub_impl.callbacks) == 1
+        message._buff = body if alone else bytes(body)
+        if frame is not None:
+            sink.end(frame, message)
         return message
+
+
+def reading(sub_impl: Any) -> Reading:
+    """The :class:`Reading` of ``sub_impl``, set up on its connections (now and later) on first call."""
+    found = sub_impl.__dict__.get("_ipyros_reading")
+    if found is not None:
+        return found
+    found = sub_impl._ipyros_reading = Reading(sub_impl)
+    add_connection = sub_impl.add_connection
+
+    def add_and_read(conn: Any) -> bool:
+        _take_over(conn, found)
+        return add_connection(conn)
+
+    sub_impl.add_connection = add_and_read
+    for conn in list(sub_impl.connections):
+        _take_over(conn, found)
+    return found
+
+
+def _take_over(conn: Any, how: Reading) -> None:
+    protocol = conn.protocol
+    if "read_messages" not in protocol.__dict__:
+        protocol.read_messages = functools.partial(how.read_messages, conn, protocol.read_messages)
 
 
 def _send(frame: Frame, piece: memoryview) -> None:

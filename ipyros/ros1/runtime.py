@@ -344,7 +344,8 @@ class Publication:
                 impl.enable_latch()
             if impl.is_latch:
                 impl.latch = msg  # rospy sends it to a subscriber connecting later
-            sending.send_to_all(impl.connections, self.topic, buffer.getvalue()[4:])
+            with buffer.getbuffer() as framed:  # sent as it is: no copy of a large message
+                sending.send_framed_to_all(impl.connections, self.topic, framed)
             impl.message_data_sent += buffer.tell()
             self.count += 1
         finally:
@@ -407,6 +408,7 @@ def _subscribe_bytes(topic: str, cls: type, callback: Callable[[Any], None]) -> 
                                f"so it cannot be read as {cls._type} too: use {existing.data_class._type}")
     sub = rospy.Subscriber(topic, raw_class(cls), callback, queue_size=None, buff_size=_BUFF_SIZE,
                            tcp_nodelay=True)
+    cutthrough.reading(sub.impl)  # large messages read straight into one buffer
     _Reconnect.guard(sub)
     _OtherTypes.install()
     return sub
@@ -604,7 +606,9 @@ class Relay:
         self._sending = threading.Lock()  # held while a message goes out in parts
         self._sent_in_parts: set[int] = set()  # ids of whole messages whose bytes already went out
         self._sub = _subscribe_bytes(source, cls, self._forward)
-        self._uncut = cutthrough.install(self._sub.impl, self)
+        self._reading = cutthrough.reading(self._sub.impl)
+        if self._reading.sink is None:
+            self._reading.sink = self
 
     def _accepts(self, header: dict) -> bool:
         """Whether messages of the incoming connection of ``header`` are forwarded."""
@@ -619,17 +623,18 @@ class Relay:
 
     def _forward(self, raw: rospy.AnyMsg) -> None:
         impl = self._impl
-        if id(raw) in self._sent_in_parts:
+        if self._sent_in_parts and id(raw) in self._sent_in_parts:  # its bytes went out as they came
             self._sent_in_parts.discard(id(raw))
             if impl.is_latch:
                 impl.latch = raw
             self.count += 1
             return
-        if not self._accepts(raw._connection_header):
+        header = raw._connection_header
+        if header is not self._header_seen and not self._accepts(header):
             return
-        # A message going out in parts from another connection keeps the outgoing streams until it ends.
-        if not self._sending.acquire(timeout=_PARTS_WAIT):
-            sending.count_dropped(self.target)
+        # A message going out in pieces (from another connection) has the outgoing streams until it ends.
+        # Unlocked, none can start while this one goes: begin() takes the lock, then sees two connections.
+        if self._sending.locked() and not self._wait_for_pieces():
             return
         impl.acquire()
         try:
@@ -638,21 +643,27 @@ class Relay:
             sending.send_to_all(impl.connections, self.target, raw._buff)
         finally:
             impl.release()
-            self._sending.release()
         self.count += 1
+
+    def _wait_for_pieces(self) -> bool:
+        if self._sending.acquire(True, _PARTS_WAIT):
+            self._sending.release()
+            return True
+        sending.count_dropped(self.target)  # its publisher stalled in mid-message
+        return False
 
     # -- cutthrough.FrameSink: a large message sent on while it arrives -----------------------
     def begin(self, header: dict, size: int) -> Optional[sending.Frame]:
         impl = self._impl
-        if impl is None or len(self._sub.impl.connections) != 1 or not self._accepts(header):
+        if impl is None or not self._sending.acquire(False):
             return None
-        if not self._sending.acquire(blocking=False):
-            return None
-        impl.acquire()
-        try:
-            frame = sending.Frame(impl.connections, self.target, size) if impl.connections else None
-        finally:
-            impl.release()
+        frame = None
+        if len(self._sub.impl.connections) == 1 and self._accepts(header):
+            impl.acquire()
+            try:
+                frame = sending.Frame(impl.connections, self.target, size) if impl.connections else None
+            finally:
+                impl.release()
         if frame is None:
             self._sending.release()
         return frame
@@ -682,7 +693,8 @@ class Relay:
 
     def close(self) -> None:
         _OtherTypes.unwatch(self.source, self._complain)
-        self._uncut()
+        if self._reading.sink is self:
+            self._reading.sink = None
         self._sub.unregister()
         if self._pub is not None:  # a RawRelay advertises at its first message
             self._pub.unregister()

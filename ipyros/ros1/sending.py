@@ -10,11 +10,14 @@ subscriber of the topic. So each connection gets an :class:`Outbox`:
   caller's thread, as before, at the same cost;
 - **slow path**: what the socket did not take goes into the connection's own backlog,
   which a writer thread of that connection drains with blocking sends. Later messages
-  for that connection queue behind it (order is kept), so the caller never waits.
-  The backlog holds at most ``limit`` messages (and ``limit_bytes``): when full, the
-  oldest message not yet begun is dropped and counted, as ROS users know from
-  ``queue_size``. A message that has begun to go out is never dropped: the stream would
-  be cut in the middle of a frame.
+  for that connection queue behind it (order is kept), so the caller does not wait.
+- **full backlog**: it holds ``limit`` messages (and ``limit_bytes``). When it is full and
+  the subscriber still reads (its writer sent something in the last ``STALLED`` seconds),
+  the caller waits for room (``ROOM_WAIT`` at most), as behind a direct connection: a subscriber that is
+  only slower than the sender (a relay flat out) loses nothing. When the subscriber reads
+  nothing (a callback asleep), the oldest message not yet begun is dropped and counted,
+  as ROS users know from ``queue_size``, and the caller goes on. A message that has begun
+  to go out is never dropped: the stream would be cut in the middle of a frame.
 
 A message may also be sent while it still arrives (a relay forwarding a large image as
 its parts come in, :mod:`.cutthrough`): a :class:`Frame` opens it on every connection,
@@ -29,17 +32,24 @@ from __future__ import annotations
 import socket
 import struct
 import threading
+import time
 import weakref
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any, Iterable
 
-__all__ = ["Backlog", "Frame", "Outbox", "backlog", "count_dropped", "dropped", "outbox", "send_to_all"]
+__all__ = ["Backlog", "Frame", "Outbox", "backlog", "count_dropped", "dropped", "outbox", "send_framed_to_all",
+           "send_to_all"]
 
 #: Messages a slow connection may have waiting before its oldest are dropped.
 LIMIT = 100
 #: Bytes a slow connection may have waiting (1 MiB images: 32 of them).
 LIMIT_BYTES = 32 * 1024 * 1024
+#: A subscriber whose connection took nothing for this long is not reading: its oldest waiting
+#: messages are dropped instead of holding the sender back.
+STALLED = 0.5
+#: The longest a sender waits for room behind one message (a subscriber that reads a trickle).
+ROOM_WAIT = 2.0
 #: How long the writer of a message still arriving waits for its next part before it
 #: checks again (the part's sender wakes it at once; this only bounds a lost wake-up).
 _PART_WAIT = 0.5
@@ -86,7 +96,9 @@ class Outbox:
         self._open_size = 0
         self._bytes = 0
         self._lock = threading.Lock()
-        self._wake = threading.Condition(self._lock)
+        self._wake = threading.Condition(self._lock)  # the writer: more to send
+        self._room = threading.Condition(self._lock)  # a sender waiting for the backlog to shrink
+        self._progress = 0.0  # when the writer last sent something (monotonic)
         self._writer: threading.Thread | None = None
 
     @property
@@ -94,16 +106,22 @@ class Outbox:
         return len(self._waiting)
 
     def send(self, parts: tuple[bytes, ...], size: int) -> None:
-        """Send one length-prefixed message (``parts`` joined are ``size`` bytes); never blocks."""
-        sock = self._socket()
-        if sock is None:
+        """Send one length-prefixed message (``parts`` joined are ``size`` bytes); waits only for room
+        behind a full backlog that a subscriber is reading (see the module's docstring)."""
+        sock = getattr(self.conn, "socket", None)
+        if sock is None or self.conn.done:
             return
         with self._lock:
             if not self._waiting and not self._opened:
-                sent = self._try_send(sock, parts)
-                if sent is None or sent == size:
-                    if sent == size:
-                        self._count(size)
+                try:
+                    sent = sock.sendmsg(parts, (), socket.MSG_DONTWAIT)
+                except BlockingIOError:
+                    sent = 0
+                except OSError:
+                    self._close()
+                    return
+                if sent == size:
+                    self._count(size)
                     return
                 rest = memoryview(b"".join(parts))[sent:]
                 self._queue(_Waiting(deque([rest]), size, begun=sent > 0))
@@ -160,6 +178,7 @@ class Outbox:
             self._waiting.clear()
             self._bytes = 0
             self._wake.notify()
+            self._room.notify_all()
         if opened:
             self._close()
 
@@ -181,11 +200,16 @@ class Outbox:
     def _queue(self, item: _Waiting) -> _Waiting:
         self._waiting.append(item)
         self._bytes += item.pending
+        deadline = time.monotonic() + ROOM_WAIT
         while len(self._waiting) > self.limit or self._bytes > self.limit_bytes:
-            # The oldest message not begun and not still arriving goes; the newest always stays.
+            # The oldest message not begun and not still arriving can go; the newest always stays.
             droppable = [w for w in list(self._waiting)[:-1] if not w.begun and w.complete]
             if not droppable:
                 break
+            now = time.monotonic()
+            if self._writer is not None and now - self._progress < STALLED and now < deadline:
+                self._room.wait(STALLED)  # the subscriber reads, only slower: wait for room
+                continue
             self._waiting.remove(droppable[0])
             self._bytes -= droppable[0].pending
             count_dropped(self.topic)
@@ -193,6 +217,7 @@ class Outbox:
 
     def _start_writer(self) -> None:
         if self._writer is None or not self._writer.is_alive():
+            self._progress = time.monotonic()
             self._writer = threading.Thread(target=self._drain, name=f"ipyros-outbox {self.topic}", daemon=True)
             self._writer.start()
         self._wake.notify()
@@ -206,6 +231,7 @@ class Outbox:
                     self._wake.wait(_PART_WAIT)  # the head still arrives: its next part comes
                 if not self._waiting:
                     self._writer = None
+                    self._room.notify_all()
                     return
                 head = self._waiting[0]
                 if not head.parts:  # whole and all sent
@@ -221,9 +247,13 @@ class Outbox:
                     self._bytes = 0
                     self._open, self._opened = None, False
                     self._writer = None
+                    self._room.notify_all()
                 self._close()
                 return
             with self._lock:
+                if sent:
+                    self._progress = time.monotonic()
+                    self._room.notify_all()
                 if not self._waiting or self._waiting[0] is not head:
                     continue  # aborted meanwhile
                 head.begun = True
@@ -257,8 +287,15 @@ def outbox(conn: Any, topic: str) -> Outbox:
 
 def send_to_all(connections: Any, topic: str, body: bytes) -> None:
     """Send one serialized message body to every connection of ``topic``."""
-    parts = (_LENGTH.pack(len(body)), body)
-    size = len(body) + 4
+    _send_parts(connections, topic, (_LENGTH.pack(len(body)), body), len(body) + 4)
+
+
+def send_framed_to_all(connections: Any, topic: str, framed: memoryview) -> None:
+    """Send one serialized message that starts with its length (as rospy's ``serialize_message`` writes it)."""
+    _send_parts(connections, topic, (framed,), len(framed))
+
+
+def _send_parts(connections: Any, topic: str, parts: tuple, size: int) -> None:
     for conn in connections:
         outbox(conn, topic).send(parts, size)
 

@@ -8,7 +8,7 @@ import pytest
 from peer import Peer
 from ros1_fixtures import wait_for
 from shell import error_of, ok
-from std_msgs.msg import UInt32
+from std_msgs.msg import Header, UInt32
 
 from ipyros.core.errors import MessageTypeError
 
@@ -102,3 +102,26 @@ def test_a_publisher_that_closes_and_reopens_its_topic_is_followed(make_node):
             peer.wait_line(f"reopened {n}")
             count = len(heard)
             wait_for(lambda: len(heard) > count + 5, timeout=10, what=f"messages after reopen {n}")
+
+
+def test_a_subscriber_slower_than_the_writer_but_reading_loses_nothing(make_node):
+    """Flat out, 1 MiB images are written faster than a rospy subscriber takes them: its backlog fills,
+    and write() waits for room (as it would behind a direct connection) instead of dropping."""
+    import re
+
+    from sensor_msgs.msg import Image
+
+    nd = make_node("flat_out")
+    nd.new.publish("/flat/image", msgType=Image).create()
+    with Peer("check_images.py", "/flat/image") as checker:
+        checker.wait_line("ready")
+        wait_for(lambda: nd.status().row("/flat/image").connections == 1, timeout=20, what="the checker to connect")
+        size = 1 << 20
+        for i in range(1, 151):
+            nd.write("/flat/image", Image(height=1, width=size, encoding="mono8", step=size,
+                                          data=bytes([i % 251]) * size, header=Header(frame_id=str(i))))
+        wait_for(lambda: any(line.startswith("got 150 ") for line in checker.lines), timeout=60,
+                 what=f"all 150 images (dropped: {nd.status().row('/flat/image').dropped})")
+        ids = [int(m.group(1)) for line in checker.lines if (m := re.fullmatch(r"got \d+ (\d+)", line))]
+        assert ids == list(range(1, 151)) and not any(line.startswith("broken") for line in checker.lines)
+        assert nd.status().row("/flat/image").dropped == 0
