@@ -92,8 +92,7 @@ class Outbox:
         self.limit, self.limit_bytes = limit, limit_bytes
         self._waiting: deque[_Waiting] = deque()
         self._open: _Waiting | None = None  # the message being sent in parts, when it waits here
-        self._opened = False  # a message is being sent in parts (queued or not)
-        self._open_size = 0
+        self._open_size: int | None = None  # its size while a message is being sent in parts (queued or not)
         self._bytes = 0
         self._lock = threading.Lock()
         self._wake = threading.Condition(self._lock)  # the writer: more to send
@@ -108,25 +107,20 @@ class Outbox:
     def send(self, parts: tuple[bytes, ...], size: int) -> None:
         """Send one length-prefixed message (``parts`` joined are ``size`` bytes); waits only for room
         behind a full backlog that a subscriber is reading (see the module's docstring)."""
-        sock = getattr(self.conn, "socket", None)
-        if sock is None or self.conn.done:
+        sock = self._socket()
+        if sock is None:
             return
         with self._lock:
-            if not self._waiting and not self._opened:
-                try:
-                    sent = sock.sendmsg(parts, (), socket.MSG_DONTWAIT)
-                except BlockingIOError:
-                    sent = 0
-                except OSError:
-                    self._close()
-                    return
-                if sent == size:
-                    self._count(size)
+            if not self._waiting and self._open_size is None:
+                sent = self._try_send(sock, parts)
+                if sent is None or sent == size:
+                    if sent == size:
+                        self._count(size)
                     return
                 rest = memoryview(b"".join(parts))[sent:]
                 self._queue(_Waiting(deque([rest]), size, begun=sent > 0))
             else:
-                if self._opened and self._open is None:  # the open message's rest must stay ahead of this one
+                if self._open_size is not None and self._open is None:  # the open message's rest stays ahead
                     self._open = self._queue(_Waiting(size=self._open_size, complete=False, begun=True))
                 self._queue(_Waiting(deque([memoryview(b"".join(parts))]), size))
             self._start_writer()
@@ -135,7 +129,7 @@ class Outbox:
     def open(self, size: int) -> None:
         """A message of ``size`` bytes (length prefix included) will come in parts (:meth:`part`)."""
         with self._lock:
-            self._opened, self._open_size = True, size
+            self._open_size = size
 
     def part(self, data: memoryview) -> None:
         """Send the open message's next bytes; what the socket does not take now waits (copied)."""
@@ -143,7 +137,7 @@ class Outbox:
         if sock is None:
             return
         with self._lock:
-            if not self._opened:
+            if self._open_size is None:
                 return
             if self._open is None and not self._waiting:
                 sent = self._try_send(sock, (data,))
@@ -160,21 +154,21 @@ class Outbox:
     def close_frame(self) -> None:
         """All of the open message has been given: it is counted once it is all sent."""
         with self._lock:
-            if not self._opened:
+            if self._open_size is None:
                 return
             if self._open is None:
                 self._count(self._open_size)
             else:
                 self._open.complete = True
                 self._wake.notify()
-            self._open, self._opened = None, False
+            self._open = self._open_size = None
 
     def abort_frame(self) -> None:
         """The open message will never be whole: the subscriber's stream is cut, so the connection is closed
         (its subscriber connects again and gets the next message whole)."""
         with self._lock:
-            opened = self._opened
-            self._open, self._opened = None, False
+            opened = self._open_size is not None
+            self._open = self._open_size = None
             self._waiting.clear()
             self._bytes = 0
             self._wake.notify()
@@ -245,7 +239,7 @@ class Outbox:
                 with self._lock:
                     self._waiting.clear()
                     self._bytes = 0
-                    self._open, self._opened = None, False
+                    self._open = self._open_size = None
                     self._writer = None
                     self._room.notify_all()
                 self._close()
