@@ -60,6 +60,9 @@ class Ros2:
         """Nothing to do before the nodes shut down."""
 
     def close(self) -> None:
+        if self._goals is not None:  # before their node: an action client left over keeps the participant alive
+            self._goals.close()      # past the process's end, and its Fast DDS ports with it
+            self._goals = None
         self.process.shutdown()
 
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
