@@ -9,7 +9,6 @@ Prints "ready" once advertised; publishes COUNT images (0: until stdin closes) a
 import argparse
 import sys
 import threading
-import time
 
 import rospy
 from sensor_msgs.msg import Image
