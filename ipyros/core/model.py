@@ -78,12 +78,14 @@ class BaseModel:
     and ``launch_args``, the ``<arg>`` values it was read with (as ``roslaunch file a:=1``);
     its ``env`` comes from the file's ``<env>`` tags. A recorded bag as the basenode
     (``baseBag``) keeps ``bag``: its path and how it is played (``rate``, ``loop``,
-    ``topics``, ``delay``), beside the player it runs as.
+    ``topics``, ``delay``), beside the player it runs as. ``own_name`` is the name its own code
+    gives its node, read from its source when it is declared (``node_name`` is the one given).
     """
 
     executable: Optional[str] = None
     package: Optional[str] = None
     node_name: Optional[str] = None
+    own_name: Optional[str] = None
     namespace: Optional[str] = None
     remaps: dict[str, str] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)

@@ -29,9 +29,12 @@ __all__ = ["base_fullname", "base_namespace", "base_node_name", "basenode_remaps
 
 
 def base_node_name(base: BaseModel) -> str:
-    """The basenode's ROS name: the one given, else the executable's (``move_base``)."""
+    """The basenode's ROS name: the one given, else the one its code gives it (as when it runs by hand), else its
+    executable's (``move_base``)."""
     if base.node_name:
         return base.node_name.strip("/")
+    if base.own_name:
+        return base.own_name
     stem = re.sub(r"\W", "_", (base.executable or "base").rsplit("/", 1)[-1].split(".")[0])
     return stem if stem[:1].isalpha() else "n" + stem
 

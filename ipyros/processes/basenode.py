@@ -34,10 +34,12 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 import yaml
 
 from ..core.errors import BaseNodeError, NodeStateError
+from ..core.nodecode import node_name_in
 from .process import spawn, stop_process
 
-__all__ = ["BaseProcess", "OnExit", "child_env", "exit_reason", "is_executable_file", "log_dir", "param_value", "plain",
-           "python_command", "refuse_path_with_package", "script_command", "stop_all", "stop_together", "temp_log"]
+__all__ = ["BaseProcess", "OnExit", "child_env", "exit_reason", "is_executable_file", "log_dir", "own_node_name",
+           "param_value", "plain", "python_command", "refuse_path_with_package", "script_command", "stop_all",
+           "stop_together", "temp_log"]
 
 
 def is_executable_file(path: Path) -> bool:
@@ -101,6 +103,31 @@ def child_env(argv0: str, extra: Optional[Mapping[str, str]] = None) -> dict[str
             env.pop("LD_LIBRARY_PATH", None)
     env.update(extra or {})
     return env
+
+
+#: The most of a script read to find the name its code gives its node: a node's source is far smaller.
+_MOST_SOURCE = 1 << 20
+
+
+def own_node_name(executable: str, package_path: Optional[Callable[[], Path]], calls: Sequence[str]) -> Optional[str]:
+    """The name a basenode's own Python code gives its node (:func:`~ipyros.core.nodecode.node_name_in`), read
+    from its file: ``package_path()`` finds a package's executable, else ``executable`` is a path. ``None`` for
+    what is not a Python script that names one node (a binary, a name computed at run time), or is not found."""
+    try:
+        if package_path is not None:
+            path = package_path()
+        elif "/" in executable or executable.startswith("~"):  # a bare name without its package is no file yet
+            path = Path(executable).expanduser()
+        else:
+            return None
+        with open(path, "rb") as f:
+            source = f.read(_MOST_SOURCE + 1)
+    except (BaseNodeError, OSError):
+        return None
+    if len(source) > _MOST_SOURCE or not (path.suffix == ".py" or (source.startswith(b"#!") and
+                                                                    b"python" in source.split(b"\n", 1)[0])):
+        return None
+    return node_name_in(source.decode(errors="replace"), calls)
 
 
 def script_command(executable: str, args: Sequence[str] = ()) -> tuple[Path, list[str]]:

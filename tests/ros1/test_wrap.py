@@ -158,7 +158,7 @@ def test_a_script_given_by_its_path_is_wrapped_like_any_basenode(make_node, tmp_
     w.baseNode(str(script), namespace="scripted", args=["--prefix", "py:"])
     w.reuse.subscribe("in", type=String).publish("out", type=String)
     w.create()
-    assert w.basenode_name == "/scripted/my_echo"
+    assert w.basenode_name == "/scripted/echo_node"  # the name its code gives it, not the file's
     wait_for(lambda: feeder.write("/scripted/in", String("x")) or out, timeout=20, what="echo through the script")
     assert out[0].data == "py:x"
     w.base.restart()

@@ -336,14 +336,15 @@ MANAGED_NODE = str(Path(__file__).resolve().parent / "peers" / "managed_node.py"
 
 
 def test_a_wrapped_lifecycle_basenode_is_managed_under_its_own_name(make_node, caller):
-    """A lifecycle manager (a plain rclpy client here) drives a wrapped managed node by its name as before, and
-    the relay follows its state: nothing while inactive, every tick once while active (issue 24)."""
+    """A lifecycle manager (a plain rclpy client here) drives a wrapped managed node by its name as before (the one
+    its code gives it: no name= given), and the relay follows its state: nothing while inactive, every tick once
+    while active (issue 24)."""
     from lifecycle_msgs.msg import Transition
     from lifecycle_msgs.srv import ChangeState, GetState
 
     ticks = listen(make_node, "lc_listener", "/lc/ticks")
     w = make_node("lc_wrap")
-    w.baseNode(MANAGED_NODE, name="managed_talker", namespace="lc")
+    w.baseNode(MANAGED_NODE, namespace="lc")  # managed_node.py: LifecycleNode.__init__(self, "managed_talker")
     w.reuse.publish("ticks", type=String)
     w.create()
 

@@ -1,0 +1,96 @@
+"""What a node's Python source says about it, read and never run: the name its code gives its node.
+
+A basenode started without ``name=`` should keep the name it has when run by hand (``rosrun``,
+``ros2 run``): that is the name its lifecycle manager, its parameter clients and its private
+topics (``~status`` is ``/<name>/status``) are known by. ipyros must know it before the node
+starts, to remap those private names, and running the node to ask would let it act on the
+robot's topics unwrapped; so its source is read instead. ROS nodes name themselves with a
+literal almost always (``rospy.init_node("talker")``, ``Node("talker")``,
+``super().__init__("talker")``), sometimes through a module constant (``NAME = "talker"``).
+Anything else (a name computed at run time, several nodes in one file, a binary) gives
+``None``, and the caller falls back to the executable's name.
+"""
+
+from __future__ import annotations
+
+import ast
+from typing import Collection, Optional
+
+from . import names
+from .errors import DeclarationError
+
+__all__ = ["node_name_in"]
+
+
+def node_name_in(source: str, calls: Collection[str]) -> Optional[str]:
+    """The one node name ``source`` gives, as the first argument (or ``node_name=``, ``name=``) of a call to one
+    of ``calls`` (``init_node``, ``Node``, ...), or of ``__init__`` in a class derived from one; ``None`` if it
+    names none, several, or one that is not a valid node name.
+
+    >>> node_name_in('import rospy\\nrospy.init_node("odometry")', {"init_node"})
+    'odometry'
+    """
+    try:
+        tree = ast.parse(source)
+    except (SyntaxError, ValueError):  # not Python after all, or a NUL byte in it
+        return None
+    constants = _module_constants(tree)
+    found = {name for call in _naming_calls(tree, set(calls))
+             if (name := _first_name(call, constants)) is not None}
+    if len(found) != 1:
+        return None
+    name = found.pop().strip("/")
+    try:
+        names.check_node_name(name)
+    except DeclarationError:
+        return None
+    return name
+
+
+def _module_constants(tree: ast.Module) -> dict[str, str]:
+    """``NAME = "talker"`` at the top of the module (assigned once: a name reassigned is not a constant)."""
+    seen: dict[str, list[object]] = {}
+    for statement in tree.body:
+        if isinstance(statement, ast.Assign) and len(statement.targets) == 1 \
+                and isinstance(statement.targets[0], ast.Name):
+            value = statement.value.value if isinstance(statement.value, ast.Constant) else None
+            seen.setdefault(statement.targets[0].id, []).append(value)
+    return {key: values[0] for key, values in seen.items() if len(values) == 1 and isinstance(values[0], str)}
+
+
+def _naming_calls(tree: ast.Module, calls: set[str]) -> list[ast.Call]:
+    """The calls that name a node: to one of ``calls``, and ``super().__init__``/``Base.__init__(self, ...)`` in a
+    class whose bases include one of them (the argument ``self`` dropped from the second)."""
+    found: list[ast.Call] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and _called(node.func) in calls:
+            found.append(node)
+        elif isinstance(node, ast.ClassDef) and any(_called(base) in calls for base in node.bases):
+            for inner in ast.walk(node):
+                if isinstance(inner, ast.Call) and isinstance(inner.func, ast.Attribute) \
+                        and inner.func.attr == "__init__":
+                    owner = inner.func.value
+                    if isinstance(owner, ast.Call) and _called(owner.func) == "super":
+                        found.append(inner)
+                    elif _called(owner) in calls and inner.args:
+                        found.append(ast.Call(func=inner.func, args=inner.args[1:], keywords=inner.keywords))
+    return found
+
+
+def _called(func: ast.expr) -> Optional[str]:
+    """``init_node`` for ``rospy.init_node`` and for ``init_node``."""
+    if isinstance(func, ast.Attribute):
+        return func.attr
+    if isinstance(func, ast.Name):
+        return func.id
+    return None
+
+
+def _first_name(call: ast.Call, constants: dict[str, str]) -> Optional[str]:
+    argument = next((k.value for k in call.keywords if k.arg in ("node_name", "name")),
+                    call.args[0] if call.args else None)
+    if isinstance(argument, ast.Constant) and isinstance(argument.value, str):
+        return argument.value
+    if isinstance(argument, ast.Name):
+        return constants.get(argument.id)
+    return None

@@ -1,0 +1,76 @@
+"""A basenode without ``name=`` keeps the name its own code gives it, as when it runs by hand (issue 24): its
+private topics, parameters and services are where its clients look for them. Its source is read, not run."""
+
+from __future__ import annotations
+
+from support import wait_for
+
+#: A node whose file is ``odom.py`` and whose node is ``odometry_node``, publishing ``~status`` (``/odometry_node/
+#: status``) with its private parameter ``~label`` in it, written once per ROS as a user writes it.
+ODOM = {
+    "ROS 1": '''
+import rospy
+from std_msgs.msg import String
+
+NODE_NAME = "odometry_node"
+rospy.init_node(NODE_NAME)
+status = rospy.Publisher("~status", String, queue_size=10)
+label = rospy.get_param("~label", "none")
+rate = rospy.Rate(10)
+while not rospy.is_shutdown():
+    status.publish(String(data=f"{rospy.get_name()} {label}"))
+    rate.sleep()
+''',
+    "ROS 2": '''
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from std_msgs.msg import String
+
+
+class Odometry(Node):
+    def __init__(self):
+        super().__init__("odometry_node")
+        label = self.declare_parameter("label", "none").value
+        status = self.create_publisher(String, "~/status", 10)
+        self.create_timer(0.1, lambda: status.publish(String(data=f"{self.get_fully_qualified_name()} {label}")))
+
+
+rclpy.init()
+try:
+    rclpy.spin(Odometry())
+except (KeyboardInterrupt, ExternalShutdownException):
+    pass
+''',
+}
+
+
+def test_a_basenode_without_a_name_runs_under_the_one_its_code_gives(session, make_node, tmp_path):
+    script = tmp_path / "odom.py"
+    script.write_text(ODOM[session.backend.name])
+    heard: list[str] = []
+    make_node("odom_listener").new.subscribe("/odom_robot/odometry_node/status", lambda m: heard.append(m.data),
+                                             msgType="std_msgs/String").create()
+    w = make_node("odom_wrap")
+    w.baseNode(str(script), namespace="odom_robot", params={"label": "L1"})
+    w.reuse.publish("~status", type="std_msgs/String")
+    assert w.model().base.own_name == "odometry_node" and w.model().base.node_name is None
+    w.create()
+    wait_for(lambda: heard, timeout=30, what="the basenode's private topic, relayed")
+    assert heard[-1] == "/odom_robot/odometry_node L1"  # its name, and its private parameter under it
+    assert "/odom_robot/odometry_node" in session.backend.graph_snapshot().nodes
+    assert "/odom_robot/odom" not in session.backend.graph_snapshot().nodes
+
+
+def test_a_name_given_or_one_the_code_does_not_say_is_used_as_before(session, make_node, tmp_path):
+    computed = tmp_path / "computed_name.py"
+    computed.write_text(ODOM[session.backend.name].replace('"odometry_node"', '"odometry_" + "node"'))
+    assert make_node("odom_computed").baseNode(str(computed)).model().base.own_name is None
+    named = make_node("odom_named").baseNode(str(tmp_path / "absent.py"), name="given")
+    assert named.model().base.node_name == "given"
+    script = tmp_path / "odom.py"
+    script.write_text(ODOM[session.backend.name])
+    w = make_node("odom_unsaved").baseNode(str(script))
+    assert w.model().base.own_name == "odometry_node"
+    w.baseNode(str(computed))  # another file: read again
+    assert w.model().base.own_name is None
