@@ -6,7 +6,7 @@ from __future__ import annotations
 from support import wait_for
 
 #: A node whose file is ``odom.py`` and whose node is ``odometry_node``, publishing ``~status`` (``/odometry_node/
-#: status``) with its private parameter ``~label`` in it, written once per ROS as a user writes it.
+#: status``) with its private parameter ``~label`` in it (read each time), written once per ROS as a user writes it.
 ODOM = {
     "ROS 1": '''
 import rospy
@@ -15,10 +15,9 @@ from std_msgs.msg import String
 NODE_NAME = "odometry_node"
 rospy.init_node(NODE_NAME)
 status = rospy.Publisher("~status", String, queue_size=10)
-label = rospy.get_param("~label", "none")
 rate = rospy.Rate(10)
 while not rospy.is_shutdown():
-    status.publish(String(data=f"{rospy.get_name()} {label}"))
+    status.publish(String(data=f"{rospy.get_name()} {rospy.get_param('~label', 'none')}"))
     rate.sleep()
 ''',
     "ROS 2": '''
@@ -31,9 +30,10 @@ from std_msgs.msg import String
 class Odometry(Node):
     def __init__(self):
         super().__init__("odometry_node")
-        label = self.declare_parameter("label", "none").value
+        self.declare_parameter("label", "none")
         status = self.create_publisher(String, "~/status", 10)
-        self.create_timer(0.1, lambda: status.publish(String(data=f"{self.get_fully_qualified_name()} {label}")))
+        self.create_timer(0.1, lambda: status.publish(String(
+            data=f"{self.get_fully_qualified_name()} {self.get_parameter('label').value}")))
 
 
 rclpy.init()
@@ -45,7 +45,27 @@ except (KeyboardInterrupt, ExternalShutdownException):
 }
 
 
-def test_a_basenode_without_a_name_runs_under_the_one_its_code_gives(session, make_node, tmp_path):
+def set_from_outside(request, session, name: str, value: str) -> None:
+    """Set parameter ``name`` (``/node/key``) as another program does: ROS 1 on the parameter server (as rosparam),
+    ROS 2 through the node's own parameter service (as ros2 param set)."""
+    if session.backend.name == "ROS 1":
+        import os
+        import xmlrpc.client
+
+        code, status, _ = xmlrpc.client.ServerProxy(os.environ["ROS_MASTER_URI"]).setParam("/outsider", name, value)
+        assert code == 1, status
+        return
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    node, _, key = name.rpartition("/")
+    parameter = Parameter(name=key, value=ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value))
+    answer = request.getfixturevalue("caller")(f"{node}/set_parameters", SetParameters,
+                                               SetParameters.Request(parameters=[parameter]))
+    assert answer.results[0].successful, answer
+
+
+def test_a_basenode_without_a_name_runs_under_the_one_its_code_gives(request, session, make_node, tmp_path):
     script = tmp_path / "odom.py"
     script.write_text(ODOM[session.backend.name])
     heard: list[str] = []
@@ -58,6 +78,8 @@ def test_a_basenode_without_a_name_runs_under_the_one_its_code_gives(session, ma
     w.create()
     wait_for(lambda: heard, timeout=30, what="the basenode's private topic, relayed")
     assert heard[-1] == "/odom_robot/odometry_node L1"  # its name, and its private parameter under it
+    set_from_outside(request, session, "/odom_robot/odometry_node/label", "L2")  # where its clients look for it
+    wait_for(lambda: heard[-1] == "/odom_robot/odometry_node L2", timeout=20, what="the parameter set from outside")
     assert "/odom_robot/odometry_node" in session.backend.graph_snapshot().nodes
     assert "/odom_robot/odom" not in session.backend.graph_snapshot().nodes
 
