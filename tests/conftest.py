@@ -74,7 +74,7 @@ def no_leftover_processes():
 def peer():
     """Start peers from ``both/peers/`` (plain ROS nodes on whichever ROS the run has), stopped after the test:
     ``listener = peer("listen.py", "/topic", "geometry_msgs/Twist", "linear.x")``."""
-    from peer import Peer
+    from peer import Peer, stop_together
 
     class BothPeer(Peer):
         PEERS = HERE / "both" / "peers"
@@ -86,5 +86,4 @@ def peer():
         return started[-1]
 
     yield start
-    for running in started:
-        running.stop()
+    stop_together(started)

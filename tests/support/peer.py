@@ -23,8 +23,12 @@ class Peer:
     PEERS = PEERS
 
     def __init__(self, script: str, *args: str) -> None:
+        path = self.PEERS / script  # an absolute path stays as it is
+        # One that reads its stdin ends when it closes, and may say its last words then (a count); any other is
+        # asked with Ctrl-C at once: waiting for it to notice a stdin it never reads only wastes the test's time.
+        self.ends_at_eof = "sys.stdin" in path.read_text()
         self.proc = subprocess.Popen(
-            [sys.executable, str(self.PEERS / script), *map(str, args)],  # an absolute path stays as it is
+            [sys.executable, str(path), *map(str, args)],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
             env={**os.environ, "PYTHONUNBUFFERED": "1"},
         )
@@ -47,8 +51,8 @@ class Peer:
             self.proc.stdin.close()  # type: ignore[union-attr]
         except OSError:
             pass
-        steps = ((lambda: None, 2.0), (lambda: self.proc.send_signal(signal.SIGINT), 5.0),
-                 (self.proc.terminate, 5.0), (self.proc.kill, 10.0))
+        steps = ((lambda: None, 2.0 if self.ends_at_eof else 0.0),
+                 (lambda: self.proc.send_signal(signal.SIGINT), 5.0), (self.proc.terminate, 5.0), (self.proc.kill, 10.0))
         for ask, wait in steps:
             if self.proc.poll() is not None:
                 break
@@ -64,3 +68,12 @@ class Peer:
 
     def __exit__(self, *exc) -> None:
         self.stop()
+
+
+def stop_together(peers: list[Peer]) -> None:
+    """Stop ``peers`` side by side: each takes a moment to unregister, and the moments need not add up."""
+    stopping = [threading.Thread(target=peer.stop) for peer in peers]
+    for thread in stopping:
+        thread.start()
+    for thread in stopping:
+        thread.join()
