@@ -131,6 +131,12 @@ def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # t
         raise DeclarationError(f"{model.name}'s basenode is incomplete; add .basePackage('package'), or give the "
                                f"path of the file to run: baseNode('./{executable}')")
     mine = base_fullname(model)
+    if mine == node_fullname(model):
+        whence = ("given it" if model.base.node_name else "its code gives it" if model.base.own_name
+                  else "of its executable")
+        raise DeclarationError(f"{model.name} and its basenode would both be {mine} (the name {whence}), and two nodes "
+                               f"of one name cannot both run; name the wrapping node otherwise, rosNode("
+                               f"'{model.name}_wrap'), or the basenode, baseNode(..., name='...')")
     for other in others:
         if other.base is None or base_fullname(other) != mine:
             continue

@@ -3,7 +3,10 @@ private topics, parameters and services are where its clients look for them. Its
 
 from __future__ import annotations
 
+import pytest
 from support import wait_for
+
+from ipyros.core.errors import DeclarationError
 
 #: A node whose file is ``odom.py`` and whose node is ``odometry_node``, publishing ``~status`` (``/odometry_node/
 #: status``) with its private parameter ``~label`` in it (read each time), written once per ROS as a user writes it.
@@ -96,3 +99,14 @@ def test_a_name_given_or_one_the_code_does_not_say_is_used_as_before(session, ma
     assert w.model().base.own_name == "odometry_node"
     w.baseNode(str(computed))  # another file: read again
     assert w.model().base.own_name is None
+
+
+def test_a_wrapping_node_of_its_basenodes_own_name_is_refused_and_starts_nothing(session, make_node, tmp_path):
+    script = tmp_path / "odom.py"
+    script.write_text(ODOM[session.backend.name])
+    same = make_node("odometry_node").baseNode(str(script))  # two nodes of one name: the master would stop one
+    with pytest.raises(DeclarationError, match=r"odometry_node and its basenode would both be /odometry_node \(the "
+                                               r"name its code gives it\).*rosNode\('odometry_node_wrap'\)"):
+        same.create()
+    assert not same.created and same.base is None
+    assert "/odometry_node" not in session.backend.graph_snapshot().nodes

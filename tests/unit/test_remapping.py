@@ -71,6 +71,17 @@ def test_a_path_needs_no_package():
     wrap.check_wrapping(model(BaseModel(executable="./talker.py")))
 
 
+@pytest.mark.parametrize("base, whence", [
+    (BaseModel(executable="./camera.py", own_name="w"), "the name its code gives it"),
+    (BaseModel(executable="./camera.py", node_name="w"), "the name given it"),
+    (BaseModel(executable="./w.py"), "the name of its executable"),
+])
+def test_a_basenode_of_the_wrapping_nodes_own_name_is_refused(base, whence):
+    with pytest.raises(DeclarationError, match=rf"w and its basenode would both be /w \({whence}\).*rosNode\('w_wrap'\)"):
+        wrap.check_wrapping(model(base))
+    wrap.check_wrapping(model(BaseModel(executable="./camera.py", own_name="w", namespace="robot")))  # /robot/w, /w
+
+
 def test_one_basenode_is_wrapped_once():
     first = model(BaseModel(executable="talker", package="p"))
     second = NodeModel("w2", "/", BaseModel(executable="talker", package="p"))
