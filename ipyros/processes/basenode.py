@@ -34,6 +34,7 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 import yaml
 
 from ..core.errors import BaseNodeError, NodeStateError
+from ..core.model import BaseModel
 from ..core.nodecode import node_name_in
 from .process import spawn, stop_process
 
@@ -109,13 +110,15 @@ def child_env(argv0: str, extra: Optional[Mapping[str, str]] = None) -> dict[str
 _MOST_SOURCE = 1 << 20
 
 
-def own_node_name(executable: str, package_path: Optional[Callable[[], Path]], calls: Sequence[str]) -> Optional[str]:
-    """The name a basenode's own Python code gives its node (:func:`~ipyros.core.nodecode.node_name_in`), read
-    from its file: ``package_path()`` finds a package's executable, else ``executable`` is a path. ``None`` for
-    what is not a Python script that names one node (a binary, a name computed at run time), or is not found."""
+def own_node_name(base: BaseModel, find_executable: Callable[[str, str], Path], calls: Sequence[str]) -> Optional[str]:
+    """The name the Python code of basenode ``base`` gives its node (:func:`~ipyros.core.nodecode.node_name_in`
+    with its ROS's ``calls``), read from its file: ``find_executable(package, executable)`` finds it in its
+    package, else its executable is a path. ``None`` for what is not a Python script that names one node (a
+    binary, a name computed at run time), or is not found (the error comes when it is run)."""
+    executable = base.executable or ""
     try:
-        if package_path is not None:
-            path = package_path()
+        if base.package:
+            path = find_executable(base.package, executable)
         elif "/" in executable or executable.startswith("~"):  # a bare name without its package is no file yet
             path = Path(executable).expanduser()
         else:
@@ -124,8 +127,9 @@ def own_node_name(executable: str, package_path: Optional[Callable[[], Path]], c
             source = f.read(_MOST_SOURCE + 1)
     except (BaseNodeError, OSError):
         return None
-    if len(source) > _MOST_SOURCE or not (path.suffix == ".py" or (source.startswith(b"#!") and
-                                                                    b"python" in source.split(b"\n", 1)[0])):
+    first_line = source.split(b"\n", 1)[0]
+    python = path.suffix == ".py" or (first_line.startswith(b"#!") and b"python" in first_line)
+    if len(source) > _MOST_SOURCE or not python:
         return None
     return node_name_in(source.decode(errors="replace"), calls)
 

@@ -10,7 +10,7 @@ from ..core.model import BaseModel
 from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
-from ..processes.basenode import BaseProcess, own_node_name
+from ..processes.basenode import BaseProcess
 from . import bagfile, introspect, master as master_mod, nodes, reconfigure, runtime
 from .connection import MasterConnection
 from .discovery import wait_for_node
@@ -235,11 +235,7 @@ class Ros1:
         return BaseProcess(nodes.command(base), node_name=base.node_name, log_path=log_path, on_exit=on_exit,
                            env={**base.env, "ROS_MASTER_URI": self.connection.uri})
 
-    def own_node_name(self, base: BaseModel) -> Optional[str]:
-        """The name the basenode's Python code gives its node, read from its file (rospy: ``init_node``)."""
-        package, executable = base.package, base.executable or ""
-        where = (lambda: nodes.find_executable(package, executable)) if package else None
-        return own_node_name(executable, where, ("init_node",))
+    own_node_name = staticmethod(nodes.own_node_name)
 
     def note_link(self, base: BaseModel, process: BaseProcess) -> Optional[str]:
         """Where a package's executable really is, if a link takes it out of the package (rosrun follows it)."""

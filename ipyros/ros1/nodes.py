@@ -32,6 +32,7 @@ from typing import Iterable, Optional
 from ..core.errors import BaseNodeError, did_you_mean
 from ..core.model import BaseModel
 from ..demo import DEMO_DIR
+from ..processes import basenode
 from ..processes.basenode import (
     is_executable_file,
     param_value,
@@ -40,7 +41,8 @@ from ..processes.basenode import (
     script_command,
 )
 
-__all__ = ["command", "find_executable", "link_outside", "list_executables", "list_packages", "refresh_packages"]
+__all__ = ["NODE_CALLS", "command", "find_executable", "link_outside", "list_executables", "list_packages",
+           "own_node_name", "refresh_packages"]
 
 
 def command(base: BaseModel) -> list[str]:
@@ -215,6 +217,15 @@ def list_packages() -> list[str]:
 def list_executables(package: str) -> list[str]:
     """Names of ``package``'s executables (cached; for completion); ``[]`` for an unknown package."""
     return list(_executables(package, _env_key()))
+
+
+#: The calls that name a node in Python code (rospy: ``init_node``): what a basenode's own name is read from.
+NODE_CALLS = ("init_node",)
+
+
+def own_node_name(base: BaseModel) -> Optional[str]:
+    """The name the basenode's Python code gives its node, read from its file (never run), or None."""
+    return basenode.own_node_name(base, find_executable, NODE_CALLS)
 
 
 def find_executable(package: str, executable: str) -> Path:

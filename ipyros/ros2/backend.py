@@ -16,7 +16,7 @@ from ..core.model import BaseModel
 from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
-from ..processes.basenode import BaseProcess, own_node_name
+from ..processes.basenode import BaseProcess
 from . import actions, bagfile, fastdds, introspect, launchfile, nodes, runtime
 from .export import RclpyScript
 from .graph import snapshot
@@ -232,12 +232,7 @@ class Ros2:
         return BaseProcess(nodes.command(base), node_name=base.node_name, log_path=log_path, on_exit=on_exit,
                            env=base.env)
 
-    def own_node_name(self, base: BaseModel) -> Optional[str]:
-        """The name the basenode's Python code gives its node, read from its file (rclpy: ``create_node``, ``Node``,
-        ``LifecycleNode``, or ``__init__`` of a class derived from them)."""
-        package, executable = base.package, base.executable or ""
-        where = (lambda: nodes.find_executable(package, executable)) if package else None
-        return own_node_name(executable, where, ("create_node", "Node", "LifecycleNode"))
+    own_node_name = staticmethod(nodes.own_node_name)
 
     def note_link(self, base: BaseModel, process: BaseProcess) -> Optional[str]:
         """Nothing to say: an ament prefix's executables are links (the demo's are) or installed files."""

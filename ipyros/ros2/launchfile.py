@@ -293,6 +293,10 @@ class _Reader:
         own = str(self.value(entry, "namespace", scope, "") or "")
         namespace = _join(scope.namespace, own) if own else scope.namespace
         name = self.value(entry, "name", scope)
+        package = self.value(entry, "pkg", scope)
+        # Without name=, ros2 launch runs the node under the name its code gives it: so it is known here too.
+        own_name = None if name else ros2_nodes.own_node_name(BaseModel(executable=str(executable), package=package))
+        called = str(name or own_name or Path(str(executable)).stem)
         params = dict(scope.params)
         remaps = dict(scope.remaps)
         env = dict(scope.env)
@@ -300,7 +304,7 @@ class _Reader:
             if child.tag == "remap":
                 remaps[str(self.value(child, "from", scope))] = str(self.value(child, "to", scope))
             elif child.tag == "param":
-                params.update(self.params_of(child, scope, names.join(namespace, str(name or executable))))
+                params.update(self.params_of(child, scope, names.join(namespace, called)))
             elif child.tag == "env":
                 env[str(self.value(child, "name", scope))] = str(self.value(child, "value", scope, ""))
         args = shlex.split(str(self.value(entry, "args", scope, "") or ""))
@@ -310,11 +314,11 @@ class _Reader:
         for unsupported in ("launch-prefix", "launch_prefix", "respawn"):
             if unsupported in entry.attrs:
                 self.notes.append(f"{self.shown}: ipyros does not act on {unsupported}= of node "
-                                  f"{names.join(namespace, str(name or executable))}")
+                                  f"{names.join(namespace, called)}")
         self.nodes.append(BaseModel(
-            executable=str(executable), package=self.value(entry, "pkg", scope), node_name=name,
+            executable=str(executable), package=package, node_name=name, own_name=own_name,
             namespace=namespace, remaps=remaps, params=params, args=args, env=env,
-            launch_node=names.join(namespace, str(name or Path(str(executable)).stem))))
+            launch_node=names.join(namespace, called)))
 
     def params_of(self, entry: Entry, scope: Scope, node: str, prefix: str = "") -> dict[str, Any]:
         """A ``<param>``'s values: one, a nested group (``a.b``), or a parameters file's for this node."""

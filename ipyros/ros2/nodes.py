@@ -20,9 +20,11 @@ from typing import Optional
 from ..core.errors import BaseNodeError, did_you_mean
 from ..core.model import BaseModel
 from ..demo import AMENT_PREFIX as DEMO_PREFIX
+from ..processes import basenode
 from ..processes.basenode import param_value, python_command, refuse_path_with_package, script_command
 
-__all__ = ["command", "find_executable", "list_executables", "list_packages", "package_prefix", "prefixes"]
+__all__ = ["NODE_CALLS", "command", "find_executable", "list_executables", "list_packages", "own_node_name",
+           "package_prefix", "prefixes"]
 
 
 def command(base: BaseModel) -> list[str]:
@@ -76,6 +78,16 @@ def list_executables(package: str) -> list[str]:
     if folder is None or not folder.is_dir():
         return []
     return sorted(p.name for p in folder.iterdir() if p.is_file() and os.access(p, os.X_OK))
+
+
+#: The calls that name a node in Python code (rclpy: ``create_node``, ``Node``,
+#: ``LifecycleNode``, or ``__init__`` of a class derived from them): what a basenode's own name is read from.
+NODE_CALLS = ("create_node", "Node", "LifecycleNode")
+
+
+def own_node_name(base: BaseModel) -> Optional[str]:
+    """The name the basenode's Python code gives its node, read from its file (never run), or None."""
+    return basenode.own_node_name(base, find_executable, NODE_CALLS)
 
 
 def find_executable(package: str, executable: str) -> Path:

@@ -155,3 +155,20 @@ def test_a_node_of_the_rest_that_cannot_start_or_ends_is_told(make_node, tmp_pat
         assert w.base.running  # the wrapped node runs on
     finally:
         w.shutdown()
+
+
+def test_a_launched_node_without_a_name_is_known_by_the_one_its_code_gives(make_node, tmp_path):
+    """As ros2 launch runs it: a <node> without name= is its code's own node (managed_node.py: "managed_talker"),
+    found, wrapped and named so, and a sibling without name= runs under its own too."""
+    managed = Path(ECHO_NODE).with_name("managed_node.py")
+    path = tmp_path / "unnamed.launch.xml"
+    path.write_text(f'<launch><node exec="{managed}" namespace="unnamed"/>'
+                    f'<node exec="{managed}" namespace="unnamed_sibling"/></launch>')
+    assert [(n.launch_node, n.own_name) for n in launchfile.read(str(path)).nodes] == [
+        ("/unnamed/managed_talker", "managed_talker"), ("/unnamed_sibling/managed_talker", "managed_talker")]
+    w = make_node("unnamed_wrap").baseLaunch(str(path), "/unnamed/managed_talker")
+    w.reuse.publish("ticks", type=String)
+    w.create()
+    assert w.basenode_name == "/unnamed/managed_talker"
+    wait_for(lambda: {"/unnamed/managed_talker", "/unnamed_sibling/managed_talker"} <= node_names(w), timeout=30,
+             what="the wrapped node and its sibling, each under its code's name")
