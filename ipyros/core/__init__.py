@@ -3,6 +3,7 @@
 - :mod:`.model`: a node's declared structure (topics, timers, services, params, basenode);
 - :mod:`.plan`: which endpoints must run for a model (the wrapping semantics of the paper's
   figure 1), and :mod:`.remapping`: how a wrapping node names and remaps its basenode;
+  :mod:`.nodecode`: the name a node's Python source gives its node, read and never run;
 - :mod:`.names`: ROS names checked and resolved; :mod:`.qos`: QoS as data;
 - :mod:`.msgtypes`, :mod:`.msgbuild`: message classes found by name, messages built from
   YAML checked field by field, and shown as YAML (the same on both ROS);
@@ -16,5 +17,5 @@
 May import: nothing of ipyros's outside it (the bottom layer).
 """
 
-__all__ = ["actions", "code", "errors", "graph", "journal", "model", "msgbuild", "msgtypes", "names", "plan", "qos",
-           "records", "remapping", "slots", "text", "userdata", "versions"]
+__all__ = ["actions", "code", "errors", "graph", "journal", "model", "msgbuild", "msgtypes", "names", "nodecode",
+           "plan", "qos", "records", "remapping", "slots", "text", "userdata", "versions"]
