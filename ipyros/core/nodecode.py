@@ -9,6 +9,10 @@ literal almost always (``rospy.init_node("talker")``, ``Node("talker")``,
 ``super().__init__("talker")``), sometimes through a module constant (``NAME = "talker"``).
 Anything else (a name computed at run time, several nodes in one file, a binary) gives
 ``None``, and the caller falls back to the executable's name.
+
+An installed Python node is often a small entry-point script that names nothing itself
+(``from demo_nodes_py.topics.talker import main``, or setuptools' ``load_entry_point(...)``):
+:func:`entry_point_of` says what it runs, so that its module can be read in turn.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ from typing import Collection, Optional
 from . import names
 from .errors import DeclarationError
 
-__all__ = ["node_name_in"]
+__all__ = ["entry_point_of", "node_name_in"]
 
 
 def node_name_in(source: str, calls: Collection[str]) -> Optional[str]:
@@ -94,3 +98,26 @@ def _first_name(call: ast.Call, constants: dict[str, str]) -> Optional[str]:
     if isinstance(argument, ast.Name):
         return constants.get(argument.id)
     return None
+
+
+def entry_point_of(source: str) -> Optional[tuple[str, str]]:
+    """What an entry-point script runs: ``("module", "pkg.mod")`` for ``from pkg.mod import main`` at its top,
+    ``("console_scripts", "dist name/script")`` for setuptools' ``load_entry_point("dist==1.0", "console_scripts",
+    "script")``; ``None`` for any other script.
+
+    >>> entry_point_of("import sys\\nfrom demo_nodes_py.topics.talker import main\\nsys.exit(main())")
+    ('module', 'demo_nodes_py.topics.talker')
+    """
+    try:
+        tree = ast.parse(source)
+    except (SyntaxError, ValueError):
+        return None
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and _called(node.func) == "load_entry_point" and len(node.args) == 3 \
+                and all(isinstance(a, ast.Constant) and isinstance(a.value, str) for a in node.args):
+            dist, group, script = (a.value for a in node.args)  # type: ignore[attr-defined]
+            if group == "console_scripts":
+                return "console_scripts", f"{dist.split('==')[0]}/{script}"
+    imported = [s.module for s in tree.body if isinstance(s, ast.ImportFrom) and s.module and not s.level
+                and any(alias.name == "main" for alias in s.names)]
+    return ("module", imported[0]) if len(imported) == 1 else None

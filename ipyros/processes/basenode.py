@@ -21,6 +21,7 @@ exits; and if the interpreter is SIGKILLed, the kernel sends the basenode SIGTER
 from __future__ import annotations
 
 import atexit
+import importlib.metadata
 import os
 import re
 import shlex
@@ -35,7 +36,7 @@ import yaml
 
 from ..core.errors import BaseNodeError, NodeStateError
 from ..core.model import BaseModel
-from ..core.nodecode import node_name_in
+from ..core.nodecode import entry_point_of, node_name_in
 from .process import spawn, stop_process
 
 __all__ = ["BaseProcess", "OnExit", "child_env", "exit_reason", "is_executable_file", "log_dir", "own_node_name",
@@ -113,8 +114,9 @@ _MOST_SOURCE = 1 << 20
 def own_node_name(base: BaseModel, find_executable: Callable[[str, str], Path], calls: Sequence[str]) -> Optional[str]:
     """The name the Python code of basenode ``base`` gives its node (:func:`~ipyros.core.nodecode.node_name_in`
     with its ROS's ``calls``), read from its file: ``find_executable(package, executable)`` finds it in its
-    package, else its executable is a path. ``None`` for what is not a Python script that names one node (a
-    binary, a name computed at run time), or is not found (the error comes when it is run)."""
+    package, else its executable is a path. An entry-point script (what colcon and pip install) is followed to
+    the module it runs. ``None`` for what is not a Python script that names one node (a binary, a name computed
+    at run time), or is not found (the error comes when it is run)."""
     executable = base.executable or ""
     try:
         if base.package:
@@ -123,15 +125,49 @@ def own_node_name(base: BaseModel, find_executable: Callable[[str, str], Path], 
             path = Path(executable).expanduser()
         else:
             return None
+    except BaseNodeError:
+        return None
+    source = _python_source(path)
+    if source is None:
+        return None
+    name = node_name_in(source, calls)
+    entry = entry_point_of(source) if name is None else None
+    module = _module_file(*entry) if entry is not None else None
+    inner = _python_source(module) if module is not None else None
+    return node_name_in(inner, calls) if inner is not None else name
+
+
+def _python_source(path: Path) -> Optional[str]:
+    """The text of ``path`` if it is a Python script (``.py``, or a ``#!`` line naming python) of a node's size."""
+    try:
         with open(path, "rb") as f:
             source = f.read(_MOST_SOURCE + 1)
-    except (BaseNodeError, OSError):
+    except OSError:
         return None
     first_line = source.split(b"\n", 1)[0]
     python = path.suffix == ".py" or (first_line.startswith(b"#!") and b"python" in first_line)
-    if len(source) > _MOST_SOURCE or not python:
+    return source.decode(errors="replace") if python and len(source) <= _MOST_SOURCE else None
+
+
+def _module_file(kind: str, what: str) -> Optional[Path]:
+    """The file of the module an entry-point script runs, found on this Python's path without importing anything
+    (a package's ``__init__`` is code); a ``console_scripts`` entry is looked up in its distribution's metadata."""
+    if kind == "console_scripts":
+        dist, _, script = what.partition("/")
+        try:
+            points = importlib.metadata.distribution(dist).entry_points
+        except importlib.metadata.PackageNotFoundError:
+            return None
+        what = next((p.value.split(":", 1)[0].strip() for p in points
+                     if p.group == "console_scripts" and p.name == script), "")
+    parts = what.split(".")
+    if not all(part.isidentifier() for part in parts):
         return None
-    return node_name_in(source.decode(errors="replace"), calls)
+    for folder in sys.path:
+        for candidate in (Path(folder, *parts[:-1], parts[-1] + ".py"), Path(folder, *parts, "__init__.py")):
+            if candidate.is_file():
+                return candidate
+    return None
 
 
 def script_command(executable: str, args: Sequence[str] = ()) -> tuple[Path, list[str]]:

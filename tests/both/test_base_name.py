@@ -87,6 +87,26 @@ def test_a_basenode_without_a_name_runs_under_the_one_its_code_gives(request, se
     assert "/odom_robot/odom" not in session.backend.graph_snapshot().nodes
 
 
+def test_an_installed_entry_point_script_is_followed_to_the_module_it_runs(session, make_node, tmp_path, monkeypatch):
+    """What colcon and pip install is a script that names nothing (``from pkg.mod import main``): its module is read,
+    found on the path and not imported (this package's __init__ would refuse), for the name given there."""
+    import textwrap
+
+    package = tmp_path / "site" / "mynodes"
+    package.mkdir(parents=True)
+    (package / "__init__.py").write_text("raise SystemExit('importing the package is running it')\n")
+    body = ODOM[session.backend.name].replace("rospy.init_node(NODE_NAME)", 'rospy.init_node("odometry_node")')
+    (package / "odom.py").write_text("def main():\n" + textwrap.indent(body, "    "))
+    script = tmp_path / "bin" / "odom"
+    script.parent.mkdir()
+    script.write_text("#!/usr/bin/env python3\nimport sys\nfrom mynodes.odom import main\n"
+                      "if __name__ == '__main__':\n    sys.exit(main())\n")
+    script.chmod(0o755)
+    monkeypatch.syspath_prepend(str(tmp_path / "site"))
+    w = make_node("entry_wrap").baseNode(str(script), namespace="entry_robot")
+    assert w.model().base.own_name == "odometry_node"
+
+
 def test_a_name_given_or_one_the_code_does_not_say_is_used_as_before(session, make_node, tmp_path):
     computed = tmp_path / "computed_name.py"
     computed.write_text(ODOM[session.backend.name].replace('"odometry_node"', '"odometry_" + "node"'))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from ipyros.core.nodecode import node_name_in
+from ipyros.core.nodecode import entry_point_of, node_name_in
 
 ROS1 = {"init_node"}
 ROS2 = {"create_node", "Node", "LifecycleNode"}
@@ -37,3 +37,15 @@ def test_a_literal_name_is_found(source, calls, name):
 ])
 def test_anything_else_gives_none(source, calls):
     assert node_name_in(source, calls) is None
+
+
+@pytest.mark.parametrize("source, entry", [
+    ("import sys\nfrom demo_nodes_py.topics.talker import main\nsys.exit(main())",
+     ("module", "demo_nodes_py.topics.talker")),
+    ("import re, sys\nif __name__ == '__main__':\n    sys.exit(load_entry_point('demo-nodes-py==0.20.3', "
+     "'console_scripts', 'talker')())", ("console_scripts", "demo-nodes-py/talker")),
+    ("import rospy\nrospy.init_node('x')", None),
+    ("from a import main\nfrom b import main", None),  # which one runs is not read from the text
+])
+def test_an_entry_point_script_says_what_it_runs(source, entry):
+    assert entry_point_of(source) == entry
