@@ -130,7 +130,11 @@ def test_a_session_at_the_terminal(ipython, ticks, ros_master):
     text = "\n".join(rows)
     first_new = next(i for i, row in enumerate(rows) if numbers([row], "NEW"))
     assert not numbers(rows[first_new:], "OLD"), f"the old handler ran after the new one:\n{text}"
-    if (old := numbers(rows, "OLD")) and (new := numbers(rows, "NEW")):
+    # The swap's notice may land between a print's word and its number ("NEW ipyros: ... on_tick", then "21"
+    # rows below): without it, a word and the number after it belong together across rows.
+    unbroken = text.replace(swapped, "")
+    old, new = ([int(n) for n in re.findall(rf"\b{word}\s+(\d+)", unbroken)] for word in ("OLD", "NEW"))
+    if old and new:
         assert new[0] == old[-1] + 1, f"a message was lost in the swap:\n{text}"
 
     # Prints from ROS threads while a line is being typed: each lands above the prompt, which
