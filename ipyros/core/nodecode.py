@@ -39,8 +39,8 @@ def node_name_in(source: str, calls: Collection[str]) -> Optional[str]:
     except (SyntaxError, ValueError):  # not Python after all, or a NUL byte in it
         return None
     constants = _module_constants(tree)
-    found = {name for call in _naming_calls(tree, set(calls))
-             if (name := _first_name(call, constants)) is not None}
+    found = {name for args, keywords in _naming_calls(tree, set(calls))
+             if (name := _first_name(args, keywords, constants)) is not None}
     if len(found) != 1:
         return None
     name = found.pop().strip("/")
@@ -62,22 +62,22 @@ def _module_constants(tree: ast.Module) -> dict[str, str]:
     return {key: values[0] for key, values in seen.items() if len(values) == 1 and isinstance(values[0], str)}
 
 
-def _naming_calls(tree: ast.Module, calls: set[str]) -> list[ast.Call]:
-    """The calls that name a node: to one of ``calls``, and ``super().__init__``/``Base.__init__(self, ...)`` in a
-    class whose bases include one of them (the argument ``self`` dropped from the second)."""
-    found: list[ast.Call] = []
+def _naming_calls(tree: ast.Module, calls: set[str]) -> list[tuple[list[ast.expr], list[ast.keyword]]]:
+    """The arguments of the calls that name a node: to one of ``calls``, and ``super().__init__``/
+    ``Base.__init__(self, ...)`` in a class whose bases include one of them (``self`` dropped from the second)."""
+    found: list[tuple[list[ast.expr], list[ast.keyword]]] = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Call) and _called(node.func) in calls:
-            found.append(node)
+            found.append((node.args, node.keywords))
         elif isinstance(node, ast.ClassDef) and any(_called(base) in calls for base in node.bases):
             for inner in ast.walk(node):
                 if isinstance(inner, ast.Call) and isinstance(inner.func, ast.Attribute) \
                         and inner.func.attr == "__init__":
                     owner = inner.func.value
                     if isinstance(owner, ast.Call) and _called(owner.func) == "super":
-                        found.append(inner)
+                        found.append((inner.args, inner.keywords))
                     elif _called(owner) in calls and inner.args:
-                        found.append(ast.Call(func=inner.func, args=inner.args[1:], keywords=inner.keywords))
+                        found.append((inner.args[1:], inner.keywords))
     return found
 
 
@@ -90,9 +90,8 @@ def _called(func: ast.expr) -> Optional[str]:
     return None
 
 
-def _first_name(call: ast.Call, constants: dict[str, str]) -> Optional[str]:
-    argument = next((k.value for k in call.keywords if k.arg in ("node_name", "name")),
-                    call.args[0] if call.args else None)
+def _first_name(args: list[ast.expr], keywords: list[ast.keyword], constants: dict[str, str]) -> Optional[str]:
+    argument = next((k.value for k in keywords if k.arg in ("node_name", "name")), args[0] if args else None)
     if isinstance(argument, ast.Constant) and isinstance(argument.value, str):
         return argument.value
     if isinstance(argument, ast.Name):

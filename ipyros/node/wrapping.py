@@ -69,7 +69,8 @@ def set_base(node: "NodeEngine", **fields: Any) -> None:
     if fields.get("name"):
         names.check_node_name(fields["name"])
     _check_base_options(fields, node.session.backend)
-    own_name = _own_name(node, fields)
+    reread = "executable" in fields or "package" in fields  # its file may be another: read its name again
+    own_name = _own_name(node, fields) if reread else None
 
     def edit(model: NodeModel) -> None:
         base = model.base or BaseModel()
@@ -77,7 +78,8 @@ def set_base(node: "NodeEngine", **fields: Any) -> None:
             base.bag = None  # another program now; baseBag says so again after this when it is a bag
         for key, value in fields.items():
             setattr(base, _BASE_OPTIONS.get(key, key), value)
-        base.own_name = own_name
+        if reread:
+            base.own_name = own_name
         model.base = base
         if fields.get("namespace") and not node.explicit_namespace:
             model.namespace = names.global_ns(fields["namespace"])
@@ -87,11 +89,9 @@ def set_base(node: "NodeEngine", **fields: Any) -> None:
 
 
 def _own_name(node: "NodeEngine", fields: dict[str, Any]) -> Optional[str]:
-    """The name the basenode's code gives its node, read again when its file may be another: without ``name=`` it
-    runs under that name, as it does when run by hand (the backend reads it; a binary's is not known)."""
+    """The name the code of the basenode that ``fields`` make gives its node: without ``name=`` it runs under
+    that name, as it does when run by hand (the backend reads it; a binary's is not known)."""
     base = node.model().base or BaseModel()
-    if "executable" not in fields and "package" not in fields:
-        return base.own_name
     merged = BaseModel(**{**base.__dict__, **{key: fields[key] for key in ("executable", "package") if key in fields}})
     return node.session.backend.own_node_name(merged) if merged.executable else None
 

@@ -125,7 +125,7 @@ def own_node_name(base: BaseModel, find_executable: Callable[[str, str], Path], 
             path = Path(executable).expanduser()
         else:
             return None
-    except BaseNodeError:
+    except (BaseNodeError, RuntimeError):  # RuntimeError: a ~user that does not exist (said when it is run)
         return None
     source = _python_source(path)
     if source is None:
