@@ -1,21 +1,25 @@
 """What ipyros reports, as plain records: a node's status, history and handler versions, a node's interface.
 
-Records are data and nothing else: the DSL and the tools return them, tests read their
-fields, files save them. How they look (a table in a terminal, an HTML table in Jupyter)
-is the IPython face's business (:mod:`ipyros.ipython.display`), which registers itself
-for these types when the extension loads.
+Records are data: the DSL and the tools return them, tests read their fields, files save
+them. Each also says what its table holds (``table()``, a :class:`~ipyros.core.tables.TextTable`),
+so that ``print(nd.status())`` in a script or a handler shows the table as text; how it looks
+at the prompt (rich in a terminal, an HTML table in Jupyter) is the IPython face's business
+(:mod:`ipyros.ipython.display`), which draws the same table.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field, replace
-from typing import Any, Iterator, Optional
+from typing import Any, Iterator, Optional, Union
+
+from .tables import Cell, Column, TextTable
 
 __all__ = ["History", "Interface", "NodeStatus", "Rows", "StatusRow", "Versions"]
 
 
 class Rows:
-    """A sequence of records (``rows``): ``len``, iteration and indexing go to the rows."""
+    """A sequence of records (``rows``): ``len``, iteration and indexing go to the rows; ``str()`` is its table."""
 
     rows: tuple[Any, ...]
 
@@ -27,6 +31,12 @@ class Rows:
 
     def __getitem__(self, index: int) -> Any:
         return self.rows[index]
+
+    def table(self) -> TextTable:
+        raise NotImplementedError
+
+    def __str__(self) -> str:
+        return self.table().text()
 
 
 @dataclass(frozen=True)
@@ -63,6 +73,26 @@ class NodeStatus(Rows):
     def row(self, name: str) -> StatusRow:
         return next(r for r in self.rows if r.name == name)
 
+    def table(self) -> TextTable:
+        """One row per handler and per topic sent on; the node's parameters under them."""
+        columns = (Column("kind"), Column("name"), Column("handler"), Column("calls", True), Column("rate Hz", True),
+                   Column("mean ms", True), Column("max ms", True), Column("errors", True),
+                   Column("subscribers", True), Column("dropped", True))
+        rows: list[tuple[Union[str, Cell], ...]] = []
+        for r in self.rows:
+            errors: Union[str, Cell] = Cell(str(r.errors), "red") if r.errors else "0"
+            if r.handler:
+                rest: tuple[Union[str, Cell], ...] = (f"{r.rate_hz:.1f}", f"{r.mean_ms:.3f}", f"{r.max_ms:.3f}", errors,
+                                                      "", "")
+            else:  # a topic sent on: who gets it, and what slow subscribers lost
+                waiting = f" ({r.waiting} waiting)" if r.waiting else ""
+                rest = ("", "", "", "", str(r.connections),
+                        Cell(f"{r.dropped}{waiting}", "red") if r.dropped else f"0{waiting}")
+            rows.append((r.kind, r.name, r.handler, str(r.calls), *rest))
+        rows += [("param", name, value, *[""] * 7) for name, value in self.params]
+        title = f"status of {self.node}" + ("" if self.running else " (not running)")
+        return TextTable(title, columns, tuple(rows))
+
 
 @dataclass(frozen=True)
 class History(Rows):
@@ -72,6 +102,12 @@ class History(Rows):
     rows: tuple[Any, ...]
     path: Any = None  # the file the session writes its history to, if any
 
+    def table(self) -> TextTable:
+        kept = f" (kept in {self.path})" if self.path else ""
+        return TextTable(f"history of {self.node}{kept}", (Column("#", True), Column("time"), Column("change", fold=True)),
+                         tuple((str(number), time.strftime("%H:%M:%S", time.localtime(change.time)), change.change)
+                               for number, change in enumerate(self.rows, 1)))
+
 
 @dataclass(frozen=True)
 class Versions(Rows):
@@ -80,6 +116,21 @@ class Versions(Rows):
     label: str  # e.g. "kobuki /cmd_vel"
     rows: tuple[Any, ...]
     current: Optional[int]  # the number of the version serving now, or None
+
+    def table(self) -> TextTable:
+        """Oldest first; ``(now)`` marks the version serving; each with the first line of its body."""
+        rows: list[tuple[Union[str, Cell], ...]] = []
+        for v in self.rows:
+            lines = [line.strip() for line in (v.source or "").splitlines() if line.strip()]
+            body = next((line for line in lines[1:] if not line.startswith(("#", '"""', "'''"))),
+                        lines[0] if lines else "no source")
+            rows.append((f"{v.number}{' (now)' if v.number == self.current else ''}", v.when, v.name, str(len(lines)),
+                         body))
+        if not rows:
+            rows.append(("", "", "no versions yet", "", ""))
+        columns = (Column("#", True, True), Column("time", fold=True), Column("handler", fold=True),
+                   Column("lines", True, True), Column("first line of its body", fold=True))
+        return TextTable(f"versions of the handler of {self.label}", columns, tuple(rows))
 
 
 @dataclass
@@ -129,6 +180,31 @@ class Interface:
         return replace(self, publications=[e for e in self.publications if not part(e)],
                        subscriptions=[e for e in self.subscriptions if not part(e)],
                        services=[e for e in self.services if not part(e)], actions=sorted(found.items()))
+
+    def table(self) -> TextTable:
+        """A row per topic, service or action with its direction and type; what was not seen, and the plumbing
+        left out, in sections of their own."""
+        rows: list[tuple[Union[str, Cell], ...]] = [
+            (Cell(label, "bold"), Cell(name, "cyan"), Cell(type_, "green") if type_ else Cell("unknown", "dim"))
+            for label, entries in (("publishes", self.publications), ("subscribes", self.subscriptions),
+                                   ("service", self.services), ("action", self.actions))
+            for name, type_ in entries]
+        if not rows:
+            rows.append(("", Cell("no topics or services", "dim"), ""))
+        sections = []
+        if self.not_seen:
+            sections.append(len(rows))
+            rows.append((Cell("not seen", "yellow"), ", ".join(self.not_seen),
+                         Cell("declared; may come after its first input", "dim")))
+        if self.left_out:
+            short = (entry.split(" ")[0].replace(self.node + "/", "~", 1) for entry in self.left_out)
+            sections.append(len(rows))
+            rows.append((Cell("not shown", "dim"), Cell(", ".join(short), "dim"), Cell("ROS plumbing", "dim")))
+        return TextTable(f"Interface of {self.node}", (Column(""), Column("name"), Column("type")), tuple(rows),
+                         tuple(sections))
+
+    def __str__(self) -> str:
+        return self.table().text()
 
 
 #: The topics of a ROS 1 action under its name (actionlib's).

@@ -24,6 +24,7 @@ from rich.text import Text
 from ..core.graph import GraphSnapshot
 from ..core.qos import from_model as qos_of
 from ..core.records import History, Interface, NodeStatus, Versions
+from ..core.tables import Cell, TextTable
 from ..core.text import counted
 from ..dsl import rosNode
 from ..tools.probe import Rate
@@ -31,8 +32,8 @@ from ..tools.robot import DemoRobot
 from ..tools.tryout import TrialReport, one_line
 
 __all__ = ["LARGE_TABLE", "RENDERERS", "endpoints_table", "interface_table", "is_large", "node_table", "register",
-           "render_html", "render_plain", "render_text", "renderable", "session_table", "status_table", "table_html",
-           "table_text", "topics_table", "unregister"]
+           "render_html", "render_plain", "render_text", "renderable", "rich_table", "session_table", "status_table",
+           "table_html", "table_text", "topics_table", "unregister"]
 
 
 def node_table(node: rosNode) -> Table:
@@ -74,38 +75,27 @@ def session_table(nodes: list[Any], user_ns: dict[str, Any], host: str) -> Table
     return table
 
 
+def rich_table(table: TextTable, edge: bool = True) -> Table:
+    """A record's table (:mod:`ipyros.core.tables`) as a rich one: the same rows, its styled cells coloured."""
+    drawn = Table(title=table.title, title_justify="left", show_edge=edge)
+    for column in table.columns:
+        drawn.add_column(column.name, justify="right" if column.right else "left",
+                         overflow="fold" if column.fold else "ellipsis")
+    for number, row in enumerate(table.rows):
+        if number in table.sections:
+            drawn.add_section()
+        drawn.add_row(*(Text(cell.text, style=cell.style) if isinstance(cell, Cell) else Text(cell) for cell in row))
+    return drawn
+
+
 def status_table(status: NodeStatus) -> Table:
     """A node's status: one row per handler and per topic it sends on; its parameters under it."""
-    table = Table(title=f"status of {status.node}" + ("" if status.running else " (not running)"),
-                  title_justify="left")
-    for column, justify in (("kind", "left"), ("name", "left"), ("handler", "left"), ("calls", "right"),
-                            ("rate Hz", "right"), ("mean ms", "right"), ("max ms", "right"),
-                            ("errors", "right"), ("subscribers", "right"), ("dropped", "right")):
-        table.add_column(column, justify=justify)  # type: ignore[arg-type]
-    for r in status.rows:
-        errors = f"[red]{r.errors}[/]" if r.errors else "0"
-        if r.handler:
-            timing = (f"{r.rate_hz:.1f}", f"{r.mean_ms:.3f}", f"{r.max_ms:.3f}", errors, "", "")
-        else:  # a topic sent on: who gets it, and what slow subscribers lost
-            waiting = f" ({r.waiting} waiting)" if r.waiting else ""
-            dropped = f"[red]{r.dropped}[/]{waiting}" if r.dropped else f"0{waiting}"
-            timing = ("", "", "", "", str(r.connections), dropped)
-        table.add_row(r.kind, r.name, r.handler, str(r.calls), *timing)
-    for name, value in status.params:
-        table.add_row("param", name, value, *[""] * 7)
-    return table
+    return rich_table(status.table())
 
 
 def history_table(history: History) -> Table:
     """A node's changes, oldest first."""
-    kept = f" (kept in {history.path})" if history.path else ""
-    table = Table(title=f"history of {history.node}{kept}", title_justify="left")
-    table.add_column("#", justify="right")
-    table.add_column("time")
-    table.add_column("change", overflow="fold")
-    for i, change in enumerate(history.rows, 1):
-        table.add_row(str(i), time.strftime("%H:%M:%S", time.localtime(change.time)), change.change)
-    return table
+    return rich_table(history.table())
 
 
 def robot_table(robot: DemoRobot) -> Table:
@@ -149,30 +139,7 @@ def _outcome(lines: list[str], other: list[str]) -> Text:
 
 def interface_table(interface: Interface) -> Table:
     """A rich table of an interface: one row per topic, service or action, with its direction and type."""
-    table = Table(title=f"Interface of {interface.node}", title_justify="left", show_edge=False)
-    table.add_column("", style="bold")
-    table.add_column("name", style="cyan")
-    table.add_column("type", style="green")
-    for label, entries in (
-        ("publishes", interface.publications),
-        ("subscribes", interface.subscriptions),
-        ("service", interface.services),
-        ("action", interface.actions),
-    ):
-        for name, type_ in entries:
-            table.add_row(label, name, type_ or "[dim]unknown[/]")
-    if not (interface.publications or interface.subscriptions or interface.services or interface.actions):
-        table.add_row("", "[dim]no topics or services[/]", "")
-    if interface.not_seen:
-        table.add_section()
-        table.add_row("[yellow]not seen[/]", ", ".join(interface.not_seen), "[dim]declared; may come after its first "
-                      "input[/]")
-    if interface.left_out:
-        node_prefix = interface.node + "/"
-        short = (entry.split(" ")[0].replace(node_prefix, "~", 1) for entry in interface.left_out)
-        table.add_section()
-        table.add_row("[dim]not shown[/]", f"[dim]{', '.join(short)}[/]", "[dim]ROS plumbing[/]")
-    return table
+    return rich_table(interface.table(), edge=False)
 
 
 def topics_table(snap: GraphSnapshot, found: list[str], rates: Optional[dict[str, Optional[Rate]]],
@@ -331,18 +298,7 @@ def _width(default: int) -> int:
 
 def versions_table(versions: Versions) -> Table:
     """The versions of one handler, oldest first; (now) marks the live one."""
-    table = Table(title=f"versions of the handler of {versions.label}", title_justify="left")
-    for column in ("#", "time", "handler", "lines", "first line of its body"):
-        table.add_column(column, justify="right" if column in ("#", "lines") else "left", overflow="fold")
-    for v in versions.rows:
-        mark = " (now)" if v.number == versions.current else ""
-        lines = [line.strip() for line in (v.source or "").splitlines() if line.strip()]
-        body = next((line for line in lines[1:] if not line.startswith(("#", '"""', "'''"))),
-                    lines[0] if lines else "no source")
-        table.add_row(f"{v.number}{mark}", v.when, v.name, str(len(lines)), escape(body))
-    if not versions.rows:
-        table.add_row("", "", "no versions yet", "", "")
-    return table
+    return rich_table(versions.table())
 
 
 #: How each record type looks (the most specific class of an object's MRO wins).
