@@ -8,11 +8,25 @@ that is what it is, so generic code can still catch them the usual way.
 
 from __future__ import annotations
 
+import re
 from typing import Sequence
 
 
+#: The most characters an error or notice line keeps: past it, the values quoted in it are cut (see :func:`shorten`).
+LONGEST = 600
+
+
 class IpyrosError(Exception):
-    """Base class: a one-line, actionable message about something the user asked for."""
+    """Base class: a one-line, actionable message about something the user asked for.
+
+    Its message is :func:`shorten`-ed: whatever value a message quotes (100,000 arguments, a name of
+    5,000 characters), the line stays readable.
+    """
+
+    def __init__(self, *args: object) -> None:
+        if len(args) == 1 and isinstance(args[0], str):
+            args = (shorten(args[0]),)
+        super().__init__(*args)
 
 
 class DeclarationError(IpyrosError, ValueError):
@@ -59,6 +73,21 @@ def cut(value: object, limit: int = 80) -> str:
     """``repr(value)`` on one line, cut to about ``limit`` characters: what an error line may quote of a value."""
     text = " ".join(repr(value).split())
     return text if len(text) <= limit else f"{text[:limit - 20]}... ({len(text):,} characters)"
+
+
+def shorten(text: str, longest: int = LONGEST) -> str:
+    """``text`` cut to about ``longest`` characters, saying how much was cut: first each run of over 100 characters
+    without a space (a long name, a path, a value) to its start and its size, then, if the line is still too long
+    (a list of 100,000 short words), its middle; the end, which says what to do, stays whole."""
+    if len(text) <= longest:
+        return text
+    text = re.sub(r"(\S{101,}?)([:;,.)'\"]*)(?=\s|$)",
+                  lambda word: f"{word[1][:60]}... ({len(word[1]):,} characters){word[2]}", text)
+    if len(text) <= longest:
+        return text
+    keep_end = longest // 3
+    head, tail = text[:longest - keep_end - 40], text[-keep_end:]
+    return f"{head} ... ({len(text) - len(head) - len(tail):,} characters cut) ... {tail}"
 
 
 def first_line(error: BaseException) -> str:

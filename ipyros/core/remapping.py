@@ -49,8 +49,9 @@ def base_fullname(model: NodeModel) -> str:
     return names.join(base_namespace(model), base_node_name(model.base))
 
 
-def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
-    """``reuse`` names are the basenode's: resolve them as it does; ``new`` ones are the node's own.
+def resolve_for(model: NodeModel, role: str, name: str, kind: str, rules: names.NameRules = names.ROS1) -> str:
+    """``reuse`` names are the basenode's: resolve them as it does; ``new`` ones are the node's own (both as
+    ``rules``' ROS allows them).
 
     A ``new`` declaration spelled like a ``reuse`` one (``~reset`` both times) means the
     basenode's name: that is how a reused topic or service is intercepted.
@@ -60,9 +61,9 @@ def resolve_for(model: NodeModel, role: str, name: str, kind: str) -> str:
         if any(d.role == "reuse" and d.name == name for d in declared):
             role = "reuse"
     if role == "reuse" and model.base is not None:
-        resolved = names.resolve(name, base_namespace(model), base_node_name(model.base), kind)
+        resolved = names.resolve(name, base_namespace(model), base_node_name(model.base), kind, rules)
         return own_remaps(model).get(resolved, resolved)  # the basenode's remaps apply: it talks there
-    return names.resolve(name, model.namespace, model.name, kind)
+    return names.resolve(name, model.namespace, model.name, kind, rules)
 
 
 def own_remaps(model: NodeModel) -> dict[str, str]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import pytest
 from std_msgs.msg import String
 
@@ -99,3 +101,59 @@ def test_a_full_disk_is_one_line_and_keeps_the_file(make_node, tmp_path, monkeyp
         nd.save(target)
     assert "No space left on device; nothing was changed there" in one_line(caught.value)
     assert target.read_text() == "before" and [p.name for p in tmp_path.iterdir()] == ["node.yaml"]
+
+
+def test_a_basenode_given_100000_arguments_fails_in_one_readable_line(make_node, tmp_path):
+    """The basenode's own complaint and its log are quoted, never its 100,000 arguments whole."""
+    script = tmp_path / "too_many.py"
+    script.write_text(f"#!{sys.executable}\nimport sys\nsys.exit(f'given {{len(sys.argv) - 1}} arguments, wanted none')\n")
+    script.chmod(0o755)
+    nd = make_node("many_args").baseNode(str(script), name="many_args_base", args=["x"] * 100_000)
+    with pytest.raises(errors.BaseNodeError) as caught:
+        nd.create()
+    text = one_line(caught.value)
+    assert "characters cut" in text and "arguments, wanted none" in text, text[-300:]  # its own last words
+
+
+@pytest.mark.parametrize("make, size", [
+    (lambda make_node: make_node("n" * 5_000), 5_000),
+    (lambda make_node: make_node("long_ns", namespace="/" + "s" * 3_000), 3_001),
+    (lambda make_node: make_node("long_topic").new.publish("/" + "t" * 6_000, msgType=String), 6_001),
+])
+def test_long_names_are_quoted_cut_with_their_size(make_node, session, make, size):
+    """On ROS 2 they are refused by its length rules (a node's name 255, a namespace 245, a topic 247); on ROS 1,
+    which has none, they are taken; what an error quotes of them is cut either way."""
+    if session.backend.name == "ROS 1":
+        make(make_node)
+        return
+    with pytest.raises(errors.TopicNameError) as caught:
+        make(make_node)
+    text = one_line(caught.value)
+    assert f"is {size:,} characters; ROS 2 allows" in text and len(text) < 300, text
+
+
+def test_names_follow_the_rules_of_the_sessions_ros(make_node, session):
+    """ROS 2 reserves '__' in every name; ROS 1 allows it."""
+    if session.backend.name == "ROS 1":
+        nd = make_node("underscores")
+        nd.new.publish("/a__b", msgType=String)
+        assert nd.model().topics[0].resolved == "/a__b"
+        return
+    for declare in (lambda: make_node("underscores").new.publish("/a__b", msgType=String),
+                    lambda: make_node("a__b"),
+                    lambda: make_node("ns_underscores", namespace="/r__1")):
+        with pytest.raises(errors.TopicNameError) as caught:
+            declare()
+        assert "ROS 2 reserves '__'" in one_line(caught.value)
+
+
+@pytest.mark.parametrize("value", [2**70, [2**70], [1, -2**64]])
+def test_an_integer_parameter_out_of_64_bits_is_refused_in_one_line(make_node, session, value):
+    """ROS 2's parameters hold 64-bit integers, ROS 1's parameter server (XML-RPC) 32-bit ones."""
+    nd = make_node("wide_param").create()
+    with pytest.raises(errors.DeclarationError) as caught:
+        nd.params["p"] = value
+    text = one_line(caught.value)
+    bits = "64-bit" if session.backend.name == "ROS 2" else "32-bit"
+    assert "does not fit" in text and bits in text, text
+    assert "p" not in nd.model().params

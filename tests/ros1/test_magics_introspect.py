@@ -40,6 +40,9 @@ def test_services_call_params_and_nodes_at_the_prompt(ip, capsys):
         assert "success: False" in capsys.readouterr().out
         assert "SetBoolRequest: dat: no such field" in str(error_of(ip, "%call /mi/check {dat: 1}"))
         assert "no live service /mi/nothing; %services lists them" in str(error_of(ip, "%call /mi/nothing {}"))
+        for timeout in ("-1", "0"):  # rospy's own answer was 96 lines ending in "Timeout value out of range"
+            said = str(error_of(ip, f"%call /mi/check std_srvs/SetBool -t {timeout} {{data: true}}"))
+            assert said.startswith(f"-t {timeout}: give the seconds to wait") and "\n" not in said, said
 
         # %params / %param: read, set, read back.
         ok(ip, "%params /mi")

@@ -7,6 +7,7 @@ import os
 import pytest
 from IPython.core.interactiveshell import InteractiveShell
 from traitlets.config import Config
+from shell import error_of
 
 
 @pytest.fixture
@@ -280,6 +281,8 @@ def test_services_call_params_and_nodes_at_the_ros2_prompt(ip, capsys):
         _ok(ip, "%call /mi2/check {data: true}")
         out = capsys.readouterr().out
         assert "success: true" in out and "P> checked" in out, out
+        said = str(error_of(ip, "%call /mi2/check std_srvs/SetBool -t -1 {data: true}"))
+        assert said.startswith("-t -1: give the seconds to wait") and "\n" not in said, said
         _ok(ip, "%params /mi2")
         out = capsys.readouterr().out
         assert "/mi2/echo_node/prefix" in out and "P>" in out, out

@@ -71,3 +71,54 @@ def test_default_namespace_follows_ros_namespace(monkeypatch):
     assert names.default_namespace() == "/robot7/"
     monkeypatch.delenv("ROS_NAMESPACE")
     assert names.default_namespace() == "/"
+
+
+# -- what one ROS adds: names.ROS1, names.ROS2 -----------------------------------------------------
+
+@pytest.mark.parametrize("name", ["/a__b", "a__b", "~x__y"])
+def test_ros2_reserves_double_underscores_and_ros1_does_not(name):
+    assert names.resolve(name, "/", "n", "topic", names.ROS1)
+    with pytest.raises(TopicNameError, match="ROS 2 reserves '__'") as caught:
+        names.resolve(name, "/", "n", "topic", names.ROS2)
+    assert "\n" not in str(caught.value) and "use a single _" in str(caught.value)
+
+
+def test_ros2_refuses_a_part_starting_with_a_digit():
+    assert names.resolve("/a/1b", "/", "n", "topic", names.ROS1) == "/a/1b"
+    with pytest.raises(TopicNameError, match="no part of a name may start with a digit"):
+        names.resolve("/a/1b", "/", "n", "topic", names.ROS2)
+
+
+@pytest.mark.parametrize("length, ok", [(246, True), (247, False), (6_000, False)])
+def test_ros2_topic_names_have_rmw_s_length_and_the_error_quotes_a_cut_name(length, ok):
+    name = "/" + "a" * length  # 1 + length characters
+    if ok:
+        assert names.resolve(name, "/", "n", "topic", names.ROS2) == name
+        return
+    with pytest.raises(TopicNameError) as caught:
+        names.resolve(name, "/", "n", "topic", names.ROS2)
+    text = str(caught.value)
+    assert f"is {length + 1:,} characters; ROS 2 allows 247" in text and len(text) < 300, text
+    assert names.resolve(name, "/", "n", "topic", names.ROS1) == name  # ROS 1 has no such limit
+
+
+def test_ros2_node_names_and_namespaces_have_rmw_s_lengths():
+    assert names.check_node_name("n" * 255, names.ROS2)
+    for bad in ("n" * 256, "n" * 5_000):
+        with pytest.raises(TopicNameError, match="ROS 2 allows 255") as caught:
+            names.check_node_name(bad, names.ROS2)
+        assert len(str(caught.value)) < 300
+    assert names.check_node_name("n" * 5_000, names.ROS1)
+    assert names.check_namespace("/" + "a" * 244, names.ROS2)
+    with pytest.raises(TopicNameError, match="ROS 2 allows 245") as caught:
+        names.check_namespace("/" + "a" * 3_000, names.ROS2)
+    assert len(str(caught.value)) < 300
+    with pytest.raises(TopicNameError, match="reserves '__'"):
+        names.check_node_name("a__b", names.ROS2)
+
+
+@pytest.mark.parametrize("check", [lambda v: names.resolve(v, "/", "n"), names.check_node_name, names.check_namespace])
+def test_a_long_illegal_value_is_quoted_cut_with_its_size(check):
+    with pytest.raises(TopicNameError) as caught:
+        check("-" * 5_000)
+    assert "(5,002 characters)" in str(caught.value) and len(str(caught.value)) < 300, str(caught.value)

@@ -111,6 +111,8 @@ class IntrospectMagics(ExtensionMagics):
         head, data = split_head(line, self.call.parser, lambda index, word: index < 1 or (
             index == 1 and "/" in word and not word.startswith(("{", "[", "/"))))
         args = parse_argstring(self.call, head)
+        if not 0 < args.timeout < float("inf"):
+            raise UsageError(f"-t {args.timeout:g}: give the seconds to wait for the answer, more than 0 (e.g. -t 5)")
         name = global_topic(args.service)
         backend = self._ready()
         if name not in live_graph(self.ext).services:
