@@ -34,7 +34,7 @@ from ..node.wrapping import discover, set_bag, set_base, set_launch_base
 from . import keeping
 from .declarations import UNSET, NodeParams, TopicHandler
 
-__all__ = ["engine_of", "restore", "rosNode"]
+__all__ = ["engine_of", "restore", "rosNode", "shutdown"]
 
 MIN_TIMER_PERIOD = 1e-4  # seconds; below it a timer would only spin a core (and rospy divides by it)
 
@@ -52,10 +52,12 @@ class rosNode:  # noqa: N801 - the paper's name
             given = f"got unknown keyword argument(s) {', '.join(sorted(unknown))}; it" if unknown else "needs a name:"
             raise TypeError(f"rosNode() {given} takes name and namespace, e.g. rosNode('turtle_control_node') "
                             "or rosNode('planner', namespace='/robot1')")
-        ns = names.default_namespace() if namespace is None else names.check_namespace(namespace)
-        model = NodeModel(name=names.check_node_name(name), namespace=ns)
+        session = session or current()
+        rules = session.backend.name_rules
+        ns = names.default_namespace() if namespace is None else names.check_namespace(namespace, rules)
+        model = NodeModel(name=names.check_node_name(name, rules), namespace=ns)
         # A wrapping node without a namespace of its own lives in its basenode's (see wrapping.set_base).
-        self._engine = NodeEngine(self, model, session or current(), explicit_namespace=namespace is not None)
+        self._engine = NodeEngine(self, model, session, explicit_namespace=namespace is not None)
         self.new = TopicHandler(self._engine, "new")
         self.reuse = TopicHandler(self._engine, "reuse")
         self.params = NodeParams(self._engine)
@@ -338,6 +340,18 @@ class rosNode:  # noqa: N801 - the paper's name
         actions = f", {len(model.actions)} actions" if model.actions else ""
         return f"<rosNode {self.fullname} ({state}): {len(model.topics)} topics, " \
                f"{len(model.timers)} timers, {len(model.services)} services{actions}>"
+
+
+def shutdown(*nodes: rosNode) -> None:
+    """Shut ``nodes`` down together (every node of the session when none is given): their basenodes are all asked to
+    stop at once and waited for side by side, so that leaving 50 wrapped basenodes takes seconds, not a minute."""
+    if not all(isinstance(node, rosNode) for node in nodes):
+        wrong = next(node for node in nodes if not isinstance(node, rosNode))
+        raise DeclarationError(f"shutdown({cut(wrong)}): give rosNodes, e.g. shutdown(nd1, nd2), or none for all")
+    sessions = {id(node._engine.session): node._engine.session for node in nodes} or {id(current()): current()}
+    for session in sessions.values():
+        mine = [node._engine for node in nodes if node._engine.session is session] if nodes else None
+        session.shutdown_nodes(mine)
 
 
 def engine_of(node: rosNode) -> NodeEngine:

@@ -33,7 +33,8 @@ actions (new / reuse)    ``action_server(host, name, cls, slot, forward)``: each
                          suffixes a basenode's action is remapped by; ``send_goal(name, cls,
                          goal, feedback, timeout)``: a :class:`~ipyros.core.actions.SentGoal`;
                          ``watch_action(name, cls, tell)``: the goals others send, as events
-a DSL node's life        ``open_host(host)`` at create(), ``close_host(host)`` at shutdown()
+a DSL node's life        ``open_host(host)`` at create(), ``close_host(host)`` at shutdown();
+                         ``closing_hosts(hosts)``: several shut down together next
 its params               ``check_param``, ``get_param``, ``set_param``, ``has_param``,
                          ``delete_param`` (by global name); ``forget_params(names)``: what
                          ended nodes left on a parameter server (ROS 1)
@@ -75,6 +76,7 @@ from typing import Any, Callable, Optional, Protocol
 from ..core.errors import IpyrosError
 from ..core.graph import GraphSnapshot
 from ..core.model import BaseModel
+from ..core.names import NameRules
 from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
@@ -89,6 +91,7 @@ class Backend(Protocol):
     """One ROS, as the rest of ipyros sees it (see the module's table)."""
 
     name: str  # "ROS 1", "ROS 2"
+    name_rules: NameRules  # what its graph names may be beyond the shared rules
     process: Any
     qos_fields: tuple[str, ...]  # the QoS fields that mean something here (ROS 1: durability)
 
@@ -122,8 +125,9 @@ class Backend(Protocol):
     def send_goal(self, name: str, cls: type, goal: Any, feedback: Optional[Callable[[Any], None]],
                   timeout: float) -> Any: ...
     def watch_action(self, name: str, cls: type, tell: Callable[[str, str, Any], None]) -> Any: ...
-    def open_host(self, host: str) -> None: ...
+    def open_host(self, host: str, parameters: bool = True) -> None: ...  # parameters: it has some now
     def close_host(self, host: str) -> None: ...
+    def closing_hosts(self, hosts: list[str]) -> None: ...  # these are shut down next: stop their callbacks at once
 
     # params of the session's nodes, by global name
     def check_param(self, name: str, value: Any) -> None: ...

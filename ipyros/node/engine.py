@@ -37,7 +37,7 @@ from ..core.remapping import base_fullname, basenode_remaps, check_wrapping, res
 from ..core.slots import HandlerSlot, OutputScope, SendFigures
 from ..core.versions import HandlerVersion
 from .session import Session
-from .wrapping import learn_relayed_types, start_base
+from .wrapping import interrupted, learn_relayed_types, start_base
 
 #: A slot key's new handler and whether it takes the message (or timer event) as its argument.
 Handlers = dict[str, tuple[Callable[..., Any], bool]]
@@ -116,11 +116,11 @@ class NodeEngine:
 
     def resolve(self, name: str, kind: str = "topic") -> str:
         """The global name ``name`` has for this node (``~x`` under it, relative names in its namespace)."""
-        return names.resolve(name, self._model.namespace, self._model.name, kind)
+        return names.resolve(name, self._model.namespace, self._model.name, kind, self.session.backend.name_rules)
 
     def resolve_as(self, role: str, name: str, kind: str) -> str:
         """Resolve a declared name: ``reuse`` names are the basenode's, resolved as it resolves them."""
-        return resolve_for(self._model, role, name, kind)
+        return resolve_for(self._model, role, name, kind, self.session.backend.name_rules)
 
     def handlers(self) -> dict[str, Callable[..., Any]]:
         """The user's function serving each handler slot, by slot key (``"topic /x"``, ``"timer t"``)."""
@@ -277,7 +277,7 @@ class NodeEngine:
             session.add(self)
             try:
                 session.start_process_node(self.fullname)
-                session.backend.open_host(self.fullname)
+                session.backend.open_host(self.fullname, parameters=bool(self._model.params))
                 session.require_graph(f"{self.called}.create()")
                 self._check_live_types(self._model.topics)
                 self._set_params(self._model.params)
@@ -290,6 +290,9 @@ class NodeEngine:
                 self.created = True
                 start_base(self)
                 self.record("create()")
+            except KeyboardInterrupt:  # Ctrl-C at the prompt: one line, with everything of the node stopped
+                self.shutdown()
+                raise interrupted(f"{self.called}.create()", f"{self.called} and its basenode were stopped") from None
             except BaseException:
                 self.shutdown()
                 raise
@@ -315,6 +318,12 @@ class NodeEngine:
             self.session.backend.close_host(self.fullname)
             self.created = False
             self.session.remove(self)
+
+    def release_base(self) -> Any:
+        """Hand the running basenode over to be stopped elsewhere (beside others: ``Session.shutdown_nodes``)."""
+        with self._lock:
+            base, self.base = self.base, None
+            return base
 
     def quieten(self) -> None:
         """Let the node's handlers fail silently from now on: it is shutting down (its timer's last call may

@@ -67,7 +67,7 @@ def set_base(node: "NodeEngine", **fields: Any) -> None:
     if "executable" in fields:
         _check_executable(fields["executable"])
     if fields.get("name"):
-        names.check_node_name(fields["name"])
+        names.check_node_name(fields["name"], node.session.backend.name_rules)
     _check_base_options(fields, node.session.backend)
     reread = "executable" in fields or "package" in fields  # its file may be another: read its name again
     own_name = _own_name(node, fields) if reread else None
@@ -99,7 +99,7 @@ def _own_name(node: "NodeEngine", fields: dict[str, Any]) -> Optional[str]:
 def _check_base_options(fields: dict[str, Any], backend: Any) -> None:
     """One line for a basenode option of the wrong shape, before anything is recorded."""
     if fields.get("namespace") is not None:
-        names.check_namespace(fields["namespace"])
+        names.check_namespace(fields["namespace"], backend.name_rules)
     remaps = fields.get("remaps")
     if remaps is not None and (not isinstance(remaps, dict)
                                or not all(isinstance(k, str) and isinstance(v, str) for k, v in remaps.items())):
@@ -197,7 +197,7 @@ def set_bag(node: "NodeEngine", path: Any, rate: float, loop: bool, topics: Opti
 REGISTRATION_TIMEOUT = 45.0
 
 #: After how long (s) a basenode still starting is said at the prompt, with how to stop waiting.
-SLOW_START_NOTICE = 5.0
+SLOW_START_NOTICE = 3.0
 
 
 def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> None:
@@ -269,10 +269,18 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
         if not process.running:
             raise _ended_at_start(model, process, f" (nothing of {node.called} was left running)") from None
         raise _never_seen(node, model, timeout) from None
+    except KeyboardInterrupt:  # create() stops the basenode and everything else of the node on its way out
+        raise interrupted(f"waiting for basenode {base_fullname(model)} of {node.called} to show up in the graph",
+                          f"it and the rest of {node.called} were stopped") from None
     finally:
         notice.cancel()
     check_base_types(model, interface)
     report_unused_reuses(node, model, interface)
+
+
+def interrupted(doing: str, outcome: str) -> BaseNodeError:
+    """Ctrl-C while ``doing``, said in one line (not a traceback from inside a wait): what was stopped."""
+    return BaseNodeError(f"Ctrl-C while {doing}: {outcome}; nothing is left half-declared")
 
 
 def _never_seen(node: "NodeEngine", model: NodeModel, timeout: float) -> BaseNodeError:
@@ -394,6 +402,9 @@ def _run_as_it_is(node: "NodeEngine", timeout: float, ask: Callable[[Interface],
         if not probe.running:
             raise _ended_at_start(model, probe) from None
         raise
+    except KeyboardInterrupt:
+        raise interrupted(f"running basenode {base_fullname(model)} as it is to read its interface",
+                          "it was stopped") from None
     finally:
         probe.stop()
 

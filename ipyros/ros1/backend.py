@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Optional
 
+from ..core import names
 from ..core.errors import IpyrosError, MasterError
 from ..core.graph import ROS1_ACTION_TOPICS, GraphSnapshot
 from ..core.model import BaseModel
@@ -43,6 +44,7 @@ class Ros1:
     """
 
     name = "ROS 1"
+    name_rules = names.ROS1
     #: The QoS fields a declaration's ``qos=`` means something in here (TCP is reliable and ipyros's queues
     #: unbounded: only durability, as latching).
     qos_fields = ("durability",)
@@ -173,11 +175,14 @@ class Ros1:
     def watch_action(self, name: str, cls: type, tell: Callable[[str, str, Any], None]) -> Any:
         return _actions().ActionWatch(name, cls, tell)
 
-    def open_host(self, host: str) -> None:
+    def open_host(self, host: str, parameters: bool = True) -> None:
         """Nothing to do: the DSL node's endpoints live in the process node."""
 
     def close_host(self, host: str) -> None:
         """Nothing to do: the process node stays for the session's other nodes."""
+
+    def closing_hosts(self, hosts: list[str]) -> None:
+        """Nothing to do: each subscription has its thread, which closing it ends."""
 
     # -- the parameter server, by global name --------------------------------------------------
     check_param = staticmethod(runtime.check_param)

@@ -9,7 +9,7 @@ from typing import Any, Callable, Optional
 from rclpy._rclpy_pybind11 import RCLError
 from rclpy.exceptions import NameValidationException
 
-from ..core import msgtypes
+from ..core import msgtypes, names
 from ..core.errors import DeclarationError, IpyrosError, MessageTypeError, NodeStateError, first_line
 from ..core.graph import GraphSnapshot
 from ..core.model import BaseModel
@@ -30,6 +30,7 @@ class Ros2:
     """rclpy behind the seam: each DSL node (``host``) is a ROS 2 node of its own."""
 
     name = "ROS 2"
+    name_rules = names.ROS2
     #: The QoS fields a declaration's ``qos=`` means something in: all of them.
     qos_fields = ("depth", "reliability", "durability")
 
@@ -88,7 +89,7 @@ class Ros2:
 
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
               complain: Optional[Complain] = None) -> runtime.Timer:
-        return runtime.Timer(self.process.host(host), period, slot, oneshot, complain)
+        return runtime.Timer(self.process.host(host), period, slot, oneshot, complain, self.process.spinner)
 
     def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
         return runtime.ServiceServer(self.process.host(host), name, cls, slot)
@@ -123,14 +124,14 @@ class Ros2:
         """The interface of the running node ``name`` once it has settled."""
         return runtime.wait_for_node(self._graph(), name, timeout, settle=settle, alive=alive)
 
-    def open_host(self, host: str) -> None:
+    def open_host(self, host: str, parameters: bool = True) -> None:
         if any(token[:1].isdigit() for token in host.split("/")):  # before rclpy, which warns as it refuses
             raise DeclarationError(f"ROS 2 refuses the node {host}: a part of a ROS 2 name may not start with a "
                                    "digit; ROS 2 names are letters, digits and _, each part starting with a letter")
         if host not in self.process.hosted:  # a name of ours lingers in the graph for a while after shutdown
             self.refuse_taken_name(host)
         try:
-            self.process.host(host)
+            self.process.host(host, parameters)
         except (ValueError, RCLError, NameValidationException) as error:  # rclpy's name rules (a namespace token
             # may not start with a digit), which are stricter than ROS 1's
             raise DeclarationError(f"ROS 2 refuses the node {host}: {first_line(error)}; ROS 2 names are letters, "
@@ -138,6 +139,9 @@ class Ros2:
 
     def close_host(self, host: str) -> None:
         self.process.close_host(host)
+
+    def closing_hosts(self, hosts: list[str]) -> None:
+        self.process.detach(hosts)
 
     # -- parameters: each belongs to its node --------------------------------------------
     check_param = staticmethod(runtime.check_param)
@@ -160,6 +164,7 @@ class Ros2:
 
         runtime.check_param(name, value)
         node, key = self._owner(name)
+        node.serve_parameters()  # reachable from outside (ros2 param, on_param) from its first parameter on
         if node.has_parameter(key):
             node.set_parameters([Parameter(key, value=list(value) if isinstance(value, tuple) else value)])
         else:  # any type later, as nd.params allows on ROS 1
@@ -285,7 +290,10 @@ class Ros2:
         """Every parameter of the live nodes under ``namespace``, by global name ``/ns/node/key``."""
         prefix = namespace.rstrip("/") + "/"
         found = {}
-        for node in self.graph_snapshot().nodes:
+        snapshot = self.graph_snapshot()
+        for node in snapshot.nodes:
+            if f"{node}/list_parameters" not in snapshot.services:  # a node without parameters serves none
+                continue
             if node.startswith(prefix) or prefix.startswith(node + "/"):
                 try:
                     params = introspect.node_params(self.process, node, timeout=1.0)
@@ -354,9 +362,9 @@ class Ros2:
         return []  # DDS matches endpoints, and the graph does not list who is matched with whom
 
     def ping_node(self, node: str) -> float:
-        """How long ``node`` takes to answer a call of its parameter services, in ms (ROS 2 has no node ping)."""
+        """How long ``node`` takes to answer a call of one of its services, in ms (ROS 2 has no node ping)."""
         started = time.perf_counter()
-        introspect.node_params(self.process, node, timeout=2.0)
+        introspect.ping(self.process, node, timeout=2.0)
         return (time.perf_counter() - started) * 1e3
 
     def kill_node(self, node: str) -> None:
@@ -387,8 +395,7 @@ def describe(transport: str = "") -> str:
     except PackageNotFoundError:
         release = "?"
     distro = os.environ.get("ROS_DISTRO") or _DISTROS.get(int(release.split(".")[0]) if release[:1].isdigit() else -1)
-    reach = os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE") or (
-        "LOCALHOST" if os.environ.get("ROS_LOCALHOST_ONLY") == "1" else "SUBNET")
+    reach = fastdds.discovery_range()
     return (f"ROS 2{f' {distro.capitalize()}' if distro else ''} (rclpy {release}), ROS_DOMAIN_ID "
             f"{runtime.domain_id()}, {rclpy.get_rmw_implementation_identifier()}, discovery "
             f"{reach.lower()}{f', {transport}' if transport else ''}; the DSL, wrapping, %topics, %echo, %pub, "

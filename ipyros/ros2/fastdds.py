@@ -17,6 +17,18 @@ the demo robot) inherit the environment, and so the profile. A user who configur
 (a profile file, builtin transports, another middleware) is left alone, and the load line
 says which applies.
 
+Discovery kept to this machine is the profile's too. rmw_fastrtps's own ``LOCALHOST`` range adds
+two transports of its own to whatever the profile gives (its ``create_participant``: a shared memory
+of Fast DDS's default size and a UDPv4 transport with no interface list), and that UDPv4 transport
+opens its sending sockets on ``0.0.0.0`` and on every interface's address (the machine's LAN
+address among them), where anyone on the network can send to them. So a local session's profile
+says what ``LOCALHOST`` means itself (discovery on loopback: a unicast locator on ``127.0.0.1``,
+``127.0.0.1`` as the initial peer, 32 participants to try there, no multicast) and the session and
+what it starts run with ``ROS_AUTOMATIC_DISCOVERY_RANGE=SYSTEM_DEFAULT``, under which rmw adds
+nothing: every socket is then on loopback (tested), and the nodes still find, and are found by,
+the other ``LOCALHOST`` nodes of the machine. What the user asked for is kept in
+``IPYROS_DISCOVERY_RANGE`` (the load line says it; :func:`local` reads it).
+
 Fast DDS frees its shared memory when a participant is deleted; a process that is killed
 (SIGKILL, a crash) leaves its files in ``/dev/shm``, a port's lock still taken. A new
 participant given that port is then never seen by the others (its node does not show up
@@ -31,8 +43,8 @@ import os
 from pathlib import Path
 from typing import Optional
 
-__all__ = ["DEFAULT_SEGMENT", "SEGMENT", "USER_SETTINGS", "local", "prepare", "profile_xml", "remove_stale_files",
-           "size_note", "write_profile"]
+__all__ = ["DEFAULT_SEGMENT", "HELD_RANGE", "SEGMENT", "USER_SETTINGS", "discovery_range", "environment", "local",
+           "prepare", "profile_xml", "remove_stale_files", "size_note", "write_profile"]
 
 #: The shared-memory segment of each participant: room for a few 16 MiB point clouds in flight.
 SEGMENT = 64 * 1024 * 1024
@@ -47,17 +59,45 @@ USER_SETTINGS = ("FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FIL
 _MARK = "ipyros-profile"  # in the file's name: a profile of ipyros's, not the user's
 
 
+#: Where a session keeps the discovery range the user asked for, when its profile does what the range said.
+HELD_RANGE = "IPYROS_DISCOVERY_RANGE"
+
+
+def discovery_range() -> str:
+    """The discovery range the user asked for: ``LOCALHOST``, ``SUBNET``, ``OFF`` or ``SYSTEM_DEFAULT``."""
+    return (os.environ.get(HELD_RANGE) or os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").upper()
+            or ("LOCALHOST" if os.environ.get("ROS_LOCALHOST_ONLY") == "1" else "SUBNET"))
+
+
 def local() -> bool:
     """Whether discovery is kept to this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, or the older
     ``ROS_LOCALHOST_ONLY=1``)."""
-    return (os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").upper() == "LOCALHOST"
-            or os.environ.get("ROS_LOCALHOST_ONLY") == "1")
+    return discovery_range() == "LOCALHOST"
+
+
+def environment(loopback_only: bool, folder: Optional[Path] = None) -> dict[str, str]:
+    """The variables a process needs to run with ipyros's profile (empty if it cannot be written): the profile's
+    file and, for a local one, the discovery range that lets the profile alone decide (see the module's docstring)."""
+    path = write_profile(loopback_only, folder)
+    if path is None:
+        return {}
+    if not loopback_only:
+        return {"FASTDDS_DEFAULT_PROFILES_FILE": str(path)}
+    return {"FASTDDS_DEFAULT_PROFILES_FILE": str(path), "ROS_AUTOMATIC_DISCOVERY_RANGE": "SYSTEM_DEFAULT",
+            HELD_RANGE: "LOCALHOST"}
 
 
 def profile_xml(loopback_only: bool) -> str:
-    """The Fast DDS XML profile: shared memory of :data:`SEGMENT` bytes, and UDPv4 (on ``lo`` alone if asked)."""
+    """The Fast DDS XML profile: shared memory of :data:`SEGMENT` bytes, and UDPv4 (on ``lo`` alone, and discovery
+    on loopback, if asked)."""
     interfaces = ("\n        <interfaces><allowlist><interface name=\"lo\"/></allowlist></interfaces>"
-                  if loopback_only else "")
+                  "\n        <maxInitialPeersRange>32</maxInitialPeersRange>" if loopback_only else "")
+    loopback = "<locator><udpv4><address>127.0.0.1</address></udpv4></locator>"
+    discovery = (f"""
+        <builtin>
+          <metatrafficUnicastLocatorList>{loopback}</metatrafficUnicastLocatorList>
+          <initialPeersList>{loopback}</initialPeersList>
+        </builtin>""" if loopback_only else "")
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <!-- Written by ipyros for its session and the processes it starts (see ipyros/ros2/fastdds.py).
      Set FASTDDS_DEFAULT_PROFILES_FILE to a profile of your own to use that instead. -->
@@ -75,7 +115,7 @@ def profile_xml(loopback_only: bool) -> str:
       </transport_descriptor>
     </transport_descriptors>
     <participant profile_name="ipyros" is_default_profile="true">
-      <rtps>
+      <rtps>{discovery}
         <userTransports>
           <transport_id>ipyros_shm</transport_id>
           <transport_id>ipyros_udp</transport_id>
@@ -103,11 +143,14 @@ def prepare() -> str:
     given = next((f"{name}={os.environ[name]}" for name in USER_SETTINGS if os.environ.get(name)), None)
     if given is not None:
         return f"Fast DDS as you configured it ({given})"
-    path = write_profile(loopback_only=local())
-    if path is None:
+    # Static peers are added by rmw for its own ranges only: with them, its LOCALHOST stays as it is.
+    variables = environment(loopback_only=local() and not os.environ.get("ROS_STATIC_PEERS"))
+    if not variables:
         return "Fast DDS's defaults (ipyros could not write its profile)"
-    os.environ["FASTDDS_DEFAULT_PROFILES_FILE"] = str(path)
-    return _describe(str(path))
+    if HELD_RANGE in variables:
+        os.environ.pop("ROS_LOCALHOST_ONLY", None)  # said by IPYROS_DISCOVERY_RANGE now
+    os.environ.update(variables)
+    return _describe(variables["FASTDDS_DEFAULT_PROFILES_FILE"])
 
 
 def size_note(size: float) -> Optional[str]:

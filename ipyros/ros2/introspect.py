@@ -69,6 +69,24 @@ def _request(process: ProcessNode, node: str, kind: str, timeout: float, **field
                       f"{node} has no parameter services answering; is it a ROS 2 node, and alive? (%nodes lists them)")
 
 
+def ping(process: ProcessNode, node: str, timeout: float = 2.0) -> None:
+    """One call that every rclpy node answers: its parameter services' list, else its type description service (a
+    node may run without parameter services, as the session's own nodes do until they have a parameter)."""
+    base = node.rstrip("/")
+    namespace, name = base.rsplit("/", 1)
+    try:
+        services = {found for found, _ in process.graph().get_service_names_and_types_by_node(name, namespace or "/")}
+    except Exception:  # noqa: BLE001 - not in the graph (rclpy raises its own NodeNameNonExistentError): said below
+        services = set()
+    if f"{base}/list_parameters" in services or f"{base}/get_type_description" not in services:
+        _request(process, node, "ListParameters", timeout)
+        return
+    from type_description_interfaces.srv import GetTypeDescription
+
+    _call_once(process, f"{base}/get_type_description", GetTypeDescription, GetTypeDescription.Request(), timeout,
+               f"{node} has no services answering; is it a ROS 2 node, and alive? (%nodes lists them)")
+
+
 def node_params(process: ProcessNode, node: str, timeout: float = 3.0) -> dict[str, Any]:
     """The parameters of the live node ``node`` (``/ns/name``) and their values, by key."""
     from rclpy.parameter import parameter_value_to_python

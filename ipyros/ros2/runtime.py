@@ -9,8 +9,9 @@ The executor is rclpy's single-threaded one, as ``rclpy.spin`` uses: its multi-t
 executor, which would let one blocking handler leave the others running, cannot keep up
 with a 1 kHz topic on two cores (one second behind and losing messages in
 ``bench/relay_ros2.py``), and the C++ events executor cannot take a node added while it
-spins, which a prompt does all the time. So, as in any rclpy node, a handler that blocks
-holds up the session's other callbacks: keep handlers short (a timer, not a sleep).
+spins, which a prompt does all the time. A handler that blocks is kept from holding the
+session's other callbacks by :mod:`ipyros.ros2.spinning`: its lane moves to a thread of its
+own within about a tenth of a second, and a new thread spins the executor.
 
 Endpoints mirror :mod:`ipyros.ros1.runtime`: each has ``close()``; handlers go through
 a :class:`~ipyros.core.slots.HandlerSlot`; relays forward serialized bytes (``raw=True``),
@@ -19,7 +20,6 @@ never deserialising.
 
 from __future__ import annotations
 
-import collections
 import functools
 import logging
 import os
@@ -36,11 +36,12 @@ from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, Reliabilit
 from rclpy.serialization import deserialize_message
 
 from ..core import msgtypes
-from ..core.errors import BaseNodeError, DeclarationError, HandlerError, MessageTypeError, NodeStateError
+from ..core.errors import BaseNodeError, DeclarationError, HandlerError, MessageTypeError, NodeStateError, cut
 from ..core.msgbuild import conform
 from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import Arrival, HandlerSlot, Pristine, SendFigures
+from .spinning import HostNode, Lane, Spinner
 
 #: Reliable, and deep enough that a burst is not cut short: what ROS 1's unbounded
 #: subscriber queue gave. A declaration's ``qos=`` overrides any of it.
@@ -151,18 +152,18 @@ class ProcessNode:
         self.name: Optional[str] = None  # the first node's name, for messages (there is no one process node)
         self._context: Any = None
         self._executor: Any = None
-        self._spinner: Optional[threading.Thread] = None
+        self.spinner: Optional[Spinner] = None
         self._started_at = 0.0  # when rclpy started: discovery needs a moment after it
         self._hosts: dict[str, Node] = {}
         self.hosted: set[str] = set()  # every name this process has had a node at (the graph lags behind)
-        self._watchers: list[Callable[[], None]] = []
+        self._watchers: list[Callable[[], None]] = []  # bound methods: their __self__._node is the node they are of
         #: Publications that take the QoS of a topic's publishers ({topic: [Publication]}; see Publication).
         self.followers: dict[str, list[Publication]] = {}
         self._watch_timer: Any = None
         self._looks = 0
         self._typed: list[tuple[str, str, Complain]] = []  # (topic, type, complain): peers of another type are told
         self._told: set[tuple[str, str, str, Complain]] = set()
-        self._caller: Optional[tuple[Node, Any, threading.Thread]] = None
+        self._caller: Optional[tuple[Node, Any, Spinner]] = None
 
     @property
     def started(self) -> bool:
@@ -178,8 +179,8 @@ class ProcessNode:
             context = rclpy.Context()
             rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
             executor = SingleThreadedExecutor(context=context)  # why: the module's docstring
-            self._spinner = threading.Thread(target=self._spin, args=(executor,), name="ipyros-rclpy", daemon=True)
-            self._spinner.start()
+            self.spinner = Spinner(executor, "ipyros-rclpy")
+            self.spinner.start()
             self._context, self._executor, self.name = context, executor, name
             self._started_at = time.monotonic()
             return name
@@ -198,39 +199,12 @@ class ProcessNode:
         if left > 0:
             time.sleep(min(left, within))
 
-    @staticmethod
-    def _spin(executor: Any) -> None:
-        """Spin until the context shuts down: the supervised executor thread.
-
-        rclpy's executor lets a callback's exception out of ``spin()``, which would end the
-        thread and with it every node of the session. Handlers are guarded by their slots,
-        but an error of rclpy's own (a publish the middleware refused), or a ``SystemExit``
-        from a callback that is not a handler, must not stop the session: it is said in one
-        line and the executor spins again.
-        """
-        from rclpy.executors import ExternalShutdownException
-
-        while executor.context.ok():
-            try:
-                executor.spin()
-            except ExternalShutdownException:
-                return
-            except BaseException as error:  # noqa: BLE001 - said; the nodes go on
-                if not executor.context.ok():
-                    return
-                # A node shut down while the executor held one of its callbacks: rclpy refuses the destroyed
-                # handle. Nothing of any node is lost, and shutting down many nodes did it every few nodes.
-                gone = type(error).__name__ == "InvalidHandle" and "destruction was requested" in str(error)
-                logging.getLogger("ipyros").log(
-                    logging.DEBUG if gone else logging.WARNING,
-                    "ipyros: a ROS 2 callback raised %s%s, which ended the executor of the session's nodes; it runs "
-                    "again (nothing of yours was stopped)", type(error).__name__, f" ({error})" if str(error) else "")
-
     def host(self, fullname: str, parameters: bool = True) -> Node:
         """The ROS 2 node of the DSL node ``fullname`` (``/ns/name``), made on first use.
 
         ``parameters=False``: without the parameter services (six entities fewer for the
-        executor to wait on, for a node that has no parameters).
+        executor to wait on, for a node that has no parameters; :meth:`HostNode.serve_parameters`
+        starts them when it gets one).
         """
         with self._lock:
             if self.name is None:
@@ -238,8 +212,8 @@ class ProcessNode:
             node = self._hosts.get(fullname)
             if node is None:
                 namespace, base = fullname.rsplit("/", 1)
-                node = Node(base, namespace=namespace or "/", context=self._context,
-                            start_parameter_services=parameters)
+                node = HostNode(base, namespace=namespace or "/", context=self._context,
+                                start_parameter_services=parameters)
                 self._executor.add_node(node)
                 self._hosts[fullname] = node
                 self.hosted.add(fullname)
@@ -259,7 +233,7 @@ class ProcessNode:
                 node = Node(f"_ipyros_caller_{os.getpid()}", context=self._context, start_parameter_services=False)
                 executor = SingleThreadedExecutor(context=self._context)
                 executor.add_node(node)
-                spinner = threading.Thread(target=self._spin, args=(executor,), name="ipyros-rclpy-calls", daemon=True)
+                spinner = Spinner(executor, "ipyros-rclpy-calls", watch=False)  # it runs no handler
                 spinner.start()
                 self._caller = (node, executor, spinner)
             return self._caller[0]
@@ -341,6 +315,17 @@ class ProcessNode:
         with self._lock:
             return list(self._hosts)
 
+    def detach(self, fullnames: list[str]) -> None:
+        """Take these nodes off the executor at once, before they close: each endpoint destroyed while its node is on
+        it makes the executor build its wait set again from every entity of the session (thousands with 150 nodes:
+        shutting them down one by one took 25 s)."""
+        with self._lock:
+            nodes = [self._hosts[name] for name in fullnames if name in self._hosts]
+            # nor does the graph watch look for their endpoints any more (it would hold the graph meanwhile)
+            self._watchers = [w for w in self._watchers if getattr(w.__self__, "_node", None) not in nodes]
+        for node in nodes:
+            self._executor.remove_node(node)
+
     def close_host(self, fullname: str) -> None:
         with self._lock:
             node = self._hosts.pop(fullname, None)
@@ -362,7 +347,7 @@ class ProcessNode:
             self._hosts.clear()
             self._watchers.clear()
             self._watch_timer = None
-            spinners = [self._spinner]
+            spinners = [self.spinner]
             if self._caller is not None:
                 node, executor, spinner = self._caller
                 executor.remove_node(node)
@@ -374,7 +359,7 @@ class ProcessNode:
             rclpy.try_shutdown(context=self._context)
             for spinner in spinners:  # a spinning thread left at exit aborts the interpreter
                 if spinner is not None:
-                    spinner.join(timeout=5.0)
+                    spinner.stop(timeout=5.0)
             self.name = None
 
 
@@ -468,6 +453,26 @@ def _effective(qos: Qos) -> tuple[str, str, Optional[int]]:
     return (qos.reliability or "reliable", qos.durability or "volatile", (qos.depth or 1) if qos.latched else None)
 
 
+class _Publishers:
+    """When the graph watch reads a topic's publishers again: only once their number changed (a count costs a
+    fraction of a read of each one's QoS, which builds Python objects; with 150 endpoints watched ten times a
+    second the reads kept a core busy), and every :attr:`ALL_SAME_EVERY` looks all the same (a publisher replaced
+    by one of another QoS leaves the number as it was)."""
+
+    ALL_SAME_EVERY = 10
+
+    def __init__(self, node: Node, topic: str) -> None:
+        self._node, self._topic, self._count, self._looks = node, topic, -1, 0
+
+    def changed(self) -> bool:
+        self._looks += 1
+        count = self._node.count_publishers(self._topic)
+        if count == self._count and self._looks % self.ALL_SAME_EVERY:
+            return False
+        self._count = count
+        return True
+
+
 def _publishers_qos(node: Node, topic: str) -> Optional[Qos]:
     """The QoS that matches every publisher of ``topic`` now and gets the most from them; None if none.
 
@@ -501,8 +506,9 @@ class Subscription:
         self.topic, self.cls, self.slot = topic, cls, slot
         self._process, self._node, self._declared, self._complain = process, node, qos, complain
         self._lock = threading.Lock()
-        self._lane = Lane(slot, complain, topic)
+        self._lane = Lane(slot, complain, topic, process.spinner)
         self._follows = qos.reliability is None and qos.durability is None
+        self._publishers = _Publishers(node, topic)
         self.qos = self._wanted() or Qos(qos.depth, qos.reliability or "reliable", qos.durability or "volatile")
         self._sub = self._open(self.qos)
         if self._follows:
@@ -532,7 +538,7 @@ class Subscription:
 
     def _follow_publishers(self) -> None:
         with self._lock:
-            wanted = self._wanted() if self._sub is not None else None
+            wanted = self._wanted() if self._sub is not None and self._publishers.changed() else None
             if wanted is None or wanted == self.qos:  # no publisher yet, or nothing to change
                 return
             for publication in list(self._process.followers.get(self.topic, ())):
@@ -580,6 +586,7 @@ class Relay:
         self.qos = Qos(None, "reliable", "volatile")  # rclpy's, until the source's publishers show up
         self._last: Optional[bytes] = None
         self._skip: Optional[bytes] = None
+        self._publishers = _Publishers(node, source)
         self._pub, self._sub = self._endpoints(self.qos)
         process.watch(self._follow_source)
         process.watch_types(source, msgtypes.type_name(cls) or "", complain)
@@ -602,7 +609,7 @@ class Relay:
     def _follow_source(self) -> None:
         """Take the QoS of the source's publishers, if they have shown up and it differs."""
         with self._lock:
-            if self._sub is None:
+            if self._sub is None or not self._publishers.changed():
                 return
             wanted = _publishers_qos(self._node, self.source)
             if wanted is None or wanted == self.qos:  # none yet, or a basenode restarting: keep what matched last
@@ -648,78 +655,14 @@ class Relay:
                 self._sub = None
 
 
-class Lane:
-    """Where a handler runs: on the executor thread while it is quick, on a thread of its own once it is not.
-
-    One executor thread runs every callback of the session (see the module's docstring),
-    so a handler that blocks would hold up every other node. A handler call that takes
-    longer than :attr:`LONG` seconds moves its slot to a thread of its own, in order, from
-    the next call on, and the session is told once; the quick ones keep the executor's fast
-    path (one time measurement per call). What waits for a slow handler is bounded: at most
-    :attr:`BACKLOG` calls; a timer's ticks are not queued up behind one still running.
-    """
-
-    LONG = 0.2  # seconds
-    BACKLOG = 1000
-
-    def __init__(self, slot: HandlerSlot, complain: Optional[Complain], what: str, coalesce: bool = False) -> None:
-        self.slot, self._complain, self._what, self._coalesce = slot, complain, what, coalesce
-        self._queue: Optional[collections.deque] = None
-        self._ready = threading.Condition()
-        self._closed = False
-        self.dropped = 0
-
-    def __call__(self, *args: Any) -> None:
-        queue = self._queue
-        if queue is not None:
-            with self._ready:
-                if self._coalesce and queue:
-                    return
-                if len(queue) >= self.BACKLOG:
-                    queue.popleft()
-                    self.dropped += 1
-                queue.append(args)
-                self._ready.notify()
-            return
-        start = time.perf_counter()
-        self.slot.run(*args)
-        took = time.perf_counter() - start
-        if took > self.LONG and not self._closed:
-            self._move(took)
-
-    def _move(self, took: float) -> None:
-        self._queue = collections.deque()
-        threading.Thread(target=self._work, name=f"ipyros-slow-{self.slot.label}", daemon=True).start()
-        if self._complain is not None:
-            self._complain(f"the handler of {self._what} took {took:.2f} s, which held up every other handler of "
-                           "the session; it runs on a thread of its own from now on")
-
-    def _work(self) -> None:
-        queue = self._queue
-        assert queue is not None
-        while True:
-            with self._ready:
-                while not queue and not self._closed:
-                    self._ready.wait()
-                if self._closed:
-                    return
-                args = queue.popleft()
-            self.slot.run(*args)
-
-    def close(self) -> None:
-        with self._ready:
-            self._closed = True
-            self._ready.notify_all()
-
-
 class Timer:
     """A periodic (or one-shot) callback through a :class:`HandlerSlot` (on its :class:`Lane`)."""
 
     def __init__(self, node: Node, period: float, slot: HandlerSlot, oneshot: bool = False,
-                 complain: Optional[Complain] = None) -> None:
+                 complain: Optional[Complain] = None, spinner: Optional[Spinner] = None) -> None:
         self.period, self.slot, self._oneshot = period, slot, oneshot
         self._node = node
-        self._lane = Lane(slot, complain, f"timer {slot.label.split(' ', 1)[-1]}", coalesce=True)
+        self._lane = Lane(slot, complain, f"timer {slot.label.split(' ', 1)[-1]}", spinner, coalesce=True)
         self._timer = node.create_timer(period, self._tick)
 
     def _tick(self) -> None:
@@ -955,16 +898,20 @@ def check_param(name: str, value: Any) -> None:
         return
     if isinstance(value, int):
         if value not in _INT64:
-            raise DeclarationError(f"parameter {name} = {value} does not fit the 64-bit integer a ROS 2 parameter "
+            raise DeclarationError(f"parameter {name} = {cut(value)} does not fit the 64-bit integer a ROS 2 parameter "
                                    "holds; pass it as a float or a string")
         return
     if isinstance(value, (list, tuple)):
         kinds = {bool if isinstance(v, bool) else type(v) for v in value}
-        if len(kinds) <= 1 and kinds <= {bool, int, float, str}:
-            return
-        raise DeclarationError(f"parameter {name} = {value!r:.60}: a ROS 2 parameter list holds one type "
-                               "(bool, int, float or str)")
-    raise DeclarationError(f"parameter {name} = {value!r:.60} is a {type(value).__name__}: a ROS 2 parameter "
+        if not (len(kinds) <= 1 and kinds <= {bool, int, float, str}):
+            raise DeclarationError(f"parameter {name} = {cut(value)}: a ROS 2 parameter list holds one type "
+                                   "(bool, int, float or str)")
+        wide = next((v for v in value if kinds == {int} and v not in _INT64), None)
+        if wide is not None:
+            raise DeclarationError(f"parameter {name} = {cut(value)}: its item {cut(wide)} does not fit the 64-bit "
+                                   "integers a ROS 2 parameter list holds; pass floats or strings")
+        return
+    raise DeclarationError(f"parameter {name} = {cut(value)} is a {type(value).__name__}: a ROS 2 parameter "
                            "holds bool, int, float, str, bytes or a list of one of those")
 
 

@@ -99,7 +99,47 @@ def test_a_slow_handler_holds_up_no_other_handler(make_node, notices, session):
     finally:
         gate.set()
     if session.backend.name == "ROS 2":
-        assert any("/resilience/slow_in took" in n and "runs on a thread of its own" in n for n in notices), notices
+        assert any("/resilience/slow_in" in n and "runs on a thread of its own" in n for n in notices), notices
+
+
+@pytest.mark.parametrize("where", ["another node", "the same node"])
+def test_a_handler_that_blocks_on_its_first_message_holds_up_no_other_from_then_on(make_node, notices, session,
+                                                                                      where):
+    """A handler blocked from its first call on (a sleep, a slow service call) leaves the others running: on ROS 2
+    the executor thread it holds is noticed within about a tenth of a second and replaced; the blocked call
+    ends where it is, and its next calls come after it, in order."""
+    tag = where.split()[0]
+    gate, slow_calls, quick = threading.Event(), [], []
+
+    def slow(msg):
+        slow_calls.append(msg.data)
+        gate.wait(6)
+
+    blocked = make_node(f"blocked_{tag}")
+    blocked.new.subscribe(f"/first_block/{tag}/slow", handler=slow, msgType=UInt32)
+    other = blocked if where == "the same node" else make_node(f"unblocked_{tag}")
+    other.new.subscribe(f"/first_block/{tag}/quick", handler=lambda m: quick.append(m.data), msgType=UInt32)
+    blocked.create()
+    other.create()
+    feeder = make_node(f"first_block_feeder_{tag}").new.publish(f"/first_block/{tag}/slow", msgType=UInt32) \
+        .publish(f"/first_block/{tag}/quick", msgType=UInt32).create()
+    wait_for(lambda: all(f.connections for f in engine_of(feeder).sent()), timeout=20, what="both to connect")
+    try:
+        feeder.write(f"/first_block/{tag}/slow", UInt32(data=1))
+        wait_for(lambda: slow_calls, what="the slow handler to start")
+        feeder.write(f"/first_block/{tag}/slow", UInt32(data=2))  # waits behind the first call
+        start = time.monotonic()
+        for i in range(20):  # 20 Hz for 1 s, while the first call still blocks
+            feeder.write(f"/first_block/{tag}/quick", UInt32(data=i))
+            time.sleep(0.05)
+        wait_for(lambda: len(quick) >= 15, timeout=3, what="the quick handler while the slow one blocks")
+        assert not gate.is_set() and time.monotonic() - start < 5, "the slow handler was meant to block throughout"
+        assert slow_calls == [1], slow_calls  # the second waits for the first: in order, never beside it
+    finally:
+        gate.set()
+    wait_for(lambda: slow_calls == [1, 2], what="the second call after the first ended")
+    if session.backend.name == "ROS 2":
+        assert any(f"/first_block/{tag}/slow has held the session's executor" in n for n in notices), notices
 
 
 def test_a_chain_that_fails_part_way_changes_nothing(make_node):
@@ -158,6 +198,16 @@ def test_a_basenode_slow_to_show_up_is_waited_for_and_said(make_node, notices, m
     w.shutdown()
 
 
+def wrapping_no_node(make_node, tmp_path, name: str):
+    """``{name}_wrap`` wrapping ``{name}_base``: a process that runs but is no ROS node, so never shows up."""
+    script = tmp_path / f"{name}_not_a_node.py"
+    script.write_text("import time\nprint('up', flush=True)\ntime.sleep(600)\n")
+    w = make_node(f"{name}_wrap")
+    w.baseNode(str(script), name=f"{name}_base")
+    w.reuse.publish("level", type=UInt32)
+    return w
+
+
 def test_a_basenode_that_runs_but_never_shows_up_fails_create_in_one_line_and_is_stopped(make_node, monkeypatch,
                                                                                       tmp_path):
     """A basenode that is no ROS node (or takes another name than it is given) is stopped once the wait ends, and
@@ -166,12 +216,8 @@ def test_a_basenode_that_runs_but_never_shows_up_fails_create_in_one_line_and_is
 
     from ipyros.node import wrapping
 
-    script = tmp_path / "not_a_node.py"
-    script.write_text("import time\nprint('up', flush=True)\ntime.sleep(600)\n")
     monkeypatch.setattr(wrapping, "REGISTRATION_TIMEOUT", 2.0)
-    w = make_node("absent_wrap")
-    w.baseNode(str(script), name="absent_base")
-    w.reuse.publish("level", type=UInt32)
+    w = wrapping_no_node(make_node, tmp_path, "absent")
     before = children()
     with pytest.raises(errors.BaseNodeError) as caught:
         w.create()
@@ -181,3 +227,40 @@ def test_a_basenode_that_runs_but_never_shows_up_fails_create_in_one_line_and_is
     assert message.endswith("so it was stopped; is it a ROS node that keeps the name it is given?"), message
     assert not w.created and w.base is None
     assert children() <= before, "the basenode was stopped"
+
+
+def test_ctrl_c_while_create_waits_for_a_basenode_ends_it_in_one_line_with_nothing_left(make_node, notices,
+                                                                                        monkeypatch, tmp_path):
+    """Ctrl-C at the prompt while create() waits for a basenode that runs but never shows up: one line (not a
+    traceback from inside the wait), the basenode stopped, the wrapping node not running and declared as before."""
+    import _thread
+
+    from support import children
+
+    from ipyros.node import wrapping
+
+    monkeypatch.setattr(wrapping, "SLOW_START_NOTICE", 0.3)
+    w = wrapping_no_node(make_node, tmp_path, "interrupted")
+    declared = w.model()
+    before = children()
+
+    def press_ctrl_c_once_said():
+        wait_for(lambda: any("not in the graph yet" in n for n in notices), timeout=20, what="the wait to be said")
+        _thread.interrupt_main()
+
+    presser = threading.Thread(target=press_ctrl_c_once_said)
+    presser.start()
+    started = time.monotonic()
+    try:
+        with pytest.raises(errors.BaseNodeError) as caught:
+            w.create()
+    finally:
+        presser.join(30)
+    message = str(caught.value)
+    assert time.monotonic() - started < 15, "Ctrl-C ended the wait at once"
+    assert "\n" not in message and message.startswith(
+        "Ctrl-C while waiting for basenode /interrupted_base of interrupted_wrap to show up in the graph: "), message
+    assert "nothing is left half-declared" in message, message
+    assert caught.value.__cause__ is None and caught.value.__suppress_context__, "no traceback from inside the wait"
+    assert not w.created and w.base is None and w.model() == declared
+    wait_for(lambda: children() <= before, what="the basenode to be stopped")

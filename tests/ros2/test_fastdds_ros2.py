@@ -15,9 +15,9 @@ from ipyros.dsl import engine_of
 from ipyros.ros2 import fastdds
 
 
-def receiving_sockets(pid: int) -> list[tuple[str, int]]:
-    """(address, port) of the UDP sockets ``pid`` has bound to a fixed port (Fast DDS's receivers; its senders
-    take ephemeral ports, from which nothing is read)."""
+def udp_sockets(pid: int, receivers_only: bool = False) -> list[tuple[str, int]]:
+    """(address, port) of the UDP sockets ``pid`` has bound: all of them, or Fast DDS's receivers alone (bound to a
+    fixed port; its senders take ephemeral ports)."""
     low = int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
     inodes = set()
     for fd in Path(f"/proc/{pid}/fd").iterdir():
@@ -34,27 +34,68 @@ def receiving_sockets(pid: int) -> list[tuple[str, int]]:
             continue
         address, port = fields[1].split(":")
         address = ".".join(str(int(address[i:i + 2], 16)) for i in (6, 4, 2, 0))
-        if int(port, 16) < low:
+        if not receivers_only or int(port, 16) < low:
             found.append((address, int(port, 16)))
     return found
 
 
-def test_a_local_session_receives_on_loopback_only(ros2_session, make_node):
+def test_a_local_session_holds_udp_sockets_on_loopback_only(ros2_session, make_node):
+    """Its receivers and its senders alike: rmw's own LOCALHOST range would add a sending socket on 0.0.0.0 and
+    one on the LAN address (see ipyros/ros2/fastdds.py)."""
     make_node("fastdds_local").create()
     assert "ipyros's profile" in ros2_session.backend.transport and "loopback only" in ros2_session.backend.transport
-    sockets = receiving_sockets(os.getpid())
-    assert sockets, "no DDS receivers found"
-    assert all(address in ("127.0.0.1", "239.255.0.1") for address, _ in sockets), sockets
+    assert "discovery localhost" in ros2_session.backend.describe()
+    assert udp_sockets(os.getpid(), receivers_only=True), "no DDS receivers found"
+    sockets = udp_sockets(os.getpid())
+    assert all(address == "127.0.0.1" for address, _ in sockets), sockets
 
 
-def test_a_basenode_it_starts_receives_on_loopback_only_too(make_node):
+def test_a_basenode_it_starts_holds_them_on_loopback_only_too_and_is_found(make_node):
     script = Path(__file__).resolve().parent / "peers" / "echo_node.py"
     nd = make_node("fastdds_base").baseNode(str(script))
-    nd.create()
+    nd.create()  # found in the graph: discovery on loopback works both ways
     pid = nd.base.pid
-    wait_for(lambda: receiving_sockets(pid), timeout=20, what="the basenode's receivers")
-    assert all(address in ("127.0.0.1", "239.255.0.1") for address, _ in receiving_sockets(pid))
+    wait_for(lambda: udp_sockets(pid, receivers_only=True), timeout=20, what="the basenode's receivers")
+    assert all(address == "127.0.0.1" for address, _ in udp_sockets(pid)), udp_sockets(pid)
     assert "ipyros-profile" in Path(f"/proc/{pid}/environ").read_bytes().decode(errors="replace")
+
+
+def test_a_local_session_and_a_plain_localhost_node_find_each_other(make_node, tmp_path):
+    """A node of the machine that ipyros did not start (rmw's own LOCALHOST range, Fast DDS's defaults) and the
+    session's node hear each other: what the profile says of discovery matches what rmw does."""
+    from std_msgs.msg import String
+
+    script = tmp_path / "plain.py"
+    script.write_text(PLAIN_LOCALHOST_NODE)
+    env = {k: v for k, v in os.environ.items() if k not in ("FASTDDS_DEFAULT_PROFILES_FILE", fastdds.HELD_RANGE)}
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    heard = []
+    nd = make_node("fastdds_meets_plain")
+    nd.new.subscribe("/fastdds_plain/out", handler=lambda m: heard.append(m.data), msgType=String)
+    nd.new.publish("/fastdds_plain/in", msgType=String).create()
+    plain = subprocess.Popen([sys.executable, str(script)], env=env, stdout=subprocess.PIPE, text=True)
+    try:
+        wait_for(lambda: nd.write("/fastdds_plain/in", String(data="ping")) or heard, timeout=30, interval=0.2,
+                 what="the plain node to answer")
+    finally:
+        plain.terminate()
+        plain.wait(10)
+    assert heard[0] == "pong: ping"
+
+
+PLAIN_LOCALHOST_NODE = """
+import rclpy
+from rclpy.node import Node
+from std_msgs.msg import String
+rclpy.init()
+node = Node("plain_localhost")
+out = node.create_publisher(String, "/fastdds_plain/out", 10)
+node.create_subscription(String, "/fastdds_plain/in", lambda m: out.publish(String(data="pong: " + m.data)), 10)
+try:
+    rclpy.spin(node)
+except Exception:
+    pass
+"""
 
 
 def test_a_users_own_fast_dds_profile_is_left_alone(tmp_path):
