@@ -69,7 +69,9 @@ class Figure:
         return f"{bound} {limit:.3g}x"
 
 
-def _number(value: float, unit: str) -> str:
+def _number(value: Optional[float], unit: str) -> str:
+    if value is None:  # a path that delivered nothing has no such figure
+        return "-"
     if unit == "ms":
         return f"{value:.3f} ms" if value < 10 else f"{value:.1f} ms"
     if unit == "s":

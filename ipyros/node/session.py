@@ -21,10 +21,11 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Protocol
 
 from ..core import msgtypes
-from ..core.errors import NodeStateError, NotDeclaredError
+from ..core.errors import NodeStateError, NotDeclaredError, shorten
 from ..core.graph import EMPTY, GraphSnapshot, actions_of
 from ..core.journal import Change, Journal
 from ..core.slots import HandlerFailure, OutputScope
+from ..processes.basenode import stop_together
 from .backend import Backend, choose as choose_backend
 
 
@@ -36,6 +37,7 @@ class SessionNode(Protocol):
     def name(self) -> str: ...
     @property
     def fullname(self) -> str: ...
+    def release_base(self) -> Any: ...  # its running basenode (stop()), handed over to be stopped elsewhere
     def quieten(self) -> None: ...
     def shutdown(self) -> None: ...
 
@@ -114,8 +116,8 @@ class Session:
         return self._journal
 
     def notify(self, text: str) -> None:
-        """Tell the user something that happened on its own (a basenode died, ...)."""
-        self.notice(text)
+        """Tell the user something that happened on its own (a basenode died, ...); each line :func:`shorten`-ed."""
+        self.notice("\n".join(shorten(line) for line in text.split("\n")))
 
     def start_process_node(self, fullname: str) -> str:
         """Start this process's ROS side (on ROS 1 the master is found or started first) once; its node's name."""
@@ -181,6 +183,28 @@ class Session:
         if stop not in self._on_close:
             self._on_close.append(stop)
 
+    def shutdown_nodes(self, nodes: Optional[list[SessionNode]] = None) -> None:
+        """Shut ``nodes`` down (default: every node of the session) side by side: their handlers quietened first
+        (one node's handler may write through another), their basenodes all asked to stop at once and waited for
+        together while the nodes' own endpoints close (one after another, 50 basenodes took most of a minute)."""
+        nodes = list(self.nodes.values()) if nodes is None else nodes
+        for node in nodes:
+            node.quieten()
+        self.backend.closing_hosts([node.fullname for node in nodes])
+        bases = [base for base in (node.release_base() for node in nodes) if base is not None]
+        stopping = threading.Thread(target=stop_together, args=(bases,), name="ipyros-stop-basenodes", daemon=True)
+        try:
+            stopping.start()
+        except RuntimeError:  # at interpreter exit (Python 3.12 on) no thread may start: stopped here
+            stop_together(bases)
+        for node in reversed(nodes):
+            try:
+                node.shutdown()
+            except Exception as error:  # keep closing the rest
+                print(f"ipyros: error while shutting down {node.fullname}: {error}", file=sys.stderr)
+        if stopping.ident is not None:
+            stopping.join()
+
     def close(self) -> None:
         """Stop every node and basenode, the ROS side of this process, and the master if ipyros started it."""
         with self._lock:
@@ -193,13 +217,7 @@ class Session:
                     stop()
                 except Exception as error:  # keep closing the rest
                     print(f"ipyros: error while closing: {error}", file=sys.stderr)
-            for node in list(self.nodes.values()):  # first all: one node's handler may write through another
-                node.quieten()
-            for node in reversed(list(self.nodes.values())):
-                try:
-                    node.shutdown()
-                except Exception as error:  # keep closing the rest
-                    print(f"ipyros: error while shutting down {node.fullname}: {error}", file=sys.stderr)
+            self.shutdown_nodes()
             self.backend.close()
             if self._journal is not None:
                 self._journal.close()

@@ -432,11 +432,11 @@ def _last_lines(path: Path, n: int) -> list[str]:
     return [plain(line) for line in data.decode("utf-8", errors="replace").splitlines()[-n:]]
 
 
-def stop_together(processes: Sequence["BaseProcess"], timeout: float = 5.0) -> None:
-    """Stop several processes at once, each on a thread of its own: stopping them one after another would take
-    the sum of their times (up to ``timeout`` each, for nodes slow to stop); together, the longest one's.
-    One's trouble does not spare the others."""
-    def stop(process: BaseProcess) -> None:
+def stop_together(processes: Sequence[Any], timeout: float = 5.0) -> None:
+    """Stop several processes at once (anything with ``stop(timeout)``: a basenode, a launch file's rest), each on a
+    thread of its own: stopping them one after another would take the sum of their times (up to ``timeout`` each,
+    for nodes slow to stop); together, the longest one's. One's trouble does not spare the others."""
+    def stop(process: Any) -> None:
         try:
             process.stop(timeout)
         except Exception:  # noqa: BLE001 - said in its own log; the others must still stop

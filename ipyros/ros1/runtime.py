@@ -249,31 +249,36 @@ class _Reconnect:
         def remove_connection(connection: Any) -> None:
             original(connection)
             if not impl.closed:
-                cls._soon(impl.resolved_name, impl.type)
+                cls._soon(impl)
 
         impl.remove_connection = remove_connection  # what rospy hands each new connection as its cleanup
         impl._ipyros_reconnect = True
 
     @classmethod
-    def _soon(cls, topic: str, type_name: str) -> None:
+    def _soon(cls, impl: Any) -> None:
         with cls._lock:
-            if topic in cls._pending:
+            if impl.resolved_name in cls._pending:
                 return
-            cls._pending.add(topic)
-        timer = threading.Timer(0.3, cls._ask, (topic, type_name))
+            cls._pending.add(impl.resolved_name)
+        timer = threading.Timer(0.3, cls._ask, (impl,))
         timer.daemon = True
         timer.start()
 
     @classmethod
-    def _ask(cls, topic: str, type_name: str) -> None:
+    def _ask(cls, impl: Any) -> None:
+        """Register the subscription again, unless it closed meanwhile (its node shut down as its publisher went):
+        a closed subscription registered again would be left on the master as a dead entry."""
+        topic = impl.resolved_name
         with cls._lock:
             cls._pending.discard(topic)
         manager = _registration_manager()
-        if manager is None or rospy.core.is_shutdown():
+        if manager is None or rospy.core.is_shutdown() or impl.closed:
             return
         try:
-            _subscribe_again(master_proxy(os.environ.get("ROS_MASTER_URI", ""), timeout=2.0), manager, topic,
-                             type_name)
+            master = master_proxy(os.environ.get("ROS_MASTER_URI", ""), timeout=2.0)
+            _subscribe_again(master, manager, topic, impl.type)
+            if impl.closed:  # it closed while it was being registered: take it back
+                master.unregisterSubscriber(rospy.get_name(), topic, rospy.core.get_node_uri())
         except (OSError, xmlrpc.client.Error):
             pass  # no master now: when it is back, the master watch registers everything again
 
@@ -366,18 +371,25 @@ def _send_figures(topic: str, kind: str, count: int, impl: Any) -> SendFigures:
     return SendFigures(topic, kind, count, len(impl.connections), backlog.messages, backlog.dropped)
 
 
-def _offer_again(topic: str, type_name: str) -> None:
-    """Register this process's publication of ``topic`` with the master again, in a moment and once more later.
+def _offer_again(impl: Any) -> None:
+    """Register this process's publication ``impl`` with the master again, in a moment and once more later.
 
-    The master then sends every subscriber of ``topic`` the list of its publishers, and one
+    The master then sends every subscriber of its topic the list of its publishers, and one
     whose connection to this process was just closed connects again: rospy subscribers do not
     by themselves when a publisher closes their connection (roscpp ones do). Its first try waits
     for the subscriber to notice the closed connection; the second is for one busy in a callback.
+    A publication closed meanwhile is not registered again (it would stay on the master as a dead entry).
     """
+    topic, type_name = impl.resolved_name, impl.type
+
     def offer() -> None:
+        if impl.closed or rospy.core.is_shutdown():
+            return
         try:
-            master_proxy(os.environ["ROS_MASTER_URI"], timeout=5.0).registerPublisher(
-                rospy.get_name(), topic, type_name, rospy.core.get_node_uri())
+            master = master_proxy(os.environ["ROS_MASTER_URI"], timeout=5.0)
+            master.registerPublisher(rospy.get_name(), topic, type_name, rospy.core.get_node_uri())
+            if impl.closed:  # it closed while it was being registered: take it back
+                master.unregisterPublisher(rospy.get_name(), topic, rospy.core.get_node_uri())
         except Exception:  # noqa: BLE001 - the master is away: when it is back, everything is registered again
             pass
 
@@ -677,7 +689,7 @@ class Relay:
         frame.abort()  # the subscribers' connections are closed: their streams were cut mid-message
         sending.count_dropped(self.target)
         self._sending.release()
-        _offer_again(self.target, self._impl.type)
+        _offer_again(self._impl)
 
     def _wrong_type(self, got: str) -> None:
         self.dropped += 1

@@ -1,0 +1,32 @@
+"""The bench's one table: a path that delivers nothing is a figure too ("0 delivered"), never a traceback."""
+
+from __future__ import annotations
+
+from bench.figures import Figure, table, target_lines
+from bench.relay_ros2 import Load, Run, targets
+
+BEST_EFFORT = Load("image_be", "image", "Image 1 MiB, best effort, 30 Hz", 30.0, 60, 0, paths="ae",
+                   reliability="best_effort")
+
+
+def run(p50, lost):
+    return Run(p50, None if p50 is None else p50 * 2, 0, 30, lost, 0.0, 0, 0, None, True)
+
+
+def test_the_direct_path_delivering_nothing_is_the_anchor_of_the_wrapped_cameras_loss():
+    figures = targets({("image_be", "a"): run(None, 60), ("image_be", "e"): run(2.0, 0)}, [BEST_EFFORT])
+    lines = target_lines(figures)
+    assert lines == ["- PASS ROS 2 Image 1 MiB, best effort, 30 Hz lost, wrapped camera (e), start included: 0 msgs "
+                     "vs direct (a) 60 msgs (0.00x), target 0"], lines
+
+
+def test_a_wrapped_camera_delivering_nothing_fails_its_loss_target_and_shows_no_latency():
+    figures = targets({("image_be", "a"): run(None, 60), ("image_be", "e"): run(None, 60)}, [BEST_EFFORT])
+    assert [f.what for f in figures] == ["Image 1 MiB, best effort, 30 Hz lost, wrapped camera (e), start included"]
+    assert figures[0].passed is False
+
+
+def test_a_figure_whose_anchor_has_no_value_is_printed():
+    figure = Figure("ROS 2", "lost", 3, "msgs", "direct (a)", None, most=0)
+    assert target_lines([figure]) == ["- FAIL ROS 2 lost: 3 msgs vs direct (a) -, target 0"]
+    assert "| ROS 2 | lost | 3 msgs | direct (a) |  |" in table([figure])
