@@ -70,6 +70,31 @@ class ActionModel:
 
 
 @dataclass
+class GuardModel:
+    """A safety guard on an output of the node (see :mod:`ipyros.core.guard`): every message that leaves the node
+    on ``resolved`` passes it.
+
+    ``limits`` bounds numeric fields by path (``{"linear.x": [-0.5, 0.5]}``), ``rate`` their change per second,
+    ``on_limit`` says what a value outside does (``"clamp"`` or ``"drop"``); after ``timeout`` seconds of
+    silence the ``stop`` message is sent (its fields; None: the type's zero message), again at ``repeat`` Hz,
+    and held ``grace`` seconds after the session ends; ``estop_topic`` (a ``std_msgs/Bool``) trips it too.
+    Plain data: a guard in a model file runs without ``trust``.
+    """
+
+    name: str
+    resolved: str
+    type: str
+    limits: dict[str, list[float]] = field(default_factory=dict)
+    rate: dict[str, float] = field(default_factory=dict)
+    on_limit: str = "clamp"
+    timeout: Optional[float] = None
+    stop: Optional[dict[str, Any]] = None
+    repeat: float = 10.0
+    grace: float = 3.0
+    estop_topic: Optional[str] = None
+
+
+@dataclass
 class BaseModel:
     """The basenode a wrapping node wraps: found as ``rosrun package executable`` finds it.
 
@@ -120,6 +145,7 @@ class NodeModel:
     services: list[ServiceModel] = field(default_factory=list)
     params: dict[str, Any] = field(default_factory=dict)
     actions: list[ActionModel] = field(default_factory=list)
+    guards: list[GuardModel] = field(default_factory=list)
 
     # -- queries -------------------------------------------------------------
     def topic(self, resolved: str, direction: Direction, role: Optional[Role] = None) -> Optional[TopicModel]:
@@ -144,6 +170,14 @@ class NodeModel:
     def action(self, resolved: str, role: Optional[Role] = None) -> Optional[ActionModel]:
         return next((a for a in self.actions if a.resolved == resolved and (role is None or a.role == role)), None)
 
+    def guard(self, resolved: str) -> Optional[GuardModel]:
+        return next((g for g in self.guards if g.resolved == resolved), None)
+
+    def outputs(self) -> list[TopicModel]:
+        """What the node sends to the world: its new publications and the basenode's outputs it relays or takes over
+        (the topics a guard may stand on)."""
+        return [t for t in self.topics if t.direction == "publish"]
+
     # -- plain data ----------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """A JSON/YAML-ready dict (only str, float, bool, list, dict, None)."""
@@ -163,6 +197,7 @@ class NodeModel:
             timers=[_build(TimerModel, t) for t in data.pop("timers", [])],
             services=[_build(ServiceModel, s) for s in data.pop("services", [])],
             actions=[_build(ActionModel, a) for a in data.pop("actions", [])],
+            guards=[_build(GuardModel, g) for g in data.pop("guards", [])],
             **data,
         )
 
@@ -174,7 +209,7 @@ def _check_keys(cls: type, data: dict[str, Any]) -> None:
 
 
 #: The values a field may take, where it has a fixed set (checked when a model is read from a file).
-_CHOICES = {"direction": ("publish", "subscribe"), "role": ("new", "reuse")}
+_CHOICES = {"direction": ("publish", "subscribe"), "role": ("new", "reuse"), "on_limit": ("clamp", "drop")}
 
 
 def _build(cls: type, data: dict[str, Any]):

@@ -96,9 +96,9 @@ def definition(type_name: str, expand: bool = False) -> str:
 
 def _definition_lines(cls: type, expand: bool, indent: str) -> list[str]:
     lines = [f"{indent}{name}={value!r}" for name, value in _constants(cls)]
-    for name, field_type in zip(*_field_types(cls)):
+    for name, field_type in zip(*field_types(cls)):
         lines.append(f"{indent}{field_type} {name}")
-        nested = _nested_class(field_type.split("[")[0]) if expand and _kind(field_type.split("[")[0]) == "message" \
+        nested = nested_class(field_type.split("[")[0]) if expand and _kind(field_type.split("[")[0]) == "message" \
             else None
         if nested is not None:
             lines += _definition_lines(nested, expand, indent + "  ")
@@ -107,7 +107,7 @@ def _definition_lines(cls: type, expand: bool, indent: str) -> list[str]:
 
 def _constants(cls: type) -> list[tuple[str, Any]]:
     """A message's constants (``GoalStatus.PENDING``): upper-case class attributes holding plain values."""
-    fields = set(_field_types(cls)[0])
+    fields = set(field_types(cls)[0])
     found = []
     for name in dir(cls):
         if name.isupper() and not name.startswith("_") and name.lower() not in fields:
@@ -127,6 +127,11 @@ def to_yaml(msg: Any, noarr: bool = False, offset: bool = False) -> str:
         return str(msg)  # a field's value; or genpy's own YAML, as rostopic prints it
     data = _as_data(msg, noarr=noarr, now=time.time() if offset else None)
     return yaml.safe_dump(data, default_flow_style=False, width=1 << 20, sort_keys=False).strip()
+
+
+def as_data(msg: Any) -> Any:
+    """A message as plain data (dicts of fields, times as {secs, nsecs}, bytes as lists): what a file keeps."""
+    return _as_data(msg)
 
 
 def flow_yaml(msg: Any) -> str:
@@ -237,7 +242,7 @@ class _Builder:
         name = msgtypes.type_name(cls)
         if _is_message(data):
             raise _FieldError(path, f"expected a {name}, got a {msgtypes.type_name(type(data))}")
-        fields, types = _field_types(cls)
+        fields, types = field_types(cls)
         if data is None:
             return cls()
         if isinstance(data, dict):
@@ -310,7 +315,7 @@ _ROS2_PRIMITIVES = {"double": "float64", "float": "float32", "boolean": "bool", 
 _ROS2_SEQUENCE = re.compile(r"^sequence<(?P<base>[^,>]+)(?:, *\d+)?>$")
 
 
-def _field_types(cls: type) -> tuple[list[str], list[str]]:
+def field_types(cls: type) -> tuple[list[str], list[str]]:
     """A message class's field names and their types, in ROS 1's spelling on either ROS
     (``sequence<double>`` is ``float64[]``, ``string<=10`` is ``string``, ...)."""
     ros2_fields = getattr(cls, "get_fields_and_field_types", None)
@@ -428,7 +433,7 @@ def _checker(cls: type) -> Any:
     found = _CHECKERS.get(cls)
     if found is not None:
         return found
-    fields, types = _field_types(cls)
+    fields, types = field_types(cls)
     scope: dict[str, Any] = {"_conform": _conform, "_fix": _fix, "_ok": _int_fits}
     lines = ["def check(m, p):"]
     for i, (name, field_type) in enumerate(zip(fields, types)):
@@ -445,7 +450,7 @@ def _checker(cls: type) -> Any:
             extra = "" if kind != "int" else f" or not _ok(t{i}, m.{name})"
             lines.append(f"    if type(m.{name}) is not {want}{extra}: m.{name} = _fix(t{i}, m.{name}, p + {name!r})")
         elif kind == "message":
-            nested = scope[f"c{i}"] = _nested_class(field_type)
+            nested = scope[f"c{i}"] = nested_class(field_type)
             scope[f"k{i}"] = _checker(nested) if nested is not None else None
             lines.append(f"    v = m.{name}")
             lines.append(f"    if type(v) is not c{i}: _fix(t{i}, v, p + {name!r})")
@@ -479,7 +484,7 @@ def _kind(field_type: str) -> str | None:
     return "message"
 
 
-def _nested_class(field_type: str) -> Any:
+def nested_class(field_type: str) -> Any:
     """The class of a nested message field, or None if it cannot be imported here (then checked by kind)."""
     try:
         return msgtypes.resolve_message("std_msgs/Header" if field_type == "Header" else field_type)[1]

@@ -1,7 +1,7 @@
 """From a node model to the endpoints that must run, and the internal names of wrapped topics.
 
-This is where the wrapping semantics live (DESIGN.md, "Wrapping, precisely"), as a
-pure function of the model: the runtime only opens what the plan lists and closes
+This is where the wrapping semantics live (the paper's figure 1; docs/architecture.md,
+"Wrapping names"), as a pure function of the model: the runtime only opens what the plan lists and closes
 what it no longer lists. For a wrapping node W around basenode B, every base topic W
 declares gets an *internal* name ``/W/base/<topic>`` and B is launched remapped onto
 it, so B talks only to W there:
@@ -20,6 +20,7 @@ reuse.action(A)                 goals, cancels, feedback, status and results rel
                                 A and B's internal(A), as one unit (the backend knows the parts)
 new.action(A, h)                h serves A's goals
 reuse.action(A) + new.action(A, h)       h serves A's goals and may forward them to B's internal(A)
+guard(T)                        a guard on the output T: opened first, every message to T passes it
 ==============================  ==========================================================
 """
 
@@ -95,8 +96,16 @@ class ActionRelaySpec:
     type: str
 
 
+@dataclass(frozen=True)
+class GuardSpec:
+    """A guard on the output ``topic`` (its rules are the node's to swap live: see ipyros.node.guards)."""
+
+    topic: str
+    type: str
+
+
 Spec = Union[PublishSpec, SubscribeSpec, RelaySpec, TimerSpec, ServiceSpec, ServiceRelaySpec, ActionServerSpec,
-             ActionRelaySpec]
+             ActionRelaySpec, GuardSpec]
 
 
 def topic_slot(resolved: str) -> str:
@@ -125,8 +134,13 @@ def internal_name(model: NodeModel, resolved: str) -> str:
 
 
 def plan(model: NodeModel) -> dict[Spec, None]:
-    """The endpoints the node needs now, in a stable order (a dict used as an ordered set)."""
+    """The endpoints the node needs now, in a stable order (a dict used as an ordered set): its guards first, so
+    that an output never sends a message before its guard stands (and closes before it, in reverse)."""
     specs: dict[Spec, None] = {}
+    outputs = {t.resolved for t in model.topics if t.direction == "publish"}
+    for guard in model.guards:
+        if guard.resolved in outputs:
+            specs[GuardSpec(guard.resolved, guard.type)] = None
     reused_out = {t.resolved for t in model.topics if t.role == "reuse" and t.direction == "publish"}
     reused_in = {t.resolved for t in model.topics if t.role == "reuse" and t.direction == "subscribe"}
     intercepted = {t.resolved for t in model.topics if t.role == "new" and t.direction == "subscribe"}

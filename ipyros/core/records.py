@@ -69,6 +69,7 @@ class NodeStatus(Rows):
     running: bool
     rows: tuple[StatusRow, ...]
     params: tuple[tuple[str, str], ...] = ()  # the node's own parameters as they are now (set from outside too)
+    guards: tuple[Any, ...] = ()  # its guards (ipyros.core.guard.GuardState): state, what each did
 
     def row(self, name: str) -> StatusRow:
         return next(r for r in self.rows if r.name == name)
@@ -90,6 +91,16 @@ class NodeStatus(Rows):
                         Cell(f"{r.dropped}{waiting}", "red") if r.dropped else f"0{waiting}")
             rows.append((r.kind, r.name, r.handler, str(r.calls), *rest))
         rows += [("param", name, value, *[""] * 7) for name, value in self.params]
+        for guard in self.guards:
+            f = guard.figures
+            did = f"{guard.state}; {f.clamped} clamped, {f.dropped} dropped, {f.replaced} stopped in place, " \
+                  f"{guard.stops_sent} stops sent by its process" + (f"; last: {f.last_trip} at " +
+                                                                  time.strftime("%H:%M:%S",
+                                                                                time.localtime(f.last_trip_at))
+                                                                  if f.last_trip else "")
+            state: Union[str, Cell] = Cell(did, "bold red") if guard.state != "passing" else did
+            # subscribers: those its process reaches, where a stop message on silence goes
+            rows.append(("guard", guard.topic, state, str(f.passed), *[""] * 4, str(guard.reach), ""))
         title = f"status of {self.node}" + ("" if self.running else " (not running)")
         return TextTable(title, columns, tuple(rows))
 

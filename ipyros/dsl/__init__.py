@@ -8,7 +8,7 @@ own modules reach the node through :func:`engine_of` (its :class:`~ipyros.node.e
 from .declarations import NodeParams, TopicHandler, end_chains
 from .keeping import RestoreError, restoring, save_session, spin
 from .messages import build_messages
-from .rosnode import engine_of, restore, rosNode, shutdown
+from .rosnode import engine_of, node_of, restore, rosNode, shutdown
 
-__all__ = ["NodeParams", "RestoreError", "TopicHandler", "build_messages", "end_chains", "engine_of", "restore",
-           "restoring", "rosNode", "save_session", "shutdown", "spin"]
+__all__ = ["NodeParams", "RestoreError", "TopicHandler", "build_messages", "end_chains", "engine_of", "node_of",
+           "restore", "restoring", "rosNode", "save_session", "shutdown", "spin"]

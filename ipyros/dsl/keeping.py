@@ -112,7 +112,8 @@ def _across_ros(file: modelfile.ModelFile, session: Any) -> None:
 
 
 def _declare(node: Any, model: NodeModel, functions: dict[str, Callable[..., Any]]) -> None:
-    """Replay ``model`` through the public DSL: base first, then topics, services, timers, params."""
+    """Replay ``model`` through the public DSL: base first, then topics, services, timers, params, guards (a
+    guard is data: every value of it is checked as if typed, and it runs nothing)."""
     base = model.base
     if base is not None and base.bag:  # a recorded bag: played by this ipyros's player
         node.baseBag(**base.bag)
@@ -142,6 +143,10 @@ def _declare(node: Any, model: NodeModel, functions: dict[str, Callable[..., Any
                    oneshot=timer.oneshot)
     for key, value in model.params.items():
         node.params[key] = value
+    for guard in model.guards:
+        node.guard(guard.name, limits=guard.limits or None, rate=guard.rate or None, on_limit=guard.on_limit,
+                   timeout=guard.timeout, stop=guard.stop, repeat=guard.repeat, grace=guard.grace,
+                   estop_topic=guard.estop_topic)
 
 
 def export(engine: NodeEngine, path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:

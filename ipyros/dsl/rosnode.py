@@ -17,26 +17,22 @@ DSL and nothing else: ``nd.<TAB>`` shows the paper's methods and how to keep the
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 from typing import Any, Callable, Optional
 
-from ..core import names, plan as planning
+from ..core import names
 from ..core.actions import SentGoal
 from ..core.errors import DeclarationError, NotDeclaredError, cut
-from ..core.model import NodeModel, TimerModel
+from ..core.model import NodeModel
 from ..core.records import History, NodeStatus, Versions
-from ..core.slots import call_arity
-from ..core.versions import name_of
+from ..node import declaring
 from ..node.engine import NodeEngine
 from ..node.session import Session, current
 from ..node.wrapping import discover, set_bag, set_base, set_launch_base
 from . import keeping
 from .declarations import UNSET, NodeParams, TopicHandler
 
-__all__ = ["engine_of", "restore", "rosNode", "shutdown"]
-
-MIN_TIMER_PERIOD = 1e-4  # seconds; below it a timer would only spin a core (and rospy divides by it)
+__all__ = ["engine_of", "node_of", "restore", "rosNode", "shutdown"]
 
 
 class rosNode:  # noqa: N801 - the paper's name
@@ -58,8 +54,8 @@ class rosNode:  # noqa: N801 - the paper's name
         model = NodeModel(name=names.check_node_name(name, rules), namespace=ns)
         # A wrapping node without a namespace of its own lives in its basenode's (see wrapping.set_base).
         self._engine = NodeEngine(self, model, session, explicit_namespace=namespace is not None)
-        self.new = TopicHandler(self._engine, "new")
-        self.reuse = TopicHandler(self._engine, "reuse")
+        self.new = TopicHandler(self, "new")
+        self.reuse = TopicHandler(self, "reuse")
         self.params = NodeParams(self._engine)
 
     # -- what it is ---------------------------------------------------------------------------
@@ -177,21 +173,7 @@ class rosNode:  # noqa: N801 - the paper's name
 
         Declaring a timer with the same ``name`` (default: the handler's name) replaces it.
         """
-        if (isinstance(period, bool) or not isinstance(period, (int, float))
-                or not MIN_TIMER_PERIOD <= period < float("inf")):
-            raise DeclarationError(f"timer period must be a number of seconds from {MIN_TIMER_PERIOD:g} "
-                                   f"(10 kHz) up, not {period!r}")
-        name = name or getattr(handler, "__name__", "timer")
-        if not isinstance(name, str) or not (re.fullmatch(r"\w+", name) or name == "<lambda>"):
-            raise DeclarationError(f"timer name {cut(name)}: give letters, digits and _, e.g. name='heartbeat'")
-        takes_event = call_arity(handler, "timer", f"{self.name} timer {name}")
-        timer = TimerModel(name=name, period=float(period), handler=name_of(handler) or "timer", oneshot=oneshot)
-
-        def edit(model: NodeModel) -> None:
-            model.timers = [t for t in model.timers if t.name != name] + [timer]
-
-        self._engine.change(edit, {planning.timer_slot(name): (handler, takes_event)})
-        self._engine.record(f"timer {name} every {float(period):g} s -> {timer.handler}" + (" once" if oneshot else ""))
+        declaring.timer(self._engine, period, handler, name, oneshot)
         return self
 
     # -- parameters set from outside ------------------------------------------------------
@@ -208,34 +190,47 @@ class rosNode:  # noqa: N801 - the paper's name
         if handler is not None and not callable(handler):
             raise DeclarationError(f"on_param({key!r}, ...) takes a function of the new value, "
                                    f"e.g. lambda value: print(value); not {cut(handler)}")
-        self._engine.on_param(self.params._key(key), handler)
+        self._engine.params.on_param(self.params._key(key), handler)
         return self
 
     # -- removal ---------------------------------------------------------------------
     def remove(self, topic: Optional[str] = None, *, timer: Optional[str] = None,
-               service: Optional[str] = None, action: Optional[str] = None) -> "rosNode":
-        """Remove every declaration of ``topic``, or the named ``timer``, ``service`` or ``action``."""
-        for kind, name in (("topic", topic), ("timer", timer), ("service", service), ("action", action)):
+               service: Optional[str] = None, action: Optional[str] = None, guard: Optional[str] = None) -> "rosNode":
+        """Remove every declaration of ``topic``, or the named ``timer``, ``service``, ``action`` or ``guard``
+        (a guarded output is removed only after its guard, by its own call)."""
+        for kind, name in (("guard", guard), ("topic", topic), ("timer", timer), ("service", service),
+                           ("action", action)):
             if name is not None:
-                self._remove(kind, name)
+                declaring.remove(self._engine, kind, name)
         return self
 
-    #: Each kind's list in the model and its handler slot (a timer is found by its name, the rest by global name).
-    _REMOVABLE = {"topic": ("topics", planning.topic_slot), "timer": ("timers", planning.timer_slot),
-                  "service": ("services", planning.service_slot), "action": ("actions", planning.action_slot)}
+    # -- safety: guards on its outputs ---------------------------------------------------
+    def guard(self, topic: str, *, limits: Optional[dict] = None, timeout: Optional[float] = None,
+              stop: Any = None, on_limit: str = "clamp", rate: Optional[dict] = None,
+              estop_topic: Optional[str] = None, grace: float = 3.0, repeat: float = 10.0) -> "rosNode":
+        """Guard the output ``topic``: every message that leaves the node there passes the guard first, whatever
+        sent it (a handler, ``write``, ``%pub``, the relay of the basenode's output).
 
-    def _remove(self, kind: str, name: str) -> None:
-        engine = self._engine
-        field, slot = self._REMOVABLE[kind]
-        key = name if kind == "timer" else engine.resolve(name, kind)
-        of = (lambda entry: entry.name) if kind == "timer" else (lambda entry: entry.resolved)
-        declared = getattr(engine.model(), field)
-        if not any(of(entry) == key for entry in declared):
-            known = ", ".join(dict.fromkeys(of(entry) for entry in declared)) or "none"
-            shown = repr(key) if kind == "timer" else key
-            raise NotDeclaredError(f"{self.name} has no {kind} {shown} ({field}: {known})")
-        engine.change(lambda m: setattr(m, field, [e for e in getattr(m, field) if of(e) != key]), drop=[slot(key)])
-        engine.record(f"remove {'' if kind == 'topic' else kind + ' '}{key}")
+        ``limits={"linear.x": (-0.5, 0.5)}`` bounds numeric fields by path (``axes[2]``, ``poses[*].x``): a value
+        outside is clamped, or with ``on_limit="drop"`` the message is not sent; ``rate={"linear.x": 1.0}`` bounds
+        a field's change per second; NaN and infinities never pass (the stop message goes instead). After
+        ``timeout`` seconds with nothing passing, a process of the session's own sends ``stop`` (fields, or a
+        message; default: the type's zero message) at ``repeat`` Hz until a command passes, even when the
+        session is frozen or killed; when the session ends it holds the stop for ``grace`` s (at most 10).
+        ``estop_topic`` (``std_msgs/Bool``) trips the e-stop from anywhere. Declared again, the rules change
+        live. Not certified functional safety: the robot's hardware e-stop stays the last line.
+        """
+        declaring.guard(self._engine, topic, limits, rate, on_limit, timeout, stop, repeat, grace, estop_topic)
+        return self
+
+    def estop(self) -> list[str]:
+        """Put every guarded output of this node to its stop message at once, and hold it there until
+        :meth:`release`, whatever else arrives; the topics."""
+        return self._engine.estop(True)
+
+    def release(self) -> list[str]:
+        """Let commands through the guards again after :meth:`estop`; the topics."""
+        return self._engine.estop(False)
 
     # -- actions as a client ----------------------------------------------------------
     def send_goal(self, name: str, goal: Any = None, type: Any = None,  # noqa: A002 - as for topics
@@ -247,12 +242,12 @@ class rosNode:  # noqa: N801 - the paper's name
         ``result(timeout)``, ``cancel()``, ``status`` and ``feedback`` (see :mod:`ipyros.core.actions`).
         ``timeout``: how long the server may take to show up.
         """
-        return self._engine.send_goal(name, goal, type, feedback, timeout)
+        return self._engine.writing.send_goal(name, goal, type, feedback, timeout)
 
     # -- writing ----------------------------------------------------------------------
     def write(self, topic: str, msg: Any) -> None:
         """Publish ``msg`` on ``topic``, which this node must publish."""
-        self._engine.write(topic, msg)
+        self._engine.writing.write(topic, msg)
 
     # -- keeping the work (the formats are the files layer's; dsl/keeping.py brings them here) ------
     def save(self, path: Any, namespace: Optional[dict] = None) -> Path:
@@ -292,7 +287,7 @@ class rosNode:  # noqa: N801 - the paper's name
         if engine is None or not engine.created:
             known = ", ".join(sorted(n for n, e in session.nodes.items() if e.created)) or "none"
             raise NotDeclaredError(f"no node {wanted} is running in this session (running: {known})")
-        return engine.dsl
+        return node_of(engine)
 
     def export(self, path: Any, namespace: Optional[dict] = None) -> Path:
         """Export this node to run without ipyros: a ``.py`` path is one standalone script; any other
@@ -357,6 +352,13 @@ def shutdown(*nodes: rosNode) -> None:
 def engine_of(node: rosNode) -> NodeEngine:
     """The engine of ``node``: how ipyros's own modules use a node (the user sees the DSL only)."""
     return node._engine
+
+
+def node_of(engine: NodeEngine) -> rosNode:
+    """The rosNode the user holds for ``engine`` (its ``owner``: the node layer keeps it for identity only)."""
+    owner = engine.owner
+    assert isinstance(owner, rosNode), owner
+    return owner
 
 
 def restore(path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> list[rosNode]:

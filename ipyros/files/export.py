@@ -61,6 +61,121 @@ def stop_basenode(proc):
 '''
 
 
+#: A guard as the session ran it (ipyros.core.guard), standing alone in the exported node: plain Python, the same for
+#: rospy and rclpy. The stop on silence runs here on a thread of the node's own, on the steady clock.
+GUARD_FUNCTIONS = '''
+class Guard:
+    """What every message of a guarded output passes before it is published: limits (clamped, or dropped), NaN and
+    infinities replaced by the stop message, a rate limit per field; after timeout s with nothing passed, the stop
+    message at repeat Hz until a message passes (on the steady clock: never stopped by a stopped ROS clock)."""
+
+    def __init__(self, publish, stop, limits=None, rate=None, on_limit="clamp", timeout=None, repeat=10.0):
+        self._out, self._stop, self.limits, self.rate = publish, stop, limits or {}, rate or {}
+        self.on_limit, self.timeout, self.period = on_limit, timeout, 1.0 / repeat
+        self._lock, self._last, self.passed_at = threading.Lock(), {}, time.monotonic()
+        if timeout is not None:
+            threading.Thread(target=self._watch, daemon=True).start()
+
+    def publish(self, msg):
+        with self._lock:
+            msg = self.check(msg)
+            if msg is not None:
+                self.passed_at = time.monotonic()
+                self._out(msg)
+
+    def check(self, msg):
+        if not _finite(msg):
+            return copy.deepcopy(self._stop)
+        msg = copy.deepcopy(msg)
+        for path, (low, high) in self.limits.items():
+            for owner, key, value in _values(msg, path):
+                if not low <= value <= high:
+                    if self.on_limit == "drop":
+                        return None
+                    _put(owner, key, type(value)(min(max(value, low), high)))
+        now = time.monotonic()
+        for path, most in self.rate.items():
+            for place, (owner, key, value) in enumerate(_values(msg, path)):
+                last = self._last.get((path, place))
+                if last is not None:
+                    step = most * (now - last[1])
+                    value = type(value)(min(max(value, last[0] - step), last[0] + step))
+                    _put(owner, key, value)
+                self._last[(path, place)] = (value, now)
+        return msg
+
+    def _watch(self):
+        while True:
+            wait = self.passed_at + self.timeout - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+                continue
+            with self._lock:
+                self._out(copy.deepcopy(self._stop))
+                self._last.clear()  # a rate-limited field starts again from the stop message
+            time.sleep(self.period)
+
+
+def _fields(msg):
+    listed = getattr(type(msg), "get_fields_and_field_types", None)
+    return list(listed()) if listed is not None else list(getattr(type(msg), "__slots__", ()))
+
+
+def _finite(value):
+    if isinstance(value, float):
+        return math.isfinite(value)
+    if isinstance(value, (bytes, bytearray, str)):
+        return True
+    if isinstance(value, (list, tuple)) or hasattr(value, "tolist"):
+        items = value.tolist() if hasattr(value, "tolist") else value
+        return all(_finite(item) for item in items)
+    return all(_finite(getattr(value, name)) for name in _fields(value)) if _fields(value) else True
+
+
+def _values(msg, path):
+    """(owner, key, value) of each value the path (linear.x, axes[2], poses[*].x) names in msg."""
+    found = [msg]
+    steps = path.split(".")
+    out = []
+    for number, step in enumerate(steps):
+        name, _, index = step.partition("[")
+        index = index.rstrip("]")
+        nxt = []
+        for owner in found:
+            value = getattr(owner, name)
+            places = [None] if not index else range(len(value)) if index in ("*", ":") else [int(index)]
+            for place in places:
+                item = value if place is None else value[place]
+                key = name if place is None else (name, place)
+                (out.append((owner, key, item)) if number == len(steps) - 1 else nxt.append(item))
+        found = nxt
+    return out
+
+
+def _put(owner, key, value):
+    if isinstance(key, tuple):
+        items = getattr(owner, key[0])
+        if isinstance(items, tuple):
+            items = list(items)
+            items[key[1]] = value
+            setattr(owner, key[0], items)
+        else:
+            items[key[1]] = value
+    else:
+        setattr(owner, key, value)
+
+
+def _fill(msg, data):
+    """msg with the fields of data (a dict, nested for nested messages) set: the guard's stop message."""
+    for key, value in data.items():
+        if isinstance(value, dict):
+            _fill(getattr(msg, key), value)
+        else:
+            setattr(msg, key, value)
+    return msg
+'''
+
+
 class ExportWarning(UserWarning):
     """The exported script has names to fill in by hand (``NAME = None  # set me``)."""
 
@@ -136,8 +251,24 @@ class Script:
         return {planning.write_target(self.model, t.resolved): t.resolved for t in self.model.topics}
 
     def plan(self) -> list[Any]:
-        """The endpoints, publishers first: a handler may write as soon as its subscriber is up."""
-        return sorted(planning.plan(self.model), key=lambda s: not isinstance(s, planning.PublishSpec))
+        """The endpoints, publishers first: a handler may write as soon as its subscriber is up. A guard is not an
+        endpoint of its own here: its output publishes through it (:meth:`guard`)."""
+        return sorted((s for s in planning.plan(self.model) if not isinstance(s, planning.GuardSpec)),
+                      key=lambda s: not isinstance(s, planning.PublishSpec))
+
+    def guard(self, topic: str, publish: str) -> Optional[str]:
+        """The script's guard on the output ``topic`` around ``publish`` (an expression: what publishes a
+        message), an expression with a ``publish(msg)`` of its own; None if the output is not guarded."""
+        guard = self.model.guard(topic)
+        if guard is None:
+            return None
+        cls = self.cls(guard.type)
+        stop = f"_fill({cls}(), {guard.stop!r})" if guard.stop else f"{cls}()"
+        options = {"limits": {p: tuple(b) for p, b in guard.limits.items()} or None, "rate": guard.rate or None,
+                   "on_limit": guard.on_limit if guard.on_limit != "clamp" else None, "timeout": guard.timeout,
+                   "repeat": guard.repeat}
+        text = "".join(f", {key}={value!r}" for key, value in options.items() if value is not None)
+        return f"Guard({publish}, {stop}{text})"
 
     # -- the script -----------------------------------------------------------------------------
     def render(self) -> str:
@@ -145,6 +276,8 @@ class Script:
         main = flavour.main(self)  # first: it adds the message imports
         base = self._base_argv() if self.starts_base else None
         stdlib = flavour.stdlib(self, base is not None)
+        if self.model.guards:
+            stdlib = sorted({*stdlib, "copy", "math", "threading", "time"})
         head = [flavour.shebang(), docstring(flavour.about(self)), *(f"import {m}" for m in stdlib),
                 *flavour.before_imports(self), "", *self.bindings.import_lines(skip=stdlib), *flavour.imports(self)]
         values = [*self.bindings.values.values(), *self.unset.values()]
@@ -157,6 +290,8 @@ class Script:
                          f"BASENODE_ENV = {self.model.base.env!r}  # its launch file's <env> tags, if any")
             parts.append(BASENODE_FUNCTIONS.strip("\n"))
         parts += flavour.helpers(self)
+        if self.model.guards:
+            parts.append(GUARD_FUNCTIONS.strip("\n"))
         parts += [src.rstrip("\n") for src in self.bindings.functions.values()]
         parts.append("def main():\n" + "".join(f"    {line}\n" for line in main).rstrip("\n"))
         parts.append('if __name__ == "__main__":\n    main()')

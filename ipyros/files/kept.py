@@ -22,9 +22,8 @@ class KeptNode(Protocol):
     def name(self) -> str: ...
     @property
     def fullname(self) -> str: ...
-    @property
-    def dsl(self) -> Any:
-        """The user's object for this node (a ``rosNode``): what their variables hold."""
+    #: The user's object for this node (a ``rosNode``): what their variables hold (compared, never called).
+    owner: object
     created: bool
 
     def model(self) -> NodeModel: ...

@@ -29,7 +29,8 @@ from typing import Any, Iterable, Optional, Sequence
 from ..core import plan as planning
 from ..core.code import WRITER, Bindings, container_of, handler_slots, handler_source
 from ..core.errors import IpyrosError, warn_user
-from ..core.model import NodeModel
+from ..core.guard import DEFAULT_GRACE, DEFAULT_REPEAT
+from ..core.model import GuardModel, NodeModel
 from .atomic import write_atomic
 from .kept import KeptNode
 from .modelfile import handler_sources
@@ -91,7 +92,7 @@ class _SavedFile:
         for node in self.nodes:
             scopes = [self.namespace or {}] + [fn.__globals__ for fn in node.handlers().values()
                                                if isinstance(fn, types.FunctionType)]
-            bound = [k for scope in scopes for k, v in scope.items() if v is node.dsl and not k.startswith("_")]
+            bound = [k for scope in scopes for k, v in scope.items() if v is node.owner and not k.startswith("_")]
             writers = [w for (owner, _), src in self.sources.items() if owner == id(node) for w in WRITER.findall(src)]
             candidates = [w for w in writers if w in bound] + bound + [_identifier(node.name)]
             name = next((c for c in candidates if c not in taken), None) or _unique(_identifier(node.name), taken)
@@ -195,6 +196,7 @@ class _SavedFile:
             lines.append(f"{var}.timer({timer.period!r}, {fn}{options})")
         lines += [f"{var}.params[{key!r}] = {value!r}" for key, value in model.params.items()]
         lines += [f"{var}.on_param({key!r}, {name})" for key, name in self.watches.get(id(node), [])]
+        lines += [guard_line(var, guard) for guard in model.guards]
         lines += self._versions(node, var, model)
         lines.append(f"{var}.create()" if node.created else f"# {var}.create()  (it was not running when saved)")
         return lines + [""]
@@ -212,6 +214,16 @@ class _SavedFile:
             lines += [f"    ({v.when!r}, {_python_string(v.source)})," for v in versions]  # type: ignore[arg-type]
             lines.append(f"], current={current})")
         return lines
+
+
+def guard_line(var: str, guard: GuardModel) -> str:
+    """``nd.guard(...)`` as it was declared (its settings that are not the defaults)."""
+    options = {"limits": {p: tuple(b) for p, b in guard.limits.items()} or None, "rate": guard.rate or None,
+               "on_limit": guard.on_limit if guard.on_limit != "clamp" else None, "timeout": guard.timeout,
+               "stop": guard.stop, "repeat": guard.repeat if guard.repeat != DEFAULT_REPEAT else None,
+               "grace": guard.grace if guard.grace != DEFAULT_GRACE else None, "estop_topic": guard.estop_topic}
+    text = "".join(f", {key}={value!r}" for key, value in options.items() if value is not None)
+    return f"{var}.guard({guard.name!r}{text})"
 
 
 def _declaring(method: str, name: str, args: list[str]) -> str:

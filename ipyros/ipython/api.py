@@ -20,7 +20,7 @@ from IPython.core.error import UsageError
 from ..core import names, plan as planning
 from ..core.errors import MasterError
 from ..core.graph import GraphSnapshot, frozen
-from ..dsl import rosNode
+from ..dsl import node_of, rosNode
 from ..node.session import Session, current
 from ..tools.graph import GraphCache
 from ..tools.probe import PromptPublisher
@@ -150,7 +150,7 @@ def find_node(shell: Any, name: str) -> rosNode:
     wanted = name if name.startswith("/") else None
     for engine in current().nodes.values():
         if engine.fullname == wanted or engine.name == name:
-            return engine.dsl
+            return node_of(engine)
     raise UsageError(f"no rosNode called {name!r}; give the variable that holds the node "
                      f"({_node_variables(shell)})")
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import html
 import io
-import time
 from typing import Any, Callable, Optional
 
 from rich.console import Console, Group

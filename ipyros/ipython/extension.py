@@ -29,7 +29,7 @@ import warnings
 from collections import deque
 from typing import Any, Optional
 
-from ..core import plan as planning
+from ..core import plan as planning, streams
 from ..core.errors import IpyrosError
 from ..core.names import is_tool
 from ..dsl import build_messages, end_chains, rosNode
@@ -49,6 +49,7 @@ from .magics import (
     RateMagics,
     RecordMagics,
     RosMagics,
+    SafetyMagics,
     TopicMagics,
     WrapMagics,
     cell_output,
@@ -77,7 +78,7 @@ class Extension:
         self.record_magics = RecordMagics(shell, self)
         self.magics = [self.settings, TopicMagics(shell, self), RateMagics(shell, self), IntrospectMagics(shell, self),
                        self.node_magics, WrapMagics(shell, self), self.plot_magics, self.record_magics,
-                       DemoMagics(shell, self), ActionMagics(shell, self)]
+                       DemoMagics(shell, self), ActionMagics(shell, self), SafetyMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
         self._freezer: Optional[collector.Freezer] = None  # takes what the session loaded out of full collections
         self._log_handler = StderrLogHandler()
@@ -112,8 +113,8 @@ class Extension:
         self.session.call_name = self._variable_of
         self._saved["known_graph"] = self.session.known_graph
         self.session.known_graph = self._known_graph
+        streams.route()  # a thread's prints to where it says (%try keeps a handler's; Jupyter: below its cell)
         if cell_output.in_kernel(shell):
-            cell_output.route()
             self._saved["output_scope"] = self.session.output_scope
             self.session.output_scope = _output_below_the_cell
         self._saved["display"] = display.register(shell)  # nd, nd.status(), ... at the prompt: tables
@@ -274,7 +275,7 @@ class Extension:
             session.known_graph = self._saved["known_graph"]
         if "output_scope" in self._saved:
             session.output_scope = self._saved["output_scope"]
-            cell_output.unroute()
+        streams.unroute()
         saved = self._saved["config"]
         try:
             session.backend.check_config(session, saved.master_uri)

@@ -17,7 +17,8 @@ the session's ROS        ``process`` (its node(s): ``name``, ``started``); ``sta
                          ``require_graph(doing)`` (fails in a moment if the master is
                          gone); ``connect(session)`` (the load line); ``closing()`` and
                          ``close()`` at the end; ``check_config(session, master_uri)``
-publish / write          ``publication(host, topic, cls, qos, complain)``
+publish / write          ``publication(host, topic, cls, qos, complain, follows, gate)``: the gate
+                         of a guard every message passes first (relays take one too)
 subscribe(h)             ``subscription(host, topic, cls, slot, qos, complain)``: the slot
                          calls the handler; ``complain(text)`` tells the session of what
                          goes wrong after it opened (a QoS mismatch, a peer of another type)
@@ -106,11 +107,11 @@ class Backend(Protocol):
 
     # endpoints
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
-                    follows: Optional[str] = None) -> Any: ...
+                    follows: Optional[str] = None, gate: Any = None) -> Any: ...
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Complain) -> Any: ...
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> Any: ...
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Any = None) -> Any: ...
     relays_any_type: bool  # whether raw_relay works: a type this Python cannot import relayed as bytes
     def raw_relay(self, host: str, source: str, target: str, type_name: str,
                   on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> Any: ...
@@ -125,6 +126,8 @@ class Backend(Protocol):
     def send_goal(self, name: str, cls: type, goal: Any, feedback: Optional[Callable[[Any], None]],
                   timeout: float) -> Any: ...
     def watch_action(self, name: str, cls: type, tell: Callable[[str, str, Any], None]) -> Any: ...
+    def serialize(self, msg: Any) -> bytes: ...  # a message as its ROS sends it (a guard's stop message)
+    def sentinel_command(self) -> list[str]: ...  # how a guard's own process is run (argv, before its two fds)
     def open_host(self, host: str, parameters: bool = True) -> None: ...  # parameters: it has some now
     def close_host(self, host: str) -> None: ...
     def closing_hosts(self, hosts: list[str]) -> None: ...  # these are shut down next: stop their callbacks at once

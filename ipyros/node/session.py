@@ -27,6 +27,7 @@ from ..core.journal import Change, Journal
 from ..core.slots import HandlerFailure, OutputScope
 from ..processes.basenode import stop_together
 from .backend import Backend, choose as choose_backend
+from .guards import Watch
 
 
 class SessionNode(Protocol):
@@ -93,6 +94,14 @@ class Session:
         self._lock = threading.RLock()
         self.closed = False
         self._closes_at_exit = False
+        self._guard_watch: Optional[Any] = None
+
+    @property
+    def guard_watch(self) -> Any:
+        """The one thread that tells the prompt what the session's guards' processes did (made on first use)."""
+        if self._guard_watch is None:
+            self._guard_watch = Watch(self.notify)
+        return self._guard_watch
 
     def record(self, node: str, change: str, **handler: Any) -> Change:
         """Add a change to the session's history, and to its file (see :mod:`ipyros.core.journal`)."""

@@ -27,6 +27,7 @@ from ..core.plan import RelaySpec, internal_name
 from ..core.records import Interface
 from ..core.remapping import base_fullname, base_namespace, base_node_name, basenode_remaps, check_wrapping, reresolve
 from ..processes.basenode import exit_reason
+from . import declaring
 
 
 class NodeEngine(Protocol):
@@ -39,10 +40,14 @@ class NodeEngine(Protocol):
     explicit_namespace: bool
     session: Any
     base: Any
-    dsl: Any
 
     def model(self) -> NodeModel: ...
     def apply(self, edit: Callable[[NodeModel], None], change: str) -> None: ...
+    def resolve(self, name: str, kind: str = "topic") -> str: ...
+    def resolve_as(self, role: str, name: str, kind: str) -> str: ...
+    def change(self, edit: Callable[[NodeModel], None], handlers: Any = None, drop: Any = (),
+               check: Any = ()) -> None: ...
+    def record(self, change: str) -> None: ...
 
 _BASE_OPTIONS = {"name": "node_name", "namespace": "namespace", "remaps": "remaps", "params": "params", "args": "args",
                  "env": "env"}
@@ -318,7 +323,6 @@ def check_base_types(model: NodeModel, interface: Interface) -> None:
 def declare_interface(node: "NodeEngine", interface: Interface) -> Interface:
     """Declare every topic, service and action of a basenode's interface as ``reuse`` on ``node``."""
     model = node.model()
-    reuse = node.dsl.reuse
     prefix = names.global_ns(base_namespace(model))
     untyped = [name for name, type_ in interface.publications + interface.subscriptions + interface.services
                if not type_]
@@ -327,17 +331,19 @@ def declare_interface(node: "NodeEngine", interface: Interface) -> Interface:
     # tried that (_build_its_own_types): what is still lacking stays undeclared and named.
     lacking = {} if node.session.backend.relays_any_type else msgtypes.not_installed(
         type_ for _, type_ in interface.publications + interface.subscriptions)
-    for declare, found, relayed in ((reuse.publish, interface.publications, True),
-                                    (reuse.subscribe, interface.subscriptions, True),
-                                    (reuse.service, interface.services, False),
-                                    (reuse.action, interface.actions, False)):
+    declares: tuple[tuple[Callable[[str, str], Any], list[tuple[str, str]], bool], ...] = (
+        (lambda name, type_: declaring.publish(node, "reuse", name, type_), interface.publications, True),
+        (lambda name, type_: declaring.subscribe(node, "reuse", name, None, type_), interface.subscriptions, True),
+        (lambda name, type_: declaring.serve(node, "reuse", "service", name, type_, None), interface.services, False),
+        (lambda name, type_: declaring.serve(node, "reuse", "action", name, type_, None), interface.actions, False))
+    for declare, found, relayed in declares:
         for name, type_ in found:
             if not type_:
                 continue
             try:
                 if relayed and type_ in lacking:
                     raise MessageTypeError(lacking[type_])
-                declare(_relative(name, prefix), type=type_)
+                declare(_relative(name, prefix), type_)
             except MessageTypeError:
                 package = type_.split("/", 1)[0]
                 missing.setdefault(msgtypes.install_hint(package), []).append(f"{name} ({type_})")

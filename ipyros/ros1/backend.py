@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import io
+import sys
 from typing import Any, Callable, Optional
 
 from ..core import names
@@ -126,16 +128,27 @@ class Ros1:
     # TCPROS is reliable and rospy queues are ipyros's own: of a QoS only durability
     # means something here (transient-local is latched); nothing can mismatch.
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
-                    follows: Optional[str] = None) -> runtime.Publication:
-        return runtime.Publication(topic, cls, qos.latched, follows)
+                    follows: Optional[str] = None, gate: Any = None) -> runtime.Publication:
+        return runtime.Publication(topic, cls, qos.latched, follows, gate)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Complain) -> runtime.Subscription:
         return runtime.Subscription(topic, cls, slot, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.Relay:
-        return runtime.Relay(source, target, cls, on_wrong_type, complain)
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Any = None) -> runtime.Relay:
+        return runtime.Relay(source, target, cls, on_wrong_type, complain, gate)
+
+    # -- guards: a message as bytes, the guard's own process -------------------------------------
+    @staticmethod
+    def serialize(msg: Any) -> bytes:
+        buffer = io.BytesIO()
+        msg.serialize(buffer)
+        return buffer.getvalue()
+
+    @staticmethod
+    def sentinel_command() -> list[str]:
+        return [sys.executable, "-m", "ipyros.ros1.sentinel"]
 
     #: TCPROS carries bytes: a topic of a type this Python cannot import is relayed all the same.
     relays_any_type = True

@@ -23,12 +23,12 @@ connections and has them connect again (:meth:`~.runtime.Relay.abort`).
 
 from __future__ import annotations
 
-import functools
 import struct
 from typing import Any, Optional, Protocol
 
 from rospy.exceptions import TransportTerminated
 
+from . import rospy_inside
 from .sending import Frame
 
 __all__ = ["LARGE_BYTES", "FrameSink", "Reading", "reading"]
@@ -116,22 +116,8 @@ def reading(sub_impl: Any) -> Reading:
     if found is not None:
         return found
     found = sub_impl._ipyros_reading = Reading(sub_impl)
-    add_connection = sub_impl.add_connection
-
-    def add_and_read(conn: Any) -> bool:
-        _take_over(conn, found)
-        return add_connection(conn)
-
-    sub_impl.add_connection = add_and_read
-    for conn in list(sub_impl.connections):
-        _take_over(conn, found)
+    rospy_inside.on_connection_added(sub_impl, lambda conn: rospy_inside.take_over_reading(conn, found.read_messages))
     return found
-
-
-def _take_over(conn: Any, how: Reading) -> None:
-    protocol = conn.protocol
-    if "read_messages" not in protocol.__dict__:
-        protocol.read_messages = functools.partial(how.read_messages, conn, protocol.read_messages)
 
 
 def _send(frame: Frame, piece: memoryview) -> None:

@@ -250,8 +250,13 @@ class RospyScript:
         for spec in script.plan():
             if isinstance(spec, planning.PublishSpec):
                 latch = ", latch=True" if spec.latch else ""
-                lines.append(f"{handle}.publishers[{writes_to[spec.topic]!r}] = rospy.Publisher("
-                             f"{spec.topic!r}, {script.cls(spec.type)}, queue_size=10{latch})")
+                publisher = f"rospy.Publisher({spec.topic!r}, {script.cls(spec.type)}, queue_size=10{latch})"
+                guarded = script.guard(spec.topic, f"{publisher}.publish")
+                lines.append(f"{handle}.publishers[{writes_to[spec.topic]!r}] = {guarded or publisher}")
+            elif isinstance(spec, planning.RelaySpec) and script.model.guard(spec.target) is not None:
+                cls = script.cls(spec.type)  # a guarded relay reads the values it must check
+                guarded = script.guard(spec.target, f"rospy.Publisher({spec.target!r}, {cls}, queue_size=10).publish")
+                lines.append(f"rospy.Subscriber({spec.source!r}, {cls}, {guarded}.publish)")
             elif isinstance(spec, planning.SubscribeSpec):
                 lines.append(f"rospy.Subscriber({spec.topic!r}, {script.cls(spec.type)}, {script.names[spec.slot]})")
             elif isinstance(spec, planning.RelaySpec):

@@ -1,6 +1,8 @@
-"""The only module that talks to rospy: the process node and its live endpoints.
+"""The session's rospy node and its live endpoints (the ROS 1 backend's runtime).
 
-rospy allows one ROS node per process. :class:`ProcessNode` is that node; every DSL
+Other modules of ``ros1/`` talk to rospy too (actions, bags, introspection, the master); what
+reaches past rospy's public API goes through :mod:`.rospy_inside` alone. rospy allows one ROS
+node per process. :class:`ProcessNode` is that node; every DSL
 node of the session hosts its publishers, subscribers, relays, timers and services in
 it. Endpoints are small objects with a ``close()``; the DSL decides which exist
 (see :mod:`ipyros.core.plan`), this module only opens and closes them.
@@ -32,14 +34,13 @@ from typing import Any, Callable, Optional
 
 import genpy
 import rospy
-from rospy.impl.tcpros_service import convert_return_to_response
 from rospy.msg import serialize_message
 
 from ..core.errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
 from ..core.msgbuild import explain_unsendable
 from ..core.names import is_tool
 from ..core.slots import Arrival, HandlerSlot, Pristine, SendFigures
-from . import cutthrough, sending
+from . import cutthrough, rospy_inside, sending
 from .master import master_proxy
 
 
@@ -86,7 +87,7 @@ class ProcessNode:
                 if is_tool(self.name) and not is_tool(name):
                     self._rename(name)
                 return self.name
-            if rospy.core.is_shutdown_requested() or rospy.core.is_initialized():
+            if rospy_inside.initialised_or_ended():
                 raise NodeStateError("rospy was already initialised or shut down in this process; "
                                      "restart the interpreter to use ipyros")
             refuse_taken_name(master_uri, name)
@@ -106,29 +107,25 @@ class ProcessNode:
         Connections made already stay up (peers find the same address under the new name).
         """
         from roscpp.srv import GetLoggers, SetLoggerLevel
-        from rospy.client import _get_loggers, _set_logger_level
-        from rospy.impl.registration import get_service_manager, get_topic_manager
 
         refuse_taken_name(self.master_uri, name)
-        old, uri = self.name, rospy.core.get_node_uri()
+        old, uri = self.name, rospy_inside.node_uri()
         master = master_proxy(self.master_uri, timeout=5.0)
-        services = get_service_manager()
+        services = rospy_inside.service_manager()
         for service, _ in services.get_services():  # rospy's own, named after the node: named again below
             if service in (f"{old}/get_loggers", f"{old}/set_logger_level"):
                 services.get_service(service).shutdown()
-        topics = get_topic_manager()
+        topics = rospy_inside.topic_manager()
         for topic, _ in topics.get_publications():
             master.unregisterPublisher(old, topic, uri)
         for topic, _ in topics.get_subscriptions():
             master.unregisterSubscriber(old, topic, uri)
         for service, service_uri in services.get_services():
             master.unregisterService(old, service, service_uri)
-        rospy.names._set_caller_id(name)
-        manager = _registration_manager()
-        if manager is not None:
-            manager.handler.name = name  # what getName answers
-        rospy.Service(f"{name}/get_loggers", GetLoggers, _get_loggers)
-        rospy.Service(f"{name}/set_logger_level", SetLoggerLevel, _set_logger_level)
+        rospy_inside.rename_caller(name)
+        get_loggers, set_logger_level = rospy_inside.logger_services()
+        rospy.Service(f"{name}/get_loggers", GetLoggers, get_loggers)
+        rospy.Service(f"{name}/set_logger_level", SetLoggerLevel, set_logger_level)
         self.name = name
         self.register_again()
 
@@ -139,11 +136,9 @@ class ProcessNode:
         the master's list of publishers back, and rospy connects to them. Returns how many
         publications, subscriptions and services were registered.
         """
-        from rospy.impl.registration import get_service_manager, get_topic_manager
-
-        topics, services = get_topic_manager(), get_service_manager()
-        manager = _registration_manager()
-        master, caller, uri = master_proxy(self.master_uri, timeout=5.0), rospy.get_name(), rospy.core.get_node_uri()
+        topics, services = rospy_inside.topic_manager(), rospy_inside.service_manager()
+        manager = rospy_inside.registration_manager()
+        master, caller, uri = master_proxy(self.master_uri, timeout=5.0), rospy.get_name(), rospy_inside.node_uri()
         publications, subscriptions = topics.get_publications(), topics.get_subscriptions()
         for name, type_name in publications:
             master.registerPublisher(caller, name, type_name, uri)
@@ -155,7 +150,7 @@ class ProcessNode:
         return len(publications), len(subscriptions), len(served)
 
     def shutdown(self, reason: str = "ipyros exit") -> None:
-        if self.name is not None and not rospy.core.is_shutdown():
+        if self.name is not None and not rospy.is_shutdown():
             rospy.signal_shutdown(reason)
 
     @staticmethod
@@ -209,17 +204,9 @@ def _python_warnings_still_shown() -> None:
     root.addHandler(shown)
 
 
-def _registration_manager() -> Any:
-    """rospy's RegManager: given a topic's publishers, it connects to those it lacks."""
-    from rospy.impl.registration import RegManager, get_registration_listeners
-
-    return next((listener for listener in get_registration_listeners().listeners
-                 if isinstance(listener, RegManager)), None)
-
-
 def _subscribe_again(master: Any, manager: Any, topic: str, type_name: str) -> None:
     """Register the subscription of ``topic`` with the master; rospy connects to the publishers it lacks."""
-    code, _, publishers = master.registerSubscriber(rospy.get_name(), topic, type_name, rospy.core.get_node_uri())
+    code, _, publishers = master.registerSubscriber(rospy.get_name(), topic, type_name, rospy_inside.node_uri())
     if code == 1 and manager is not None:
         manager.publisher_update(topic, publishers)
 
@@ -242,17 +229,7 @@ class _Reconnect:
     @classmethod
     def guard(cls, subscriber: Any) -> None:
         impl = subscriber.impl
-        if getattr(impl, "_ipyros_reconnect", False):
-            return
-        original = impl.remove_connection
-
-        def remove_connection(connection: Any) -> None:
-            original(connection)
-            if not impl.closed:
-                cls._soon(impl)
-
-        impl.remove_connection = remove_connection  # what rospy hands each new connection as its cleanup
-        impl._ipyros_reconnect = True
+        rospy_inside.on_connection_removed(impl, lambda: cls._soon(impl))
 
     @classmethod
     def _soon(cls, impl: Any) -> None:
@@ -271,14 +248,14 @@ class _Reconnect:
         topic = impl.resolved_name
         with cls._lock:
             cls._pending.discard(topic)
-        manager = _registration_manager()
-        if manager is None or rospy.core.is_shutdown() or impl.closed:
+        manager = rospy_inside.registration_manager()
+        if manager is None or rospy.is_shutdown() or impl.closed:
             return
         try:
             master = master_proxy(os.environ.get("ROS_MASTER_URI", ""), timeout=2.0)
             _subscribe_again(master, manager, topic, impl.type)
             if impl.closed:  # it closed while it was being registered: take it back
-                master.unregisterSubscriber(rospy.get_name(), topic, rospy.core.get_node_uri())
+                master.unregisterSubscriber(rospy.get_name(), topic, rospy_inside.node_uri())
         except (OSError, xmlrpc.client.Error):
             pass  # no master now: when it is back, the master watch registers everything again
 
@@ -316,12 +293,15 @@ class Publication:
     loses its own oldest messages instead of blocking the writer.
     """
 
-    def __init__(self, topic: str, cls: type, latch: bool = False, follows: Optional[str] = None) -> None:
+    def __init__(self, topic: str, cls: type, latch: bool = False, follows: Optional[str] = None,
+                 gate: Any = None) -> None:
         self.topic, self.cls = topic, cls
         self.count = 0
         self._pub = _publisher(topic, cls, latch)
         self._impl = self._pub.impl
         self._follows = follows  # a topic whose latching this one takes: latched once a message came latched on it
+        #: A guard's gate every message passes first (``check(msg)``: what to send, or nothing), or None.
+        self.gate = gate
 
     def write(self, msg: Any) -> None:
         if not isinstance(msg, genpy.Message) or msg._md5sum != self.cls._md5sum:
@@ -332,6 +312,11 @@ class Publication:
                 if got == self.cls._type else got
             raise MessageTypeError(f"{self.topic} carries {self.cls._type}, not {what}; "
                                    f"write a message: {self.cls.__name__}(...)")
+        gate = self.gate
+        if gate is not None:
+            msg = gate.check(msg).send
+            if msg is None:  # dropped by the guard
+                return
         impl = self._impl
         impl.acquire()
         try:
@@ -383,13 +368,13 @@ def _offer_again(impl: Any) -> None:
     topic, type_name = impl.resolved_name, impl.type
 
     def offer() -> None:
-        if impl.closed or rospy.core.is_shutdown():
+        if impl.closed or rospy.is_shutdown():
             return
         try:
             master = master_proxy(os.environ["ROS_MASTER_URI"], timeout=5.0)
-            master.registerPublisher(rospy.get_name(), topic, type_name, rospy.core.get_node_uri())
+            master.registerPublisher(rospy.get_name(), topic, type_name, rospy_inside.node_uri())
             if impl.closed:  # it closed while it was being registered: take it back
-                master.unregisterPublisher(rospy.get_name(), topic, rospy.core.get_node_uri())
+                master.unregisterPublisher(rospy.get_name(), topic, rospy_inside.node_uri())
         except Exception:  # noqa: BLE001 - the master is away: when it is back, everything is registered again
             pass
 
@@ -414,7 +399,7 @@ def _subscribe_bytes(topic: str, cls: type, callback: Callable[[Any], None]) -> 
     ``%echo``) on one topic then each get what they asked for, in either order. A topic
     already read here as another type is refused: its bytes would not parse.
     """
-    existing = rospy.topics.get_topic_manager().get_subscriber_impl(topic)
+    existing = rospy_inside.subscriber_impl(topic)
     if existing is not None and existing.data_class._type != cls._type:
         raise DeclarationError(f"{topic} is already read in this session as {existing.data_class._type}, "
                                f"so it cannot be read as {cls._type} too: use {existing.data_class._type}")
@@ -447,7 +432,7 @@ class _OtherTypes(logging.Handler):
     @classmethod
     def install(cls) -> None:
         if not cls._installed:
-            logging.getLogger("rospy.internal").addHandler(cls(level=logging.ERROR))
+            rospy_inside.listen_to_internal_log(cls(level=logging.ERROR))
             cls._installed = True
 
     @classmethod
@@ -468,7 +453,7 @@ class _OtherTypes(logging.Handler):
         if found is None:
             return
         wanted, theirs = found["wanted"], found["theirs"]
-        topic = found.groupdict().get("topic") or _connecting_topic()
+        topic = found.groupdict().get("topic") or rospy_inside.connecting_topic()
         for declared, complain in list(self.watchers.get(topic or "", ())):
             if declared != wanted or (topic, theirs, complain) in self.told:
                 continue
@@ -477,20 +462,6 @@ class _OtherTypes(logging.Handler):
             complain(f"{topic}: {', '.join(peers) or 'a publisher'} publishes {theirs} there, and this node "
                      f"subscribes to it as {declared}: nothing passes between them (ROS connects no two types); "
                      f"subscribe with msgType={theirs!r}, or publish {declared}")
-
-
-def _connecting_topic() -> Optional[str]:
-    """The topic rospy's connecting thread (``robust_connect_subscriber``, which logged the refusal) is for.
-
-    The publisher's "topic types do not match" answer does not name the topic; the thread
-    that logs it is connecting that topic's subscription, and holds its name.
-    """
-    frame = sys._getframe(1)
-    while frame is not None:
-        if frame.f_code.co_name == "robust_connect_subscriber":
-            return frame.f_locals.get("resolved_topic_name")
-        frame = frame.f_back
-    return None
 
 
 def _publishers_of_type(topic: str, type_name: str) -> list[str]:
@@ -596,9 +567,12 @@ class Relay:
 
     def __init__(self, source: str, target: str, cls: type,
                  on_wrong_type: Optional[Callable[[str], None]] = None,
-                 complain: Optional[Callable[[str], None]] = None) -> None:
+                 complain: Optional[Callable[[str], None]] = None, gate: Any = None) -> None:
         self.source, self.target, self.cls = source, target, cls
         self._complain = complain
+        #: A guard's gate: while set, each message is read, checked and sent as the gate says (a guarded relay
+        #: reads the values it must check; relays of other topics stay byte relays).
+        self.gate = gate
         self.count = 0
         self.dropped = 0
         self._type = cls._type
@@ -648,11 +622,35 @@ class Relay:
         # Unlocked, none can start while this one goes: begin() takes the lock, then sees two connections.
         if self._sending.locked() and not self._wait_for_pieces():
             return
+        gate = self.gate
+        if gate is not None:
+            self.send(_message(self.cls, raw._buff, header))
+            return
         impl.acquire()
         try:
             if impl.is_latch:
                 impl.latch = raw  # what a subscriber connecting later gets first
             sending.send_to_all(impl.connections, self.target, raw._buff)
+        finally:
+            impl.release()
+        self.count += 1
+
+    def send(self, msg: Any) -> None:
+        """Send a message object on the target, through the gate if the topic is guarded (a guarded relay's own
+        messages, ``%pub`` and an e-stop on a guarded relay)."""
+        gate = self.gate
+        if gate is not None:
+            msg = gate.check(msg).send
+            if msg is None:
+                return
+        buffer = io.BytesIO()
+        msg.serialize(buffer)
+        impl = self._impl
+        impl.acquire()
+        try:
+            if impl.is_latch:
+                impl.latch = msg
+            sending.send_to_all(impl.connections, self.target, buffer.getvalue())
         finally:
             impl.release()
         self.count += 1
@@ -667,7 +665,7 @@ class Relay:
     # -- cutthrough.FrameSink: a large message sent on while it arrives -----------------------
     def begin(self, header: dict, size: int) -> Optional[sending.Frame]:
         impl = self._impl
-        if impl is None or not self._sending.acquire(False):
+        if impl is None or self.gate is not None or not self._sending.acquire(False):  # a guard reads it whole
             return None
         frame = None
         if len(self._sub.impl.connections) == 1 and self._accepts(header):
@@ -725,6 +723,7 @@ class RawRelay(Relay):
                  complain: Optional[Callable[[str], None]] = None) -> None:
         self.source, self.target, self.cls = source, target, None
         self._complain, self._on_wrong_type = complain, on_wrong_type
+        self.gate = None  # a guard reads values: a type this Python lacks cannot be guarded
         self.count = self.dropped = 0
         self._type = type_name
         self._header_seen: Optional[dict] = None
@@ -781,7 +780,7 @@ class ServiceServer:
             raise rospy.ServiceException(f"the handler of {self.name} raised an exception (the ipyros session shows it)")
         response_class = self.cls._response_class  # type: ignore[attr-defined]
         try:
-            response = convert_return_to_response(result, response_class)
+            response = rospy_inside.response_of(result, response_class)
             response.serialize(io.BytesIO())
         except Exception as error:  # noqa: BLE001 - whatever the value, the caller gets one line
             detail = str(error).splitlines()[0][:120] if str(error) else type(error).__name__
@@ -892,11 +891,9 @@ class ParamWatch:
     _watches: dict[str, list["ParamWatch"]] = {}
 
     def __init__(self, name: str, tell: Callable[[Any], None]) -> None:
-        from rospy.impl.paramserver import get_param_server_cache
-
         self.name, self.tell = name.rstrip("/"), tell
         with ParamWatch._lock:
-            get_param_server_cache().set_notifier(ParamWatch._notify)
+            rospy_inside.notify_param_sets(ParamWatch._notify)
             ParamWatch._watches.setdefault(self.name, []).append(self)
         rospy.get_param_cached(self.name)  # subscribes: from now on the master tells this process
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 import time
 from typing import Any, Callable, Optional
 
@@ -67,16 +68,28 @@ class Ros2:
         self.process.shutdown()
 
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
-                    follows: Optional[str] = None) -> runtime.Publication:
-        return runtime.Publication(self.process.host(host), topic, cls, qos, complain, self.process, follows)
+                    follows: Optional[str] = None, gate: Any = None) -> runtime.Publication:
+        return runtime.Publication(self.process.host(host), topic, cls, qos, complain, self.process, follows, gate)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
                      complain: Complain) -> runtime.Subscription:
         return runtime.Subscription(self.process, self.process.host(host), topic, cls, slot, qos, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.Relay:
-        return runtime.Relay(self.process, self.process.host(host), source, target, cls, on_wrong_type, complain)
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Any = None) -> runtime.Relay:
+        return runtime.Relay(self.process, self.process.host(host), source, target, cls, on_wrong_type, complain,
+                             gate=gate)
+
+    # -- guards: a message as bytes, the guard's own process -------------------------------------
+    @staticmethod
+    def serialize(msg: Any) -> bytes:
+        from rclpy.serialization import serialize_message
+
+        return serialize_message(msg)
+
+    @staticmethod
+    def sentinel_command() -> list[str]:
+        return [sys.executable, "-m", "ipyros.ros2.sentinel"]
 
     #: rclpy needs the type's Python package to subscribe at all, even to bytes.
     relays_any_type = False

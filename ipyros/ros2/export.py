@@ -151,11 +151,16 @@ def action_relay(node, caller, source, target, action_class):
                                       ("get_result", action_class.Impl.GetResultService, None)):
         client = caller.create_client(srv_class, f"{source}/_action/{part}")
 
-        def answer(request, response, client=client, patience=patience):
+        def answer(request, response, client=client, patience=patience, settle=0.02 * (part == "get_result")):
             done = threading.Event()
             future = client.call_async(request)
             future.add_done_callback(lambda _: done.set())
-            return future.result() if done.wait(patience) and future.result() is not None else response
+            if not done.wait(patience) or future.result() is None:
+                return response
+            # The goal's last feedback may still be on its way (two DDS topics keep no order between them),
+            # and a client drops feedback that comes after the result: it passes first.
+            time.sleep(settle)
+            return future.result()
 
         node.create_service(srv_class, f"{target}/_action/{part}", answer, callback_group=group)
     # Feedback and status are read by the caller, whose one thread also takes the results: a goal's
@@ -206,7 +211,7 @@ class RclpyScript:
     @staticmethod
     def stdlib(script: Any, starts_base: bool) -> list[str]:
         found = ["os", "signal", "subprocess", "sys", "threading"] if starts_base else ["sys", "threading"]
-        return found + (["time"] if _has(script, planning.ActionServerSpec) else [])
+        return found + (["time"] if _has(script, planning.ActionServerSpec, planning.ActionRelaySpec) else [])
 
     @staticmethod
     def before_imports(script: Any) -> list[str]:
@@ -260,9 +265,15 @@ class RclpyScript:
                       "threading.Thread(target=calls.spin, daemon=True).start()"]
         for spec in specs:
             if isinstance(spec, planning.PublishSpec):
-                lines.append(f"{handle}.publishers[node.resolve_topic_name({writes_to[spec.topic]!r})] = "
-                             f"node.create_publisher({script.cls(spec.type)}, {spec.topic!r}, "
+                publisher = (f"node.create_publisher({script.cls(spec.type)}, {spec.topic!r}, "
                              f"{_qos_call(spec.qos, spec.latch)})")
+                guarded = script.guard(spec.topic, f"{publisher}.publish")
+                lines.append(f"{handle}.publishers[node.resolve_topic_name({writes_to[spec.topic]!r})] = "
+                             f"{guarded or publisher}")
+            elif isinstance(spec, planning.RelaySpec) and script.model.guard(spec.target) is not None:
+                cls = script.cls(spec.type)  # a guarded relay reads the values it must check
+                guarded = script.guard(spec.target, f"node.create_publisher({cls}, {spec.target!r}, qos()).publish")
+                lines.append(f"node.create_subscription({cls}, {spec.source!r}, {guarded}.publish, qos())")
             elif isinstance(spec, planning.SubscribeSpec):
                 lines.append(f"node.create_subscription({script.cls(spec.type)}, {spec.topic!r}, "
                              f"{script.names[spec.slot]}, {_qos_call(spec.qos)})")

@@ -21,7 +21,6 @@ never deserialising.
 from __future__ import annotations
 
 import functools
-import logging
 import os
 import queue
 import threading
@@ -33,7 +32,7 @@ from rclpy._rclpy_pybind11 import RCLError
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 
 from ..core import msgtypes
 from ..core.errors import BaseNodeError, DeclarationError, HandlerError, MessageTypeError, NodeStateError, cut
@@ -395,8 +394,10 @@ class Publication:
 
     def __init__(self, node: Node, topic: str, cls: type, qos: Qos = Qos(),
                  complain: Optional[Complain] = None, process: Optional["ProcessNode"] = None,
-                 follows: Optional[str] = None) -> None:
+                 follows: Optional[str] = None, gate: Any = None) -> None:
         self.topic, self.cls, self.count = topic, cls, 0
+        #: A guard's gate every message passes first (``check(msg)``: what to send, or nothing), or None.
+        self.gate = gate
         self._node, self._complain, self.qos = node, complain, qos
         self._lock = threading.Lock()
         self._pub = self._open(qos)
@@ -427,6 +428,11 @@ class Publication:
             raise MessageTypeError(f"{self.topic}: write() got the class {msg.__name__}, not a message; "
                                    f"build one, {msg.__name__}(), and write that (nothing was sent)")
         conform(msg)  # rclpy would send an int in a float field as garbage (see msgbuild.conform)
+        gate = self.gate
+        if gate is not None:
+            msg = gate.check(msg).send
+            if msg is None:  # dropped by the guard
+                return
         try:
             self._pub.publish(msg)
         except (TypeError, ValueError, AssertionError) as error:
@@ -579,8 +585,11 @@ class Relay:
 
     def __init__(self, process: ProcessNode, node: Node, source: str, target: str, cls: type,
                  on_wrong_type: Optional[Callable[[str], None]] = None, complain: Optional[Complain] = None,
-                 reader: Optional[Node] = None) -> None:
+                 reader: Optional[Node] = None, gate: Any = None) -> None:
         self.source, self.target, self.cls, self.count, self.dropped = source, target, cls, 0, 0
+        #: A guard's gate: while set, each message is read, checked and sent as the gate says (a guarded relay
+        #: reads the values it must check; relays of other topics stay byte relays).
+        self.gate = gate
         self._process, self._node, self._reader, self._complain = process, node, reader or node, complain
         self._lock = threading.Lock()  # the watch and close() may swap endpoints from two threads
         self.qos = Qos(None, "reliable", "volatile")  # rclpy's, until the source's publishers show up
@@ -631,6 +640,12 @@ class Relay:
             skip, self._skip = self._skip, None
             if raw == skip:
                 return
+        gate = self.gate
+        if gate is not None:
+            sent = gate.check(deserialize_message(raw, self.cls)).send
+            if sent is None:
+                return
+            raw = serialize_message(sent)
         try:
             self._pub.publish(raw)
         except Exception as error:  # noqa: BLE001 - the middleware refused it (a reliable peer too slow, ...)
@@ -641,6 +656,11 @@ class Relay:
             return
         self._last = raw
         self.count += 1
+
+    def send(self, msg: Any) -> None:
+        """Send a message object on the target, through the gate if the topic is guarded (``%pub`` on a guarded
+        relay, an e-stop)."""
+        self._forward(serialize_message(msg))
 
     def figures(self) -> SendFigures:
         return SendFigures(self.target, "relay", self.count, self._pub.get_subscription_count(), 0, self.dropped)

@@ -29,7 +29,7 @@ from ..core import msgtypes
 from ..core.errors import MessageTypeError
 from ..core.names import tool_name
 from ..core.slots import arrival
-from ..dsl import engine_of, rosNode
+from ..dsl import engine_of, node_of, rosNode
 from ..node.session import current
 
 
@@ -206,8 +206,10 @@ class PromptPublisher:
         (the messages after the first of ``%pub -r``).
         """
         owner = self._owner(topic, type_name)
-        if owner is not None:
-            owner.write(topic, msg)
+        if owner is not None:  # a node of the session sends it: through its guard, if the topic is guarded
+            engine = engine_of(owner)
+            if engine.model().guard(topic) is None or not engine.writing.send(topic, msg):
+                owner.write(topic, msg)
             return owner.name, _connections(owner, topic)
         node = self._node
         if node is None or not node.created:
@@ -224,13 +226,15 @@ class PromptPublisher:
         return node.name, _connections(node, topic)
 
     def _owner(self, topic: str, type_name: str) -> Optional[rosNode]:
-        """A running node of the session (not ours) that publishes ``topic`` with that type."""
+        """A running node of the session (not ours) that publishes ``topic`` with that type, or guards it (then
+        what ``%pub`` sends passes the guard, as every message on that topic does)."""
         for engine in list(current().nodes.values()):
-            if engine.dsl is self._node or not engine.created:
+            if engine.owner is self._node or not engine.created:
                 continue
-            declared = engine.model().topic(topic, "publish", "new")
+            model = engine.model()
+            declared = model.topic(topic, "publish", "new") or (model.guard(topic) and model.topic(topic, "publish"))
             if declared is not None and declared.type == type_name:
-                return engine.dsl
+                return node_of(engine)
         return None
 
     def close(self) -> None:

@@ -11,10 +11,11 @@ after the other in the calling thread, and records for each call:
 
 What is *not* isolated, honestly: both handlers really run. Each gets its own deep copy
 of the message, and writes are recorded instead of sent, but anything else they do
-happens for real: changing globals, setting parameters, publishing through a rospy
-publisher of their own or a ``write`` method saved before the try (``w = nd.write``).
-Only calls made from the trying thread are intercepted: the node's ROS callbacks keep
-running, printing and publishing as usual meanwhile.
+happens for real: changing globals, setting parameters, publishing through a publisher
+of their own.
+Only calls made from the trying thread are intercepted (nothing process-wide is swapped:
+:mod:`ipyros.core.streams` and :func:`~ipyros.node.writing.writes_recorded` are per thread): the
+node's ROS callbacks keep running, printing and publishing as usual meanwhile.
 """
 
 from __future__ import annotations
@@ -22,18 +23,18 @@ from __future__ import annotations
 import contextlib
 import copy
 import io
-import sys
-import threading
 import time
 import traceback
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Optional
 
-from ..core import msgtypes, plan as planning
+from ..core import msgtypes, plan as planning, streams
 from ..core.errors import IpyrosError, NotDeclaredError
 from ..core.msgbuild import flow_yaml
 from ..core.slots import call_arity
 from ..dsl import engine_of, rosNode
+from ..node.engine import NodeEngine
+from ..node.writing import writes_recorded
 
 
 @dataclass(frozen=True)
@@ -128,39 +129,17 @@ def try_candidate(node: rosNode, topic: str, candidate: Callable[..., Any],
 # -- capturing one thread's prints and writes -----------------------------------------------
 
 
-class _ThreadTee(io.TextIOBase):
-    """Stands in for sys.stdout/stderr: the trying thread's text is kept, others' passes through."""
-
-    def __init__(self, original: Any, thread: int, buffer: io.StringIO) -> None:
-        self.original, self.thread, self.buffer = original, thread, buffer
-
-    def write(self, text: str) -> int:
-        if threading.get_ident() == self.thread:
-            return self.buffer.write(text)
-        return self.original.write(text)
-
-    def flush(self) -> None:
-        if threading.get_ident() != self.thread:
-            self.original.flush()
-
-    def isatty(self) -> bool:
-        return False
-
-    def __getattr__(self, name: str) -> Any:  # encoding, fileno, ... of the real stream
-        return getattr(self.original, name)
-
-
 class _Recorder:
     """The writes of one handler call."""
 
     def __init__(self) -> None:
         self.writes: list[Write] = []
 
-    def record(self, node: rosNode, topic: str, msg: Any) -> None:
+    def record(self, node: NodeEngine, topic: str, msg: Any) -> None:
         self.writes.append(Write(node.name, topic, copy.deepcopy(msg), _write_problem(node, topic, msg)))
 
 
-def _write_problem(node: rosNode, topic: str, msg: Any) -> Optional[str]:
+def _write_problem(node: NodeEngine, topic: str, msg: Any) -> Optional[str]:
     """What ``node.write(topic, msg)`` would raise, in words; None if it would publish."""
     try:
         resolved = node.resolve(topic)
@@ -176,16 +155,14 @@ def _write_problem(node: rosNode, topic: str, msg: Any) -> Optional[str]:
 
 @contextlib.contextmanager
 def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
-    """Within the block, ``run(handler, msg)`` calls the handler with its output captured."""
-    me = threading.get_ident()
+    """Within the block, ``run(handler, msg)`` calls the handler with what it prints and writes kept, in this thread
+    alone: its prints go to a sink of this thread (:mod:`ipyros.core.streams`), its writes to a recorder of this
+    thread's context (:func:`~ipyros.node.writing.writes_recorded`); other threads print and publish as usual."""
     buffer = io.StringIO()
     recorder: list[_Recorder] = []  # the recorder of the call in progress, if any
-    original_write = rosNode.write
 
-    def write(self: rosNode, topic: str, msg: Any) -> None:
-        if threading.get_ident() != me or not recorder:
-            return original_write(self, topic, msg)
-        recorder[-1].record(self, topic, msg)
+    def record(node: NodeEngine, topic: str, msg: Any) -> None:
+        recorder[-1].record(node, topic, msg)
 
     def run(handler: Callable[..., Any], msg: Any) -> Outcome:
         buffer.seek(0)
@@ -194,7 +171,8 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
         error = None
         start = time.perf_counter()
         try:
-            handler(copy.deepcopy(msg))
+            with streams.into(buffer):
+                handler(copy.deepcopy(msg))
         except Exception as exc:  # shown in the table: it is what the handler would do live
             error = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         finally:
@@ -202,14 +180,9 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
             writes = tuple(recorder.pop().writes)
         return Outcome(buffer.getvalue(), writes, error, elapsed)
 
-    stdout, stderr = sys.stdout, sys.stderr
-    sys.stdout, sys.stderr = _ThreadTee(stdout, me, buffer), _ThreadTee(stderr, me, buffer)
-    rosNode.write = write  # type: ignore[method-assign]
-    try:
+    streams.route()  # once (the extension does it as it loads): a no-op after
+    with writes_recorded(record):
         yield run
-    finally:
-        rosNode.write = original_write  # type: ignore[method-assign]
-        sys.stdout, sys.stderr = stdout, stderr
 
 
 def one_line(msg: Any, width: int = 80) -> str:

@@ -97,7 +97,7 @@ def test_a_rejected_declaration_leaves_the_running_node_alone(make_node):
         with pytest.raises(errors.IpyrosError):
             bad()
     assert nd.model() == before
-    wait_for(lambda: engine_of(nd).writer("/err_keep")[0].connections(), timeout=20, what="connection")
+    wait_for(lambda: engine_of(nd).writing.writer("/err_keep")[0].connections(), timeout=20, what="connection")
     nd.write("/err_keep", UInt32(data=7))
     wait_for(lambda: [m.data for m in seen] == [7], what="the old handler to still run")
 

@@ -29,7 +29,7 @@ from ipyros.ros1.nodes import command, find_executable, list_executables, list_p
 
 
 @pytest.fixture(autouse=True)
-def test_nodes(monkeypatch):
+def packages_of_the_tests_found(monkeypatch):
     use_test_nodes(monkeypatch)
 
 

@@ -16,7 +16,7 @@ from ipyros.ros1.nodes import find_executable
 
 
 @pytest.fixture(autouse=True)
-def test_nodes(monkeypatch):
+def packages_of_the_tests_found(monkeypatch):
     use_test_nodes(monkeypatch)
 
 

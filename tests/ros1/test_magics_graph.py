@@ -211,7 +211,7 @@ def test_pub_through_a_node_that_publishes_the_topic_and_type_conflicts(ip, caps
         with Peer("echo_topic.py", "/mg/talk", "std_msgs/String") as listener:
             listener.wait_line("ready")
             talker = ip.user_ns["talker"]  # a message written before the connection is up is lost: wait for it
-            wait_for(lambda: engine_of(talker).writer("/mg/talk")[0].connections(), what="the listener to connect")
+            wait_for(lambda: engine_of(talker).writing.writer("/mg/talk")[0].connections(), what="the listener to connect")
             capsys.readouterr()
             ok(ip, "%pub /mg/talk std_msgs/String 'via the talker'")
             assert "(from mg_talker)" in capsys.readouterr().out

@@ -57,7 +57,7 @@ def test_a_crash_is_reported_with_exit_code_and_log(make_node, ros_session):
     try:
         w = wrapped_echo(make_node, "crash_wrapper")
         crasher = make_node("crash_sender").new.publish("/crash", msgType=Int32).create()
-        wait_for(lambda: engine_of(crasher).writer("/crash")[0].connections(), what="the basenode to subscribe /crash")
+        wait_for(lambda: engine_of(crasher).writing.writer("/crash")[0].connections(), what="the basenode to subscribe /crash")
         crasher.write("/crash", Int32(3))
         wait_for(lambda: told, timeout=20, what="the crash to be reported")
     finally:

@@ -101,6 +101,11 @@ def check_kobuki(nb: nbformat.NotebookNode, text: str) -> None:
     assert top_commanded == 6.0
     assert top_driven == pytest.approx(5.0, abs=0.25), "the base did not hold the robot to its 5 m/s limit"
     assert "speed 6.00 m/s exceeds max_speed 5.00 m/s" in text  # the monitor's own log line
+    # the rule as a guard: the output clamped to 5 m/s, held at rest while e-stopped, released
+    assert "with the guard, speed = 6.0: the base is told 5.0 m/s" in text
+    assert "e-stopped: the base is told 0.0 m/s while the planner still asks for 6.0" in text
+    assert "released: the base is told 5.0 m/s again" in text
+    assert re.search(r"mobile_base/commands/velocity.*passing", text), "%status shows no guard"
     recorded, top = number(r"the live plot recorded (\d+) commands, up to ([\d.]+) m/s", text)
     assert recorded >= 20 and top == 6.0, "the live plot did not follow the commands"
     assert images(nb) == 2, "the live plot or the speed plot is missing"

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from bench.figures import Figure, table, target_lines
+from bench.figures import Figure, compare, table, target_lines
 from bench.relay_ros2 import Load, Run, targets
 
 BEST_EFFORT = Load("image_be", "image", "Image 1 MiB, best effort, 30 Hz", 30.0, 60, 0, paths="ae",
@@ -30,3 +30,12 @@ def test_a_figure_whose_anchor_has_no_value_is_printed():
     figure = Figure("ROS 2", "lost", 3, "msgs", "direct (a)", None, most=0)
     assert target_lines([figure]) == ["- FAIL ROS 2 lost: 3 msgs vs direct (a) -, target 0"]
     assert "| ROS 2 | lost | 3 msgs | direct (a) |  |" in table([figure])
+
+
+def test_two_runs_side_by_side_show_each_runs_ratio_to_its_own_anchor():
+    before = [Figure("ROS 2", "p50, relay (c)", 0.4, "ms", "direct (a)", 0.2, most=3.0),
+              Figure("ROS 2", "only before", 1.0, "ms")]
+    now = [Figure("ROS 2", "p50, relay (c)", 0.75, "ms", "direct (a)", 0.3, most=3.0),
+           Figure("ROS 2", "only now", 1.0, "ms")]
+    rows = compare(before, now).splitlines()
+    assert rows[2:] == ["| ROS 2 | p50, relay (c) | 0.400 ms | 2.00x | 0.750 ms | 2.50x | <= 3x | PASS |"], rows

@@ -10,7 +10,8 @@
 * :class:`WrapMagics` (``wrap.py``): ``%wrap``;
 * :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
 * :class:`PlotMagics` (``plot.py``): ``%plot``, topic fields drawn live;
-* :class:`RecordMagics` (``record.py``): ``%record``, topics written to a bag.
+* :class:`RecordMagics` (``record.py``): ``%record``, topics written to a bag;
+* :class:`SafetyMagics` (``safety.py``): ``%estop``, the session's guards held at their stop message.
 
 :mod:`ipyros.ipython.extension` creates and registers them; ``%magic?`` shows each one's help.
 """
@@ -24,7 +25,8 @@ from .nodes import NodeMagics
 from .plot import PlotMagics
 from .rates import RateMagics
 from .record import RecordMagics
+from .safety import SafetyMagics
 from .wrap import WrapMagics
 
 __all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics",
-           "RateMagics", "IntrospectMagics", "ActionMagics"]
+           "RateMagics", "IntrospectMagics", "ActionMagics", "SafetyMagics"]

@@ -5,8 +5,8 @@ sends to whichever cell runs at that moment (or ran last): a node created in cel
 would scatter its prints over cells 4, 5 and 6, and a node printing at 10 Hz would make
 every later cell unreadable. So, in a kernel only:
 
-* :func:`route` puts a :class:`RoutedStream` in front of ``sys.stdout`` and ``sys.stderr``:
-  text written by a thread that is running a handler goes to that handler's node's
+* the extension routes ``sys.stdout`` and ``sys.stderr`` (:mod:`ipyros.core.streams`): text
+  written by a thread that is running a handler goes to that handler's node's
   :class:`OutputArea`; any other text passes through unchanged;
 * each node created from a cell gets an :class:`OutputArea`: an output of that cell with a
   display id, redrawn in place (at most a few times a second) with the last lines written
@@ -20,13 +20,11 @@ around each handler call, so the handler's failure reports go to the same place.
 from __future__ import annotations
 
 import html
-import sys
 import threading
 from collections import deque
-from typing import Any, Optional
+from typing import Any
 
-#: The area of the handler the current thread is running, if any.
-_current = threading.local()
+from ...core import streams
 
 
 class OutputArea:
@@ -78,32 +76,10 @@ class NodeOutput:
         self.area = area
 
     def enter(self) -> Any:
-        previous = getattr(_current, "area", None)
-        _current.area = self.area
-        return previous
+        return streams.enter(self.area)
 
     def leave(self, previous: Any) -> None:
-        _current.area = previous
-
-
-class RoutedStream:
-    """Stands for ``sys.stdout`` or ``sys.stderr``: a handler's text to its node's area, the rest through."""
-
-    def __init__(self, original: Any) -> None:
-        self.original = original
-
-    def write(self, text: str) -> int:
-        area: Optional[OutputArea] = getattr(_current, "area", None)
-        if area is not None:
-            return area.write(text)
-        return self.original.write(text)
-
-    def flush(self) -> None:
-        if getattr(_current, "area", None) is None:
-            self.original.flush()
-
-    def __getattr__(self, name: str) -> Any:  # fileno, encoding, the kernel's own methods ...
-        return getattr(self.original, name)
+        streams.leave(previous)
 
 
 def in_kernel(shell: Any) -> bool:
@@ -111,20 +87,4 @@ def in_kernel(shell: Any) -> bool:
     return getattr(shell, "kernel", None) is not None
 
 
-def route() -> None:
-    """Put a :class:`RoutedStream` in front of ``sys.stdout`` and ``sys.stderr`` (once)."""
-    for name in ("stdout", "stderr"):
-        stream = getattr(sys, name)
-        if not isinstance(stream, RoutedStream):
-            setattr(sys, name, RoutedStream(stream))
-
-
-def unroute() -> None:
-    """Take the :class:`RoutedStream` away again, if nothing has replaced it since."""
-    for name in ("stdout", "stderr"):
-        stream = getattr(sys, name)
-        if isinstance(stream, RoutedStream):
-            setattr(sys, name, stream.original)
-
-
-__all__ = ["NodeOutput", "OutputArea", "RoutedStream", "in_kernel", "route", "unroute"]
+__all__ = ["NodeOutput", "OutputArea", "in_kernel"]

@@ -17,7 +17,7 @@ from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
 from ...core.errors import IpyrosError
 from ...core.names import is_tool
-from ...dsl import engine_of, keeping, restore, rosNode
+from ...dsl import engine_of, keeping, node_of, restore, rosNode
 from ...files.modelfile import handler_sources
 from ...node.session import current
 from ...tools.editing import EditWatch, PendingEdit, fresh_name, handler_source, lambda_as_def, new_functions
@@ -167,7 +167,7 @@ class NodeMagics(ExtensionMagics):
         args = parse_argstring(self.save_nodes, line)
         nodes = [find_node(self.shell, name) for name in args.node]
         if not nodes:  # every node of the user's: ipyros's own tool nodes (%pub's, %echo's) are not saved
-            nodes = [engine.dsl for engine in current().nodes.values() if not is_tool(engine.name)]
+            nodes = [node_of(engine) for engine in current().nodes.values() if not is_tool(engine.name)]
             left_out = {}
             for node in nodes:  # save what can be saved; say what could not, and why
                 try:
@@ -246,7 +246,7 @@ class NodeMagics(ExtensionMagics):
             return
         # ipyros's own tool nodes (the %pub publisher, %echo's listener) are not the user's.
         session = current()
-        nodes = [engine.dsl for engine in session.nodes.values() if not is_tool(engine.name)]
+        nodes = [node_of(engine) for engine in session.nodes.values() if not is_tool(engine.name)]
         if not nodes:
             print("no rosNode of yours is running in this session")
             return

@@ -1,0 +1,248 @@
+"""A node's guards, live: each one's gate in front of its output, the page it shares with its sentinel process,
+the sentinel, and what the prompt is told (see :mod:`ipyros.core.guard` and :mod:`ipyros.processes.sentinel`).
+
+The engine opens a guard before the output it stands on (the plan lists guards first), hands the
+output endpoint its :class:`LiveGuard` (every message the endpoint sends passes it), swaps its rules
+when the guard is declared again (nothing reopens), and closes it when the node shuts down (its
+sentinel then holds the stop message for its grace) or when the guard is removed (at once).
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import threading
+import time
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+from ..core import msgtypes
+from ..core.guard import Gate, GuardState, Verdict
+from ..core.model import GuardModel, TopicModel
+from ..core.msgbuild import build_message
+from ..core.names import tool_name
+from ..processes.basenode import log_dir
+from ..processes.sentinel import ESTOPPED, PASSING, STATES, STOPPED, Sentinel, Shared
+
+__all__ = ["GuardEndpoint", "LiveGuard", "NodeGuards", "Watch", "guard_of"]
+
+#: How long a guard's process may take to publish on its topic (s): a rospy or rclpy start, on a loaded machine.
+SENTINEL_START = 30.0
+
+_count = iter(range(1, 1 << 30))
+
+
+class LiveGuard:
+    """One guard of a running node: what its output's endpoint passes every message through (:meth:`check`)."""
+
+    def __init__(self, model: GuardModel, output: TopicModel, backend: Any, say: Callable[[str], None]) -> None:
+        self.topic, self.type = model.resolved, model.type
+        self.cls = msgtypes.resolve_message(model.type)[1]
+        self._backend, self._say, self._output = backend, say, output
+        self.shared = Shared.create()
+        self.model = model
+        self._stop_message = self._make_stop(model)
+        self.gate = self._gate(model)
+        self.sentinel: Optional[Sentinel] = None
+        self._noticed, self._by_topic = self.shared.state, False
+
+    # -- rules ------------------------------------------------------------------------------------
+    def _make_stop(self, model: GuardModel) -> Any:
+        return build_message(self.cls, model.stop) if model.stop is not None else self.cls()
+
+    def _gate(self, model: GuardModel) -> Gate:
+        return Gate(self.topic, self.cls, {p: (b[0], b[1]) for p, b in model.limits.items()}, dict(model.rate),
+                    model.on_limit, self.stop_message, lambda: self.shared.estopped, self.shared.passed, self._say)
+
+    def stop_message(self) -> Any:
+        """A fresh stop message (a gate may be handed it to send)."""
+        return copy.deepcopy(self._stop_message)
+
+    def update(self, model: GuardModel) -> None:
+        """The guard declared again: its new rules from the next message on (its figures kept)."""
+        figures = self.gate.figures
+        self._stop_message = self._make_stop(model)
+        self.gate = self._gate(model)
+        self.gate.figures = figures
+        self.model = model
+        if self.sentinel is not None:
+            self.sentinel.tell({"settings": self._settings()})
+
+    def check(self, msg: Any) -> Verdict:
+        return self.gate.check(msg)
+
+    # -- its process ------------------------------------------------------------------------------
+    def _settings(self) -> dict[str, Any]:
+        model = self.model
+        return {"timeout": model.timeout, "repeat": model.repeat, "grace": model.grace,
+                "stop": self._backend.serialize(self._stop_message).hex()}
+
+    def start(self) -> None:
+        """Start its sentinel, and wait until it publishes on the topic; a one-line error if it cannot."""
+        from ..core.errors import BaseNodeError
+
+        name = f"{tool_name('guard')}_{next(_count)}"
+        settings = {**self._settings(), "node": name, "topic": self.topic, "type": self.type,
+                    "latch": bool(self._output.latch), "qos": self._output.qos, "estop_topic": self.model.estop_topic}
+        env = dict(os.environ)
+        package_root = str(Path(__file__).resolve().parents[2])  # ipyros importable as it is here
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+        log = log_dir() / f"{name}.log"
+        self.sentinel = Sentinel(self._backend.sentinel_command(), settings, self.shared, log, env)
+        problem = self.sentinel.ready(SENTINEL_START)
+        if problem is not None:
+            self.sentinel = None
+            self.shared.close()
+            raise BaseNodeError(f"the guard of {self.topic} could not start its process ({problem}); nothing of the "
+                                f"node runs: see {log}")
+
+    def estop(self, on: bool) -> None:
+        """Hold the stop message (``on``) or let commands pass again; the sentinel is woken to act at once."""
+        self.shared.estop_session = on
+        if self.sentinel is not None:
+            self.sentinel.tell({"wake": True})
+
+    def close(self, hold: bool) -> None:
+        """End the guard: its sentinel holds the stop message for its grace first (``hold``: the node stops), or
+        quits at once (the guard was removed; the output goes on unguarded)."""
+        if self.sentinel is not None:
+            self.sentinel.end(hold=hold, wait=not hold)
+            self.sentinel = None
+
+    # -- what it shows ------------------------------------------------------------------------------
+    def state(self) -> GuardState:
+        shared = self.shared
+        state = STATES.get(shared.state, "passing") if self.sentinel is not None else "not running"
+        if shared.estopped:
+            state = STATES[ESTOPPED] + (" (by its e-stop topic)" if shared.estop_topic else "")
+        return GuardState(self.topic, state, self.gate.figures, shared.stops_sent, shared.reach)
+
+    def news(self) -> Optional[str]:
+        """One line when the sentinel's state changed since the last look: a trip on silence, an e-stop by its
+        topic, commands passing again after either (an e-stop from the session was said by who asked for it)."""
+        state, by_topic = self.shared.state, self.shared.estop_topic
+        if state == ESTOPPED and not by_topic and not self._by_topic:
+            self._noticed = PASSING  # the session's own e-stop: its release is said by who asked for it too
+            return None
+        if state == self._noticed:
+            return None
+        before, self._noticed, self._by_topic = self._noticed, state, by_topic
+        if state == STOPPED:
+            return (f"guard {self.topic}: nothing passed for {self.model.timeout:g} s: its process sends the stop "
+                    f"message ({self.model.repeat:g} Hz) until a command passes")
+        if state == ESTOPPED:
+            return f"guard {self.topic}: e-stopped by {self.model.estop_topic}: the stop message holds until released"
+        return f"guard {self.topic}: commands pass again" if before in (STOPPED, ESTOPPED) else None
+
+
+def guard_of(outputs: list[TopicModel], resolved: str) -> Optional[TopicModel]:
+    """The output a guard on ``resolved`` stands on, if the node has one there."""
+    return next((t for t in outputs if t.resolved == resolved), None)
+
+
+class Watch:
+    """One thread per session that tells the prompt what the guards' processes did (a trip on silence, an e-stop
+    by topic, commands passing again), once per change: the sentinels act, the session only says so."""
+
+    LOOK = 0.1  # seconds between two looks
+
+    def __init__(self, notify: Callable[[str], None]) -> None:
+        self._notify = notify
+        self._guards: list[LiveGuard] = []
+        self._lock = threading.Lock()
+        self._thread: Optional[threading.Thread] = None
+
+    def add(self, guard: LiveGuard) -> None:
+        with self._lock:
+            self._guards.append(guard)
+            if self._thread is None or not self._thread.is_alive():
+                self._thread = threading.Thread(target=self._run, name="ipyros-guards", daemon=True)
+                self._thread.start()
+
+    def remove(self, guard: LiveGuard) -> None:
+        with self._lock:
+            if guard in self._guards:
+                self._guards.remove(guard)
+
+    def guards(self) -> list[LiveGuard]:
+        with self._lock:
+            return list(self._guards)
+
+    def _run(self) -> None:
+        while True:
+            with self._lock:
+                guards = list(self._guards)
+                if not guards:
+                    self._thread = None
+                    return
+            for guard in guards:
+                news = guard.news()
+                if news is not None:
+                    self._notify(f"ipyros: {news}")
+            time.sleep(self.LOOK)
+
+
+
+class NodeGuards:
+    """The guards of one running node, by topic: opened from the plan (before their outputs), handed to the
+    output endpoints, told of new rules, e-stopped, shown."""
+
+    def __init__(self, backend: Any, say: Callable[[str], None], watch: "Watch") -> None:
+        self._backend, self._say, self._watch = backend, say, watch
+        self.live: dict[str, LiveGuard] = {}
+        self.ending = False  # set once the node shuts down: its guards then hold the stop message
+
+    def open(self, model: GuardModel, output: TopicModel) -> "GuardEndpoint":
+        guard = LiveGuard(model, output, self._backend, self._say)
+        guard.start()
+        self.live[model.resolved] = guard
+        self._watch.add(guard)
+        return GuardEndpoint(self, guard)
+
+    def quieten(self) -> None:
+        """The node shuts down: its guards will hold the stop message for their grace, as they should, and the
+        prompt is not told of that silence."""
+        self.ending = True
+        for guard in self.live.values():
+            self._watch.remove(guard)
+
+    def gate(self, topic: str) -> Optional[LiveGuard]:
+        """The guard an output of ``topic`` passes its messages through, if it is guarded."""
+        return self.live.get(topic)
+
+    def attach(self, endpoints: dict[Any, Any], output_of: Callable[[Any], Optional[str]]) -> None:
+        """Hand each output endpoint its topic's guard (or none): after a guard was added or removed on a running
+        node, or an output opened again."""
+        for spec, endpoint in endpoints.items():
+            topic = output_of(spec)
+            if topic is not None and hasattr(endpoint, "gate"):
+                endpoint.gate = self.live.get(topic)
+
+    def update(self, guards: list[GuardModel]) -> None:
+        for model in guards:
+            live = self.live.get(model.resolved)
+            if live is not None and live.model != model:
+                live.update(model)
+
+    def estop(self, on: bool) -> list[str]:
+        """E-stop every guard of the node (or release them); the topics."""
+        for guard in self.live.values():
+            guard.estop(on)
+        return list(self.live)
+
+    def states(self) -> tuple[GuardState, ...]:
+        return tuple(guard.state() for guard in self.live.values())
+
+
+class GuardEndpoint:
+    """A guard as an endpoint of the node's plan: closing it ends the guard (holding the stop message when the
+    node shuts down, at once when the guard is removed)."""
+
+    def __init__(self, guards: NodeGuards, guard: LiveGuard) -> None:
+        self._guards, self.guard = guards, guard
+
+    def close(self) -> None:
+        guards = self._guards
+        guards.live.pop(self.guard.topic, None)
+        guards._watch.remove(self.guard)
+        self.guard.close(hold=guards.ending)

@@ -1,0 +1,368 @@
+"""A safety guard on what reaches the robot, on either ROS, with real processes: a basenode gone wrong, a plain
+subscriber as the robot, the guard's own process that sends the stop message when the session stops."""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from geometry_msgs.msg import Twist
+from support import children, wait_for
+
+from ipyros.core import errors
+from ipyros.dsl import engine_of
+
+PEERS = Path(__file__).parent / "peers"
+LIMITS = {"linear.x": (-0.5, 0.5), "angular.z": (-1.0, 1.0)}
+
+
+def twists(listener) -> list[tuple[float, float, float, float]]:
+    """``(linear.x, linear.y, angular.z, when)`` of each message the plain subscriber heard so far."""
+    return [tuple(float(v) for v in line.split()[1:]) for line in list(listener.lines) if line.startswith("twist ")]
+
+
+def stops(listener, after: float = 0.0) -> list[float]:
+    """When the subscriber heard the stop message (all zeros), after ``after``."""
+    return [t for x, y, z, t in twists(listener) if x == y == z == 0.0 and t > after]
+
+
+def test_a_wrapped_basenode_gone_wrong_reaches_the_robot_only_within_limits(make_node, peer, notices):
+    """Out-of-limit values are clamped, NaN and infinities never pass (the stop message goes instead); a plain
+    subscriber sees nothing else over hundreds of hostile messages; the relay of the other topics is untouched."""
+    robot = peer("listen_twist.py", "/guarded/cmd_vel", "--name=robot")
+    robot.wait_line("ready")
+    nd = make_node("guard_wrap")
+    nd.reuse.publish("/guarded/cmd_vel", type=Twist)
+    nd.baseNode(str(PEERS / "hostile_cmd.py"), name="hostile_cmd", args=["/guarded/cmd_vel", "50"])
+    nd.guard("/guarded/cmd_vel", limits=LIMITS, timeout=0.5, grace=0.5)
+    nd.create()
+    wait_for(lambda: len(twists(robot)) >= 240, timeout=60, what="hundreds of guarded messages at the robot")
+    heard = twists(robot)
+    assert all(-0.5 <= x <= 0.5 and -1.0 <= z <= 1.0 and math.isfinite(y) for x, y, z, _ in heard), heard[:20]
+    assert any(x == 0.5 for x, _, _, _ in heard) and any(x == -0.5 for x, _, _, _ in heard), "clamped both ways"
+    assert any(x == 0.2 for x, _, _, _ in heard), "a value within its limits passes as it came"
+    status = engine_of(nd).status()
+    (state,) = status.guards
+    assert state.figures.clamped > 0 and state.figures.replaced > 0 and state.state == "passing"
+    said = [n for n in notices if "guard /guarded/cmd_vel" in n]
+    assert any("clamped (" in n for n in said) and any("is not a finite number" in n for n in said), notices
+    assert len(said) < 0.5 * len(heard), "said once per episode, not once per message"
+    assert "guard" in str(status) and "clamped" in str(status)
+
+
+def test_the_basenode_stopped_the_stop_message_comes_within_the_timeout_and_commands_resume(make_node, peer):
+    robot = peer("listen_twist.py", "/guarded2/cmd_vel", "--name=robot2")
+    robot.wait_line("ready")
+    nd = make_node("guard_silence")
+    nd.baseNode(str(PEERS / "talk.py"), name="steady_cmd",
+                args=["/guarded2/cmd_vel", "geometry_msgs/Twist", "20", "linear.x=0.3"])
+    nd.reuse.publish("/guarded2/cmd_vel", type=Twist)
+    nd.guard("/guarded2/cmd_vel", limits=LIMITS, timeout=0.3, grace=0.3)
+    nd.create()
+    wait_for(lambda: any(x == 0.3 for x, *_ in twists(robot)), timeout=30, what="commands at the robot")
+    flowing = time.monotonic()
+    time.sleep(1.0)  # commands flowing: no stop message among them
+    frozen_at = time.monotonic()
+    assert not [t for t in stops(robot, flowing + 0.2) if t < frozen_at], "a stop message while commands passed"
+    os.kill(nd.base.pid, signal.SIGSTOP)  # the basenode hangs
+    try:
+        wait_for(lambda: stops(robot, frozen_at), timeout=10, what="the stop message after the silence")
+        last_command = max(t for x, *_, t in twists(robot) if x == 0.3)
+        first_stop = min(stops(robot, frozen_at))
+        around = [(x, round(t - frozen_at, 3)) for x, *_, t in twists(robot) if abs(t - frozen_at) < 1.0]
+        assert first_stop - last_command <= 0.3 + 0.5, around  # the timeout, and what delivery takes
+        wait_for(lambda: len(stops(robot, frozen_at)) >= 3, what="the stop message again, at its rate")
+    finally:
+        os.kill(nd.base.pid, signal.SIGCONT)
+    resumed = time.monotonic()
+    wait_for(lambda: any(x == 0.3 and t > resumed for x, *_, t in twists(robot)), what="commands again")
+    time.sleep(0.4)  # commands flowing: no stop message among them any more
+    late = [t for t in stops(robot, resumed + 0.3)]
+    assert not late, "stops sent while commands passed"
+    (state,) = engine_of(nd).status().guards
+    assert state.stops_sent >= 3 and state.state == "passing"
+
+
+def test_a_guard_added_to_a_moving_output_sends_no_stop_while_commands_pass(make_node, peer):
+    robot = peer("listen_twist.py", "/guarded9/cmd_vel", "--name=robot9")
+    robot.wait_line("ready")
+    nd = make_node("guard_added")
+    nd.baseNode(str(PEERS / "talk.py"), name="moving_cmd",
+                args=["/guarded9/cmd_vel", "geometry_msgs/Twist", "20", "linear.x=0.3"])
+    nd.reuse.publish("/guarded9/cmd_vel", type=Twist)
+    nd.create()
+    wait_for(lambda: any(x == 0.3 for x, *_ in twists(robot)), timeout=30, what="commands at the robot")
+    nd.guard("/guarded9/cmd_vel", limits=LIMITS, timeout=0.3, grace=0.2)  # the robot moving: no jolt to a stop
+    guarded = time.monotonic()
+    wait_for(lambda: engine_of(nd).status().guards[0].figures.passed >= 20, what="commands through the guard")
+    (state,) = engine_of(nd).status().guards
+    assert state.stops_sent == 0 and not stops(robot), "the guard sent a stop message as it started"
+    assert any(x == 0.3 and t > guarded for x, *_, t in twists(robot))
+
+
+def test_e_stop_holds_the_stop_message_whatever_else_arrives_until_released(make_node, peer, session):
+    robot = peer("listen_twist.py", "/guarded3/cmd_vel", "--name=robot3")
+    robot.wait_line("ready")
+    nd = make_node("guard_estop")
+    nd.new.publish("/guarded3/cmd_vel", msgType=Twist)
+    nd.guard("/guarded3/cmd_vel", limits=LIMITS, grace=0.2, repeat=20)
+    nd.create()
+    drive = Twist()
+    drive.linear.x = 0.4
+    wait_for(lambda: nd.write("/guarded3/cmd_vel", drive) or any(x == 0.4 for x, *_ in twists(robot)),
+             timeout=30, interval=0.1, what="commands at the robot")
+    assert nd.estop() == ["/guarded3/cmd_vel"]
+    tripped = time.monotonic()
+    for _ in range(10):
+        nd.write("/guarded3/cmd_vel", drive)  # what arrives meanwhile becomes the stop message
+        time.sleep(0.05)
+    wait_for(lambda: len(stops(robot, tripped)) >= 10, what="the stop message held")
+    assert not any(x == 0.4 and t > tripped + 0.05 for x, *_, t in twists(robot)), "a command passed an e-stop"
+    assert engine_of(nd).status().guards[0].state.startswith("e-stopped")
+    nd.release()
+    released = time.monotonic()
+    wait_for(lambda: nd.write("/guarded3/cmd_vel", drive) or any(x == 0.4 and t > released
+                                                                   for x, *_, t in twists(robot)),
+             interval=0.1, what="commands after release")
+    assert [c.change for c in engine_of(nd).history()][-2:] in (["estop()", "release()"],) or \
+        "release()" in [c.change for c in engine_of(nd).history()]
+
+
+def test_an_estop_topic_trips_it_from_another_process(make_node, peer, notices):
+    robot = peer("listen_twist.py", "/guarded4/cmd_vel", "--name=robot4")
+    robot.wait_line("ready")
+    nd = make_node("guard_estop_topic")
+    nd.new.publish("/guarded4/cmd_vel", msgType=Twist)
+    nd.guard("/guarded4/cmd_vel", estop_topic="/guarded4/estop", grace=0.2, repeat=20)
+    nd.create()
+    drive = Twist()
+    drive.linear.x = 0.1
+    wait_for(lambda: nd.write("/guarded4/cmd_vel", drive) or twists(robot), interval=0.1, timeout=30,
+             what="commands at the robot")
+    joystick = peer("talk.py", "/guarded4/estop", "std_msgs/Bool", "5", "data=True")
+    joystick.wait_line("ready")
+    wait_for(lambda: engine_of(nd).status().guards[0].state.startswith("e-stopped"), timeout=20,
+             what="the e-stop topic to trip the guard")
+    tripped = time.monotonic()
+    for _ in range(5):
+        nd.write("/guarded4/cmd_vel", drive)
+        time.sleep(0.05)
+    wait_for(lambda: len(stops(robot, tripped)) >= 3, what="stop messages while e-stopped by topic")
+    assert not any(x == 0.1 and t > tripped + 0.05 for x, *_, t in twists(robot))
+    wait_for(lambda: "ipyros: guard /guarded4/cmd_vel: e-stopped by /guarded4/estop: the stop message holds until "
+                     "released" in notices, what="the prompt told of the e-stop by topic")
+
+
+def test_a_guard_is_not_weakened_by_accident(make_node):
+    nd = make_node("guard_kept")
+    nd.new.publish("/guarded5/cmd_vel", msgType=Twist).subscribe("/guarded5/in", handler=print, msgType=Twist)
+    nd.guard("/guarded5/cmd_vel", limits=LIMITS)
+    nd.new.subscribe("/guarded5/in", handler=lambda m: None, msgType=Twist)  # a handler swapped
+    nd.remove("/guarded5/in")  # a handler removed
+    assert nd.model().guard("/guarded5/cmd_vel") is not None
+    with pytest.raises(errors.DeclarationError, match="is guarded; remove its guard first, by its own call"):
+        nd.remove("/guarded5/cmd_vel")
+    with pytest.raises(errors.DeclarationError, match="is guarded"):
+        nd.new.unpublish("/guarded5/cmd_vel")
+    nd.remove(guard="/guarded5/cmd_vel")
+    nd.remove("/guarded5/cmd_vel")
+    assert nd.model().topics == [] and nd.model().guards == []
+    changes = [c.change for c in engine_of(nd).history()]
+    assert any(c.startswith("guard /guarded5/cmd_vel: limits linear.x -0.5..0.5") for c in changes), changes
+    assert "remove guard /guarded5/cmd_vel" in changes
+
+
+@pytest.mark.parametrize("call, says", [
+    (lambda nd: nd.guard("/nothing_here", limits=LIMITS), "sends nothing on /nothing_here"),
+    (lambda nd: nd.guard("/guarded6/cmd_vel", limits={"linear.q": (0, 1)}), "no field 'q' (there: x, y, z)"),
+    (lambda nd: nd.guard("/guarded6/cmd_vel", timeout=-1), "give the seconds of silence"),
+    (lambda nd: nd.guard("/guarded6/cmd_vel", stop={"linear": {"x": "fast"}}), "linear.x: expected a number"),
+    (lambda nd: nd.estop(), "has no guard to e-stop"),
+])
+def test_a_guard_given_wrong_is_one_line(make_node, call, says):
+    nd = make_node("guard_wrong")
+    nd.new.publish("/guarded6/cmd_vel", msgType=Twist)
+    with pytest.raises(errors.IpyrosError) as caught:
+        call(nd)
+    assert says in str(caught.value) and "\n" not in str(caught.value), str(caught.value)
+    assert nd.model().guards == []
+
+
+SESSION = """
+import sys, time
+from geometry_msgs.msg import Twist
+from ipyros import rosNode
+nd = rosNode("frozen_session")
+nd.new.publish("{topic}", msgType=Twist)
+nd.guard("{topic}", limits={{"linear.x": (-0.5, 0.5)}}, timeout=0.3, grace=1.0)
+nd.create()
+drive = Twist()
+drive.linear.x = 0.25
+nd.timer(0.05, lambda: nd.write("{topic}", drive))
+from ipyros.dsl import engine_of
+while not engine_of(nd).status().guards[0].reach:  # its process has found the robot: a stop would reach it
+    time.sleep(0.05)
+print("READY", flush=True)
+while True:
+    time.sleep(1)
+"""
+
+
+@pytest.fixture
+def guarded_session(tmp_path):
+    """A session in a process of its own (as at a prompt) driving a guarded output at 20 Hz: (process, topic)."""
+    started = []
+
+    def start(topic: str) -> subprocess.Popen:
+        script = tmp_path / "session.py"
+        script.write_text(SESSION.format(topic=topic))
+        # a process group of its own, as a terminal gives a foreground job: Ctrl-Z stops the whole group
+        proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                text=True, process_group=0)
+        started.append(proc)
+        wait_for(lambda: proc.stdout.readline().strip() == "READY", timeout=60, interval=0.0,
+                 what="the session to drive the guarded output")
+        return proc
+
+    yield start
+    for proc in started:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGCONT)
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(10)
+        proc.stdout.close()
+
+
+def test_the_session_frozen_then_killed_the_guards_own_process_stops_the_robot(guarded_session, peer):
+    """Ctrl-Z (the session's whole process group stopped), then SIGKILL: the stop message comes within the timeout
+    each time, is held for the grace, and then nothing of the session is left running."""
+    robot = peer("listen_twist.py", "/guarded7/cmd_vel", "--name=robot7")
+    robot.wait_line("ready")
+    before = children()
+    session = guarded_session("/guarded7/cmd_vel")
+    wait_for(lambda: any(x == 0.25 for x, *_ in twists(robot)), timeout=30, what="commands from the session")
+    frozen = time.monotonic()
+    os.killpg(session.pid, signal.SIGSTOP)  # what Ctrl-Z does to the foreground job
+    wait_for(lambda: stops(robot, frozen), timeout=10, what="the stop message while the session is frozen")
+    last = max(t for x, *_, t in twists(robot) if x == 0.25)
+    assert min(stops(robot, frozen)) - last <= 0.3 + 0.5
+    os.killpg(session.pid, signal.SIGCONT)
+    thawed = time.monotonic()
+    wait_for(lambda: any(x == 0.25 and t > thawed for x, *_, t in twists(robot)), what="commands after the thaw")
+    session.kill()  # SIGKILL: no atexit, no goodbye
+    killed = time.monotonic()
+    session.wait(10)
+    wait_for(lambda: len(stops(robot, killed)) >= 5, what="the stop message held after the session died")
+    held = stops(robot, killed)
+    assert held[-1] - held[0] <= 1.0 + 0.5, "held for its grace, not longer"
+    wait_for(lambda: not [pid for pid in _guard_processes()], timeout=10, what="the guard's process to end")
+    assert children() <= before
+
+
+def _guard_processes() -> list[int]:
+    """The pids of guard processes (``ipyros.ros1.sentinel``, ``ipyros.ros2.sentinel``) that are not this test
+    process's own: a killed session's, whose parent is gone."""
+    found = []
+    for proc in Path("/proc").iterdir():
+        if proc.name.isdigit():
+            try:
+                cmdline = (proc / "cmdline").read_bytes().decode(errors="replace")
+                parent = int((proc / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue
+            if "ipyros.ros" in cmdline and "sentinel" in cmdline and parent != os.getpid():
+                found.append(int(proc.name))
+    return found
+
+
+def test_pub_at_the_prompt_passes_the_guard_and_estop_holds_the_session(ip, peer, capsys):
+    """A guard added to a running node stands at once; %pub on its topic passes it; %estop stops every guarded
+    output of the session until %estop --release."""
+    from shell import ok
+
+    robot = peer("listen_twist.py", "/guarded8/cmd_vel", "--name=robot8")
+    robot.wait_line("ready")
+    ok(ip, "from geometry_msgs.msg import Twist\n"
+           "gp = rosNode('guard_prompt')\ngp.new.publish('/guarded8/cmd_vel', msgType=Twist)\ngp.create()\n"
+           "gp.guard('/guarded8/cmd_vel', limits={'linear.x': (-0.5, 0.5)}, grace=0.2, repeat=20)")
+    wait_for(lambda: ok(ip, "%pub /guarded8/cmd_vel geometry_msgs/Twist {linear: {x: 3.0}}") or
+             any(x == 0.5 for x, *_ in twists(robot)), interval=0.2, timeout=30, what="the clamped %pub")
+    assert not any(x == 3.0 for x, *_ in twists(robot))
+    capsys.readouterr()
+    ok(ip, "%estop")
+    assert "ipyros: e-stopped /guarded8/cmd_vel (gp): the stop message holds until %estop --release" in \
+        capsys.readouterr().out
+    tripped = time.monotonic()
+    ok(ip, "%pub /guarded8/cmd_vel geometry_msgs/Twist {linear: {x: 0.2}}")
+    wait_for(lambda: len(stops(robot, tripped)) >= 3, what="the stop message held")
+    assert not any(x == 0.2 for x, *_ in twists(robot)), "%pub passed an e-stop"
+    ok(ip, "%status gp")
+    assert "e-stopped" in capsys.readouterr().out
+    ok(ip, "%estop --release")
+    released = time.monotonic()
+    wait_for(lambda: ok(ip, "%pub /guarded8/cmd_vel geometry_msgs/Twist {linear: {x: 0.2}}") or
+             any(x == 0.2 and t > released for x, *_, t in twists(robot)), interval=0.2, what="commands again")
+
+
+WITHOUT_IPYROS = ("import runpy, sys; sys.modules['ipyros'] = None; sys.argv = sys.argv[1:]; "
+                  "runpy.run_path(sys.argv[0], run_name='__main__')")
+
+
+def forward_guarded9(msg):
+    """The handler of the exported node: what comes in goes out, through the guard."""
+    exported.write("/guarded9/cmd_vel", msg)
+
+
+exported = None
+
+
+def test_a_guard_is_kept_by_save_by_a_model_file_without_trust_and_by_export(make_node, peer, tmp_path, session):
+    """Saved as Python and as a model (plain data: it loads without trust), and exported: the script, run
+    without ipyros, still clamps and still sends the stop message on silence."""
+    global exported
+    from ipyros import rosNode
+
+    nd = exported = make_node("guard_kept_files")
+    nd.new.publish("/guarded9/cmd_vel", msgType=Twist).subscribe("/guarded9/in", handler=forward_guarded9,
+                                                                 msgType=Twist)
+    nd.guard("/guarded9/cmd_vel", limits=LIMITS, rate={"linear.x": 50.0}, timeout=0.3, stop={"angular": {"z": 0.0}},
+             grace=0.5)
+    nd.save(tmp_path / "kept.py")
+    assert "exported.guard('/guarded9/cmd_vel', limits={'linear.x': (-0.5, 0.5)" in \
+        (tmp_path / "kept.py").read_text()
+    data_only = make_node("guard_data_only")
+    data_only.new.publish("/guarded9/cmd_vel", msgType=Twist)
+    data_only.guard("/guarded9/cmd_vel", limits=LIMITS, timeout=0.3, stop={"angular": {"z": 0.0}}, grace=0.5)
+    data_only.save(tmp_path / "kept.yaml")
+    session.remove(engine_of(data_only))
+    loaded = rosNode.load(tmp_path / "kept.yaml", session=session)  # no trust=True: a guard is data
+    assert loaded.model().guards == data_only.model().guards and loaded.model().guards[0].timeout == 0.3
+    session.remove(engine_of(loaded))
+    script = nd.export(tmp_path / "guarded_node.py")
+    text = script.read_text()
+    assert "class Guard:" in text and "import ipyros" not in text
+    robot = peer("listen_twist.py", "/guarded9/cmd_vel", "--name=robot9")
+    robot.wait_line("ready")
+    node = subprocess.Popen([sys.executable, "-c", WITHOUT_IPYROS, str(script)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True, process_group=0)
+    try:
+        driver = peer("talk.py", "/guarded9/in", "geometry_msgs/Twist", "20", "linear.x=4.0")
+        wait_for(lambda: any(x == 0.5 for x, *_ in twists(robot)), timeout=60, what="the exported guard's clamping")
+        assert not any(x == 4.0 for x, *_ in twists(robot))
+        driver.stop()
+        silent = time.monotonic()
+        wait_for(lambda: len(stops(robot, silent)) >= 2, timeout=20, what="the exported node's stop on silence")
+    finally:
+        os.killpg(node.pid, signal.SIGINT)
+        try:
+            node.wait(15)
+        except subprocess.TimeoutExpired:
+            os.killpg(node.pid, signal.SIGKILL)
+            node.wait()
+        node.stderr.close()

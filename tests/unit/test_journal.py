@@ -1,0 +1,61 @@
+"""The history file: a line per change, the user's alone, nothing lost if the disk says no
+(:mod:`ipyros.core.journal`)."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import pytest
+
+from ipyros.core import journal
+
+
+def test_changes_are_written_as_they_happen_and_read_back(tmp_path):
+    kept = journal.Journal(tmp_path / "history")
+    kept.append(journal.Change(1.0, "/n", "create()"))
+    kept.append(journal.Change(2.0, "/n", "timer t every 1 s -> tick", slot="timer t", version=1, handler="tick",
+                               source="def tick():\n    pass\n"))
+    assert kept.path is not None and kept.path.parent == tmp_path / "history"
+    changes = journal.read(kept.path)  # before close: each line is on disk already
+    assert [c.change for c in changes] == ["create()", "timer t every 1 s -> tick"]
+    assert changes[1].source == "def tick():\n    pass\n" and changes[0].slot is None
+    kept.close()
+
+
+def test_the_files_are_the_users_alone(tmp_path):
+    kept = journal.Journal(tmp_path / "history")
+    kept.append(journal.Change(1.0, "/n", "params['token'] = 'secret'"))
+    assert stat.S_IMODE(os.stat(tmp_path / "history").st_mode) == 0o700
+    assert stat.S_IMODE(os.stat(kept.path).st_mode) == 0o600
+    kept.close()
+
+
+def test_two_sessions_in_one_second_get_two_files(tmp_path):
+    first, second = journal.Journal(tmp_path), journal.Journal(tmp_path)
+    for kept in (first, second):
+        kept.append(journal.Change(1.0, "/n", "create()"))
+    assert first.path != second.path
+    first.close()
+    second.close()
+
+
+def test_a_directory_that_cannot_be_written_fails_once_then_keeps_quiet(tmp_path):
+    blocked = tmp_path / "file"
+    blocked.write_text("not a directory")
+    kept = journal.Journal(blocked / "history")
+    with pytest.raises(OSError):
+        kept.append(journal.Change(1.0, "/n", "create()"))
+    kept.append(journal.Change(2.0, "/n", "shutdown()"))  # off now: no second error
+    assert kept.failed
+
+
+def test_a_torn_last_line_is_skipped(tmp_path):
+    path = tmp_path / "h.jsonl"
+    path.write_text('{"time": 1.0, "node": "/n", "change": "create()"}\n{"time": 2.0, "node": "/n", "cha')
+    assert [c.change for c in journal.read(path)] == ["create()"]
+
+
+def test_the_default_directory_follows_the_environment(monkeypatch, tmp_path):
+    monkeypatch.setenv(journal.ENV_DIR, str(tmp_path / "mine"))
+    assert journal.default_dir() == tmp_path / "mine"
