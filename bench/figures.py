@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Iterable, Optional
 
-__all__ = ["FOLDER", "Figure", "keep", "machine", "main", "table", "target_lines"]
+__all__ = ["FOLDER", "Figure", "compare", "keep", "machine", "main", "table", "target_lines"]
 
 FOLDER = Path(__file__).resolve().parent / "results" / "figures"
 
@@ -74,8 +74,8 @@ def _number(value: Optional[float], unit: str) -> str:
         return "-"
     if unit == "ms":
         return f"{value:.3f} ms" if value < 10 else f"{value:.1f} ms"
-    if unit == "s":
-        return f"{value:.1f} s"
+    if unit in ("s", "µs"):
+        return f"{value:.1f} {unit}"
     if unit in ("msg/s", "KiB", "MiB"):
         return f"{value:,.0f} {unit}"
     return f"{value:g} {unit}".rstrip()
@@ -139,8 +139,37 @@ def load(folder: Path = FOLDER) -> tuple[list[str], list[Figure]]:
     return machines, figures
 
 
+def compare(before: list[Figure], now: list[Figure]) -> str:
+    """The figures both runs have, side by side: each run's value and its ratio to its own run's anchor.
+
+    Two runs of a noisy machine differ in their anchors too; the ratio to the anchor measured in the
+    same run is what says whether a change made ipyros slower. A figure only one run has is left out.
+    """
+    earlier = {(f.ros, f.what): f for f in before}
+    lines = ["| ROS | figure | before | ratio before | now | ratio now | target | |",
+             "|---|---|---:|---:|---:|---:|---|---|"]
+    for f in now:
+        old = earlier.get((f.ros, f.what))
+        if old is None:
+            continue
+        ratios = [f"{x.ratio:.2f}x" if x.ratio is not None else "" for x in (old, f)]
+        verdict = {True: "PASS", False: "**FAIL**", None: ""}[f.passed]
+        lines.append(f"| {f.ros} | {f.what} | {_number(old.value, old.unit)} | {ratios[0]} "
+                     f"| {_number(f.value, f.unit)} | {ratios[1]} | {f.target} | {verdict} |")
+    return "\n".join(lines)
+
+
 def main(argv: Optional[list[str]] = None) -> int:
+    """``python -m bench.figures`` (this run's table) or ``--before FOLDER`` (an earlier run's figures beside it)."""
+    argv = sys.argv[1:] if argv is None else argv
     machines, figures = load()
+    if argv[:1] == ["--before"] and len(argv) == 2:
+        _, earlier = load(Path(argv[1]))
+        if not earlier:
+            print(f"no figures in {argv[1]}: give the bench/results/figures folder of an earlier run", file=sys.stderr)
+            return 1
+        print(compare(earlier, figures))
+        return 0
     if not figures:
         print(f"no bench has kept its figures in {FOLDER} yet: run bash run.sh bench", file=sys.stderr)
         return 1

@@ -93,6 +93,7 @@ class Route:
     note: str = ""
     handler: bool = False  # the relay changes a field of every message (path d)
     says_ready: bool = True  # the relay says "ready TOPIC", TOPIC being where to publish
+    kinds: tuple[str, ...] = ("twist", "image")  # the messages it is run with
 
     def argv(self, kind: str) -> Optional[list[str]]:
         return None if self.relay is None else [a.replace("{kind}", kind) for a in self.relay]
@@ -121,6 +122,10 @@ def main_routes(rospy_only: bool = False) -> list[Route]:
                       "a wrapping node's reuse.publish relay (bench/nodes/ipyros_node.py)")
         handler = Route("d", "ipyros node, handler", ipyros_node("handler"),
                         "new.subscribe(handler) + write() (bench/nodes/ipyros_node.py)", handler=True)
+        guarded = Route("g", "ipyros wrapping node, reuse, guarded", ipyros_node("guarded"),
+                        "(c) with a guard on its output: limits on two fields, NaN and infinities checked "
+                        "(issue 40)", kinds=("twist",))
+        return [Route("a", "no relay", says_ready=False), topic_tools_relay(), reuse, guarded, handler]
     return [Route("a", "no relay", says_ready=False), topic_tools_relay(), reuse, handler]
 
 
@@ -567,7 +572,7 @@ def measure(master: Master, cell: Cell, workdir: Path, quiet_below: float, attem
 
 def run_all(routes: list[Route], load_list: list[Load], repeats: int, log: Callable[[str], None],
             quiet_below: float = 0.25, attempts: int = 2) -> list[Cell]:
-    cells = [Cell(load, route) for load in load_list for route in routes]
+    cells = [Cell(load, route) for load in load_list for route in routes if load.kind in route.kinds]
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-") as tmp:
         master = Master(Path(tmp))
         try:
@@ -618,6 +623,15 @@ def check_targets(cells: list[Cell]) -> list[Figure]:
             if cell:
                 out.append(Figure(ROS, f"{label} lost at start, ({cell.route.key}), worst of {len(cell.runs)}",
                                   cell.start_lost, "msgs", most=0))
+        g = by.get((kind, "g"))
+        if c and g:  # issue 40: what a guard costs a relay, beside the same relay unguarded
+            out += [Figure(ROS, f"{label} p50, guarded relay (g)", g.p50, "ms", "reuse relay (c)", c.p50),
+                    Figure(ROS, f"{label} relay CPU µs/msg flat out, guarded relay (g)", g.flat_cpu_us, "µs",
+                           "reuse relay (c)", c.flat_cpu_us),
+                    Figure(ROS, f"{label} CPU the guard adds to a relay, per message", g.flat_cpu_us - c.flat_cpu_us,
+                           "µs", most=15.0),
+                    Figure(ROS, f"{label} flat out, guarded relay (g)", g.per_s, "msg/s", least=10000.0),
+                    Figure(ROS, f"{label} lost at start, (g), worst of {len(g.runs)}", g.start_lost, "msgs", most=0)]
     return out
 
 

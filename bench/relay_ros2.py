@@ -84,6 +84,8 @@ PATHS = [
           [sys.executable, str(NODES / "ipyros_node.py"), "handler", TOPIC_IN, TOPIC_OUT, "{kind}"]),
     Path_("e", "ipyros wrapping node, reuse, basenode it started", _REUSE, started_by_ipyros=True),
     Path_("f", "no relay, both ends with ipyros's profile", None, started_by_ipyros=True, listener_profiled=True),
+    Path_("g", "ipyros wrapping node, reuse, guarded",
+          [sys.executable, str(NODES / "ipyros_node.py"), "guarded", TOPIC_IN, TOPIC_OUT, "{kind}"]),
 ]
 
 
@@ -228,6 +230,12 @@ def targets(results: dict[tuple[str, str], Run], loads: list[Load]) -> list[Figu
         if load.key == "image" and e is not None:
             floor = f"one shared-memory hop (f) takes {f.p50:.3f} ms, (e) makes two" if f is not None else ""
             out.append(Figure(ROS, f"{load.label} p50, wrapped camera (e)", e.p50, "ms", most=5.0, note=floor))
+        g = results.get((load.key, "g"))
+        if c is not None and g is not None and g.p50 is not None:  # issue 40: a guard's cost, beside (c)
+            out += [Figure(ROS, f"{load.label} p50, guarded relay (g)", g.p50, "ms", "reuse relay (c)", c.p50),
+                    Figure(ROS, f"{load.label} flat out, guarded relay (g)", g.flat_per_s, "msg/s", "reuse relay (c)",
+                           c.flat_per_s),
+                    Figure(ROS, f"{load.label} lost at start, (g)", g.start_lost, "msgs", most=0)]
         if load.reliability == "best_effort" and "e" in lost:
             out.append(Figure(ROS, f"{load.label} lost, wrapped camera (e), start included", lost["e"],
                               "msgs", "direct (a)", lost.get("a"), most=0))

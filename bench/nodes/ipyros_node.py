@@ -1,6 +1,6 @@
 """Paths (c) and (d) of the relay bench through ipyros itself: a DSL node in a process of its own.
 
-    ipyros_node.py reuse|handler IN OUT KIND
+    ipyros_node.py reuse|guarded|handler IN OUT KIND
 
 ``reuse``: a wrapping node declared as issue 3's session declares one::
 
@@ -14,6 +14,10 @@ the internal name to OUT unchanged, without deserializing. The basenode
 (``ipyros_bench/idle``, next to this file) publishes nothing: the bench's publisher
 publishes on the internal name in its place, so that the bench drives the stream.
 IN is not used.
+
+``guarded``: the wrapping node of ``reuse`` with a guard on OUT (limits on two fields, NaN and
+infinities checked, no stop on silence: the bench's pauses are not a robot's), as a session guards
+a wrapped driver's output: the relay reads, checks and writes every message.
 
 ``handler``: a plain node whose handler changes one field and writes the message on::
 
@@ -31,6 +35,8 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+#: Path (g)'s guard: the bench's messages are within them (the relay's cost is checking, not clamping).
+GUARD_LIMITS = {"twist.linear.x": (-1.0, 1.0), "twist.angular.z": (-2.0, 2.0)}
 # The stand-in basenode's package, found the way rosrun would find it.
 os.environ["ROS_PACKAGE_PATH"] = os.pathsep.join(p for p in (str(HERE), os.environ.get("ROS_PACKAGE_PATH")) if p)
 
@@ -40,10 +46,12 @@ from ipyros.dsl import rosNode  # noqa: E402
 from ipyros.core.plan import internal_name  # noqa: E402
 
 
-def wrapping_node(target: str, cls: type) -> tuple[rosNode, str]:
+def wrapping_node(target: str, cls: type, guarded: bool = False) -> tuple[rosNode, str]:
     node = rosNode("bench_wrap")
     node.baseNode("idle").basePackage("ipyros_bench")
     node.reuse.publish(topic=target, type=cls)
+    if guarded:
+        node.guard(target, limits=GUARD_LIMITS, grace=0.2)
     node.create()
     return node, internal_name(node.model(), node.resolve(target))
 
@@ -64,8 +72,8 @@ def handler_node(source: str, target: str, cls: type, kind: str) -> tuple[rosNod
 def main() -> None:
     mode, source, target, kind = sys.argv[1:5]
     cls = wire.message_class(kind)
-    if mode == "reuse":
-        node, publish_on = wrapping_node(target, cls)
+    if mode in ("reuse", "guarded"):
+        node, publish_on = wrapping_node(target, cls, guarded=mode == "guarded")
     else:
         node, publish_on = handler_node(source, target, cls, kind)
     nodeio.say("ready", publish_on)

@@ -1,10 +1,11 @@
 """Paths (c) and (d) through ipyros itself, on ROS 2: a DSL node in a process of its own.
 
-    ipyros_node.py reuse|handler IN OUT KIND
+    ipyros_node.py reuse|guarded|handler IN OUT KIND
 
 ``reuse``: a wrapping node around ``idle.py`` (which publishes nothing: the bench's
 publisher publishes on the wrapper's internal name in its place), ``reuse.publish(OUT)``:
-the relay forwards bytes. ``handler``: ``new.subscribe(IN, handler)`` that changes one
+the relay forwards bytes. ``guarded``: the same with a guard on OUT (limits on two fields, NaN and
+infinities checked, no stop on silence): the relay reads, checks and writes every message. ``handler``: ``new.subscribe(IN, handler)`` that changes one
 field and ``write``s the message on OUT. Says ``ready TOPIC``, TOPIC being where to publish.
 """
 
@@ -23,10 +24,12 @@ from ipyros.core.plan import internal_name  # noqa: E402
 
 mode, source, target, kind = sys.argv[1:5]
 cls = wire2.message_class(kind)
-if mode == "reuse":
+if mode in ("reuse", "guarded"):
     node = rosNode("bench_wrap")
     node.baseNode(str(Path(__file__).with_name("idle.py")))
     node.reuse.publish(target, type=cls)
+    if mode == "guarded":
+        node.guard(target, limits={"twist.linear.x": (-1.0, 1.0), "twist.angular.z": (-2.0, 2.0)}, grace=0.2)
     node.create()
     publish_on = internal_name(node.model(), node.resolve(target))
 else:

@@ -1,0 +1,193 @@
+"""Guard benchmark: how soon the stop message follows silence, and that hostile values never reach the robot.
+
+    python -m bench.guard            # 100 trips in each state, 100,000 hostile messages (about 4 minutes)
+    python -m bench.guard --quick    # 20 trips, 20,000 messages
+
+Run with the venv of either ROS (``bash run.sh bench`` runs it in both). Two processes of the
+bench's own, on a rosmaster of its own (ROS 1) or a DDS domain of its own (ROS 2):
+
+* the *session* (``bench/guard_nodes/session.py``): an ipyros node whose ``TwistStamped`` output has
+  a guard (limits on ``linear.x`` and ``angular.z``, stop on ``TIMEOUT`` s of silence); the guard's
+  own process (its sentinel) is the session's child, as at the prompt;
+* the *robot* (``bench/guard_nodes/robot.py``): a plain rospy or rclpy subscriber of that output,
+  which notes when each message came and whether it breaks the rules.
+
+**Silence to the stop message**: the session drives (20 commands at 50 Hz, each stamped with the
+wall clock as it is written), then falls silent; the figure is the time from the last command's
+stamp to the first stop message at the robot, over ``--trips`` trips, p50 and p99, in three states
+of the session: *idle* (at the prompt, waiting), *busy* (pure Python holding the GIL for a second,
+a long cell) and *frozen* (SIGSTOP, as Ctrl-Z or a debugger leaves it; SIGCONT once the stop came).
+Targets (issue 40): p99 within the timeout + 20 ms on ROS 1, + 50 ms on ROS 2.
+
+**Hostile values**: the session writes ``--hostile`` messages flat out whose six numbers are drawn
+from NaN, infinities, +-1e308, 2**63, -0.0, denormals, just outside the limits and the wrong sign;
+the robot counts what it got and what broke the rules: the target is 0. The rate the guarded
+writes went out at is shown.
+
+The guard's cost per message against the unguarded relay is path (g) of the relay benches
+(``bench/relay.py``, ``bench/relay_ros2.py``), beside path (c) in the same run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import signal
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Optional
+
+from bench.figures import Figure, keep, machine, table, target_lines
+from bench.relay import BenchError, Child, Master, stop_cleanly_on_sigterm, wait_until
+
+HERE = Path(__file__).resolve().parent
+NODES = HERE / "guard_nodes"
+RESULTS = HERE / "results"
+TOPIC = "/bench/guarded_cmd"
+TIMEOUT = 0.25  # s of silence before the stop message
+DRIVE = (20, 50.0)  # commands a trip, and their rate (Hz)
+BUSY = 1.0  # s the session computes after its last command, in the busy state
+STATES = ("idle", "busy", "frozen")
+#: What each ROS's p99 may add to the timeout (issue 40), ms.
+MARGIN_MS = {"ROS 1": 20.0, "ROS 2": 50.0}
+
+
+def percentile(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(len(ordered) * q))]
+
+
+def gone(pid: int, timeout: float) -> bool:
+    """Whether process ``pid`` (not a child of ours: the sentinel is the session's) has exited within ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def trips(session: Child, robot: Child, state: str, count: int) -> list[float]:
+    """``count`` trips of the session in ``state``: the ms from the last command's stamp to the first stop."""
+    pid = session.proc.pid
+    delays = []
+    for _ in range(count):
+        busy = f" {BUSY}" if state == "busy" else ""
+        session.send(f"drive {DRIVE[0]} {DRIVE[1]}{busy}")
+        session.expect("silent", 30)
+        if state == "frozen":
+            os.kill(pid, signal.SIGSTOP)
+        try:
+            answer = wait_until(lambda: (lambda a: a if a != "none" else None)(robot.ask("trip")), 10 + TIMEOUT,
+                                f"the stop message after silence ({state})", 0.01)
+        finally:
+            if state == "frozen":
+                os.kill(pid, signal.SIGCONT)
+        if state == "busy":
+            session.expect("spun", 30)
+        last, stop = (float(word) for word in answer.split())
+        delays.append((stop - last) * 1000.0)
+    return delays
+
+
+def run(ros: str, env: dict[str, str], workdir: Path, count: int, hostile: int) -> tuple[dict[str, list[float]], dict]:
+    procs: list[Child] = []
+    sentinel: Optional[int] = None
+    try:
+        robot = Child("robot", [sys.executable, str(NODES / "robot.py"), TOPIC], env, workdir)
+        procs.append(robot)
+        robot.expect("ready", 60)
+        session = Child("session", [sys.executable, str(NODES / "session.py"), TOPIC, str(TIMEOUT)], env, workdir)
+        procs.append(session)
+        sentinel = int(session.expect("ready", 90))
+        wait_until(lambda: int(robot.ask("publishers")) >= 2, 30, "the robot to hear the session and its guard", 0.05)
+        delays = {}
+        for state in STATES:
+            trips(session, robot, state, 2)  # warm-up: the first connection, the first stop
+            delays[state] = trips(session, robot, state, count)
+            print(f"  {ros} {state:6}: silence to stop p50 {statistics.median(delays[state]):.1f} ms, "
+                  f"p99 {percentile(delays[state], 0.99):.1f} ms (timeout {TIMEOUT * 1000:.0f} ms)", flush=True)
+        before, _ = (int(w) for w in robot.ask("tally").split())
+        session.send(f"hostile {hostile}")
+        wrote, seconds = session.expect("wrote", 600).split()
+        wait_until(lambda: int(robot.ask("tally").split()[0]) - before >= hostile, 30, "the hostile messages", 0.1) \
+            if ros == "ROS 1" else time.sleep(2.0)  # ROS 2 keeps the last 1000: some may be overtaken
+        received, outside = (int(w) for w in robot.ask("tally").split())
+        hostile_run = {"sent": int(wrote), "received": received - before, "outside": outside,
+                       "per_s": int(wrote) / float(seconds)}
+        print(f"  {ros} hostile: {hostile_run}", flush=True)
+        return delays, hostile_run
+    finally:
+        for proc in reversed(procs):
+            proc.stop()
+        if sentinel is not None and not gone(sentinel, 15.0):  # it holds the stop for its grace, then ends
+            os.kill(sentinel, signal.SIGKILL)
+            print(f"bench: the guard's process {sentinel} outlived its grace (killed)", file=sys.stderr)
+
+
+def figures(ros: str, delays: dict[str, list[float]], hostile_run: dict) -> list[Figure]:
+    most = TIMEOUT * 1000 + MARGIN_MS[ros]
+    out = []
+    for state, values in delays.items():
+        out += [Figure(ros, f"guard: silence to the stop message, session {state}, p50 of {len(values)}",
+                       statistics.median(values), "ms"),
+                Figure(ros, f"guard: silence to the stop message, session {state}, p99 of {len(values)}",
+                       percentile(values, 0.99), "ms", most=most,
+                       note=f"timeout {TIMEOUT * 1000:.0f} ms + {MARGIN_MS[ros]:.0f} ms")]
+    out += [Figure(ros, f"guard: hostile messages at the robot outside the rules, of {hostile_run['received']:,}",
+                   hostile_run["outside"], "msgs", most=0),
+            Figure(ros, "guard: hostile messages written through it, flat out", hostile_run["per_s"], "msg/s")]
+    return out
+
+
+def main(argv: Optional[list[str]] = None) -> int:
+    stop_cleanly_on_sigterm()
+    parser = argparse.ArgumentParser(prog="python -m bench.guard", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="20 trips a state, 20,000 hostile messages")
+    parser.add_argument("--trips", type=int, default=None)
+    parser.add_argument("--hostile", type=int, default=None)
+    args, _ = parser.parse_known_args(argv)  # `bash run.sh bench` passes the other benches' options too
+    count = args.trips or (20 if args.quick else 100)
+    hostile = args.hostile or (20000 if args.quick else 100000)
+    ros = "ROS 1" if importlib.util.find_spec("rospy") else "ROS 2"
+    began = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix="ipyros-bench-guard-") as tmp:
+        workdir = Path(tmp)
+        master = None
+        try:
+            if ros == "ROS 1":
+                master = Master(workdir)
+                env = dict(master.env)
+            else:
+                from bench.relay_ros2 import environment
+                env = {**environment(), "IPYROS_ROS": "2", "ROS_HOME": tmp, "ROS_LOG_DIR": str(workdir / "log")}
+            env["PYTHONPATH"] = os.pathsep.join(p for p in (str(HERE.parent), env.get("PYTHONPATH")) if p)
+            delays, hostile_run = run(ros, env, workdir, count, hostile)
+        except BenchError as error:
+            print(f"bench: {error}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            print("guard bench interrupted", file=sys.stderr)
+            return 130
+        finally:
+            if master is not None:
+                master.stop()
+    checks = figures(ros, delays, hostile_run)
+    text = (f"Machine: {machine(ros)}; {count} trips a state, timeout {TIMEOUT * 1000:.0f} ms; "
+            f"{hostile_run['sent']:,} hostile messages.\n\n{table(checks)}\n\n" + "\n".join(target_lines(checks))
+            + f"\n\nWhole run: {time.monotonic() - began:.0f} s.\n")
+    keep(f"{ros.lower().replace(' ', '')}_guard", checks)
+    print(text)
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / f"guard_{ros.lower().replace(' ', '')}.md").write_text(text)
+    return int(any(f.passed is False for f in checks))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
