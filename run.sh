@@ -5,10 +5,11 @@
 #   bash run.sh ipython   the same without the demo robot
 #   bash run.sh notebook  the notebooks in Jupyter (installs Jupyter into the venv the first time)
 #   bash run.sh test      install what is missing, then run the whole test suite: the unit layer (no ROS),
-#                         then tests/both + tests/ros1 on ROS 1, then tests/both + tests/ros2 on ROS 2
+#                         the guide built with warnings as errors, then tests/both + tests/ros1 on ROS 1, then tests/both + tests/ros2 on ROS 2
 #                         (rclpy from PyPI, in a venv of its own); each is run and reported, whatever
 #                         the one before it did
 #   bash run.sh unit      the unit layer alone, in a venv without ROS (seconds)
+#   bash run.sh docs      the guide (docs/), built by Sphinx with warnings as errors into docs/_build/html
 #   bash run.sh test-ros1 the ROS 1 layers alone;  bash run.sh test-ros2  the ROS 2 layers alone
 #   bash run.sh ros2      the same as bash run.sh, on ROS 2 (rclpy from PyPI, no ROS from apt), in
 #                         the DDS domain of ROS_DOMAIN_ID (0 if unset)
@@ -83,9 +84,14 @@ unit_venv() {
   fi
   local stamp0="$venv0/.ipyros-installed"
   if [[ ! -f "$stamp0" || "$here/pyproject.toml" -nt "$stamp0" ]]; then
-    "$venv0/bin/pip" install -q --disable-pip-version-check -e "$here[unit]" >&2
+    "$venv0/bin/pip" install -q --disable-pip-version-check -e "$here[unit,docs]" >&2
     touch "$stamp0"
   fi
+}
+
+# The guide, with every Sphinx warning an error (a broken link, a magic's help that does not parse).
+build_docs() {
+  "$venv0/bin/python" -m sphinx -W --keep-going -q -b html "$here/docs" "$here/docs/_build/html"
 }
 
 # Runs one layer of the suite and notes how it ended, so that every layer runs and is reported.
@@ -157,11 +163,13 @@ case "$cmd" in
             unit_venv
             ros2_venv
             layer "unit (no ROS)" "$venv0/bin/python" -m pytest -q tests/unit
+            layer "guide (sphinx -W)" build_docs
             # One after the other: side by side on two cores the load made timing-bound tests fail.
             layer "ROS 1" "$venv/bin/python" -m pytest --durations=10 tests/both tests/ros1
             layer "ROS 2" "$venv2/bin/python" -m pytest --durations=10 tests/both tests/ros2
             report ;;
   unit)     cd "$here" && unit_venv && exec "$venv0/bin/python" -m pytest tests/unit "$@" ;;
+  docs)     cd "$here" && unit_venv && build_docs && echo "the guide: $here/docs/_build/html/index.html" ;;
   test-ros1) cd "$here" && exec "$venv/bin/python" -m pytest tests/both tests/ros1 "$@" ;;
   test-ros2) cd "$here" && ros2_venv && exec "$venv2/bin/python" -m pytest tests/both tests/ros2 "$@" ;;
   bench)    # ROS 1's benchmarks, then ROS 2's in its venv, then one table of every figure beside its anchor
@@ -171,6 +179,6 @@ case "$cmd" in
             ros2_venv && "$venv2/bin/python" -m bench "$@" || status=$?
             "$venv/bin/python" -m bench.figures || status=$?
             exit "$status" ;;
-  *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|unit|test-ros1|test-ros2|bench] [args...]" >&2
+  *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|unit|docs|test-ros1|test-ros2|bench] [args...]" >&2
      exit 2 ;;
 esac
