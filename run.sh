@@ -58,7 +58,8 @@ venv2="$here/.venv-ros2"
 ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs ros-rcl-interfaces
                ros-action-msgs ros-test-msgs  # actions: test_msgs/action/Fibonacci serves the tests and the README
                rosbags  # rosbags: ROS 2 bags (%record, baseBag); rosbag2 is not on PyPI
-               catkin_pkg)  # build_messages: rosidl_adapter reads .msg files with it
+               catkin_pkg  # build_messages: rosidl_adapter reads .msg files with it
+               colcon-common-extensions)  # builds the ament_python package nd.export(DIR) writes
 ros2_venv() {
   if ! /usr/bin/python3 -c "import ensurepip" 2>/dev/null; then  # Debian splits venv support out
     echo "run.sh: installing python3-venv" >&2
@@ -69,7 +70,7 @@ ros2_venv() {
     /usr/bin/python3 -m venv "$venv2"
   fi
   local stamp2="$venv2/.ipyros-installed"
-  if [[ ! -f "$stamp2" || "$here/pyproject.toml" -nt "$stamp2" ]]; then
+  if [[ ! -f "$stamp2" || "$here/pyproject.toml" -nt "$stamp2" || "$here/run.sh" -nt "$stamp2" ]]; then
     echo "run.sh: installing ROS 2 (rclpy, from PyPI) into $venv2" >&2
     "$venv2/bin/pip" install -q --disable-pip-version-check "${ros2_packages[@]}" -e "$here[test]" >&2
     touch "$stamp2"

@@ -1,4 +1,4 @@
-"""Export a DSL node to run without ipyros: one script, or (ROS 1) a ROS package with a launch file.
+"""Export a DSL node to run without ipyros: one script, or a ROS package with a launch file.
 
 The script walks the same plan the runtime opens (:func:`ipyros.core.plan.plan`), so the
 script and the live node cannot disagree on wrapping: publishers, subscribers with the
@@ -15,16 +15,19 @@ asks the session's backend: ``backend.export_flavour()``).
 A wrapping node's basenode runs remapped as ipyros runs it
 (:func:`ipyros.core.remapping.basenode_remaps`): started and stopped by the script itself in
 the one-file form (``nd.export("node.py")``), or by roslaunch next to the node in the
-package form (``nd.export("my_node_pkg")``).
+package form (``nd.export("my_node_pkg")``: a catkin package on ROS 1, an ament_python package
+that colcon builds on ROS 2).
 """
 
 from __future__ import annotations
 
 import ast
 import dataclasses
+import getpass
 import os
 import re
 import types
+import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any, Callable, Optional
 
@@ -37,7 +40,8 @@ from ..core.slots import call_arity
 from .atomic import write_atomic
 from .kept import KeptNode
 
-__all__ = ["ExportWarning", "Script", "docstring", "export"]
+__all__ = ["ExportWarning", "Script", "check_package_name", "docstring", "export", "package_xml", "xml_comment",
+           "xml_text"]
 
 #: How a script starts and stops its basenode: plain Python, the same for rospy and rclpy.
 BASENODE_FUNCTIONS = '''
@@ -380,15 +384,72 @@ def _inside(directory: Path, name: str) -> bool:
         os.path.realpath(target).startswith(os.path.realpath(directory) + os.sep)
 
 
+# REP 144: lower case letters, digits and single underscores, starting with a letter.
+_PACKAGE_NAME = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
+
+
+def check_package_name(name: str) -> str:
+    """``name`` if it is a valid ROS package name (REP 144), else a one-line :class:`IpyrosError`."""
+    if len(name) < 2 or not _PACKAGE_NAME.fullmatch(name):
+        raise IpyrosError(f"{name!r} is not a valid ROS package name (lower case letters, digits and single "
+                          "underscores, starting with a letter): export to a directory named like my_robot_node")
+    return name
+
+
+def maintainer() -> tuple[str, str]:
+    """Who maintains an exported package: the user, with catkin_create_pkg's placeholder address (``user@todo.todo``)."""
+    try:
+        user = getpass.getuser()
+    except (KeyError, OSError):  # no name for this uid (e.g. in a container)
+        user = "ipyros"
+    return user, re.sub(r"[^-a-zA-Z0-9_%+]", "_", user) + "@todo.todo"
+
+
+def package_xml(model: NodeModel, package: str, description: str, depends: list[str], files: Any, mark_text: str,
+                *, format: str, buildtool: Optional[str] = None, build_type: Optional[str] = None) -> str:
+    """package.xml, written by an XML library (every name escaped), with the comment that marks it as ipyros's
+    (listing the files the export wrote: a later export replaces those, and only those)."""
+    user, email = maintainer()
+    root = ET.Element("package", format=format)
+    for tag, text in (("name", package), ("version", "0.0.0"), ("description", description + ".")):
+        ET.SubElement(root, tag).text = text
+    ET.SubElement(root, "maintainer", email=email).text = user
+    ET.SubElement(root, "license").text = "TODO"
+    if buildtool:
+        ET.SubElement(root, "buildtool_depend").text = buildtool
+    for dependency in depends:
+        ET.SubElement(root, "exec_depend").text = dependency
+    if build_type:
+        ET.SubElement(ET.SubElement(root, "export"), "build_type").text = build_type
+    ET.indent(root, space="  ")
+    mark = ET.Comment(f" {mark_text} from the DSL node {planning.node_fullname(model)}.\n"
+                      "     Exporting again replaces the package: this file and the files listed here (and only these).\n"
+                      f"     files: {' '.join(sorted(files))}\n")
+    return ('<?xml version="1.0"?>\n' + ET.tostring(mark, encoding="unicode") + "\n"
+            + ET.tostring(root, encoding="unicode") + "\n")
+
+
+def xml_comment(*lines: str) -> ET.Element:
+    """A comment of a launch file's top level, one line each (``--`` may not stand in an XML comment)."""
+    return ET.Comment(" " + "\n       ".join(lines).replace("--", "- -") + " ")
+
+
+def xml_text(root: ET.Element) -> str:
+    """``root`` as an indented XML file."""
+    ET.indent(root, space="  ")
+    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
 def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Optional[dict]) -> Path:
     """Write the package ``directory`` (named after it): the flavour says which files, this writes them."""
-    package = flavour.check_package_name(directory.name)
+    package = check_package_name(directory.name)
     model = node.model()
-    script_path = directory / "scripts" / model.name
+    script_name, script_mode = flavour.script_file(package, model.name)
+    script_path = directory / script_name
     script = Script(node, flavour, script_path, namespace, package=package)
     text = script.render()
     compile(text, str(script_path), "exec")  # a generated script that does not compile is ipyros's bug
-    files = {f"scripts/{model.name}": (text, 0o755), **flavour.package_files(script, package)}
+    files = {script_name: (text, script_mode), **flavour.package_files(script, package)}
     stale = _previous_export(directory) - set(files)
     try:
         for folder in {str(Path(name).parent) for name in files} - {"."}:
@@ -414,13 +475,22 @@ def export(node: KeptNode, path: "str | os.PathLike[str]", flavour: Any, namespa
     ``path`` ending in ``.py``: one standalone script of that ROS (rospy or rclpy)
     that does everything, for a wrapping node starting and stopping its basenode itself.
 
-    Any other ``path`` (ROS 1): a directory, made a ROS package named after it (drop it into
-    a catkin workspace's ``src/`` or put its parent on ``ROS_PACKAGE_PATH``)::
+    Any other ``path``: a directory, made a ROS package named after it (drop it into a
+    workspace's ``src/``). ROS 1, a catkin package (or put its parent on ``ROS_PACKAGE_PATH``)::
 
         package.xml              exec_depend on rospy, the message packages, the basenode's
         CMakeLists.txt           catkin_make installs the script and the launch file
         scripts/<node>           the node: rosrun <package> <node>
         launch/<node>.launch     the node with its params, and its basenode with its remaps
+
+    ROS 2, an ament_python package that ``colcon build`` builds::
+
+        package.xml              format 3: exec_depend on rclpy, the message packages, the basenode's
+        setup.py, setup.cfg      the console script <node> (ros2 run <package> <node>)
+        resource/<package>       the ament index's marker
+        <package>/<node>.py      the node, a module with main()
+        launch/<node>.launch.xml the node with its params file, and its basenode with its remaps
+        config/<node>.yaml       the node's parameters
 
     An existing directory is replaced only if it is an earlier export (its package.xml
     says so, and it holds nothing else): nobody's own package is overwritten.

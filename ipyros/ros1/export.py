@@ -9,9 +9,7 @@ package is imported here: this writes text.
 
 from __future__ import annotations
 
-import getpass
 import json
-import re
 import shlex
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -21,6 +19,7 @@ import yaml
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError
+from ..files.export import package_xml, xml_comment, xml_text
 from .nodes import command, list_packages
 
 __all__ = ["RospyScript"]
@@ -282,8 +281,9 @@ class RospyScript:
 
     # -- the package form -----------------------------------------------------------------------
     @staticmethod
-    def check_package_name(name: str) -> str:
-        return _check_package_name(name)
+    def script_file(package: str, node: str) -> tuple[str, int]:
+        """Where the package holds the node, and its mode: an executable script (catkin installs it)."""
+        return f"scripts/{node}", 0o755
 
     @staticmethod
     def package_files(script: Any, package: str) -> dict[str, tuple[str, int]]:
@@ -296,9 +296,6 @@ class RospyScript:
     def manifest(script: Any, package: str, files: Iterable[str], mark: str) -> str:
         return _package_xml(script, package, files, mark)
 
-
-# REP 144: lower case letters, digits and single underscores, starting with a letter.
-_PACKAGE_NAME = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
 
 _CMAKE = """\
 cmake_minimum_required(VERSION 3.0.2)
@@ -315,14 +312,6 @@ install(DIRECTORY launch
 """
 
 
-def _check_package_name(name: str) -> str:
-    """``name`` if it is a valid ROS package name (REP 144), else a one-line :class:`IpyrosError`."""
-    if len(name) < 2 or not _PACKAGE_NAME.fullmatch(name):
-        raise IpyrosError(f"{name!r} is not a valid ROS package name (lower case letters, digits and single "
-                          "underscores, starting with a letter): export to a directory named like my_robot_node")
-    return name
-
-
 def _dependencies(script: Any, package: str) -> list[str]:
     """The ROS packages the exported node needs at run time: rospy, the message and service packages
     it imports (``pkg.msg``/``pkg.srv``), other imports that are ROS packages, and the basenode's."""
@@ -337,36 +326,13 @@ def _dependencies(script: Any, package: str) -> list[str]:
     return sorted(needs - {package})
 
 
-def _maintainer() -> tuple[str, str]:
-    """Who maintains the package: the user, with catkin_create_pkg's placeholder address (``user@todo.todo``)."""
-    try:
-        user = getpass.getuser()
-    except (KeyError, OSError):  # no name for this uid (e.g. in a container)
-        user = "ipyros"
-    return user, re.sub(r"[^-a-zA-Z0-9_%+]", "_", user) + "@todo.todo"
-
-
 def _package_xml(script: Any, package: str, files: Iterable[str], mark_text: str) -> str:
-    """package.xml, written by an XML library (every name escaped), with the comment that marks it as ipyros's."""
     model = script.model
-    user, email = _maintainer()
     what = f"{model.name}: a rospy node exported by ipyros from the DSL node {planning.node_fullname(model)}"
     if model.base is not None:
         what += f", and a launch file that starts it next to its basenode {model.base.package}/{model.base.executable}"
-    root = ET.Element("package", format="2")
-    for tag, text in (("name", package), ("version", "0.0.0"), ("description", what + ".")):
-        ET.SubElement(root, tag).text = text
-    ET.SubElement(root, "maintainer", email=email).text = user
-    ET.SubElement(root, "license").text = "TODO"
-    ET.SubElement(root, "buildtool_depend").text = "catkin"
-    for dependency in _dependencies(script, package):
-        ET.SubElement(root, "exec_depend").text = dependency
-    ET.indent(root, space="  ")
-    mark = ET.Comment(f" {mark_text} from the DSL node {planning.node_fullname(model)}.\n"
-                      "     Exporting again replaces the package: this file and the files listed here (and only these).\n"
-                      f"     files: {' '.join(sorted(files))}\n")
-    return ('<?xml version="1.0"?>\n' + ET.tostring(mark, encoding="unicode") + "\n"
-            + ET.tostring(root, encoding="unicode") + "\n")
+    return package_xml(model, package, what, _dependencies(script, package), files, mark_text, format="2",
+                       buildtool="catkin")
 
 
 def _add_params(node: ET.Element, params: dict[str, Any]) -> None:
@@ -399,14 +365,14 @@ def _launch_xml(script: Any, package: str) -> str:
     model = script.model
     root = ET.Element("launch")
     wrapping = model.base is not None
-    root.append(_comment(f"{model.name}, exported by ipyros from the DSL node {planning.node_fullname(model)}.",
+    root.append(xml_comment(f"{model.name}, exported by ipyros from the DSL node {planning.node_fullname(model)}.",
                          f"roslaunch {package} {model.name}.launch starts it" +
                          (" and its basenode, which stops with it (required), as under ipyros." if wrapping else ".")))
     node = _node_element(root, package, model.name, model.name, model.namespace,
                          **({"required": "true"} if wrapping else {}))
     _add_params(node, model.params)
     if model.base is None:
-        return _xml(root)
+        return xml_text(root)
     base = script.placed_base()
     if not base.package or not base.executable:
         raise IpyrosError(f"{model.name}'s basenode has no package, and roslaunch starts nodes by package: "
@@ -419,7 +385,7 @@ def _launch_xml(script: Any, package: str) -> str:
                   ", as ipyros wrapped it there.",
                   "Start the rest of that launch file separately, without this node: roslaunch",
                   "cannot leave one node of an included file out."]
-    root.append(_comment(*about))
+    root.append(xml_comment(*about))
     bad = next((arg for arg in base.args if "$(" in arg), None)
     if bad is not None:
         raise IpyrosError(f"basenode argument {bad!r} holds '$(', which roslaunch would expand: "
@@ -431,16 +397,4 @@ def _launch_xml(script: Any, package: str) -> str:
     for source, target in base.remaps.items():
         ET.SubElement(base_node, "remap", {"from": source, "to": target})
     _add_params(base_node, base.params)
-    return _xml(root)
-
-
-def _comment(*lines: str) -> ET.Element:
-    """A comment of the launch file's top level, one line each (``--`` may not stand in a comment)."""
-    return ET.Comment(" " + "\n       ".join(lines).replace("--", "- -") + " ")
-
-
-def _xml(root: ET.Element) -> str:
-    ET.indent(root, space="  ")
-    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-
-
+    return xml_text(root)

@@ -3,8 +3,8 @@
 The flavour that :func:`ipyros.files.export.export` writes with (``backend.export_flavour()``):
 an rclpy node (``#!`` this Python, which has rclpy), its endpoints with the QoS they were
 declared with, byte relays (``raw=True``), service relays that call out from a caller node
-of their own, and the basenode started with ``--ros-args``. A ROS 2 package (ament_python)
-is not made yet: the package form is refused in one line. No ROS package is imported here.
+of their own, and the basenode started with ``--ros-args``; or the same node as the module of an
+ament_python package (:mod:`.package`). No ROS package is imported here.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..core import plan as planning
-from ..core.errors import IpyrosError
+from . import package as ament
 from .nodes import command
 
 __all__ = ["RclpyScript"]
@@ -202,7 +202,12 @@ class RclpyScript:
     def about(script: Any) -> str:
         model = script.model
         lines = [f"{model.name}: an rclpy node exported by ipyros from the DSL node {planning.node_fullname(model)}.",
-                 "", f"It needs no ipyros: ./{Path(script.path).name} [--ros-args -r from:=to -p param:=value ...]"]
+                 ""]
+        if script.package:
+            return "\n".join(lines + [f"It needs no ipyros: ros2 run {script.package} {model.name}, or ros2 launch "
+                                       f"{script.package} {model.name}.launch.xml"
+                                       + (" (which starts its basenode too)." if model.base is not None else ".")])
+        lines.append(f"It needs no ipyros: ./{Path(script.path).name} [--ros-args -r from:=to -p param:=value ...]")
         if model.base is not None:
             lines.append(f"It runs its basenode {model.base.package or model.base.executable} itself, remapped as "
                          "ipyros ran it, and stops it on exit.")
@@ -308,19 +313,20 @@ class RclpyScript:
             lines.append("    stop_basenode(basenode)")
         return lines + ["    rclpy.try_shutdown()"]
 
-    # -- the package form: not made on ROS 2 yet ---------------------------------------------------
+    # -- the package form: an ament_python package (:mod:`.package`) ------------------------------------
     @staticmethod
-    def check_package_name(name: str) -> str:
-        raise IpyrosError(f"on ROS 2 a node exports to one script: give a path ending in .py, not {name!r} "
-                          "(a ROS 2 package is not made yet)")
+    def script_file(package: str, node: str) -> tuple[str, int]:
+        """Where the package holds the node: a module of the package's Python package, its ``main()`` the
+        console script's entry point."""
+        return f"{package}/{node}.py", 0o644
 
     @staticmethod
     def package_files(script: Any, package: str) -> dict[str, tuple[str, int]]:
-        raise IpyrosError("a ROS 2 package is not made yet; export to a .py script")
+        return ament.package_files(script, package)
 
     @staticmethod
     def manifest(script: Any, package: str, files: Iterable[str], mark: str) -> str:
-        raise IpyrosError("a ROS 2 package is not made yet; export to a .py script")
+        return ament.manifest(script, package, files, mark)
 
 
 def _qos_call(qos: Any, latch: bool = False) -> str:
