@@ -15,7 +15,7 @@ from typing import Any, Iterator, Optional, Union
 
 from .tables import Cell, Column, TextTable
 
-__all__ = ["History", "Interface", "NodeStatus", "Rows", "StatusRow", "Versions"]
+__all__ = ["BagInfo", "BagTopic", "History", "Interface", "NodeStatus", "Rows", "StatusRow", "Versions"]
 
 
 class Rows:
@@ -142,6 +142,47 @@ class Versions(Rows):
         columns = (Column("#", True, True), Column("time", fold=True), Column("handler", fold=True),
                    Column("lines", True, True), Column("first line of its body", fold=True))
         return TextTable(f"versions of the handler of {self.label}", columns, tuple(rows))
+
+
+@dataclass(frozen=True)
+class BagTopic:
+    """One topic of a bag: its name, type and how many messages it holds."""
+
+    topic: str
+    type: str
+    count: int
+
+
+@dataclass(frozen=True)
+class BagInfo(Rows):
+    """What a bag holds, as ``rosbag info`` / ``ros2 bag info`` say it: its topics, start, end and length.
+
+    ``start`` and ``end`` are the first and last message's time (s since the epoch; 0 for an empty
+    bag); ``storage`` says what the file is (``bag`` for ROS 1, ``mcap`` or ``sqlite3`` for rosbag2).
+    """
+
+    path: str
+    storage: str
+    start: float
+    end: float
+    rows: tuple[BagTopic, ...]
+
+    @property
+    def duration(self) -> float:
+        return self.end - self.start
+
+    @property
+    def messages(self) -> int:
+        return sum(row.count for row in self.rows)
+
+    def table(self) -> TextTable:
+        """A row per topic; the title says the storage, the message count, start, end and duration."""
+        span = "" if not self.messages else (
+            f", {time.strftime('%Y-%m-%d %H:%M:%S', time.localtime(self.start))} to "
+            f"{time.strftime('%H:%M:%S', time.localtime(self.end))} ({self.duration:.3f} s)")
+        title = f"bag {self.path} ({self.storage}): {self.messages} messages{span}"
+        rows = tuple((row.topic, row.type, str(row.count)) for row in self.rows)
+        return TextTable(title, (Column("topic"), Column("type"), Column("messages", True)), rows)
 
 
 @dataclass

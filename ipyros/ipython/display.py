@@ -22,7 +22,7 @@ from rich.text import Text
 
 from ..core.graph import GraphSnapshot
 from ..core.qos import from_model as qos_of
-from ..core.records import History, Interface, NodeStatus, Versions
+from ..core.records import History, Interface, NodeStatus, Rows, Versions
 from ..core.tables import Cell, TextTable
 from ..core.text import counted
 from ..dsl import rosNode
@@ -300,10 +300,15 @@ def versions_table(versions: Versions) -> Table:
     return rich_table(versions.table())
 
 
+def rows_table(rows: Rows) -> Table:
+    """Any other record of rows (a bag's topics, ...): the table it says it holds."""
+    return rich_table(rows.table())
+
+
 #: How each record type looks (the most specific class of an object's MRO wins).
 RENDERERS: dict[type, Callable[[Any], Any]] = {
     rosNode: node_table, NodeStatus: status_table, History: history_table, Versions: versions_table,
-    Interface: interface_table, DemoRobot: robot_table, TrialReport: trial_view,
+    Interface: interface_table, DemoRobot: robot_table, TrialReport: trial_view, Rows: rows_table,
 }
 
 

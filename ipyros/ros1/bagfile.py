@@ -12,8 +12,12 @@ from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from ..core.errors import DeclarationError, first_line
+from ..core.records import BagInfo, BagTopic
 
-__all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
+__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_topics", "player_args"]
+
+#: The storages a recording may be written in: a ROS 1 bag file.
+STORAGES = ("bag",)
 
 #: The player run as ``baseBag``'s basenode (a .py file: ipyros runs it with its own Python).
 PLAYER = Path(__file__).resolve().parent / "bag_player.py"
@@ -39,6 +43,21 @@ def bag_topics(path: Path) -> dict[str, str]:
                                "(rosbag record, %record)?") from None
 
 
+def bag_info(path: Path) -> BagInfo:
+    """What the bag at ``path`` holds: topics, types, counts, start and end (as ``rosbag info``)."""
+    rosbag = _rosbag()
+    try:
+        with rosbag.Bag(str(path)) as bag:
+            topics = bag.get_type_and_topic_info().topics
+            rows = tuple(BagTopic(topic, info.msg_type, info.message_count) for topic, info in sorted(topics.items()))
+            empty = not any(row.count for row in rows)
+            return BagInfo(str(path), "bag", 0.0 if empty else bag.get_start_time(),
+                           0.0 if empty else bag.get_end_time(), rows)
+    except Exception as error:  # noqa: BLE001 - rosbag's errors of any kind (a garbage file: UnicodeDecodeError)
+        raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}; is it a ROS 1 bag "
+                               "(rosbag record, %record)?") from None
+
+
 def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[str]], delay: float) -> list[str]:
     """The player's arguments: ``--delay`` lets the wrapping node's subscribers connect after each
     advertise, so that the first messages are not lost."""
@@ -53,8 +72,11 @@ def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[s
 class BagWriter:
     """Messages written to a new bag, from any thread, stamped with the wall clock on arrival."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, storage: Optional[str] = None) -> None:
         rosbag = _rosbag()
+        if storage not in (None, "bag"):
+            raise DeclarationError(f"storage={storage!r}: a ROS 1 recording is a .bag file (MCAP and sqlite3 are "
+                                   "ROS 2's)")
         try:
             self._bag = rosbag.Bag(str(path), "w")
         except (OSError, rosbag.ROSBagException) as error:

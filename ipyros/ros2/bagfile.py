@@ -1,8 +1,10 @@
-"""ROS 2 bags (a folder: sqlite3 storage, CDR messages), through rosbags, a pure-Python bag library.
+"""ROS 2 bags (a folder: MCAP or sqlite3 storage, CDR messages), through rosbags, a pure-Python bag library.
 
-Recording writes the messages' CDR bytes; playing is ``bag_player.py`` (next to this file:
-rclpy and rosbags), run as a basenode and remapped with ``--ros-args`` like any other.
-rosbag2 itself is not on PyPI; rosbags reads and writes the same files.
+Recording writes the messages' CDR bytes, to MCAP by default (rosbag2's own default since Iron),
+to sqlite3 on request; playing is ``bag_player.py`` (next to this file: rclpy and rosbags), run as
+a basenode and remapped with ``--ros-args`` like any other. It plays a rosbag2 folder of either
+storage, a bare ``.mcap`` file and a ROS 1 ``.bag``. rosbag2 itself is not on PyPI; rosbags reads
+and writes the same files.
 """
 
 from __future__ import annotations
@@ -15,8 +17,12 @@ from typing import Any, Optional, Sequence
 
 from ..core.errors import DeclarationError, first_line
 from ..core.msgtypes import type_name
+from ..core.records import BagInfo, BagTopic
 
-__all__ = ["PLAYER", "BagWriter", "bag_topics", "player_args"]
+__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_topics", "player_args"]
+
+#: The storages a recording may be written in; the first is the default.
+STORAGES = ("mcap", "sqlite3")
 
 #: The player run as ``baseBag``'s basenode on ROS 2 (ipyros runs it with its own Python).
 PLAYER = Path(__file__).resolve().parent / "bag_player.py"
@@ -30,9 +36,9 @@ def _rosbags() -> Any:
     return rosbags.rosbag2
 
 
-def bag_topics(path: Path) -> dict[str, str]:
-    """The topics recorded in the bag ``path`` (a rosbag2 folder, or a ROS 1 ``.bag`` file, which the
-    player turns into ROS 2 messages), with their types; a one-line error if it is no bag."""
+def _opened(path: Path) -> Any:
+    """rosbags' reader of the bag ``path``, open: a rosbag2 folder (MCAP or sqlite3), a bare ``.mcap``
+    file, or a ROS 1 ``.bag`` file (which the player turns into ROS 2 messages)."""
     rosbag2 = _rosbags()
     try:
         if path.suffix == ".bag":
@@ -44,8 +50,31 @@ def bag_topics(path: Path) -> dict[str, str]:
         reader.open()
     except Exception as error:  # noqa: BLE001 - rosbags' errors of any kind: not a bag we can read
         raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}") from None
+    return reader
+
+
+def bag_topics(path: Path) -> dict[str, str]:
+    """The topics recorded in the bag ``path``, with their types; a one-line error if it is no bag."""
+    reader = _opened(path)
     try:
         return {c.topic: c.msgtype for c in reader.connections}
+    finally:
+        reader.close()
+
+
+def bag_info(path: Path) -> BagInfo:
+    """What the bag ``path`` holds: topics, types, counts, start and end (as ``ros2 bag info``)."""
+    reader = _opened(path)
+    try:
+        counts: dict[tuple[str, str], int] = {}
+        for c in reader.connections:
+            counts[(c.topic, c.msgtype)] = counts.get((c.topic, c.msgtype), 0) + c.msgcount
+        storage = {".bag": "bag", ".mcap": "mcap"}.get(path.suffix) or \
+            ("mcap" if any(path.glob("*.mcap")) else "sqlite3")  # a rosbag2 folder: its files say which
+        empty = not any(counts.values())
+        return BagInfo(str(path), storage, 0.0 if empty else reader.start_time / 1e9,
+                       0.0 if empty else reader.end_time / 1e9,
+                       tuple(BagTopic(topic, msgtype, count) for (topic, msgtype), count in sorted(counts.items())))
     finally:
         reader.close()
 
@@ -61,16 +90,19 @@ def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[s
 
 
 class BagWriter:
-    """Messages written to a new bag folder, stamped with the wall clock on arrival.
+    """Messages written to a new bag folder (``storage``: mcap, the default, or sqlite3), stamped with the wall
+    clock on arrival.
 
     rosbags' sqlite3 storage may only be used from the thread that opened it: one writer
     thread of its own opens, writes and closes the bag; handlers only queue the bytes
     (so recording never slows a node down either).
     """
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, storage: Optional[str] = None) -> None:
         _rosbags()
-        self.path = path
+        if storage is not None and storage not in STORAGES:
+            raise DeclarationError(f"storage={storage!r}: a ROS 2 bag is written in {' or '.join(STORAGES)}")
+        self.path, self.storage = path, storage or STORAGES[0]
         self.count = 0
         self._queue: "queue.SimpleQueue[Optional[tuple[str, str, bytes, int]]]" = queue.SimpleQueue()
         opened: "queue.SimpleQueue[Optional[BaseException]]" = queue.SimpleQueue()
@@ -82,12 +114,12 @@ class BagWriter:
         self._closed = False
 
     def _write_all(self, opened: "queue.SimpleQueue[Optional[BaseException]]") -> None:
-        from rosbags.rosbag2 import Writer
+        from rosbags.rosbag2 import StoragePlugin, Writer
         from rosbags.typesys import Stores, get_typestore
 
         typestore = get_typestore(Stores.ROS2_JAZZY)  # the common message types, for the bag's metadata
         try:
-            bag = Writer(self.path, version=9)
+            bag = Writer(self.path, version=9, storage_plugin=StoragePlugin[self.storage.upper()])
             bag.open()
         except Exception as error:  # noqa: BLE001 - rosbags' errors: said by the constructor
             opened.put(error)

@@ -26,14 +26,16 @@ def bag_module() -> Any:
 
 
 class Recording:
-    """``topics`` ({name: type}) written to the bag ``path`` from now on, for ``duration`` seconds or until stopped."""
+    """``topics`` ({name: type}) written to the bag ``path`` from now on, for ``duration`` seconds or until stopped;
+    ``storage`` as the session's ROS writes bags (ROS 2: ``mcap``, the default, or ``sqlite3``)."""
 
-    def __init__(self, path: Path, topics: Mapping[str, str], duration: Optional[float] = None) -> None:
+    def __init__(self, path: Path, topics: Mapping[str, str], duration: Optional[float] = None,
+                 storage: Optional[str] = None) -> None:
         bagfile = bag_module()
 
         self.path, self.topics = Path(path), dict(topics)
         self._stopping = threading.Lock()
-        self._writer = bagfile.BagWriter(self.path)
+        self._writer = bagfile.BagWriter(self.path, storage)
         self._node: Optional[rosNode] = rosNode(tool_name("record"))
         for topic, type_name in self.topics.items():
             self._node.new.subscribe(topic, handler=lambda msg, topic=topic: self._writer.write(topic, msg),
@@ -55,6 +57,11 @@ class Recording:
     @property
     def count(self) -> int:
         return self._writer.count
+
+    @property
+    def writer(self) -> Any:
+        """The bag writer (its ``storage`` says how a ROS 2 folder stores the messages)."""
+        return self._writer
 
     def stop(self) -> "Recording":
         """Stop and close the bag (twice does nothing)."""

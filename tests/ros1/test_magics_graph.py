@@ -361,6 +361,14 @@ def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, cap
     wait_for(lambda: not ip.user_ns["rec"].running, timeout=10, what="the recording to end by itself")
     assert ip.user_ns["rec"].count >= 30 and "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"]
     assert "exists; give a new file name" in str(error_of(ip, f"%record {bag} /mg/rate"))
+    assert "a ROS 1 recording is a .bag file" in str(error_of(ip, f"%record {tmp_path / 'x'} /mg/rate --storage mcap"))
+    capsys.readouterr()
+    ok(ip, f"info = %bag info {bag}")
+    info, shown = ip.user_ns["info"], capsys.readouterr().out
+    assert (info.storage, [(r.topic, r.type, r.count) for r in info.rows]) == \
+        ("bag", [("/mg/rate", "std_msgs/UInt32", ip.user_ns["rec"].count)])
+    assert 0.5 < info.duration < 1.5 and "/mg/rate" in shown
+    assert "no bag at" in str(error_of(ip, f"%bag info {tmp_path / 'nothing.bag'}"))
 
     ok(ip, "from std_msgs.msg import UInt32\nouts = []\n"
            "def double(msg):\n    w.write('/mg/out', UInt32(data=msg.data * 2))\n"

@@ -209,10 +209,22 @@ def test_record_on_ros2_then_replay_the_bag_through_two_handler_versions(ip, cap
     wait_for(lambda: "/b2/counts" in _completions(ip, "%topics /b2/c"), timeout=10, what="the topic in the graph")
     capsys.readouterr()
     _ok(ip, f"rec = %record {bag} /b2/counts --duration 1")
+    assert f"to {bag} (mcap) for 1 s" in capsys.readouterr().out  # rosbag2's own default storage
     wait_for(lambda: not ip.user_ns["rec"].running, timeout=10, what="the recording to end")
+    _ok(ip, f"rec_sqlite = %record {tmp_path / 'sqlite_bag'} /b2/counts --duration 0.3 --storage sqlite3")
+    wait_for(lambda: not ip.user_ns["rec_sqlite"].running, timeout=10, what="the sqlite3 recording to end")
     _ok(ip, "src.shutdown()")
     recorded = ip.user_ns["rec"].count
-    assert recorded >= 25 and (bag / "metadata.yaml").exists()
+    assert recorded >= 25 and (bag / "metadata.yaml").exists() and list(bag.glob("*.mcap"))
+    assert list((tmp_path / "sqlite_bag").glob("*.db3"))
+    capsys.readouterr()
+    _ok(ip, f"info = %bag info {bag}")
+    info, shown = ip.user_ns["info"], capsys.readouterr().out
+    assert (info.storage, [(r.topic, r.type, r.count) for r in info.rows]) == \
+        ("mcap", [("/b2/counts", "std_msgs/msg/UInt32", recorded)])
+    assert 0.5 < info.duration < 1.5 and "/b2/counts" in shown and f"{recorded} messages" in shown
+    _ok(ip, f"info = %bag info {tmp_path / 'sqlite_bag'}")
+    assert ip.user_ns["info"].storage == "sqlite3" and ip.user_ns["info"].rows[0].count == ip.user_ns["rec_sqlite"].count
 
     _ok(ip, "outs = []\n"
             "def double(msg):\n    w.write('/b2/out', UInt32(data=msg.data * 2))\n"
@@ -235,7 +247,16 @@ def test_record_on_ros2_then_replay_the_bag_through_two_handler_versions(ip, cap
     assert "bag " in capsys.readouterr().out
     _ok(ip, f"w.save({str(tmp_path / 'w.py')!r})")
     assert f"w.baseBag({str(bag)!r}, rate=2.0, loop=False, delay=5.0)" in (tmp_path / "w.py").read_text()
-    _ok(ip, "w.shutdown(); ear.shutdown()")
+    _ok(ip, "w.shutdown()")
+    # A bare .mcap file (as other tools write them) plays too.
+    bare = next(bag.glob("*.mcap"))
+    _ok(ip, f"outs.clear()\nw2 = rosNode('b2_bare').baseBag({str(bare)!r}, rate=4.0)\n"
+            "w2.reuse.publish('/b2/counts', type=UInt32)\n"
+            "w2.new.subscribe('/b2/counts', lambda m: w2.write('/b2/out', m), msgType=UInt32)"
+            ".publish('/b2/out', msgType=UInt32)\nw2.create()")
+    wait_for(lambda: len(outs) >= recorded, timeout=20, what="the bare .mcap file through the handler")
+    assert list(outs) == inputs
+    _ok(ip, "w2.shutdown(); ear.shutdown()")
 
 
 def test_a_ros1_bag_plays_on_ros2_through_a_handler(make_node, tmp_path):

@@ -50,3 +50,15 @@ def test_print_of_an_interface_names_each_entry_and_what_was_left_out():
     assert lines[4].split() == ["subscribes", "/goal", "unknown"]
     assert any(line.split()[:3] == ["not", "seen", "/scan"] for line in lines)
     assert any("~get_loggers" in line and "ROS plumbing" in line for line in lines)
+
+
+def test_a_bags_info_is_a_table_of_its_topics_with_the_storage_count_and_span():
+    from ipyros.core.records import BagInfo, BagTopic
+
+    info = BagInfo("run", "mcap", 100.0, 102.5, (BagTopic("/a", "std_msgs/msg/String", 3),
+                                                  BagTopic("/b", "geometry_msgs/msg/Twist", 7)))
+    assert (info.messages, info.duration) == (10, 2.5)
+    text = str(info).splitlines()
+    assert text[0].startswith("bag run (mcap): 10 messages, ") and text[0].endswith("(2.500 s)")
+    assert text[3].split() == ["/a", "std_msgs/msg/String", "3"]
+    assert str(BagInfo("empty", "bag", 0.0, 0.0, ())).splitlines()[0] == "bag empty (bag): 0 messages"
