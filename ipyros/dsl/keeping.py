@@ -149,9 +149,10 @@ def _declare(node: Any, model: NodeModel, functions: dict[str, Callable[..., Any
                    estop_topic=guard.estop_topic)
 
 
-def export(engine: NodeEngine, path: "str | os.PathLike[str]", namespace: Optional[dict] = None) -> Path:
+def export(engine: NodeEngine, path: "str | os.PathLike[str]", namespace: Optional[dict] = None,
+           language: str = "python") -> Path:
     """Export a node to run without ipyros, for the session's ROS (see :func:`ipyros.files.export.export`)."""
-    return exporting.export(engine, path, engine.session.backend.export_flavour(), namespace)
+    return exporting.export(engine, path, engine.session.backend.export_flavour(), namespace, language)
 
 
 # -- running a saved file --------------------------------------------------------------------

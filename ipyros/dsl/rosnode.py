@@ -289,14 +289,18 @@ class rosNode:  # noqa: N801 - the paper's name
             raise NotDeclaredError(f"no node {wanted} is running in this session (running: {known})")
         return node_of(engine)
 
-    def export(self, path: Any, namespace: Optional[dict] = None) -> Path:
+    def export(self, path: Any, namespace: Optional[dict] = None, language: str = "python") -> Path:
         """Export this node to run without ipyros: a ``.py`` path is one standalone script; any other
-        path becomes a ROS package (package.xml, scripts/<node>, launch/<node>.launch with its basenode);
-        see :mod:`ipyros.files.export`."""
+        path becomes a ROS package (ROS 1: catkin, with launch/<node>.launch starting its basenode; ROS 2:
+        ament_python, built by colcon). ``language="cpp"`` (ROS 1): the package's node is roscpp C++ whose
+        relays, declarations, parameters and guards are complete and whose handlers are to be ported by hand
+        (PORTING.md lists them); see :mod:`ipyros.files.export`."""
         if not isinstance(path, (str, os.PathLike)):
             raise DeclarationError(f"export({cut(path)}): give a path: 'my_node.py' (one script) or 'my_node_pkg' "
                                    "(a ROS package)")
-        return keeping.export(self._engine, path, namespace)
+        if language not in ("python", "cpp"):
+            raise DeclarationError(f"export(language={cut(language)}): give 'python' or 'cpp'")
+        return keeping.export(self._engine, path, namespace, language)
 
     # -- what it did ---------------------------------------------------------------
     def status(self) -> NodeStatus:

@@ -406,9 +406,11 @@ def maintainer() -> tuple[str, str]:
 
 
 def package_xml(model: NodeModel, package: str, description: str, depends: list[str], files: Any, mark_text: str,
-                *, format: str, buildtool: Optional[str] = None, build_type: Optional[str] = None) -> str:
+                *, format: str, buildtool: Optional[str] = None, build_type: Optional[str] = None,
+                build_too: tuple[str, ...] = ()) -> str:
     """package.xml, written by an XML library (every name escaped), with the comment that marks it as ipyros's
-    (listing the files the export wrote: a later export replaces those, and only those)."""
+    (listing the files the export wrote: a later export replaces those, and only those). ``build_too``: the
+    dependencies a C++ node is built against (``<depend>``); the others are ``<exec_depend>``."""
     user, email = maintainer()
     root = ET.Element("package", format=format)
     for tag, text in (("name", package), ("version", "0.0.0"), ("description", description + ".")):
@@ -417,8 +419,8 @@ def package_xml(model: NodeModel, package: str, description: str, depends: list[
     ET.SubElement(root, "license").text = "TODO"
     if buildtool:
         ET.SubElement(root, "buildtool_depend").text = buildtool
-    for dependency in depends:
-        ET.SubElement(root, "exec_depend").text = dependency
+    for dependency in depends:  # those a C++ node is built against too: <depend>
+        ET.SubElement(root, "depend" if dependency in build_too else "exec_depend").text = dependency
     if build_type:
         ET.SubElement(ET.SubElement(root, "export"), "build_type").text = build_type
     ET.indent(root, space="  ")
@@ -440,16 +442,22 @@ def xml_text(root: ET.Element) -> str:
     return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
 
-def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Optional[dict]) -> Path:
+def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Optional[dict],
+                    language: str = "python") -> Path:
     """Write the package ``directory`` (named after it): the flavour says which files, this writes them."""
     package = check_package_name(directory.name)
     model = node.model()
     script_name, script_mode = flavour.script_file(package, model.name)
     script_path = directory / script_name
     script = Script(node, flavour, script_path, namespace, package=package)
-    text = script.render()
-    compile(text, str(script_path), "exec")  # a generated script that does not compile is ipyros's bug
-    files = {script_name: (text, script_mode), **flavour.package_files(script, package)}
+    if language == "cpp":  # the handlers' sources, collected as for a script, go beside their C++ methods
+        files = flavour.cpp_files(script, package)
+        manifest = flavour.cpp_manifest
+    else:
+        text = script.render()
+        compile(text, str(script_path), "exec")  # a generated script that does not compile is ipyros's bug
+        files = {script_name: (text, script_mode), **flavour.package_files(script, package)}
+        manifest = flavour.manifest
     stale = _previous_export(directory) - set(files)
     try:
         for folder in {str(Path(name).parent) for name in files} - {"."}:
@@ -457,19 +465,25 @@ def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Op
     except OSError as error:
         raise IpyrosError(f"cannot create {directory}: {error.strerror}") from None
     # The manifest first, listing every file that may be there: an export cut short is still replaceable.
-    write_atomic(directory / "package.xml", flavour.manifest(script, package, [*files, *stale], MARK))
+    write_atomic(directory / "package.xml", manifest(script, package, [*files, *stale], MARK))
     for name, (content, mode) in files.items():
         write_atomic(directory / name, content, mode=mode)
     if stale:
         for name in stale:
             if _inside(directory, name):  # listed by an earlier export, and checked so: never a file elsewhere
                 (directory / name).unlink(missing_ok=True)
-        write_atomic(directory / "package.xml", flavour.manifest(script, package, files, MARK))
-    _warn_unset(script, script_path)
+        write_atomic(directory / "package.xml", manifest(script, package, files, MARK))
+    if language == "cpp":
+        said = flavour.cpp_said(script, package)
+        if said:
+            warn_user(said, ExportWarning)
+    else:
+        _warn_unset(script, script_path)
     return directory
 
 
-def export(node: KeptNode, path: "str | os.PathLike[str]", flavour: Any, namespace: Optional[dict] = None) -> Path:
+def export(node: KeptNode, path: "str | os.PathLike[str]", flavour: Any, namespace: Optional[dict] = None,
+           language: str = "python") -> Path:
     """Export ``node`` to run without ipyros, written for ``flavour``'s ROS; return what was written.
 
     ``path`` ending in ``.py``: one standalone script of that ROS (rospy or rclpy)
@@ -500,8 +514,11 @@ def export(node: KeptNode, path: "str | os.PathLike[str]", flavour: Any, namespa
     assignments, the user's helper functions are copied; anything else becomes
     ``NAME = None  # set me`` and an :class:`ExportWarning` lists them.
     """
+    if language == "cpp" and Path(path).suffix == ".py":
+        raise IpyrosError(f"export({str(path)!r}, language='cpp'): C++ goes in a package: give a directory "
+                          "named like my_node_pkg")
     if Path(path).suffix != ".py":
-        return _export_package(node, flavour, Path(os.path.abspath(Path(path).expanduser())), namespace)
+        return _export_package(node, flavour, Path(os.path.abspath(Path(path).expanduser())), namespace, language)
     script = Script(node, flavour, path, namespace)
     text = script.render()
     compile(text, str(path), "exec")  # a generated script that does not compile is ipyros's bug: fail here

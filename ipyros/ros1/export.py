@@ -20,6 +20,7 @@ import yaml
 from ..core import plan as planning
 from ..core.errors import IpyrosError
 from ..files.export import package_xml, xml_comment, xml_text
+from . import cpp_export
 from .nodes import command, list_packages
 
 __all__ = ["RospyScript"]
@@ -295,6 +296,19 @@ class RospyScript:
     @staticmethod
     def manifest(script: Any, package: str, files: Iterable[str], mark: str) -> str:
         return _package_xml(script, package, files, mark)
+
+    # -- the C++ package (:mod:`.cpp_export`) ------------------------------------------------------
+    @staticmethod
+    def cpp_files(script: Any, package: str) -> dict[str, tuple[str, int]]:
+        return cpp_export.cpp_files(script, package, _launch_xml(script, package))
+
+    @staticmethod
+    def cpp_manifest(script: Any, package: str, files: Iterable[str], mark: str) -> str:
+        return cpp_export.cpp_manifest(script, package, files, mark)
+
+    @staticmethod
+    def cpp_said(script: Any, package: str) -> Optional[str]:
+        return cpp_export.ported_line(script, package)
 
 
 _CMAKE = """\

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..core import plan as planning
+from ..core.errors import IpyrosError
 from . import package as ament
 from .nodes import command
 
@@ -327,6 +328,13 @@ class RclpyScript:
     @staticmethod
     def manifest(script: Any, package: str, files: Iterable[str], mark: str) -> str:
         return ament.manifest(script, package, files, mark)
+
+    @staticmethod
+    def cpp_files(script: Any, package: str) -> dict[str, tuple[str, int]]:
+        raise IpyrosError("C++ export is made for ROS 1 (roscpp); on ROS 2 export Python: nd.export('my_pkg') "
+                          "writes an ament_python package (rclcpp is not installable here to build and test it)")
+
+    cpp_manifest = cpp_said = cpp_files
 
 
 def _qos_call(qos: Any, latch: bool = False) -> str:

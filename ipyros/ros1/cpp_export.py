@@ -1,0 +1,550 @@
+"""A ROS 1 node exported as C++ (the paper's code generation): a catkin package that ``catkin_make`` builds.
+
+``nd.export("my_pkg", language="cpp")`` writes the boilerplate a roscpp node needs, from the same
+plan the session runs (:func:`ipyros.core.plan.plan`):
+
+* every ``reuse`` relay as a byte relay (``topic_tools::ShapeShifter``: no deserialising), advertised
+  up front with its declared type, so nothing is lost at the start of a stream; latching follows the
+  source, as in the session; an action relay is its five topics;
+* every ``new.publish``/``new.subscribe``/service/timer declared with its type, latching and queue;
+* the node's parameters set at start unless given (``_key:=value`` wins) and read into members;
+* each guard compiled in: limits by field path (clamped or dropped), NaN and infinities replaced by the
+  stop message, rate limits, and the stop message after ``timeout`` s of silence on a steady timer
+  (never the ROS clock);
+* each Python handler as a C++ method whose body is the handler's Python source, as a comment, to be
+  ported by hand: ``PORTING.md`` lists them, with their topics and the globals they read.
+
+The C++ types and the fields the guard checks are read from the message classes of this Python
+(genpy's ``_slot_types``), so a path that does not exist fails here, not in the compiler.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any, Iterable, Optional
+
+from ..core import plan as planning
+from ..core.errors import IpyrosError
+from ..files.export import package_xml
+
+__all__ = ["cpp_files", "cpp_manifest"]
+
+_FLOATS = ("float32", "float64")
+
+
+def cpp_files(script: Any, package: str, launch: str) -> dict[str, tuple[str, int]]:
+    """The package's files besides package.xml: ``src/<node>.cpp``, ``CMakeLists.txt``, the launch file
+    (``launch``: its text, the same as the Python package's), ``PORTING.md``."""
+    model = script.model
+    writer = _Writer(script)
+    return {f"src/{model.name}.cpp": (writer.source(), 0o644),
+            "CMakeLists.txt": (_cmake(package, model.name, writer.packages()), 0o644),
+            f"launch/{model.name}.launch": (launch, 0o644),
+            "PORTING.md": (writer.porting(package), 0o644)}
+
+
+def cpp_manifest(script: Any, package: str, files: Iterable[str], mark_text: str) -> str:
+    model = script.model
+    writer = _Writer(script)
+    what = f"{model.name}: a roscpp node exported by ipyros from the DSL node {planning.node_fullname(model)}"
+    built = tuple(sorted({"roscpp", "topic_tools", *writer.packages()} - {package}))
+    depends = sorted({*built, *([model.base.package] if model.base is not None and model.base.package else [])}
+                     - {package})
+    return package_xml(model, package, what, depends, files, mark_text, format="2", buildtool="catkin",
+                       build_too=built)
+
+
+def ported_line(script: Any, package: str) -> Optional[str]:
+    """The one line said at export: which handlers wait to be ported by hand (None if none)."""
+    names = [script.names[slot] for slot in script.handlers]
+    if not names:
+        return None
+    return (f"ipyros: {package}'s C++ has {len(names)} handler(s) to port by hand ({', '.join(sorted(names))}): "
+            f"their Python source is beside each method; see {package}/PORTING.md")
+
+
+def _cmake(package: str, node: str, packages: list[str]) -> str:
+    components = " ".join(["roscpp", "topic_tools", *packages])
+    return f"""\
+cmake_minimum_required(VERSION 3.0.2)
+project({package})
+
+set(CMAKE_CXX_STANDARD 17)
+find_package(catkin REQUIRED COMPONENTS {components})
+catkin_package()
+
+include_directories(${{catkin_INCLUDE_DIRS}})
+add_executable({node} src/{node}.cpp)
+target_link_libraries({node} ${{catkin_LIBRARIES}})
+
+install(TARGETS {node} RUNTIME DESTINATION ${{CATKIN_PACKAGE_BIN_DESTINATION}})
+install(DIRECTORY launch DESTINATION ${{CATKIN_PACKAGE_SHARE_DESTINATION}})
+"""
+
+
+def _cpp_type(type_name: str) -> str:
+    package, name = type_name.split("/")
+    return f"{package}::{name}"
+
+
+def _ident(text: str) -> str:
+    """A C++ identifier made from a ROS name (``/robot/cmd_vel`` → ``robot_cmd_vel``)."""
+    return re.sub(r"\W+", "_", text).strip("_") or "root"
+
+
+def _string(text: str) -> str:
+    """A C++ string literal (JSON's escapes are C++'s for these)."""
+    return json.dumps(text)
+
+
+def _message_class(type_name: str) -> Any:
+    import roslib.message
+
+    cls = roslib.message.get_message_class(type_name)
+    if cls is None:
+        raise IpyrosError(f"the C++ export needs the message {type_name}, which this Python cannot import: "
+                          "install its package")
+    return cls
+
+
+def _service_class(type_name: str) -> Any:
+    import roslib.message
+
+    cls = roslib.message.get_service_class(type_name)
+    if cls is None:
+        raise IpyrosError(f"the C++ export needs the service {type_name}, which this Python cannot import: "
+                          "install its package")
+    return cls
+
+
+class _Writer:
+    """The C++ source of one node, written from its plan."""
+
+    def __init__(self, script: Any) -> None:
+        self.script, self.model = script, script.model
+        self.specs = planning.plan(self.model)
+        self.types: set[str] = set()  # message and service types the node names (their headers)
+
+    # -- what the package depends on ----------------------------------------------------------------
+    def packages(self) -> list[str]:
+        self.source()
+        return sorted({t.split("/")[0] for t in self.types})
+
+    # -- the source ---------------------------------------------------------------------------------
+    def source(self) -> str:
+        self.types = set()
+        self.finite = _Finite()
+        members: list[str] = []
+        setup: list[str] = []
+        methods: list[str] = []
+        guards: list[str] = []
+        for spec in self.specs:
+            if isinstance(spec, planning.PublishSpec):
+                self.types.add(spec.type)
+                pub = f"pub_{_ident(spec.topic)}_"
+                members.append(f"ros::Publisher {pub};")
+                setup.append(f"{pub} = nh_.advertise<{_cpp_type(spec.type)}>({_string(spec.topic)}, 10, "
+                             f"{'true' if spec.latch else 'false'});")
+                guard = self.model.guard(spec.topic)
+                if guard is not None:
+                    guards.append(self._guard(guard))
+                    name = f"guard_{_ident(spec.topic)}_"
+                    members.append(f"std::unique_ptr<{self._guard_class(guard)}> {name};")
+                    setup.append(f"{name}.reset(new {self._guard_class(guard)}(nh_, {pub}));")
+            elif isinstance(spec, planning.RelaySpec) and self.model.guard(spec.target) is not None:
+                guard = self.model.guard(spec.target)
+                self.types.add(spec.type)
+                guards.append(self._guard(guard))
+                pub, name, sub = (f"{kind}_{_ident(spec.target)}_" for kind in ("pub", "guard", "relay"))
+                members += [f"ros::Publisher {pub};", f"std::unique_ptr<{self._guard_class(guard)}> {name};",
+                            f"ros::Subscriber {sub};"]
+                setup += [f"// {spec.source} -> {spec.target}: a guarded relay reads the values it checks",
+                          f"{pub} = nh_.advertise<{_cpp_type(spec.type)}>({_string(spec.target)}, 10);",
+                          f"{name}.reset(new {self._guard_class(guard)}(nh_, {pub}));",
+                          f"{sub} = nh_.subscribe<{_cpp_type(spec.type)}>({_string(spec.source)}, 10, "
+                          f"[this](const {_cpp_type(spec.type)}::ConstPtr& msg) {{ {name}->publish(*msg); }});"]
+            elif isinstance(spec, planning.RelaySpec):
+                self.types.add(spec.type)
+                members.append(f"std::unique_ptr<ByteRelay> relay_{_ident(spec.target)}_;")
+                setup.append(f"relay_{_ident(spec.target)}_.reset(ByteRelay::make<{_cpp_type(spec.type)}>(nh_, "
+                             f"{_string(spec.source)}, {_string(spec.target)}));")
+            elif isinstance(spec, planning.ActionRelaySpec):
+                package, stem = spec.type.split("/")
+                parts = (("goal", f"{package}/{stem}ActionGoal", True), ("cancel", "actionlib_msgs/GoalID", True),
+                         ("status", "actionlib_msgs/GoalStatusArray", False),
+                         ("feedback", f"{package}/{stem}ActionFeedback", False),
+                         ("result", f"{package}/{stem}ActionResult", False))
+                setup.append(f"// the action {spec.target}: its five topics, goals and cancels in, the rest out")
+                for part, type_name, inward in parts:
+                    self.types.add(type_name)
+                    source, target = f"{spec.source}/{part}", f"{spec.target}/{part}"
+                    if inward:
+                        source, target = target, source
+                    members.append(f"std::unique_ptr<ByteRelay> relay_{_ident(target)}_;")
+                    setup.append(f"relay_{_ident(target)}_.reset(ByteRelay::make<{_cpp_type(type_name)}>(nh_, "
+                                 f"{_string(source)}, {_string(target)}));")
+            elif isinstance(spec, planning.SubscribeSpec):
+                self.types.add(spec.type)
+                method = self.script.names[spec.slot]
+                members.append(f"ros::Subscriber sub_{method}_;")
+                setup.append(f"sub_{method}_ = nh_.subscribe({_string(spec.topic)}, 10, &{self._class()}::{method}, "
+                             "this);")
+                methods.append(self._method(spec.slot, f"void {method}(const {_cpp_type(spec.type)}::ConstPtr& msg)",
+                                            "(void)msg;", f"each message on {spec.topic}"))
+            elif isinstance(spec, planning.TimerSpec):
+                method = self.script.names[spec.slot]
+                members.append(f"ros::Timer timer_{method}_;")
+                setup.append(f"timer_{method}_ = nh_.createTimer(ros::Duration({spec.period!r}), "
+                             f"&{self._class()}::{method}, this, {'true' if spec.oneshot else 'false'});")
+                methods.append(self._method(spec.slot, f"void {method}(const ros::TimerEvent& event)",
+                                            "(void)event;", f"every {spec.period:g} s" if not spec.oneshot else
+                                            f"once, {spec.period:g} s after start"))
+            elif isinstance(spec, planning.ServiceSpec):
+                self.types.add(spec.type)
+                method = self.script.names[spec.slot]
+                srv = _cpp_type(spec.type)
+                members.append(f"ros::ServiceServer srv_{method}_;")
+                setup.append(f"srv_{method}_ = nh_.advertiseService({_string(spec.name)}, &{self._class()}::{method}, "
+                             "this);")
+                methods.append(self._method(spec.slot, f"bool {method}({srv}::Request& request, {srv}::Response& "
+                                                       "response)",
+                                            "(void)request; (void)response;\n    return true;",
+                                            f"each call of {spec.name}"))
+            elif isinstance(spec, planning.ServiceRelaySpec):
+                self.types.add(spec.type)
+                srv = _cpp_type(spec.type)
+                member = f"srv_{_ident(spec.target)}_"
+                members.append(f"ros::ServiceServer {member};")
+                setup.append(f"{member} = nh_.advertiseService<{srv}::Request, {srv}::Response>({_string(spec.target)}, "
+                             f"[source = std::string({_string(spec.source)})]({srv}::Request& request, "
+                             f"{srv}::Response& response) {{ return ros::service::call(source, request, response); }});")
+            elif isinstance(spec, planning.ActionServerSpec):
+                setup.append(f"// the action server {spec.name} ({spec.type}, handler "
+                             f"{self.script.names[spec.slot]}) is not generated: see PORTING.md")
+        params = self._params()
+        self.types.update(self.finite.types)
+        includes = sorted({f"#include <{t.split('/')[0]}/{t.split('/')[1]}.h>" for t in self.types})
+        return _SOURCE.format(
+            doc=self._doc(), includes="\n".join(includes), guards="\n\n".join(dict.fromkeys(guards)),
+            finite=self.finite.text() if self.finite.done else "",
+            cls=self._class(), setup=_indent("\n".join(params[1] + setup), 4),
+            members=_indent("\n".join(params[0] + members), 2), methods=_indent("\n\n".join(methods), 2),
+            node=_string(self.model.name), byte_relay=_BYTE_RELAY.strip("\n"))
+
+    def _class(self) -> str:
+        return "".join(part.title() for part in _ident(self.model.name).split("_")) + "Node"
+
+    def _doc(self) -> str:
+        return (f"// {self.model.name}: a roscpp node exported by ipyros from the DSL node "
+                f"{planning.node_fullname(self.model)}.\n// Its handlers are to be ported by hand: see PORTING.md.")
+
+    def _params(self) -> tuple[list[str], list[str]]:
+        """Members holding the node's parameters, and the lines that set (unless given) and read them."""
+        members, setup = [], []
+        for key, value in self.model.params.items():
+            name = key.lstrip("~_")
+            kind = {bool: "bool", int: "int", float: "double", str: "std::string"}.get(type(value))
+            if kind is None:
+                setup.append(f"// the parameter ~{name} ({type(value).__name__}): read it with "
+                             f"pnh_.getParam(\"{name}\", value) into an XmlRpc::XmlRpcValue")
+                continue
+            literal = ("true" if value else "false") if kind == "bool" else \
+                _string(value) if kind == "std::string" else repr(value)
+            member = f"param_{_ident(name)}_"
+            members.append(f"{kind} {member};")
+            setup += [f"if (!pnh_.hasParam({_string(name)})) pnh_.setParam({_string(name)}, {kind}({literal}));",
+                      f"pnh_.getParam({_string(name)}, {member});"]
+        return members, setup
+
+    def _method(self, slot: str, signature: str, body: str, when: str) -> str:
+        name = self.script.names[slot]
+        source = self.script.bindings.functions.get(name, "")
+        comment = "\n".join(f"  // {line}" if line else "  //" for line in source.rstrip("\n").splitlines())
+        return (f"// Called {when}. To port from the Python handler {name}:\n{signature} {{\n{comment}\n"
+                f"  {body}\n}}")
+
+    # -- guards -------------------------------------------------------------------------------------
+    def _guard_class(self, guard: Any) -> str:
+        return "Guard_" + _ident(guard.resolved)
+
+    def _guard(self, guard: Any) -> str:
+        """A class of its own for one guarded output: the checks written out for its message type."""
+        cls = _message_class(guard.type)
+        cpp = _cpp_type(guard.type)
+        self.types.add(guard.type)
+        self.finite.of(guard.type)
+        limits, rates = [], []
+        for path, (low, high) in guard.limits.items():
+            limits.append(_visit(cls, path, "m", lambda place, v, low=low, high=high: (
+                f"if ({v} < {low!r} || {v} > {high!r}) {{ "
+                + ("return false; }" if guard.on_limit == "drop" else
+                   f"{v} = std::min(std::max({v}, _t<decltype({v})>({low!r})), _t<decltype({v})>({high!r})); }}"))))
+        for path, most in guard.rate.items():
+            rates.append(_visit(cls, path, "m", lambda place, v, path=path, most=most: (
+                f"{{ auto key = std::string({_string(path)}) + \"#\" + std::to_string({place}); "
+                f"auto last = last_.find(key); "
+                f"if (last != last_.end()) {{ double step = {most!r} * (now - last->second.second).toSec(); "
+                f"{v} = std::min(std::max(double({v}), last->second.first - step), last->second.first + step); }} "
+                f"last_[key] = std::make_pair(double({v}), now); }}")))
+        stop = "\n".join(f"    stop_.{field} = {value};" for field, value in _assignments(guard.stop or {}))
+        timeout = "-1.0" if guard.timeout is None else repr(float(guard.timeout))
+        return _GUARD.format(cls=self._guard_class(guard), cpp=cpp, topic=guard.resolved,
+                             limits=_indent("\n".join(limits), 4) or "    // no limits", stop=stop,
+                             rates=_indent("\n".join(rates), 4) or "    // no rate limits", timeout=timeout,
+                             period=repr(1.0 / guard.repeat))
+
+    # -- PORTING.md ---------------------------------------------------------------------------------
+    def porting(self, package: str) -> str:
+        rows = []
+        for spec in self.specs:
+            slot = getattr(spec, "slot", None)
+            if slot is None:
+                continue
+            fn = self.script.handlers[slot]
+            name = self.script.names[slot]
+            where = getattr(spec, "topic", None) or getattr(spec, "name", "")
+            kind = type(spec).__name__.removesuffix("Spec").replace("ActionServer", "action server")
+            reads = sorted(n for n in fn.__code__.co_names if n in getattr(fn, "__globals__", {})
+                           and n not in self.script.writers)
+            todo = "write an actionlib server (not generated)" if isinstance(spec, planning.ActionServerSpec) \
+                else f"the method {name} of {self._class()}"
+            rows.append(f"| `{name}` | {kind} | `{where}` | {', '.join(f'`{r}`' for r in reads) or '-'} | {todo} |")
+        table = "\n".join(["| handler | kind | on | globals it reads | in the C++ |", "|---|---|---|---|---|", *rows]) \
+            if rows else "No handlers: the node is all relays and declarations, nothing to port."
+        return f"""# Porting {package} to C++
+
+`src/{self.model.name}.cpp` was generated by ipyros from the DSL node `{planning.node_fullname(self.model)}`.
+Its relays, publishers, subscribers, timers, services, parameters and guards are complete C++; each
+Python handler is a method whose body is the handler's source as a comment, to be ported by hand.
+Write to an output through its publisher member (a guarded one through its guard's `publish`).
+
+{table}
+
+Build it in a catkin workspace (`catkin_make`); `roslaunch {package} {self.model.name}.launch` starts it
+(and, for a wrapping node, its basenode, remapped as ipyros ran it).
+"""
+
+
+class _Finite:
+    """``finite(m)`` for a message type and every message type inside it: false if any float is NaN or infinite."""
+
+    def __init__(self) -> None:
+        self.done: dict[str, str] = {}
+        self.types: set[str] = set()
+
+    def of(self, type_name: str) -> None:
+        if type_name in self.done:
+            return
+        self.done[type_name] = ""  # while it is written: a type may hold itself through an array
+        self.types.add(type_name)
+        cls = _message_class(type_name)
+        checks = []
+        for field, slot_type in zip(cls.__slots__, cls._slot_types):
+            base, array = slot_type.partition("[")[0], "[" in slot_type
+            if base in _FLOATS:
+                checks.append(f"  for (auto v : m.{field}) if (!std::isfinite(v)) return false;" if array else
+                              f"  if (!std::isfinite(m.{field})) return false;")
+            elif "/" in base or base == "Header":
+                nested = "std_msgs/Header" if base == "Header" else base
+                self.of(nested)
+                checks.append(f"  for (const auto& e : m.{field}) if (!finite(e)) return false;" if array else
+                              f"  if (!finite(m.{field})) return false;")
+        self.done[type_name] = (f"inline bool finite(const {_cpp_type(type_name)}& m) {{\n"
+                                + "".join(line + "\n" for line in checks) + "  (void)m;\n  return true;\n}")
+
+    def text(self) -> str:
+        declared = "\n".join(f"inline bool finite(const {_cpp_type(t)}& m);" for t in self.done)
+        return declared + "\n" + "\n".join(self.done.values())
+
+
+def _visit(cls: Any, path: str, root: str, act: Any) -> str:
+    """C++ that does ``act(place, lvalue)`` on every value ``path`` names in the message ``root`` (a type ``cls``):
+    ``linear.x``, ``axes[2]`` (if the array has it), ``poses[*].position.x`` (each element)."""
+    steps = path.strip().split(".")
+    lines: list[str] = []
+    expr, depth, place = root, 0, "0"
+    for number, step in enumerate(steps):
+        name, _, index = step.partition("[")
+        index = index.rstrip("]")
+        slots = dict(zip(cls.__slots__, cls._slot_types))
+        if name not in slots:
+            raise IpyrosError(f"the guard's path {path!r}: {cls._type} has no field {name!r}")
+        slot_type = slots[name]
+        base = slot_type.partition("[")[0]
+        expr = f"{expr}.{name}"
+        if index:
+            if index in ("*", ":"):
+                lines.append(f"{'  ' * depth}for (size_t i{depth} = 0; i{depth} < {expr}.size(); ++i{depth}) {{")
+                place = f"i{depth}"
+                expr = f"{expr}[i{depth}]"
+            else:
+                lines.append(f"{'  ' * depth}if ({expr}.size() > {int(index)}) {{")
+                expr = f"{expr}[{int(index)}]"
+            depth += 1
+        if number < len(steps) - 1:
+            if "/" not in base and base != "Header":
+                raise IpyrosError(f"the guard's path {path!r}: {name!r} is a {slot_type}, not a message")
+            cls = _message_class("std_msgs/Header" if base == "Header" else base)
+    lines.append(f"{'  ' * depth}{act(place, expr)}")
+    for level in range(depth - 1, -1, -1):
+        lines.append(f"{'  ' * level}}}")
+    return "\n".join(lines)
+
+
+def _assignments(values: dict[str, Any], prefix: str = "") -> list[tuple[str, str]]:
+    """``stop_.<field> = <value>`` pairs for a stop message given as (nested) fields."""
+    out: list[tuple[str, str]] = []
+    for key, value in values.items():
+        if isinstance(value, dict):
+            out += _assignments(value, f"{prefix}{key}.")
+        elif isinstance(value, bool):
+            out.append((prefix + key, "true" if value else "false"))
+        elif isinstance(value, (int, float)):
+            out.append((prefix + key, repr(value)))
+        elif isinstance(value, str):
+            out.append((prefix + key, _string(value)))
+        elif isinstance(value, (list, tuple)):
+            out.append((prefix + key, "{" + ", ".join(_string(v) if isinstance(v, str) else repr(v)
+                                                       for v in value) + "}"))
+    return out
+
+
+def _indent(text: str, spaces: int) -> str:
+    return "\n".join((" " * spaces + line) if line else line for line in text.splitlines())
+
+
+_BYTE_RELAY = r'''
+// Forwards a topic as bytes (no deserialising): advertised up front with its declared type, so that
+// subscribers connect before the first message; latched once a latched message arrives, as the source is.
+class ByteRelay {
+ public:
+  template <class M>
+  static ByteRelay* make(ros::NodeHandle& nh, const std::string& source, const std::string& target) {
+    auto* relay = new ByteRelay(nh, target);
+    relay->advertise_ = [relay, target](bool latch) {
+      relay->pub_ = relay->nh_.advertise<M>(target, 10, latch);
+    };
+    relay->advertise_(false);
+    relay->sub_ = nh.subscribe(source, 10, &ByteRelay::forward, relay);
+    return relay;
+  }
+
+ private:
+  ByteRelay(ros::NodeHandle& nh, const std::string& target) : nh_(nh), target_(target) {}
+
+  void forward(const ros::MessageEvent<topic_tools::ShapeShifter const>& event) {
+    const auto& header = event.getConnectionHeader();
+    auto latching = header.find("latching");
+    if (!latched_ && latching != header.end() && latching->second == "1") {
+      latched_ = true;
+      advertise_(true);
+    }
+    pub_.publish(event.getConstMessage());
+  }
+
+  ros::NodeHandle nh_;
+  std::string target_;
+  std::function<void(bool)> advertise_;
+  ros::Publisher pub_;
+  ros::Subscriber sub_;
+  bool latched_ = false;
+};
+'''
+
+_GUARD = """\
+// The guard on {topic}: every message that leaves on it passes here. NaN or an infinity anywhere:
+// the stop message goes instead; limits clamp (or drop); rate limits bound the change a second; after
+// the timeout with nothing passed, the stop message at its rate, on a steady timer (not the ROS clock).
+class {cls} {{
+ public:
+  {cls}(ros::NodeHandle& nh, ros::Publisher pub) : pub_(pub), passed_(ros::SteadyTime::now()) {{
+{stop}
+    if (timeout_ > 0) watch_ = nh.createSteadyTimer(ros::WallDuration(0.01), &{cls}::watch, this);
+  }}
+
+  void publish(const {cpp}& in) {{
+    std::lock_guard<std::mutex> lock(mutex_);
+    {cpp} m = in;
+    if (!finite(m)) {{
+      m = stop_;
+    }} else if (!check(m)) {{
+      return;  // dropped: a value outside its limits
+    }}
+    passed_ = ros::SteadyTime::now();
+    pub_.publish(m);
+  }}
+
+ private:
+  bool check({cpp}& m) {{
+{limits}
+    ros::SteadyTime now = ros::SteadyTime::now();
+    (void)now;
+{rates}
+    return true;
+  }}
+
+  void watch(const ros::SteadyTimerEvent&) {{
+    std::lock_guard<std::mutex> lock(mutex_);
+    ros::SteadyTime now = ros::SteadyTime::now();
+    if ((now - passed_).toSec() < timeout_ || (now - stopped_).toSec() < period_) return;
+    pub_.publish(stop_);
+    stopped_ = now;
+    last_.clear();  // a rate-limited field starts again from the stop message
+  }}
+
+  ros::Publisher pub_;
+  {cpp} stop_;
+  std::mutex mutex_;
+  ros::SteadyTime passed_, stopped_;
+  ros::SteadyTimer watch_;
+  std::map<std::string, std::pair<double, ros::SteadyTime>> last_;
+  const double timeout_ = {timeout};
+  const double period_ = {period};
+}};"""
+
+_SOURCE = """\
+{doc}
+#include <ros/ros.h>
+#include <topic_tools/shape_shifter.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <type_traits>
+
+{includes}
+
+template <class T>
+using _t = std::remove_cv_t<std::remove_reference_t<T>>;  // a field's own type, to clamp it in
+
+{byte_relay}
+
+{finite}
+
+{guards}
+
+class {cls} {{
+ public:
+  {cls}() : pnh_("~") {{
+{setup}
+  }}
+
+ private:
+{methods}
+
+  ros::NodeHandle nh_, pnh_;
+{members}
+}};
+
+int main(int argc, char** argv) {{
+  ros::init(argc, argv, {node});
+  {cls} node;
+  ros::spin();
+  return 0;
+}}
+"""
