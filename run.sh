@@ -28,6 +28,8 @@ ros1_setup() {
     python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-std-srvs
     python3-rosgraph-msgs python3-rosbag python3-actionlib python3-actionlib-msgs python3-dynamic-reconfigure
     python3-genpy tmux
+    # nd.export(DIR, language="cpp"): the roscpp node it writes is built with catkin_make
+    catkin g++ cmake libroscpp-dev libtopic-tools-dev libstd-msgs-dev libgeometry-msgs-dev libstd-srvs-dev
   )
 
   local missing=() p stamp

@@ -173,15 +173,6 @@ def test_live_nodes_pass_the_checks(make_node, ros_master, capsys):
 
 # -- running the export ---------------------------------------------------------------------------
 
-@pytest.fixture(scope="module")
-def no_ipyros(tmp_path_factory) -> Path:
-    """A PYTHONPATH entry whose ``ipyros`` fails to import: the exported processes run with it."""
-    root = tmp_path_factory.mktemp("no_ipyros")
-    (root / "ipyros").mkdir()
-    (root / "ipyros" / "__init__.py").write_text('raise ImportError("an exported node must run without ipyros")\n')
-    return root
-
-
 def export_env(packages: Path, no_ipyros: Path) -> dict[str, str]:
     """The environment of roslaunch/rosrun: the exports' parent on ROS_PACKAGE_PATH, ipyros poisoned."""
     return {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONPATH": str(no_ipyros),

@@ -19,7 +19,7 @@ from geometry_msgs.msg import Twist, Vector3
 from ros1_fixtures import ROS1_PYTHON, wait_for
 from std_msgs.msg import String
 from std_srvs.srv import Empty
-from test_export import export_env, no_ipyros, running, world  # noqa: F401 - no_ipyros: a fixture
+from test_export import export_env, running, world
 
 from ipyros.core.errors import IpyrosError
 from ipyros.core.plan import internal_name

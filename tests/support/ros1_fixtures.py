@@ -184,3 +184,12 @@ def counting(ros_session):
     if not ros_session.process.started:
         ros_session.start_process_node("/counting_client")
     return CountingRos1()
+
+
+@pytest.fixture(scope="module")
+def no_ipyros(tmp_path_factory) -> Path:
+    """A PYTHONPATH entry whose ``ipyros`` fails to import: the exported processes run with it."""
+    root = tmp_path_factory.mktemp("no_ipyros")
+    (root / "ipyros").mkdir()
+    (root / "ipyros" / "__init__.py").write_text('raise ImportError("an exported node must run without ipyros")\n')
+    return root
