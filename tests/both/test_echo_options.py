@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 
-from shell import ok
+from shell import error_of, ok
 
 
 def test_echo_once_without_arrays_and_with_times_from_now(ip, capsys):
@@ -38,3 +38,27 @@ def test_echo_table_rounds_floats_and_keeps_every_digit_in_the_messages(ip, caps
     out = capsys.readouterr().out
     assert "0.333333" in out and "0.3333333333" not in out and "1 messages" not in out, out
     assert ip.user_ns["rows"][0].data == 1 / 3
+
+
+
+def test_echo_a_message_path_prints_exactly_the_values_it_selects(ip, capsys):
+    """Foxglove's message paths: a field, an element from the end, a slice, a filter on the elements and one on
+    the message with a variable of the user's namespace; a field that is not there says which there are."""
+    ok(ip, "from geometry_msgs.msg import Pose, PoseArray\n"
+           "def poses():\n"
+           "    msg = PoseArray(poses=[Pose(), Pose(), Pose()])\n"
+           "    msg.header.frame_id = 'map'\n"
+           "    for pose, x in zip(msg.poses, (-0.5, 1.5, 2.5)):\n        pose.position.x = x\n"
+           "    return msg\n"
+           "paths = rosNode('echo_paths').new.publish('/echo_paths/poses', msgType=PoseArray).create()\n"
+           "paths.timer(0.05, lambda: paths.write('/echo_paths/poses', poses()))\n"
+           "limit = 2.0")
+    capsys.readouterr()
+    ok(ip, "%echo /echo_paths/poses.poses[-1].position.x -n 1")
+    assert "poses[-1].position.x: 2.5\n" in capsys.readouterr().out
+    ok(ip, "%echo '/echo_paths/poses.poses[:]{position.x>0}.position.x' -n 1")
+    assert "poses[:]{position.x>0}.position.x:\n- 1.5\n- 2.5\n" in capsys.readouterr().out
+    ok(ip, "%echo '/echo_paths/poses{header.frame_id==\"map\"}.poses[:]{position.x>=$limit}.position.x' -n 1")
+    assert "position.x>=$limit}.position.x:\n- 2.5\n" in capsys.readouterr().out
+    error = error_of(ip, "%echo /echo_paths/poses.poses[0].place -n 1")
+    assert "geometry_msgs/Pose has no field 'place' (it has position, orientation)" in str(error), error

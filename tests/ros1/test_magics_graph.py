@@ -345,6 +345,10 @@ def test_plot_in_the_terminal_until_ctrl_c_and_to_a_png(ip, capsys, rate_peer, t
     assert "plotted to" in capsys.readouterr().out
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and matplotlib.image.imread(png).shape[:2] == (350, 700)
 
+    p = ok(ip, "%plot /mg/rate.data --duration 1").result  # a message path: the topic and its field
+    assert p.topic == "/mg/rate" and p.fields == ["data"] and len(p.data["data"]) > 10
+    assert "one %plot a topic" in str(error_of(ip, "%plot /mg/rate.data /mg/other.data"))
+    assert "a slice or a filter is for %echo" in str(error_of(ip, "%plot /mg/rate.data[0]"))
     assert "give two fields" in str(error_of(ip, "%plot /mg/rate data --xy"))
     assert "no field 'dta'" in str(error_of(ip, "%plot /mg/rate dta --duration 1"))
     assert "no live topic /mg/none" in str(error_of(ip, "%plot /mg/none data"))

@@ -17,7 +17,7 @@ from IPython.core.magic_arguments import magic_arguments, parse_argstring
 from rich.syntax import Syntax
 from rich.table import Table
 
-from ...core import msgtypes
+from ...core import msgpath, msgtypes
 from ...core.msgbuild import build_message, fields_of, flat_fields, parse_data, to_yaml
 from ...tools.probe import Echo, measure_rates
 from ..api import (
@@ -63,6 +63,27 @@ def _fields_yaml(msg: Any, fields: list[str], type_name: str) -> str:
         text = to_yaml(value)
         lines.append(f"{path}: {text}" if "\n" not in text else f"{path}:\n  " + text.replace("\n", "\n  "))
     return "\n".join(lines)
+
+
+def _message_path(snap: Any, text: str) -> Optional[msgpath.MessagePath]:
+    """``text`` as a message path into a topic, or None for a topic (or rostopic's slash path, ``/pose/position``).
+    rostopic's spelling mixed with dots (``/turtle1/pose/position.x``) is read as ``/turtle1/pose.position.x``."""
+    if not msgpath.is_path(text):
+        return None
+    path = msgpath.parse(text)
+    head, slash_field = topic_and_field(snap, global_topic(path.topic))
+    if slash_field:
+        path = msgpath.parse(head + "." + slash_field + text[len(path.topic):])
+    return msgpath.MessagePath(path.text, global_topic(path.topic), path.steps)
+
+
+def _path_yaml(field: str, values: list[Any]) -> str:
+    """What a message path selected in one message, as YAML: ``x: 1.0``, or a list when a slice selected several."""
+    if len(values) == 1 and not any(mark in field for mark in ":{"):
+        text = to_yaml(values[0])
+        return f"{field}: {text}" if "\n" not in text else f"{field}:\n  " + text.replace("\n", "\n  ")
+    items = [to_yaml(value) for value in values]
+    return f"{field}:\n" + "\n".join("- " + item.replace("\n", "\n  ") for item in items)
 
 
 # "pkg/Type" or "pkg/msg/Type": how %pub tells a type from the message data after the topic.
@@ -122,7 +143,8 @@ class TopicMagics(ExtensionMagics):
 
     # -- %echo ---------------------------------------------------------------------------
     @magic_arguments()
-    @argument("topic", complete=TOPIC, help="the live topic to listen to")
+    @argument("topic", complete=TOPIC, help="the live topic to listen to, or a message path into it: "
+              "/odom.pose.pose.position.x, /scan.ranges[:3], '/poses.poses[:]{position.x>0}.position.x'")
     @argument("-n", "--count", type=int, default=None,
               help="stop after this many messages (default c.RosMagics.echo_count; 0: until Ctrl-C)")
     @argument("--field", action="extend", nargs="+", metavar="A.B",
@@ -148,7 +170,14 @@ class TopicMagics(ExtensionMagics):
         count = 1 if args.once else self.ext.settings.echo_count if args.count is None else args.count
         if count < 0:
             raise UsageError(f"-n must be 0 (until Ctrl-C) or more, not {count}")
-        topic, field = topic_and_field(self.ext.graph.snapshot, global_topic(args.topic))
+        path = _message_path(self.ext.graph.snapshot, args.topic)
+        if path is not None:  # /odom.pose.pose.position.x, /scan.ranges[:5], /poses.poses[:]{position.x>0}
+            if args.csv or args.table or args.field:
+                raise UsageError("a message path prints the values it selects, as YAML: give the topic alone with "
+                                 "--field for --csv or --table")
+            topic, field = path.topic, ""
+        else:
+            topic, field = topic_and_field(self.ext.graph.snapshot, global_topic(args.topic))
         keep = compile_filter(args.filter, self.shell.user_ns) if args.filter else None
         fields = [f.strip("'\"") for f in args.field or []] + ([field] if field else [])
         seen = Messages(topic)
@@ -168,12 +197,14 @@ class TopicMagics(ExtensionMagics):
                 while not count or len(seen) < count:
                     msg = echo.get(timeout=0.1)  # short waits: Ctrl-C gets through between them
                     # (no `continue` here: CPython 3.11 can raise Ctrl-C at that jump, outside this try)
-                    if msg is not None and (keep is None or keep(msg, len(seen) + 1)):
+                    selected = path.values(msg, self.shell.user_ns) if path is not None and msg is not None else None
+                    if msg is not None and (keep is None or keep(msg, len(seen) + 1)) and selected != []:
                         seen.append(msg)
                         if rows is not None:
                             rows.add(msg)
                         else:
-                            text = _fields_yaml(msg, fields, type_name) if fields else \
+                            text = _path_yaml(path.field, selected) if path is not None and selected is not None \
+                                else _fields_yaml(msg, fields, type_name) if fields else \
                                 to_yaml(msg, noarr=args.noarr, offset=args.offset)
                             if rolling is not None:
                                 rolling.write(f"{text}\n---\n")

@@ -23,6 +23,7 @@ from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
 from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
+from ...core import msgpath
 from ...core.text import counted
 from ...tools.plot import Plot, figure, text_chart
 from ..api import global_topic, live_type
@@ -31,6 +32,23 @@ from .common import ExtensionMagics
 
 #: How often a live plot is redrawn (s).
 REDRAW = 0.5
+
+
+def _topic_and_fields(topic: Optional[str], fields: list[str]) -> tuple[Optional[str], list[str]]:
+    """TOPIC FIELD ..., or message paths into one topic (``/odom.twist.twist.linear.x /odom.pose.pose.position.x``):
+    the topic and the dotted fields. A plot draws fields: an index, a slice or a filter is for %echo."""
+    if not topic or not msgpath.is_path(topic):
+        return topic, fields
+    words = [topic, *fields]
+    paths = [msgpath.parse(word) if word.startswith("/") else None for word in words]
+    topics = {path.topic for path in paths if path is not None}
+    if len(topics) > 1:
+        raise UsageError(f"a plot draws the fields of one topic, not of {', '.join(sorted(topics))}: "
+                         "one %plot a topic")
+    for path in paths:
+        if path is not None and not all(isinstance(step, msgpath.Field) for step in path.steps):
+            raise UsageError(f"{path.text}: a plot draws number fields; an index, a slice or a filter is for %echo")
+    return topics.pop(), [path.field if path is not None else word for path, word in zip(paths, words)]
 
 
 @magics_class
@@ -47,8 +65,8 @@ class PlotMagics(ExtensionMagics):
         return stopped.stop() if stopped is not None else None
 
     @magic_arguments()
-    @argument("topic", nargs="?", complete=TOPIC, help="the live topic")
-    @argument("fields", nargs="*", help="its number fields to plot, dotted: linear.x angular.z")
+    @argument("topic", nargs="?", complete=TOPIC, help="the live topic, or a message path into it: /odom.twist.twist.linear.x")
+    @argument("fields", nargs="*", help="its number fields to plot, dotted: linear.x angular.z (or more paths into it)")
     @argument("--xy", action="store_true", help="two fields drawn against each other: a trajectory")
     @argument("--window", type=float, default=30.0, help="keep (and draw) the last this many seconds (default 30)")
     @argument("--duration", type=float, default=None,
@@ -65,14 +83,16 @@ class PlotMagics(ExtensionMagics):
             stopped = self.stop_live()
             print(f"ipyros: stopped plotting {stopped.topic}" if stopped else "ipyros: no plot is live")
             return stopped
-        if not args.topic or not args.fields:
-            raise UsageError("give a topic and its fields: %plot /turtle1/cmd_vel linear.x angular.z")
+        topic, fields = _topic_and_fields(args.topic, [f.strip("'\"") for f in args.fields])
+        if not topic or not fields:
+            raise UsageError("give a topic and its fields: %plot /turtle1/cmd_vel linear.x angular.z "
+                             "(or message paths: %plot /turtle1/cmd_vel.linear.x /turtle1/cmd_vel.angular.z)")
         if not 0 < args.window <= 3600 or (args.duration is not None and not 0 < args.duration <= 86400):
             raise UsageError("--window and --duration are seconds: more than 0 (window up to an hour)")
-        topic = global_topic(args.topic)
+        topic = global_topic(topic)
         type_name = live_type(self.ext, topic)
         self.stop_live()
-        plot = Plot(topic, type_name, [f.strip("'\"") for f in args.fields], xy=args.xy, window=args.window)
+        plot = Plot(topic, type_name, fields, xy=args.xy, window=args.window)
         if args.png:
             return self._to_png(plot, args.png, args.duration or 5.0)
         if getattr(self.shell, "kernel", None) is not None:

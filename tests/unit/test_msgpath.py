@@ -1,0 +1,81 @@
+"""Message paths (Foxglove's syntax): parsed once, then every value they select in a message, on either ROS's
+message shape; a path that names no field says which fields there are, in one line."""
+
+from __future__ import annotations
+
+import pytest
+from unit2_msgs.msg import Point
+from unit_msgs.msg import Sample, Twist, Vector3
+
+from ipyros.core.msgpath import Field, Filter, Index, MessagePathError, Slice, is_path, parse
+
+
+def sample() -> Sample:
+    return Sample(label="s", gains=[0.5, 1.5, 2.5, 3.5], points=[Vector3(x=-1.0), Vector3(x=2.0, y=1.0),
+                                                                 Vector3(x=3.0)], names=["a", "b"])
+
+
+def test_a_path_is_read_into_its_topic_and_steps():
+    path = parse("/poses.points[:]{x>0}.y")
+    assert (path.topic, path.field) == ("/poses", "points[:]{x>0}.y")
+    assert path.steps == (Field("points"), Slice(None, None), Filter(("x",), ">", 0), Field("y"))
+    assert parse("/a/b.c[-1][1:3]").steps == (Field("c"), Index(-1), Slice(1, 3))
+    assert parse('/tf.transforms[:]{child_frame_id=="base_link"}').steps[-1] == \
+        Filter(("child_frame_id",), "==", "base_link")
+    assert parse("/odom{pose.x>$limit}").steps == (Filter(("pose", "x"), ">", "limit", variable=True),)
+    assert is_path("/odom.pose") and is_path("/scan[0]") and not is_path("/turtle1/pose")
+
+
+@pytest.mark.parametrize("text, values", [
+    ("/s.label", ["s"]),
+    ("/s.gains[0]", [0.5]),
+    ("/s.gains[-1]", [3.5]),
+    ("/s.gains[9]", []),
+    ("/s.gains[1:3]", [1.5, 2.5]),
+    ("/s.gains[:]", [0.5, 1.5, 2.5, 3.5]),
+    ("/s.points[:].x", [-1.0, 2.0, 3.0]),
+    ("/s.points[:]{x>0}.x", [2.0, 3.0]),
+    ("/s.points[:]{x>=2}{y==1}.y", [1.0]),
+    ("/s.points[:]{x<0}.x", [-1.0]),
+    ("/s.points[:]{x!=2.0}.x", [-1.0, 3.0]),
+    ("/s.names[:]{label==\"s\"}", []),
+    ("/s{label=='s'}.names[1]", ["b"]),
+    ("/s{label=='t'}.names[1]", []),
+    ("/s{on==false}.label", ["s"]),
+])
+def test_a_path_selects_exactly_these_values(text, values):
+    if "{label==\"s\"}" in text:  # a filter on strings, which have no fields: said in one line
+        with pytest.raises(MessagePathError, match="str has no field 'label'"):
+            parse(text).values(sample())
+        return
+    assert parse(text).values(sample()) == values
+
+
+def test_variables_and_the_other_rosidl_shape():
+    assert parse("/p{x>$limit}.y").values(Point(x=2.0, y=7.0), {"limit": 1}) == [7.0]
+    assert parse("/p{x>$limit}.y").values(Point(x=2.0, y=7.0), {"limit": 5}) == []
+    assert parse("/p.x").values(Point(x=2.0, y=7.0)) == [2.0]
+
+
+@pytest.mark.parametrize("text, message", [
+    ("odom.x", "a message path starts with a topic"),
+    ("/odom.", "expected a field name after '.'"),
+    ("/odom.a[1", "expected a closing ']'"),
+    ("/odom.a[x]", "expected an index"),
+    ("/odom{x~1}", "expected a filter such as"),
+    ("/odom{x>nope}", r"a number, a quoted string, true, false or a \$variable"),
+    ("/odom.a b", "expected '.field'"),
+])
+def test_a_bad_path_is_refused_in_one_line_saying_where(text, message):
+    with pytest.raises(MessagePathError, match=message) as error:
+        parse(text)
+    assert "\n" not in str(error.value)
+
+
+def test_a_field_that_is_not_there_says_which_fields_are():
+    with pytest.raises(MessagePathError, match=r"/t.linear.w: unit_msgs/Vector3 has no field 'w' \(it has x, y, z\)"):
+        parse("/t.linear.w").values(Twist())
+    with pytest.raises(MessagePathError, match=r"\[0\] needs an array"):
+        parse("/t.linear[0]").values(Twist())
+    with pytest.raises(MessagePathError, match=r"no variable \$limit"):
+        parse("/t{linear.x>$limit}").values(Twist())
