@@ -1,8 +1,8 @@
 """Run every benchmark of the ROS this venv has, in one go: ``python -m bench [--quick]``.
 
 ROS 1 (a venv that sees rospy): the relay bench against topic_tools, where a handler's time goes,
-the guard (stop on silence, hostile commands), completion, scale; ROS 2 (rclpy): the relay
-bench, the guard, completion and scale on rclpy. Each bench starts what it needs (a rosmaster on a free port, or
+the guard (stop on silence, hostile commands), %try over a bag, completion, scale; ROS 2 (rclpy): the relay
+bench, the guard, %try over a bag, completion and scale on rclpy. Each bench starts what it needs (a rosmaster on a free port, or
 a DDS domain of its own), prints a table, saves it under bench/results/, keeps its figures for
 ``python -m bench.figures`` and stops everything it started. The exit code is non-zero if a
 target was missed.
@@ -16,14 +16,14 @@ import sys
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    from bench import completion, guard, scale
+    from bench import completion, guard, scale, try_bag
 
     if importlib.util.find_spec("rospy") is None:
         from bench import relay_ros2 as relay
-        benches = (relay, guard, completion, scale)
+        benches = (relay, guard, try_bag, completion, scale)
     else:
         from bench import handler_cost, relay
-        benches = (relay, handler_cost, guard, completion, scale)
+        benches = (relay, handler_cost, guard, try_bag, completion, scale)
 
     status = 0
     for bench in benches:

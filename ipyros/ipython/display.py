@@ -28,7 +28,7 @@ from ..core.text import counted
 from ..dsl import rosNode
 from ..tools.probe import Rate
 from ..tools.robot import DemoRobot
-from ..tools.tryout import TrialReport, one_line
+from ..tools.tryout import BagTrial, TrialReport, one_line
 
 __all__ = ["LARGE_TABLE", "RENDERERS", "endpoints_table", "interface_table", "is_large", "node_table", "register",
            "render_html", "render_plain", "render_text", "renderable", "rich_table", "session_table", "status_table",
@@ -309,6 +309,7 @@ def rows_table(rows: Rows) -> Table:
 RENDERERS: dict[type, Callable[[Any], Any]] = {
     rosNode: node_table, NodeStatus: status_table, History: history_table, Versions: versions_table,
     Interface: interface_table, DemoRobot: robot_table, TrialReport: trial_view, Rows: rows_table,
+    BagTrial: lambda trial: rich_table(trial.table()),
 }
 
 

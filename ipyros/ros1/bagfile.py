@@ -8,13 +8,14 @@ so that a wrapping node sits on the topics it plays.
 from __future__ import annotations
 
 import threading
+import time
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, Collection, Iterator, Optional, Sequence
 
 from ..core.errors import DeclarationError, first_line
 from ..core.records import BagInfo, BagTopic
 
-__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_topics", "player_args"]
+__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_messages", "bag_topics", "player_args"]
 
 #: The storages a recording may be written in: a ROS 1 bag file.
 STORAGES = ("bag",)
@@ -58,6 +59,20 @@ def bag_info(path: Path) -> BagInfo:
                                "(rosbag record, %record)?") from None
 
 
+def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int, Any]]:
+    """``(topic, stamp in ns, message)`` of each message of ``topics`` in the bag, in recorded order (the
+    messages of the types the bag recorded, as rosbag reads them)."""
+    rosbag = _rosbag()
+    try:
+        bag = rosbag.Bag(str(path))
+    except Exception as error:  # noqa: BLE001 - rosbag's errors of any kind
+        raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}; is it a ROS 1 bag "
+                               "(rosbag record, %record)?") from None
+    with bag:
+        for topic, msg, stamp in bag.read_messages(topics=list(topics)):
+            yield topic, stamp.to_nsec(), msg
+
+
 def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[str]], delay: float) -> list[str]:
     """The player's arguments: ``--delay`` lets the wrapping node's subscribers connect after each
     advertise, so that the first messages are not lost."""
@@ -89,7 +104,7 @@ class BagWriter:
 
         with self._lock:
             if self._bag is not None:
-                self._bag.write(topic, msg, rospy.Time.now())
+                self._bag.write(topic, msg, rospy.Time.from_sec(time.time()))  # the wall clock, as on ROS 2
                 self.count += 1
 
     def close(self) -> None:

@@ -13,13 +13,13 @@ import queue
 import threading
 import time
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, Collection, Iterator, Optional, Sequence
 
 from ..core.errors import DeclarationError, first_line
 from ..core.msgtypes import type_name
 from ..core.records import BagInfo, BagTopic
 
-__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_topics", "player_args"]
+__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_messages", "bag_topics", "player_args"]
 
 #: The storages a recording may be written in; the first is the default.
 STORAGES = ("mcap", "sqlite3")
@@ -75,6 +75,31 @@ def bag_info(path: Path) -> BagInfo:
         return BagInfo(str(path), storage, 0.0 if empty else reader.start_time / 1e9,
                        0.0 if empty else reader.end_time / 1e9,
                        tuple(BagTopic(topic, msgtype, count) for (topic, msgtype), count in sorted(counts.items())))
+    finally:
+        reader.close()
+
+
+def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int, Any]]:
+    """``(topic, stamp in ns, message)`` of each message of ``topics`` in the bag, in recorded order, as this
+    Python's message classes (a ROS 1 ``.bag``'s turned into ROS 2 messages, as the player turns them)."""
+    from rclpy.serialization import deserialize_message
+
+    from .bag_player import Ros1Bag, message_class
+
+    if path.suffix == ".bag":
+        _rosbags()
+        reader: Any = Ros1Bag(str(path))
+        try:
+            reader.open()
+        except Exception as error:  # noqa: BLE001 - rosbags' errors of any kind: not a bag we can read
+            raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}") from None
+    else:
+        reader = _opened(path)
+    try:
+        connections = [c for c in reader.connections if c.topic in topics]
+        classes = {c.id: message_class(c.msgtype) for c in connections}
+        for connection, stamp, raw in reader.messages(connections=connections):
+            yield connection.topic, stamp, deserialize_message(bytes(raw), classes[connection.id])
     finally:
         reader.close()
 

@@ -1,4 +1,4 @@
-"""Try before swap: run a candidate handler on the messages a live handler just saw.
+"""Try before swap: run a candidate handler on the messages a live handler just saw, or on a whole bag.
 
 Each subscription of a running node keeps its last messages (``HandlerSlot.recent``).
 :func:`try_candidate` feeds each of them to the live handler and to the candidate, one
@@ -8,6 +8,11 @@ after the other in the calling thread, and records for each call:
 * what it wrote through ``rosNode.write``, checked as ``write`` would check it (the
   node publishes that topic, the message has its type) but **not published**;
 * the exception it raised, and how long it took.
+
+:func:`try_bag` does the same over every message of a recorded bag, in the session's process and
+without a ROS graph (the node need not be created; nothing is published): the rehearsal on recorded
+data before the robot. It returns a :class:`BagTrial`: how many messages ran, on how many the two
+differ, each side's outputs by topic and bag time, and the first differences side by side.
 
 What is *not* isolated, honestly: both handlers really run. Each gets its own deep copy
 of the message, and writes are recorded instead of sent, but anything else they do
@@ -26,15 +31,18 @@ import io
 import time
 import traceback
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable, Iterator, Optional
 
 from ..core import msgtypes, plan as planning, streams
 from ..core.errors import IpyrosError, NotDeclaredError
 from ..core.msgbuild import flow_yaml
 from ..core.slots import call_arity
+from ..core.tables import Column, TextTable
 from ..dsl import engine_of, rosNode
 from ..node.engine import NodeEngine
 from ..node.writing import writes_recorded
+from .record import bag_module
 
 
 @dataclass(frozen=True)
@@ -126,6 +134,101 @@ def try_candidate(node: rosNode, topic: str, candidate: Callable[..., Any],
     return TrialReport(node.name, resolved, _name(live), _name(candidate), tuple(rows))
 
 
+@dataclass(frozen=True)
+class Difference:
+    """One message on which the live handler and the candidate did not do the same."""
+
+    at: float  # bag time of the message, s from the bag's first message
+    message: Any
+    live: Outcome
+    candidate: Outcome
+
+
+@dataclass(frozen=True)
+class BagTrial:
+    """The live handler and a candidate over a whole bag: what each sent, and where they differ.
+
+    ``outputs[side][topic]`` is the list of ``(bag time in s from the bag's start, message)`` that side wrote
+    on ``topic`` (``side``: ``"live"`` or ``"candidate"``), for a plot; ``first`` the first differences.
+    """
+
+    node: str
+    topic: str
+    bag: str
+    live_name: str
+    candidate_name: str
+    total: int
+    differing: int
+    outputs: dict[str, dict[str, list[tuple[float, Any]]]]
+    first: tuple[Difference, ...]
+    others: int = 0  # messages of the node's other subscriptions run through their live handlers
+    seconds: float = 0.0  # how long the run took
+
+    def table(self) -> TextTable:
+        """Counts per output topic on each side, then the first differences side by side."""
+        topics = sorted({t for side in self.outputs.values() for t in side})
+        rows: list[tuple[str, ...]] = [(topic, str(len(self.outputs["live"].get(topic, ()))),
+                                        str(len(self.outputs["candidate"].get(topic, ())))) for topic in topics]
+        sections = (len(rows),) if self.first else ()
+        for diff in self.first:
+            rows.append((f"at {diff.at:.3f} s: {one_line(diff.message, 40)}", "\n".join(diff.live.lines()) or "-",
+                         "\n".join(diff.candidate.lines()) or "-"))
+        others = f" (and {self.others} of its other subscriptions, through their live handlers)" if self.others else ""
+        title = (f"{self.candidate_name} against {self.live_name} on {self.total} messages of {self.topic} from "
+                 f"{self.bag}{others}: {self.differing} differ ({self.seconds:.2f} s)")
+        return TextTable(title, (Column("output / message", fold=True), Column(self.live_name, fold=True),
+                                 Column(self.candidate_name, fold=True)), tuple(rows), sections)
+
+    def __str__(self) -> str:
+        return self.table().text()
+
+
+def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, shown: int = 5) -> BagTrial:
+    """Run every message of ``topic`` in the bag ``bag`` through the live handler and ``candidate``, side by side.
+
+    The node's other subscriptions get their messages from the bag too, in recorded order, through their
+    live handlers (what they change, both sides see; what they write is not counted). Nothing is published
+    and the node need not be created: no master or robot is needed, only the bag and the handlers.
+    """
+    resolved = node.resolve(topic)
+    live = node.handler(topic)
+    if live is None or node.model().topic(resolved, "subscribe", "new") is None:
+        raise NotDeclaredError(f"{node.name} has no handler for {resolved}; %try compares subscription handlers")
+    call_arity(candidate, "subscribe", f"{node.name} {resolved}")
+    path = Path(bag).expanduser()
+    if not path.exists():
+        raise IpyrosError(f"no bag at {path}: give a bag file or a rosbag2 folder (%record writes one)")
+    handlers = {t.resolved: node.handler(t.resolved) for t in node.model().topics
+                if t.direction == "subscribe" and t.role == "new" and t.resolved != resolved}
+    handlers = {t: h for t, h in handlers.items() if h is not None}
+    outputs: dict[str, dict[str, list[tuple[float, Any]]]] = {"live": {}, "candidate": {}}
+    first: list[Difference] = []
+    total = differing = others = 0
+    start: Optional[int] = None
+    began = time.perf_counter()
+    with _intercepted() as run:
+        for name, stamp, msg in bag_module().bag_messages(path, {resolved, *handlers}):
+            start = stamp if start is None else start
+            at = (stamp - start) / 1e9
+            if name != resolved:
+                run(handlers[name], msg)
+                others += 1
+                continue
+            total += 1
+            sides = {"live": run(live, msg), "candidate": run(candidate, msg)}
+            for side, outcome in sides.items():
+                for write in outcome.writes:
+                    outputs[side].setdefault(write.topic, []).append((at, write.message))
+            if not sides["live"].same_as(sides["candidate"]):
+                differing += 1
+                if len(first) < shown:
+                    first.append(Difference(at, msg, sides["live"], sides["candidate"]))
+    if total == 0:
+        raise IpyrosError(f"the bag {path} holds no message of {resolved}; %bag info {path} lists what it holds")
+    return BagTrial(node.name, resolved, str(path), _name(live), _name(candidate), total, differing, outputs,
+                    tuple(first), others, time.perf_counter() - began)
+
+
 # -- capturing one thread's prints and writes -----------------------------------------------
 
 
@@ -188,7 +291,7 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
 def one_line(msg: Any, width: int = 80) -> str:
     """A message as one short line of YAML (the same on both ROS: ``{linear: {x: 1.0, ...}, ...}``)."""
     try:
-        text = flow_yaml(msg)
+        text = " ".join(flow_yaml(msg).removesuffix("\n...\n").split())  # a plain value's YAML ends its document
     except Exception:  # noqa: BLE001 - not a message: its text
         text = " ".join(str(msg).split())
     return text if len(text) <= width else text[: width - 1] + "…"
@@ -198,4 +301,4 @@ def _name(fn: Any) -> str:
     return getattr(fn, "__name__", type(fn).__name__)
 
 
-__all__ = ["try_candidate", "TrialReport", "TrialRow", "Outcome", "Write"]
+__all__ = ["BagTrial", "Difference", "try_bag", "try_candidate", "TrialReport", "TrialRow", "Outcome", "Write"]

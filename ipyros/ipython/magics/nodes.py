@@ -21,7 +21,7 @@ from ...dsl import engine_of, keeping, node_of, restore, rosNode
 from ...files.modelfile import handler_sources
 from ...node.session import current
 from ...tools.editing import EditWatch, PendingEdit, fresh_name, handler_source, lambda_as_def, new_functions
-from ...tools.tryout import try_candidate
+from ...tools.tryout import try_bag, try_candidate
 from ..api import evaluate, find_node, split_head
 from ..arguments import DSL_NODE, FUNCTION, OWN_TOPIC, argument
 from ..display import session_table
@@ -108,13 +108,17 @@ class NodeMagics(ExtensionMagics):
               "giving a function (a lambda), the rest of the line")
     @argument("-n", "--last", type=int, help="only the last N messages (default: all the node keeps, "
               "c.RosMagics.try_history)")
+    @argument("--bag", default=None, help="every message of TOPIC in this bag instead (offline: the node need not "
+              "run, nothing is published); returns the outcome (r.total, r.differing, r.outputs)")
     @line_magic("try")
-    def try_handler(self, line: str) -> None:
+    def try_handler(self, line: str) -> Any:
         """Run CANDIDATE on the last messages TOPIC brought to NODE, beside the live handler.
 
         Nothing is swapped. Each handler gets its own copy of each message; what it prints
         and what it writes through node.write() is captured and shown, not published.
         Anything else it does (globals, parameters, its own publishers) happens for real.
+        With --bag FILE, every message of TOPIC recorded in FILE (and those of the node's other
+        subscriptions, through their live handlers, in recorded order): r = %try nd /scan new --bag run
         """
         head, expression = split_head(line, self.try_handler.parser, lambda index, word: index < 2)
         args = parse_argstring(self.try_handler, head)
@@ -124,7 +128,12 @@ class NodeMagics(ExtensionMagics):
             raise UsageError(f"-n must be 1 or more, not {args.last}")
         node = find_node(self.shell, args.node)
         candidate = evaluate(self.shell, expression, "candidate handler")
+        if args.bag is not None:
+            if args.last is not None:
+                raise UsageError("-n counts the node's last messages; with --bag every message of the bag is tried")
+            return try_bag(node, args.topic, candidate, args.bag)  # shown as the cell's result: r = %try ... keeps it
         self.ext.printer.show(try_candidate(node, args.topic, candidate, args.last))
+        return None
 
     # -- %versions / %revert -------------------------------------------------------------------
     @magic_arguments()
@@ -187,6 +196,24 @@ class NodeMagics(ExtensionMagics):
         else:
             written = keeping.save_nodes([engine_of(n) for n in nodes], args.path, self.shell.user_ns)
         print(f"ipyros: saved {', '.join(n.fullname for n in nodes)} to {written}")
+
+    @magic_arguments()
+    @argument("node", complete=DSL_NODE, help="the variable holding the rosNode")
+    @argument("path", help="my_node.py (one script), or a directory: a ROS package (ROS 1: catkin; ROS 2: "
+              "ament_python, built by colcon)")
+    @argument("--cpp", action="store_true",
+              help="ROS 1: the package's node in roscpp C++, its handlers left to port by hand (PORTING.md)")
+    @line_magic
+    def export(self, line: str) -> None:
+        """Export NODE to run without ipyros: nd.export(PATH) at the prompt (with --cpp, language="cpp").
+
+        The script or package holds the node's endpoints, handlers, parameters and guards, and for a
+        wrapping node its basenode, started remapped as ipyros ran it.
+        """
+        args = parse_argstring(self.export, line)
+        node = find_node(self.shell, args.node)
+        written = node.export(args.path, self.shell.user_ns, language="cpp" if args.cpp else "python")
+        print(f"ipyros: exported {node.fullname} to {written}")
 
     @magic_arguments()
     @argument("path", help="a file written by %%save_nodes or nd.save()")

@@ -1,0 +1,46 @@
+"""``%try NODE TOPIC CANDIDATE --bag FILE``: the live handler and a candidate over every message of a recorded bag,
+offline (the node is never created, nothing is published), the node's other subscriptions fed from the bag too."""
+
+from __future__ import annotations
+
+from shell import error_of, ok
+
+BUILD = (
+    "from std_msgs.msg import UInt32\n"
+    "gain = [1]\n"
+    "def set_gain(msg):\n    gain[0] = msg.data\n"
+    "def scale(msg):\n    tb.write('/tb/out', UInt32(data=msg.data * gain[0]))\n"
+    "def scale_v2(msg):\n    tb.write('/tb/out', UInt32(data=msg.data * gain[0] + (msg.data % 10 == 0)))\n"
+    "tb = rosNode('tb').new.subscribe('/tb/in', scale, msgType=UInt32).subscribe('/tb/gain', set_gain, "
+    "msgType=UInt32).publish('/tb/out', msgType=UInt32)\n"
+)
+
+
+def record(ip, path) -> None:
+    """A bag written as %record writes one: the gain first, then 50 inputs."""
+    ok(ip, "from ipyros.tools.record import bag_module\n"
+           f"writer = bag_module().BagWriter(__import__('pathlib').Path({str(path)!r}))\n"
+           "writer.write('/tb/gain', UInt32(data=3))\n"
+           "for i in range(1, 51):\n    writer.write('/tb/in', UInt32(data=i))\n"
+           "writer.close()")
+
+
+def test_try_over_a_bag_runs_every_message_through_both_handlers_offline(ip, session, capsys, tmp_path):
+    ok(ip, BUILD)
+    bag = tmp_path / ("run.bag" if session.backend.name == "ROS 1" else "run")  # ROS 2: a rosbag2 folder
+    record(ip, bag)
+    capsys.readouterr()
+    ok(ip, f"r = %try tb /tb/in scale_v2 --bag {bag}")
+    r = ip.user_ns["r"]
+    assert (r.total, r.differing, r.others) == (50, 5, 1)  # 10, 20, ..., 50 differ; the gain went through set_gain
+    assert [m.data for _, m in r.outputs["live"]["/tb/out"]] == [3 * i for i in range(1, 51)]
+    assert [m.data for _, m in r.outputs["candidate"]["/tb/out"]][9] == 31
+    assert [d.message.data for d in r.first] == [10, 20, 30, 40, 50]
+    assert all(t >= 0 for t, _ in r.outputs["live"]["/tb/out"])
+    text = str(r)
+    assert "scale_v2 against scale on 50 messages of /tb/in" in text and ": 5 differ" in text
+    assert not ip.user_ns["tb"].created  # offline: the node never ran
+    ok(ip, f"r2 = %try tb /tb/in scale --bag {bag}")
+    assert ip.user_ns["r2"].differing == 0
+    assert "no bag at" in str(error_of(ip, f"%try tb /tb/in scale --bag {tmp_path / 'nothing'}"))
+    assert "tb has no handler for /tb/out" in str(error_of(ip, f"%try tb /tb/out scale --bag {bag}"))
