@@ -145,16 +145,16 @@ def compare(before: list[Figure], now: list[Figure]) -> str:
     Two runs of a noisy machine differ in their anchors too; the ratio to the anchor measured in the
     same run is what says whether a change made ipyros slower. A figure only one run has is left out.
     """
-    earlier = {(f.ros, f.what): f for f in before}
-    lines = ["| ROS | figure | before | ratio before | now | ratio now | target | |",
-             "|---|---|---:|---:|---:|---:|---|---|"]
+    earlier = {(f.ros, f.what, f.anchor): f for f in before}  # one figure may stand beside two anchors
+    lines = ["| ROS | figure | anchor | before | ratio before | now | ratio now | target | |",
+             "|---|---|---|---:|---:|---:|---:|---|---|"]
     for f in now:
-        old = earlier.get((f.ros, f.what))
+        old = earlier.get((f.ros, f.what, f.anchor))
         if old is None:
             continue
         ratios = [f"{x.ratio:.2f}x" if x.ratio is not None else "" for x in (old, f)]
         verdict = {True: "PASS", False: "**FAIL**", None: ""}[f.passed]
-        lines.append(f"| {f.ros} | {f.what} | {_number(old.value, old.unit)} | {ratios[0]} "
+        lines.append(f"| {f.ros} | {f.what} | {f.anchor} | {_number(old.value, old.unit)} | {ratios[0]} "
                      f"| {_number(f.value, f.unit)} | {ratios[1]} | {f.target} | {verdict} |")
     return "\n".join(lines)
 

@@ -288,6 +288,11 @@ class _Writer:
                 f"{v} = std::min(std::max(double({v}), last->second.first - step), last->second.first + step); }} "
                 f"last_[key] = std::make_pair(double({v}), now); }}")))
         stop = "\n".join(f"    stop_.{field} = {value};" for field, value in _assignments(guard.stop or {}))
+        if guard.estop_topic:  # std_msgs/Bool: true holds the stop message, whatever else arrives
+            self.types.add("std_msgs/Bool")
+            stop += (f"\n    estop_ = nh.subscribe<std_msgs::Bool>({_string(guard.estop_topic)}, 10, "
+                     "[this](const std_msgs::Bool::ConstPtr& msg) { std::lock_guard<std::mutex> lock(mutex_); "
+                     "held_ = msg->data; });")
         timeout = "-1.0" if guard.timeout is None else repr(float(guard.timeout))
         return _GUARD.format(cls=self._guard_class(guard), cpp=cpp, topic=guard.resolved,
                              limits=_indent("\n".join(limits), 4) or "    // no limits", stop=stop,
@@ -455,18 +460,19 @@ class ByteRelay {
 _GUARD = """\
 // The guard on {topic}: every message that leaves on it passes here. NaN or an infinity anywhere:
 // the stop message goes instead; limits clamp (or drop); rate limits bound the change a second; after
-// the timeout with nothing passed, the stop message at its rate, on a steady timer (not the ROS clock).
+// the timeout with nothing passed, or while its e-stop topic says true, the stop message at its rate,
+// on a steady timer (not the ROS clock).
 class {cls} {{
  public:
   {cls}(ros::NodeHandle& nh, ros::Publisher pub) : pub_(pub), passed_(ros::SteadyTime::now()) {{
 {stop}
-    if (timeout_ > 0) watch_ = nh.createSteadyTimer(ros::WallDuration(0.01), &{cls}::watch, this);
+    watch_ = nh.createSteadyTimer(ros::WallDuration(0.01), &{cls}::watch, this);
   }}
 
   void publish(const {cpp}& in) {{
     std::lock_guard<std::mutex> lock(mutex_);
     {cpp} m = in;
-    if (!finite(m)) {{
+    if (held_ || !finite(m)) {{
       m = stop_;
     }} else if (!check(m)) {{
       return;  // dropped: a value outside its limits
@@ -487,7 +493,8 @@ class {cls} {{
   void watch(const ros::SteadyTimerEvent&) {{
     std::lock_guard<std::mutex> lock(mutex_);
     ros::SteadyTime now = ros::SteadyTime::now();
-    if ((now - passed_).toSec() < timeout_ || (now - stopped_).toSec() < period_) return;
+    bool silent = timeout_ > 0 && (now - passed_).toSec() >= timeout_;
+    if (!(silent || held_) || (now - stopped_).toSec() < period_) return;
     pub_.publish(stop_);
     stopped_ = now;
     last_.clear();  // a rate-limited field starts again from the stop message
@@ -498,6 +505,8 @@ class {cls} {{
   std::mutex mutex_;
   ros::SteadyTime passed_, stopped_;
   ros::SteadyTimer watch_;
+  ros::Subscriber estop_;
+  bool held_ = false;  // an e-stop holds the stop message
   std::map<std::string, std::pair<double, ros::SteadyTime>> last_;
   const double timeout_ = {timeout};
   const double period_ = {period};

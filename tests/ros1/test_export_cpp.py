@@ -17,7 +17,7 @@ import warnings
 import pytest
 from geometry_msgs.msg import Twist, Vector3
 from ros1_fixtures import ROS1_PYTHON, wait_for
-from std_msgs.msg import String
+from std_msgs.msg import Bool, String
 from std_srvs.srv import Empty
 from test_export import export_env, running, world
 
@@ -46,7 +46,8 @@ def cpp_node(make_node, ns: str):
         .basePackage("ipyros_test_nodes"))
     cpp.reuse.subscribe("in", type=String).publish("out", type=String).service("~reset", type=Empty)
     cpp.reuse.publish("cmd", type=Twist)
-    cpp.guard("cmd", limits={"linear.x": (-0.5, 0.5)}, timeout=0.3)
+    cpp.guard("cmd", limits={"linear.x": (-0.5, 0.5)}, rate={"angular.z": 100.0}, timeout=0.3,
+              stop={"angular": {"z": 0.0}}, estop_topic="/cpp_estop")
     cpp.new.subscribe("chatter", handler=shout_cpp, type=String).publish("loud", type=String)
     cpp.new.publish("~tick", type=String)
     cpp.timer(0.5, tick_cpp, name="tick")
@@ -112,6 +113,14 @@ def test_catkin_make_builds_it_and_the_compiled_node_relays_and_guards(make_node
         cmd.clear()  # silence: the stop message, again and again
         wait_for(lambda: len(cmd) >= 3, timeout=10, what="the stop message repeated after the timeout")
         assert all(m.linear.x == 0.0 and m.angular.z == 0.0 for m in cmd)
+        driver_estop = make_node("cpp_estop_driver").new.publish("/cpp_estop", msgType=Bool).create()
+        wait_for(lambda: driver_estop.write("/cpp_estop", Bool(data=True)) or driver.write(
+            internal_cmd, Twist(linear=Vector3(x=0.2))) or (cmd and cmd[-1].linear.x == 0.0 and len(cmd) > 5),
+            timeout=10, interval=0.05, what="the e-stop holding the stop message")
+        cmd.clear()
+        driver.write(internal_cmd, Twist(linear=Vector3(x=0.2)))
+        wait_for(lambda: len(cmd) >= 2, timeout=10, what="messages while e-stopped")
+        assert all(m.linear.x == 0.0 for m in cmd), "held at the stop message while the e-stop says true"
         answer = subprocess.run([ROS1_PYTHON, "-c", f"import rospy; from std_srvs.srv import Empty; "
                                  f"rospy.wait_for_service('{ns}/echo_node/reset', 10); "
                                  f"rospy.ServiceProxy('{ns}/echo_node/reset', Empty)(); print('called')"],

@@ -1,6 +1,6 @@
 """``nd.export(DIR)`` on ROS 2: an ament_python package that colcon builds, and whose installed node,
-started from its own launch file with ipyros not importable, relays, intercepts, serves and guards as
-the session did.
+started from its own launch file with ipyros not importable, relays, intercepts, serves (a service
+relayed, an action of its own) and guards as the session did.
 
 A first interpreter declares a wrapping node (the basenode ``echo_pkg/echo_node`` from an ament prefix of
 the test's own: its ``in`` and service relayed, its ``out`` intercepted by a handler, a timer reading a
@@ -27,6 +27,7 @@ ECHO_NODE = Path(__file__).resolve().parent / "peers" / "echo_node.py"
 
 BUILD = '''
 import sys
+import time
 from ipyros import rosNode
 from geometry_msgs.msg import Twist, Vector3
 from std_msgs.msg import String
@@ -43,6 +44,12 @@ nd.new.subscribe("out", handler=shout, type=String).publish("loud", type=String)
 nd.new.publish("cmd", type=Twist)
 nd.guard("cmd", limits={"linear.x": (-0.5, 0.5)})
 nd.timer(0.2, beat)
+def count(goal, action):
+    for i in range(1, goal.order + 1):
+        action.feedback({"sequence": list(range(i))})
+        time.sleep(0.02)
+    return {"sequence": list(range(goal.order))}
+nd.new.action("count", "test_msgs/Fibonacci", count)
 nd.params["volume"] = 11
 print("exported", nd.export(sys.argv[1], globals()), flush=True)
 '''
@@ -77,7 +84,7 @@ def test_the_package_has_what_colcon_and_ros2_run_need(workspace):
     src = workspace / "src" / "keeper_pkg"
     manifest = (src / "package.xml").read_text()
     assert '<package format="3">' in manifest and "<build_type>ament_python</build_type>" in manifest
-    for needed in ("rclpy", "std_msgs", "std_srvs", "geometry_msgs", "echo_pkg"):
+    for needed in ("rclpy", "std_msgs", "std_srvs", "geometry_msgs", "test_msgs", "action_msgs", "echo_pkg"):
         assert f"<exec_depend>{needed}</exec_depend>" in manifest
     installed = workspace / "install" / "keeper_pkg"
     assert (installed / "lib" / "keeper_pkg" / "keeper").exists()  # where ros2 run keeper_pkg keeper looks
@@ -90,7 +97,7 @@ def test_the_package_has_what_colcon_and_ros2_run_need(workspace):
 
 
 def test_the_installed_node_started_from_its_launch_file_runs_as_the_session_did(workspace, make_node, caller,
-                                                                                  monkeypatch, tmp_path):
+                                                                                  counting, monkeypatch, tmp_path):
     from ipyros.ros2 import launchfile, nodes
 
     installed = workspace / "install" / "keeper_pkg"
@@ -124,6 +131,7 @@ def test_the_installed_node_started_from_its_launch_file_runs_as_the_session_did
         assert {m.linear.x for m in heard["cmd"]} == {0.5}, "the guard's limit held in the installed node"
         answer = caller("/kp/check", SetBool, SetBool.Request(data=True))
         assert answer.success and answer.message == "echo>  checked"
+        assert counting.plain_send("/kp/count", 3) == ("succeeded", 3, [1, 2, 3])  # the action it serves
         probe.shutdown()
     except BaseException:
         for _, log in procs:

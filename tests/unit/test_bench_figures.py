@@ -38,4 +38,14 @@ def test_two_runs_side_by_side_show_each_runs_ratio_to_its_own_anchor():
     now = [Figure("ROS 2", "p50, relay (c)", 0.75, "ms", "direct (a)", 0.3, most=3.0),
            Figure("ROS 2", "only now", 1.0, "ms")]
     rows = compare(before, now).splitlines()
-    assert rows[2:] == ["| ROS 2 | p50, relay (c) | 0.400 ms | 2.00x | 0.750 ms | 2.50x | <= 3x | PASS |"], rows
+    assert rows[2:] == ["| ROS 2 | p50, relay (c) | direct (a) | 0.400 ms | 2.00x | 0.750 ms | 2.50x | <= 3x | PASS |"], rows
+
+
+def test_a_figure_beside_two_anchors_is_compared_beside_each():
+    before = [Figure("ROS 1", "p50 (c)", 0.1, "ms", "topic_tools (b)", 0.2), Figure("ROS 1", "p50 (c)", 0.1, "ms",
+                                                                                  "direct (a)", 0.05)]
+    now = [Figure("ROS 1", "p50 (c)", 0.08, "ms", "topic_tools (b)", 0.1), Figure("ROS 1", "p50 (c)", 0.08, "ms",
+                                                                                 "direct (a)", 0.04)]
+    rows = compare(before, now).splitlines()[2:]
+    assert [row.split(" | ")[2:7] for row in rows] == [["topic_tools (b)", "0.100 ms", "0.50x", "0.080 ms", "0.80x"],
+                                                       ["direct (a)", "0.100 ms", "2.00x", "0.080 ms", "2.00x"]]

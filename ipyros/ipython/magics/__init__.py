@@ -6,7 +6,7 @@
 * :class:`IntrospectMagics` (``introspect.py``): ``%services``, ``%call``, ``%params``, ``%param``,
   ``%nodes``, ``%node``;
 * :class:`ActionMagics` (``actions.py``): ``%actions``, ``%action`` (a goal with live feedback, or --watch);
-* :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``;
+* :class:`NodeMagics` (``nodes.py``): ``%handler``, ``%%handler``, ``%try``, ``%status``, ``%export``;
 * :class:`WrapMagics` (``wrap.py``): ``%wrap``;
 * :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
 * :class:`PlotMagics` (``plot.py``): ``%plot``, topic fields drawn live;
