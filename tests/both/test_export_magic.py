@@ -7,8 +7,8 @@ from shell import error_of, ok
 
 def test_export_at_the_prompt_writes_the_script_or_the_package(ip, session, tmp_path, capsys):
     ok(ip, "from std_msgs.msg import String\n"
-           "xn = rosNode('xn').new.subscribe('/xn/in', lambda m: xn.write('/xn/out', m), msgType=String)"
-           ".publish('/xn/out', msgType=String)")
+           "xn = rosNode('xn')\n"
+           "xn.new.subscribe('/xn/in', lambda m: xn.write('/xn/out', m), msgType=String).publish('/xn/out', msgType=String)")
     capsys.readouterr()
     ok(ip, f"%export xn {tmp_path / 'xn.py'}")
     assert f"ipyros: exported /xn to {tmp_path / 'xn.py'}" in capsys.readouterr().out

@@ -11,8 +11,9 @@ BUILD = (
     "def set_gain(msg):\n    gain[0] = msg.data\n"
     "def scale(msg):\n    tb.write('/tb/out', UInt32(data=msg.data * gain[0]))\n"
     "def scale_v2(msg):\n    tb.write('/tb/out', UInt32(data=msg.data * gain[0] + (msg.data % 10 == 0)))\n"
-    "tb = rosNode('tb').new.subscribe('/tb/in', scale, msgType=UInt32).subscribe('/tb/gain', set_gain, "
-    "msgType=UInt32).publish('/tb/out', msgType=UInt32)\n"
+    "tb = rosNode('tb')\n"
+    "tb.new.subscribe('/tb/in', scale, msgType=UInt32).subscribe('/tb/gain', set_gain, msgType=UInt32)"
+    ".publish('/tb/out', msgType=UInt32)\n"
 )
 
 

@@ -68,6 +68,8 @@ def _fields_yaml(msg: Any, fields: list[str], type_name: str) -> str:
 def _message_path(snap: Any, text: str) -> Optional[msgpath.MessagePath]:
     """``text`` as a message path into a topic, or None for a topic (or rostopic's slash path, ``/pose/position``).
     rostopic's spelling mixed with dots (``/turtle1/pose/position.x``) is read as ``/turtle1/pose.position.x``."""
+    if len(text) > 1 and text[0] == text[-1] and text[0] in "'\"":
+        text = text[1:-1]  # IPython's argument split keeps the quotes a path with braces needs
     if not msgpath.is_path(text):
         return None
     path = msgpath.parse(text)

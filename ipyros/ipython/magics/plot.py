@@ -83,7 +83,7 @@ class PlotMagics(ExtensionMagics):
             stopped = self.stop_live()
             print(f"ipyros: stopped plotting {stopped.topic}" if stopped else "ipyros: no plot is live")
             return stopped
-        topic, fields = _topic_and_fields(args.topic, [f.strip("'\"") for f in args.fields])
+        topic, fields = _topic_and_fields(args.topic and args.topic.strip("'\""), [f.strip("'\"") for f in args.fields])
         if not topic or not fields:
             raise UsageError("give a topic and its fields: %plot /turtle1/cmd_vel linear.x angular.z "
                              "(or message paths: %plot /turtle1/cmd_vel.linear.x /turtle1/cmd_vel.angular.z)")
