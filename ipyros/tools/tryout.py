@@ -26,7 +26,6 @@ node's ROS callbacks keep running, printing and publishing as usual meanwhile.
 from __future__ import annotations
 
 import contextlib
-import copy
 import io
 import time
 import traceback
@@ -36,7 +35,7 @@ from typing import Any, Callable, Iterator, Optional
 
 from ..core import msgtypes, plan as planning, streams
 from ..core.errors import IpyrosError, NotDeclaredError
-from ..core.msgbuild import flow_yaml
+from ..core.msgbuild import copy_message, flow_yaml
 from ..core.slots import call_arity
 from ..core.tables import Column, TextTable
 from ..dsl import engine_of, rosNode
@@ -233,13 +232,18 @@ def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, 
 
 
 class _Recorder:
-    """The writes of one handler call."""
+    """The writes of one handler call; ``problems`` is the try's (a write's problem depends only on the node, the
+    topic and the message's type, which a try does not change: checked once, not for each of a bag's messages)."""
 
-    def __init__(self) -> None:
+    def __init__(self, problems: dict[tuple[int, str, type], Optional[str]]) -> None:
         self.writes: list[Write] = []
+        self.problems = problems
 
     def record(self, node: NodeEngine, topic: str, msg: Any) -> None:
-        self.writes.append(Write(node.name, topic, copy.deepcopy(msg), _write_problem(node, topic, msg)))
+        key = (id(node), topic, type(msg))
+        if key not in self.problems:
+            self.problems[key] = _write_problem(node, topic, msg)
+        self.writes.append(Write(node.name, topic, copy_message(msg), self.problems[key]))
 
 
 def _write_problem(node: NodeEngine, topic: str, msg: Any) -> Optional[str]:
@@ -263,6 +267,7 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
     thread's context (:func:`~ipyros.node.writing.writes_recorded`); other threads print and publish as usual."""
     buffer = io.StringIO()
     recorder: list[_Recorder] = []  # the recorder of the call in progress, if any
+    problems: dict[tuple[int, str, type], Optional[str]] = {}
 
     def record(node: NodeEngine, topic: str, msg: Any) -> None:
         recorder[-1].record(node, topic, msg)
@@ -270,12 +275,12 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
     def run(handler: Callable[..., Any], msg: Any) -> Outcome:
         buffer.seek(0)
         buffer.truncate()
-        recorder.append(_Recorder())
+        recorder.append(_Recorder(problems))
         error = None
         start = time.perf_counter()
         try:
             with streams.into(buffer):
-                handler(copy.deepcopy(msg))
+                handler(copy_message(msg))
         except Exception as exc:  # shown in the table: it is what the handler would do live
             error = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         finally:

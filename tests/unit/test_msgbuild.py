@@ -125,3 +125,19 @@ def test_a_bool_as_0_or_1_is_a_bool():
     from unit_msgs.msg import Sample
 
     assert msgbuild.conform(Sample(on=1)).on is True
+
+
+def test_a_message_copy_is_deep_and_equal_on_both_shapes():
+    from unit2_msgs.msg import Pose
+    from unit_msgs.msg import Sample, Vector3
+
+    from ipyros.core.msgbuild import copy_message
+
+    sample = Sample(label="s", gains=[1.0, 2.0], points=[Vector3(x=1.0)], names=["a"])
+    copied = copy_message(sample)
+    assert copied == sample and copied is not sample
+    copied.points[0].x, copied.gains[0] = 9.0, 9.0
+    assert sample.points[0].x == 1.0 and sample.gains[0] == 1.0  # nothing shared
+    pose = Pose()
+    assert copy_message(pose) == pose and copy_message(pose) is not pose
+    assert copy_message([1, 2]) == [1, 2] and copy_message(3) == 3
