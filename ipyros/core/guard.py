@@ -35,7 +35,7 @@ from typing import Any, Callable, Optional
 from .errors import DeclarationError, cut
 from .msgbuild import field_types, nested_class
 
-__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "Gate", "GuardFigures", "Path", "Verdict", "check_rules",
+__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "Gate", "GuardFigures", "Path", "Verdict", "check_rules",
            "finite_checker", "parse_path"]
 
 #: How long the stop message is held after the session ends for good (s), unless the guard says.
@@ -44,6 +44,9 @@ DEFAULT_GRACE = 3.0
 MOST_GRACE = 10.0
 #: How often the stop message is sent again while it holds (Hz), unless the guard says.
 DEFAULT_REPEAT = 10.0
+#: An episode of a guard's acting ends when this long (s) has passed with nothing for it to do: each kind
+#: of acting (clamped, dropped, not finite, e-stopped) is said once an episode, however the kinds alternate.
+EPISODE_QUIET = 1.0
 _NUMBERS = {"float32", "float64", "int8", "int16", "int32", "int64", "uint8", "uint16", "uint32", "uint64",
             "byte", "char"}
 _FLOATS = {"float32", "float64"}
@@ -258,7 +261,9 @@ class Gate:
     ``stop()`` makes the stop message; ``estopped()`` says whether the guard holds it now (the
     session's e-stop, or its e-stop topic, read from the state it shares with its process);
     ``passed()`` is told of each message sent (its process watches the silence); ``say(text)``
-    tells the prompt, once per episode (the first clamped message of a run of them, not every one).
+    tells the prompt, once per episode and kind: an episode is a run of messages the gate acts on with
+    no second of quiet between them (:data:`EPISODE_QUIET`), so a stream that alternates clamped and
+    non-finite values is said in two lines, not one a message.
     Thread-safe: a handler, ``%pub`` and a relay may send at once.
     """
 
@@ -273,7 +278,8 @@ class Gate:
         self._finite = finite_checker(cls)
         self._lock = threading.Lock()
         self._last: dict[tuple[str, int], tuple[float, float]] = {}  # (path, n-th value) → (value, when) that passed
-        self._episode = ""  # what the gate is doing to a run of messages now ("" while they pass as they come)
+        self._said: set[str] = set()  # the kinds of acting said in this episode
+        self._acted_at = -math.inf  # when the gate last acted on a message (its clock)
         self.figures = GuardFigures()
 
     def check(self, msg: Any) -> Verdict:
@@ -313,7 +319,6 @@ class Gate:
             what = [f"{p.text} {v:g} -> {c:g}" for p, _, _, v, c in outside] + ramped
             self._episode_of(f"clamped ({', '.join(what[:3])}{' ...' if len(what) > 3 else ''})")
             return Verdict(msg, "clamped")
-        self._episode = ""
         return Verdict(msg)
 
     def _outside(self, msg: Any) -> list[tuple[Path, Any, Any, Any, float]]:
@@ -354,8 +359,12 @@ class Gate:
 
     def _episode_of(self, what: str, say: bool = True) -> None:
         kind = what.split(" ")[0] if what.startswith(("e-stopped", "clamped")) else what.split(":")[-1]
-        if kind != self._episode:
-            self._episode = kind
+        now = self._clock()
+        if now - self._acted_at >= EPISODE_QUIET:
+            self._said.clear()  # a quiet second: a new episode
+        self._acted_at = now
+        if kind not in self._said:
+            self._said.add(kind)
             self.figures.last_trip, self.figures.last_trip_at = what, time.time()
             if say:
                 self._say(f"guard {self.topic}: {what}")

@@ -42,15 +42,28 @@ def test_a_message_within_its_limits_passes_as_it_came():
 
 
 def test_a_value_outside_is_clamped_and_said_once_per_episode():
-    g, said, _ = gate(limits=LIMITS)
+    clock = Clock()
+    g, said, _ = gate(limits=LIMITS, clock=clock)
     for x in (3.0, 2.0, -7.0):
         verdict = g.check(Twist(linear=Vector3(x=x), angular=Vector3(z=5.0)))
         assert verdict.why == "clamped" and verdict.send.linear.x == max(min(x, 0.5), -0.5)
         assert verdict.send.angular.z == 1.0
     assert len(said) == 1 and said[0].startswith("guard /cmd_vel: clamped (linear.x 3 -> 0.5, angular.z 5 -> 1)")
-    g.check(Twist())  # passes as it came: the episode ends
+    g.check(Twist())  # passes as it came
+    clock.now += guard.EPISODE_QUIET  # and a quiet second: the episode ends
     g.check(Twist(linear=Vector3(x=9.0)))
     assert len(said) == 2 and g.figures.clamped == 4 and g.figures.passed == 5
+
+
+def test_kinds_of_acting_that_alternate_are_each_said_once_an_episode():
+    """A basenode gone wrong alternates clamped, clean and NaN values: two lines, not one a message."""
+    clock = Clock()
+    g, said, _ = gate(limits=LIMITS, clock=clock)
+    for n in range(300):
+        clock.now += 0.02
+        g.check(Twist(linear=Vector3(x=(3.0, 0.1, math.nan)[n % 3])))
+    assert [s.split(": ", 1)[1][:12] for s in said] == ["clamped (lin", "linear.x is "], said
+    assert g.figures.clamped == g.figures.replaced == 100
 
 
 def test_on_limit_drop_sends_nothing():

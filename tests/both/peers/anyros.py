@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -28,3 +29,15 @@ def field(msg: Any, path: str) -> Any:
     for part in filter(None, path.split(".")):
         msg = getattr(msg, part)
     return msg
+
+
+_printing = threading.Lock()
+
+
+def say(*parts: Any) -> None:
+    """Print one line whole, from any thread: ROS 1 calls a subscriber back on a thread per publisher (the
+    session's and a guard's process's, say), and ``print()`` of several parts from two threads interleaves."""
+    line = " ".join(str(p) for p in parts) + "\n"
+    with _printing:
+        sys.stdout.write(line)
+        sys.stdout.flush()
