@@ -71,7 +71,8 @@ class NodeEngine:
         #: What it sends by hand: write, a message on a guarded output, goals.
         self.writing = Writing(self)
         #: Its guards, while it runs.
-        self.guards = NodeGuards(session.backend, lambda text: session.notify(f"ipyros: {text}"), session.guard_watch)
+        self.guards = NodeGuards(session.backend, lambda text: session.notify(f"ipyros: {text}"), session.guard_watch,
+                                 self.writing.send)
 
     # -- reading -------------------------------------------------------------------------
     @property

@@ -35,16 +35,21 @@ _count = iter(range(1, 1 << 30))
 class LiveGuard:
     """One guard of a running node: what its output's endpoint passes every message through (:meth:`check`)."""
 
-    def __init__(self, model: GuardModel, output: TopicModel, backend: Any, say: Callable[[str], None]) -> None:
+    def __init__(self, model: GuardModel, output: TopicModel, backend: Any, say: Callable[[str], None],
+                 send: Callable[[str, Any], bool] = lambda topic, msg: False) -> None:
         self.topic, self.type = model.resolved, model.type
         self.cls = msgtypes.resolve_message(model.type)[1]
-        self._backend, self._say, self._output = backend, say, output
+        self._backend, self._say, self._output, self._send = backend, say, output, send
         self.shared = Shared.create()
         self.model = model
         self._stop_message = self._make_stop(model)
         self.gate = self._gate(model)
         self.sentinel: Optional[Sentinel] = None
         self._noticed, self._by_topic = self.shared.state, False
+        #: Why its process is gone, if it ended on its own: the guard then fails closed (see :meth:`tend`).
+        self.lost: Optional[str] = None
+        self._closing = False
+        self._stopped_at = 0.0  # when the session last sent the stop message for a lost process (monotonic)
 
     # -- rules ------------------------------------------------------------------------------------
     def _make_stop(self, model: GuardModel) -> Any:
@@ -52,7 +57,11 @@ class LiveGuard:
 
     def _gate(self, model: GuardModel) -> Gate:
         return Gate(self.topic, self.cls, {p: (b[0], b[1]) for p, b in model.limits.items()}, dict(model.rate),
-                    model.on_limit, self.stop_message, lambda: self.shared.estopped, self.shared.passed, self._say)
+                    model.on_limit, self.stop_message, self.holding, self.shared.passed, self._say)
+
+    def holding(self) -> bool:
+        """Whether the stop message goes in place of every message: e-stopped, or its process lost."""
+        return self.shared.estopped or self.lost is not None
 
     def stop_message(self) -> Any:
         """A fresh stop message (a gate may be handed it to send)."""
@@ -65,8 +74,14 @@ class LiveGuard:
         self.gate = self._gate(model)
         self.gate.figures = figures
         self.model = model
+        self._tell({"settings": self._settings()})
+
+    def _tell(self, message: dict[str, Any]) -> None:
         if self.sentinel is not None:
-            self.sentinel.tell({"settings": self._settings()})
+            try:
+                self.sentinel.tell(message)
+            except OSError:  # its process is gone: the watch finds it and says so (see tend())
+                pass
 
     def check(self, msg: Any) -> Verdict:
         return self.gate.check(msg)
@@ -92,19 +107,50 @@ class LiveGuard:
         problem = self.sentinel.ready(SENTINEL_START)
         if problem is not None:
             self.sentinel = None
-            self.shared.close()
-            raise BaseNodeError(f"the guard of {self.topic} could not start its process ({problem}); nothing of the "
-                                f"node runs: see {log}")
+            raise BaseNodeError(f"the guard of {self.topic} could not start its process ({problem}); "
+                                f"{'the stop message holds' if self.lost else 'nothing of the node runs'}: see {log}")
 
     def estop(self, on: bool) -> None:
-        """Hold the stop message (``on``) or let commands pass again; the sentinel is woken to act at once."""
+        """Hold the stop message (``on``) or let commands pass again; the sentinel is woken to act at once. A
+        release starts its process again if it was lost (a one-line error if it cannot: the stop message holds)."""
         self.shared.estop_session = on
+        if not on and self.lost is not None:
+            self._restart()
+        self._tell({"wake": True})
+
+    def _restart(self) -> None:
         if self.sentinel is not None:
-            self.sentinel.tell({"wake": True})
+            self.sentinel.end(hold=False)  # gone already: its pipe closed, its exit status read
+            self.sentinel = None
+        self.shared.ready, self.shared.state = False, PASSING
+        self.start()
+        self.lost = None
+        self._noticed = PASSING
+
+    def tend(self, now: float) -> Optional[str]:
+        """Fail closed when its process ended on its own (killed, crashed): one line the first time; then, for as
+        long as the session runs, every message is replaced by the stop message and the session itself sends it
+        at the guard's rate (stop on silence no longer holds if the session freezes) until released."""
+        sentinel, said = self.sentinel, None
+        if self.lost is None:
+            if sentinel is None or self._closing or sentinel.running:
+                return None
+            code = sentinel.returncode
+            self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
+            said = (f"guard {self.topic}: its process ended ({self.lost}; its log: {sentinel.log_path}): the stop "
+                    f"message goes in place of every message until released (%estop --release starts it again)")
+        if now - self._stopped_at >= 1.0 / self.model.repeat:
+            self._stopped_at = now
+            try:
+                self._send(self.topic, self.stop_message())
+            except Exception:  # noqa: BLE001 - the node closing meanwhile: the next look sends it again
+                pass
+        return said
 
     def close(self, hold: bool) -> None:
         """End the guard: its sentinel holds the stop message for its grace first (``hold``: the node stops), or
         quits at once (the guard was removed; the output goes on unguarded)."""
+        self._closing = True
         if self.sentinel is not None:
             self.sentinel.end(hold=hold, wait=not hold)
             self.sentinel = None
@@ -113,7 +159,9 @@ class LiveGuard:
     def state(self) -> GuardState:
         shared = self.shared
         state = STATES.get(shared.state, "passing") if self.sentinel is not None else "not running"
-        if shared.estopped:
+        if self.lost is not None:
+            state = f"{STATES[ESTOPPED]} (its process ended: {self.lost})"
+        elif shared.estopped:
             state = STATES[ESTOPPED] + (" (by its e-stop topic)" if shared.estop_topic else "")
         return GuardState(self.topic, state, self.gate.figures, shared.stops_sent, shared.reach)
 
@@ -176,9 +224,9 @@ class Watch:
                     self._thread = None
                     return
             for guard in guards:
-                news = guard.news()
-                if news is not None:
-                    self._notify(f"ipyros: {news}")
+                for news in (guard.tend(time.monotonic()), guard.news()):
+                    if news is not None:
+                        self._notify(f"ipyros: {news}")
             time.sleep(self.LOOK)
 
 
@@ -187,14 +235,19 @@ class NodeGuards:
     """The guards of one running node, by topic: opened from the plan (before their outputs), handed to the
     output endpoints, told of new rules, e-stopped, shown."""
 
-    def __init__(self, backend: Any, say: Callable[[str], None], watch: "Watch") -> None:
-        self._backend, self._say, self._watch = backend, say, watch
+    def __init__(self, backend: Any, say: Callable[[str], None], watch: "Watch",
+                 send: Callable[[str, Any], bool] = lambda topic, msg: False) -> None:
+        self._backend, self._say, self._watch, self._send = backend, say, watch, send
         self.live: dict[str, LiveGuard] = {}
         self.ending = False  # set once the node shuts down: its guards then hold the stop message
 
     def open(self, model: GuardModel, output: TopicModel) -> "GuardEndpoint":
-        guard = LiveGuard(model, output, self._backend, self._say)
-        guard.start()
+        guard = LiveGuard(model, output, self._backend, self._say, self._send)
+        try:
+            guard.start()
+        except BaseException:
+            guard.shared.close()
+            raise
         self.live[model.resolved] = guard
         self._watch.add(guard)
         return GuardEndpoint(self, guard)

@@ -143,6 +143,11 @@ class Sentinel:
     def running(self) -> bool:
         return self._proc.poll() is None
 
+    @property
+    def returncode(self) -> Optional[int]:
+        """How it ended (negative: the signal that ended it), None while it runs."""
+        return self._proc.poll()
+
     def end(self, hold: bool = True, wait: bool = True, timeout: float = 15.0) -> None:
         """End it: holding the stop message for its grace (``hold``, what the session's end does), or at once;
         ``wait`` for it to exit, else it is reaped by a thread of its own once its grace is over."""

@@ -134,6 +134,40 @@ def test_e_stop_holds_the_stop_message_whatever_else_arrives_until_released(make
         "release()" in [c.change for c in engine_of(nd).history()]
 
 
+def test_the_guards_process_lost_fails_closed_until_released(make_node, peer, notices):
+    """Its process killed mid-session (stop on silence no longer holds): said once; every command becomes the stop
+    message and the session itself sends it at the guard's rate; a release starts a new process and commands pass."""
+    robot = peer("listen_twist.py", "/guarded10/cmd_vel", "--name=robot10")
+    robot.wait_line("ready")
+    nd = make_node("guard_lost")
+    nd.new.publish("/guarded10/cmd_vel", msgType=Twist)
+    nd.guard("/guarded10/cmd_vel", limits=LIMITS, timeout=0.5, grace=0.2, repeat=10)
+    nd.create()
+    drive = Twist()
+    drive.linear.x = 0.4
+    wait_for(lambda: nd.write("/guarded10/cmd_vel", drive) or any(x == 0.4 for x, *_ in twists(robot)),
+             timeout=30, interval=0.1, what="commands at the robot")
+    live = engine_of(nd).guards.live["/guarded10/cmd_vel"]
+    first = live.sentinel.pid
+    os.kill(first, signal.SIGKILL)
+    wait_for(lambda: any("its process ended" in n for n in notices), what="the lost process said")
+    lost = time.monotonic()
+    for _ in range(10):
+        nd.write("/guarded10/cmd_vel", drive)  # replaced by the stop message
+        time.sleep(0.05)
+    wait_for(lambda: len(stops(robot, lost + 0.6)) >= 3, what="the stop message sent by the session, at its rate")
+    assert not any(x == 0.4 and t > lost for x, *_, t in twists(robot)), "a command passed a guard without its process"
+    assert engine_of(nd).status().guards[0].state == "e-stopped (its process ended: killed by signal 9)"
+    assert len([n for n in notices if "its process ended" in n]) == 1, notices
+    nd.release()
+    assert live.sentinel is not None and live.sentinel.pid != first and live.sentinel.running
+    released = time.monotonic()
+    wait_for(lambda: nd.write("/guarded10/cmd_vel", drive) or any(x == 0.4 and t > released
+                                                                   for x, *_, t in twists(robot)),
+             interval=0.1, what="commands after release")
+    assert engine_of(nd).status().guards[0].state == "passing"
+
+
 def test_an_estop_topic_trips_it_from_another_process(make_node, peer, notices):
     robot = peer("listen_twist.py", "/guarded4/cmd_vel", "--name=robot4")
     robot.wait_line("ready")
