@@ -28,6 +28,7 @@ import os
 import re
 import types
 import xml.etree.ElementTree as ET
+from functools import partial
 from pathlib import Path
 from typing import Any, Callable, Optional
 
@@ -451,13 +452,12 @@ def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Op
     script_path = directory / script_name
     script = Script(node, flavour, script_path, namespace, package=package)
     if language == "cpp":  # the handlers' sources, collected as for a script, go beside their C++ methods
-        files = flavour.cpp_files(script, package)
-        manifest = flavour.cpp_manifest
+        files, manifest = flavour.cpp_package(script, package)
     else:
         text = script.render()
         compile(text, str(script_path), "exec")  # a generated script that does not compile is ipyros's bug
         files = {script_name: (text, script_mode), **flavour.package_files(script, package)}
-        manifest = flavour.manifest
+        manifest = partial(flavour.manifest, script, package)
     stale = _previous_export(directory) - set(files)
     try:
         for folder in {str(Path(name).parent) for name in files} - {"."}:
@@ -465,14 +465,14 @@ def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Op
     except OSError as error:
         raise IpyrosError(f"cannot create {directory}: {error.strerror}") from None
     # The manifest first, listing every file that may be there: an export cut short is still replaceable.
-    write_atomic(directory / "package.xml", manifest(script, package, [*files, *stale], MARK))
+    write_atomic(directory / "package.xml", manifest([*files, *stale], MARK))
     for name, (content, mode) in files.items():
         write_atomic(directory / name, content, mode=mode)
     if stale:
         for name in stale:
             if _inside(directory, name):  # listed by an earlier export, and checked so: never a file elsewhere
                 (directory / name).unlink(missing_ok=True)
-        write_atomic(directory / "package.xml", manifest(script, package, files, MARK))
+        write_atomic(directory / "package.xml", manifest(files, MARK))
     if language == "cpp":
         said = flavour.cpp_said(script, package)
         if said:

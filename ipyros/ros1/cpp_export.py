@@ -22,37 +22,42 @@ from __future__ import annotations
 
 import json
 import re
-from typing import Any, Iterable, Optional
+from typing import Any, Callable, Iterable, Optional
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError
 from ..files.export import package_xml
 
-__all__ = ["cpp_files", "cpp_manifest"]
+__all__ = ["Manifest", "cpp_package", "ported_line"]
 
 _FLOATS = ("float32", "float64")
 
+#: What writes a package's package.xml, given the files it lists and the mark of an export by ipyros.
+Manifest = Callable[[Iterable[str], str], str]
 
-def cpp_files(script: Any, package: str, launch: str) -> dict[str, tuple[str, int]]:
-    """The package's files besides package.xml: ``src/<node>.cpp``, ``CMakeLists.txt``, the launch file
-    (``launch``: its text, the same as the Python package's), ``PORTING.md``."""
+
+def cpp_package(script: Any, package: str, launch: str) -> tuple[dict[str, tuple[str, int]], Manifest]:
+    """The package's files besides package.xml (``src/<node>.cpp``, ``CMakeLists.txt``, the launch file, whose
+    text ``launch`` is the same as the Python package's, ``PORTING.md``), and what writes its package.xml given
+    the files it lists: the source rendered once, its message packages the manifest's and CMake's depends."""
     model = script.model
     writer = _Writer(script)
-    return {f"src/{model.name}.cpp": (writer.source(), 0o644),
-            "CMakeLists.txt": (_cmake(package, model.name, writer.packages()), 0o644),
-            f"launch/{model.name}.launch": (launch, 0o644),
-            "PORTING.md": (writer.porting(package), 0o644)}
-
-
-def cpp_manifest(script: Any, package: str, files: Iterable[str], mark_text: str) -> str:
-    model = script.model
-    writer = _Writer(script)
+    source = writer.source()
+    packages = writer.packages()
+    files = {f"src/{model.name}.cpp": (source, 0o644),
+             "CMakeLists.txt": (_cmake(package, model.name, packages), 0o644),
+             f"launch/{model.name}.launch": (launch, 0o644),
+             "PORTING.md": (writer.porting(package), 0o644)}
     what = f"{model.name}: a roscpp node exported by ipyros from the DSL node {planning.node_fullname(model)}"
-    built = tuple(sorted({"roscpp", "topic_tools", *writer.packages()} - {package}))
+    built = tuple(sorted({"roscpp", "topic_tools", *packages} - {package}))
     depends = sorted({*built, *([model.base.package] if model.base is not None and model.base.package else [])}
                      - {package})
-    return package_xml(model, package, what, depends, files, mark_text, format="2", buildtool="catkin",
-                       build_too=built)
+
+    def manifest(listed: Iterable[str], mark_text: str) -> str:
+        return package_xml(model, package, what, depends, listed, mark_text, format="2", buildtool="catkin",
+                           build_too=built)
+
+    return files, manifest
 
 
 def ported_line(script: Any, package: str) -> Optional[str]:
@@ -128,7 +133,7 @@ class _Writer:
 
     # -- what the package depends on ----------------------------------------------------------------
     def packages(self) -> list[str]:
-        self.source()
+        """The message packages the source names (after :meth:`source`)."""
         return sorted({t.split("/")[0] for t in self.types})
 
     # -- the source ---------------------------------------------------------------------------------

@@ -299,12 +299,8 @@ class RospyScript:
 
     # -- the C++ package (:mod:`.cpp_export`) ------------------------------------------------------
     @staticmethod
-    def cpp_files(script: Any, package: str) -> dict[str, tuple[str, int]]:
-        return cpp_export.cpp_files(script, package, _launch_xml(script, package))
-
-    @staticmethod
-    def cpp_manifest(script: Any, package: str, files: Iterable[str], mark: str) -> str:
-        return cpp_export.cpp_manifest(script, package, files, mark)
+    def cpp_package(script: Any, package: str) -> tuple[dict[str, tuple[str, int]], cpp_export.Manifest]:
+        return cpp_export.cpp_package(script, package, _launch_xml(script, package))
 
     @staticmethod
     def cpp_said(script: Any, package: str) -> Optional[str]:

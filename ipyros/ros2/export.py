@@ -330,11 +330,11 @@ class RclpyScript:
         return ament.manifest(script, package, files, mark)
 
     @staticmethod
-    def cpp_files(script: Any, package: str) -> dict[str, tuple[str, int]]:
+    def cpp_package(script: Any, package: str) -> Any:
         raise IpyrosError("C++ export is made for ROS 1 (roscpp); on ROS 2 export Python: nd.export('my_pkg') "
                           "writes an ament_python package (rclcpp is not installable here to build and test it)")
 
-    cpp_manifest = cpp_said = cpp_files
+    cpp_said = cpp_package
 
 
 def _qos_call(qos: Any, latch: bool = False) -> str:
