@@ -27,7 +27,7 @@ from rclpy.task import Future
 from ..core.actions import ActionCall, GoalResult, Waiter, serve_goal, to_message
 from ..core.errors import IpyrosError
 from ..core.slots import HandlerSlot
-from .runtime import Complain, ProcessNode, Relay, ServiceRelay
+from .runtime import RESULT_SETTLE, Complain, ProcessNode, Relay, ServiceRelay
 
 __all__ = ["ActionRelay", "ActionServer", "ActionWatch", "Goal", "Goals", "STATES"]
 
@@ -194,7 +194,8 @@ class ActionRelay:
                                            ("cancel_goal", CancelGoal, ServiceRelay.TIMEOUT),
                                            ("get_result", cls.Impl.GetResultService, None)):
                 parts.append(ServiceRelay(process, node, f"{source}/_action/{part}", f"{target}/_action/{part}",
-                                          service, complain, timeout))
+                                          service, complain, timeout,
+                                          settle=RESULT_SETTLE if part == "get_result" else 0.0))
             # Feedback and status are read on the caller node, whose one thread also takes the basenode's
             # results: a goal's last feedback is passed on before its result (an rclpy client drops
             # feedback that comes after the result, and a busy session thread could delay it that long).

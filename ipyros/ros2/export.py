@@ -17,6 +17,7 @@ from ..core import plan as planning
 from ..core.errors import IpyrosError
 from . import package as ament
 from .nodes import command
+from .runtime import RESULT_SETTLE
 
 __all__ = ["RclpyScript"]
 
@@ -151,8 +152,9 @@ def action_relay(node, caller, source, target, action_class):
                                       ("cancel_goal", CancelGoal, 10.0),
                                       ("get_result", action_class.Impl.GetResultService, None)):
         client = caller.create_client(srv_class, f"{source}/_action/{part}")
+        settle = RESULT_SETTLE if part == "get_result" else 0.0
 
-        def answer(request, response, client=client, patience=patience, settle=0.02 * (part == "get_result")):
+        def answer(request, response, client=client, patience=patience, settle=settle):
             done = threading.Event()
             future = client.call_async(request)
             future.add_done_callback(lambda _: done.set())
@@ -248,7 +250,8 @@ class RclpyScript:
         if _has(script, planning.ServiceRelaySpec):
             found.append(_SERVICE_RELAY_ROS2)
         if _has(script, planning.ActionServerSpec, planning.ActionRelaySpec):
-            found.append(_ACTIONS_ROS2)
+            found.append(f"# s an action's result waits: its last feedback goes first (two DDS topics keep no order)\n"
+                         f"RESULT_SETTLE = {RESULT_SETTLE!r}\n{_ACTIONS_ROS2}")
         return [h.strip("\n") for h in found]
 
     @staticmethod

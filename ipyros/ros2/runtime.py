@@ -778,6 +778,12 @@ class ServiceServer:
         self._node.destroy_service(self._service)
 
 
+#: How long an action's result waits before it goes on to the client (s): the goal's last feedback, on a DDS
+#: topic of its own that keeps no order with the result's service, may still be on its way, and an rclpy client
+#: drops feedback that comes after the result. The session's action relay and an exported one both wait it.
+RESULT_SETTLE = 0.02
+
+
 class ServiceRelay:
     """Serve ``target`` by calling ``source`` (a basenode's service) and answering with its response.
 
@@ -786,14 +792,15 @@ class ServiceRelay:
     the answer is sent when it comes (:func:`_serve_later`), or the default response after
     ``timeout`` seconds (:attr:`TIMEOUT` unless given; None waits as long as it takes). A
     slow basenode stalls neither the session's subscriptions nor other calls to the same
-    service.
+    service. ``settle``: seconds the answer waits first, on a timer's thread, so that the
+    caller node's one thread goes on delivering meanwhile (an action's result: :data:`RESULT_SETTLE`).
     """
 
     TIMEOUT = 10.0  # seconds a basenode may take to answer
 
     def __init__(self, process: ProcessNode, node: Node, source: str, target: str, cls: type,
-                 complain: Optional[Complain] = None, timeout: Optional[float] = TIMEOUT) -> None:
-        self.source, self.target, self.cls, self.timeout = source, target, cls, timeout
+                 complain: Optional[Complain] = None, timeout: Optional[float] = TIMEOUT, settle: float = 0.0) -> None:
+        self.source, self.target, self.cls, self.timeout, self.settle = source, target, cls, timeout, settle
         self._node, self._caller, self._complain = node, process.caller(), complain
         self._client = self._caller.create_client(cls, source)
         self._service, self._send = _serve_later(node, cls, target, self._call)
@@ -807,7 +814,12 @@ class ServiceRelay:
                 return
             if expiry is not None:
                 expiry.cancel()
-            self._reply(done.result(), header)
+            if self.settle:
+                later = threading.Timer(self.settle, self._reply, (done.result(), header))
+                later.daemon = True
+                later.start()
+            else:
+                self._reply(done.result(), header)
 
         def expire() -> None:
             if not unanswered.acquire(blocking=False):
