@@ -73,6 +73,19 @@ def gone(pid: int, timeout: float) -> bool:
     return False
 
 
+def settled(count, quiet: float, slack: int, timeout: float, what: str) -> None:
+    """Wait until ``count()`` has grown by at most ``slack`` in ``quiet`` seconds: what was sent has arrived, and
+    only the guard's stop messages, at its repeat rate, still come."""
+    last, since, deadline = count(), time.monotonic(), time.monotonic() + timeout
+    while time.monotonic() - since < quiet:
+        if time.monotonic() > deadline:
+            raise BenchError(f"timed out after {timeout:.0f}s waiting for {what} to settle")
+        time.sleep(0.05)
+        now = count()
+        if now - last > slack:
+            last, since = now, time.monotonic()
+
+
 def trips(session: Child, robot: Child, state: str, count: int) -> list[float]:
     """``count`` trips of the session in ``state``: the ms from the last command's stamp to the first stop."""
     pid = session.proc.pid
@@ -116,8 +129,10 @@ def run(ros: str, env: dict[str, str], workdir: Path, count: int, hostile: int) 
         before, _ = (int(w) for w in robot.ask("tally").split())
         session.send(f"hostile {hostile}")
         wrote, seconds = session.expect("wrote", 600).split()
-        wait_until(lambda: int(robot.ask("tally").split()[0]) - before >= hostile, 30, "the hostile messages", 0.1) \
-            if ros == "ROS 1" else time.sleep(2.0)  # ROS 2 keeps the last 1000: some may be overtaken
+        if ros == "ROS 1":
+            wait_until(lambda: int(robot.ask("tally").split()[0]) - before >= hostile, 30, "the hostile messages", 0.1)
+        else:  # ROS 2 keeps the last 1000: some may be overtaken, so wait until only the stop messages come
+            settled(lambda: int(robot.ask("tally").split()[0]), 0.5, 10, 30, "the hostile messages")
         received, outside = (int(w) for w in robot.ask("tally").split())
         hostile_run = {"sent": int(wrote), "received": received - before, "outside": outside,
                        "per_s": int(wrote) / float(seconds)}
