@@ -33,6 +33,11 @@ def _rosbag() -> Any:
     return rosbag
 
 
+def _unreadable(path: Path, error: Exception) -> DeclarationError:
+    return DeclarationError(f"cannot read the bag {path}: {first_line(error)}; is it a ROS 1 bag (rosbag record, "
+                            "%record)?")
+
+
 def bag_topics(path: Path) -> dict[str, str]:
     """The topics recorded in the bag at ``path``, with their types; a one-line error if it is no bag."""
     rosbag = _rosbag()
@@ -40,8 +45,7 @@ def bag_topics(path: Path) -> dict[str, str]:
         with rosbag.Bag(str(path)) as bag:
             return {topic: info.msg_type for topic, info in bag.get_type_and_topic_info().topics.items()}
     except Exception as error:  # noqa: BLE001 - rosbag's errors of any kind (a garbage file: UnicodeDecodeError)
-        raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}; is it a ROS 1 bag "
-                               "(rosbag record, %record)?") from None
+        raise _unreadable(path, error) from None
 
 
 def bag_info(path: Path) -> BagInfo:
@@ -55,8 +59,7 @@ def bag_info(path: Path) -> BagInfo:
             return BagInfo(str(path), "bag", 0.0 if empty else bag.get_start_time(),
                            0.0 if empty else bag.get_end_time(), rows)
     except Exception as error:  # noqa: BLE001 - rosbag's errors of any kind (a garbage file: UnicodeDecodeError)
-        raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}; is it a ROS 1 bag "
-                               "(rosbag record, %record)?") from None
+        raise _unreadable(path, error) from None
 
 
 def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int, Any]]:
@@ -66,8 +69,7 @@ def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int
     try:
         bag = rosbag.Bag(str(path))
     except Exception as error:  # noqa: BLE001 - rosbag's errors of any kind
-        raise DeclarationError(f"cannot read the bag {path}: {first_line(error)}; is it a ROS 1 bag "
-                               "(rosbag record, %record)?") from None
+        raise _unreadable(path, error) from None
     with bag:
         for topic, msg, stamp in bag.read_messages(topics=list(topics)):
             yield topic, stamp.to_nsec(), msg
