@@ -30,6 +30,7 @@ ros1_setup() {
     python3-genpy tmux
     # nd.export(DIR, language="cpp"): the roscpp node it writes is built with catkin_make
     catkin g++ cmake libroscpp-dev libtopic-tools-dev libstd-msgs-dev libgeometry-msgs-dev libstd-srvs-dev
+    libsensor-msgs-dev  # the relay bench's path (h) relays images too
   )
 
   local missing=() p stamp

@@ -22,6 +22,10 @@ contend). For each message kind and path the bench measures, from one publisher 
   arrival), lost = sent - received.
 - the relay's **CPU per message** at the paced rate (all its threads, from schedstat).
 
+Paths: (a) no relay, (b) topic_tools' C++ relay, (c) an ipyros wrapping node's reuse relay,
+(g) the same guarded, (d) an ipyros handler, (h) (c)'s node exported as C++ and built by
+catkin_make at the bench's start (bench/exported.py).
+
 The medians over the repeats are shown (start loss: the worst repeat). The targets of
 issue 3 are checked and printed PASS/FAIL; the table is saved to bench/results/relay.md.
 """
@@ -109,6 +113,16 @@ def ipyros_node(mode: str) -> list[str]:
 
 def topic_tools_relay() -> Route:
     return Route("b", "topic_tools relay (C++)", [str(TOPIC_TOOLS_RELAY), TOPIC_IN, TOPIC_OUT], says_ready=False)
+
+
+def exported_route(built: Path) -> Route:
+    """Path (h): (c)'s node exported as C++ and built by catkin_make (bench/exported.py)."""
+    from bench import exported
+
+    return Route("h", "ipyros node exported as C++ (roscpp)",
+                 [*exported.command("ros1", built, "{kind}"), *exported.remap("ros1", "{kind}", TOPIC_IN, TOPIC_OUT)],
+                 "(c)'s node written by nd.export(DIR, language=\"cpp\") and built by catkin_make: a ShapeShifter "
+                 "byte relay, run without ipyros (bench/exported.py)", says_ready=False)
 
 
 def main_routes(rospy_only: bool = False) -> list[Route]:
@@ -499,7 +513,9 @@ def summarize(record: dict, load: Load, seen: Phases) -> Run:
         relay_cpu_us=per_message_us(seen.relay_rate_ns, load.rate_count),
         relay_flat_cpu_us=per_message_us(seen.relay_flat_ns, load.flat_count),
         header_ok=(header.get("type") == kind.type_name and header.get("md5sum") == cls._md5sum
-                   and header.get("message_definition") == cls._full_text),
+                   # gencpp's text of a definition may end in one more newline than genpy's (Debian's
+                   # geometry_msgs): a relay that advertises with its own C++ type (h) says the same definition
+                   and header.get("message_definition", "").rstrip() == cls._full_text.rstrip()),
         handled=record["handled"],
         foreign_cores=seen.foreign_cores,
     )
@@ -623,6 +639,15 @@ def check_targets(cells: list[Cell]) -> list[Figure]:
             if cell:
                 out.append(Figure(ROS, f"{label} lost at start, ({cell.route.key}), worst of {len(cell.runs)}",
                                   cell.start_lost, "msgs", most=0))
+        h = by.get((kind, "h"))
+        if h and b:  # issue 37: the exported C++ relay beside topic_tools' and ipyros's own
+            out += [Figure(ROS, f"{label} p50, exported C++ relay (h)", h.p50, "ms", "topic_tools (b)", b.p50),
+                    Figure(ROS, f"{label} flat out, exported C++ relay (h)", h.per_s, "msg/s", "topic_tools (b)",
+                           b.per_s)]
+        if h and c:
+            out += [Figure(ROS, f"{label} p50, exported C++ relay (h)", h.p50, "ms", "reuse relay (c)", c.p50),
+                    Figure(ROS, f"{label} relay CPU µs/msg flat out, exported C++ relay (h)", h.flat_cpu_us, "µs",
+                           "reuse relay (c)", c.flat_cpu_us)]
         g = by.get((kind, "g"))
         if c and g:  # issue 40: what a guard costs a relay, beside the same relay unguarded
             out += [Figure(ROS, f"{label} p50, guarded relay (g)", g.p50, "ms", "reuse relay (c)", c.p50),
@@ -719,6 +744,25 @@ def main(argv=None) -> int:
     if shutil.which("rosmaster") is None:
         print("rosmaster is not on PATH: install python3-rosmaster (bash run.sh does)", file=sys.stderr)
         return 2
+    with tempfile.TemporaryDirectory(prefix="ipyros-bench-exported-") as built_in:
+        return _run(opts, routes, load_list, repeats, Path(built_in))
+
+
+def _run(opts: argparse.Namespace, routes: list[Route], load_list: list[Load], repeats: int, workdir: Path) -> int:
+    if not opts.recipes and not opts.rospy_only and (not opts.only or "h" in opts.only.split(",")):
+        from bench import exported
+
+        if shutil.which("catkin_make") is None:
+            print("note: catkin_make is missing (apt install catkin libroscpp-dev libtopic-tools-dev); skipping "
+                  "path (h)", flush=True)
+        else:
+            print("relay bench: building path (h), the exported C++ node (catkin_make)...", flush=True)
+            try:
+                built = exported.build("ros1", workdir, [ld.kind for ld in load_list], TOPIC_OUT)
+            except exported.BenchError as error:  # bench.relay's (this module may run as __main__)
+                print(f"bench: {error}", file=sys.stderr, flush=True)
+                return 1
+            routes = [*routes, exported_route(built)]
 
     began = time.monotonic()
     print(f"relay bench: {len(routes)} paths x {len(load_list)} messages x {repeats} repeats", flush=True)

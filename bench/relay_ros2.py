@@ -16,7 +16,9 @@ discovery kept to this machine, one scenario at a time. Paths:
     session's Fast DDS profile (shared memory of 64 MiB), as such a basenode does; the
     subscriber is a plain rclpy listener with Fast DDS's defaults;
 (f) no relay, publisher and subscriber both with ipyros's profile: one shared-memory hop,
-    the floor of (e)'s two.
+    the floor of (e)'s two;
+(h) (c)'s node exported as an ament_python package and built by colcon at the bench's start,
+    its installed node run without ipyros (bench/exported.py).
 
 Large messages (256 KiB to 16 MiB, a point cloud's size) go through (a), (e) and (f), and a
 best-effort 1 MiB stream at 30 Hz (as cameras publish) through (a) and (e). Every other
@@ -72,6 +74,8 @@ class Path_:
     started_by_ipyros: bool = False
     #: the subscriber has ipyros's profile too (the floor of one shared-memory hop)
     listener_profiled: bool = False
+    #: the relay says ``ready TOPIC`` (TOPIC: where to publish); else the bench publishes on TOPIC_IN
+    says_ready: bool = True
 
 
 _REUSE = [sys.executable, str(NODES / "ipyros_node.py"), "reuse", TOPIC_IN, TOPIC_OUT, "{kind}"]
@@ -137,7 +141,7 @@ def run_once(path: Path_, load: Load, env: dict[str, str], logdir: Path) -> Run:
         source = TOPIC_OUT
         if path.argv is not None:
             relay = start("relay", [a.replace("{kind}", load.kind) for a in path.argv])
-            source = relay.expect("ready", 60)
+            source = relay.expect("ready", 60) if path.says_ready else TOPIC_IN
             # the relay's output matched downstream before the stream starts, as on ROS 1
             wait_until(lambda: int(sub.ask("publishers")) >= 1, 30, "the subscriber to match the relay", 0.05)
         pub = start("pub", [sys.executable, str(NODES / "pub.py"), source, load.kind, load.reliability],
@@ -182,7 +186,16 @@ def median_run(runs: list[Run]) -> Run:
                relay_peak_mib=max(peaks) if peaks else None, handled=all(r.handled for r in runs))
 
 
-def table(results: dict[tuple[str, str], Run], loads: list[Load], repeats: int) -> str:
+def exported_path(built: Path) -> Path_:
+    """Path (h): (c)'s node exported as an ament_python package and built by colcon (bench/exported.py)."""
+    from bench import exported
+
+    return Path_("h", "ipyros node exported as a package (rclpy, colcon)",
+                 [*exported.command("ros2", built, "{kind}"), *exported.remap("ros2", "{kind}", TOPIC_IN, TOPIC_OUT)],
+                 says_ready=False)
+
+
+def table(results: dict[tuple[str, str], Run], loads: list[Load], repeats: int, paths: list[Path_]) -> str:
     import rclpy
 
     ros = f"rclpy {version('rclpy')} ({rclpy.get_rmw_implementation_identifier()})"
@@ -191,7 +204,7 @@ def table(results: dict[tuple[str, str], Run], loads: list[Load], repeats: int) 
              "| relay peak MiB | handled |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for load in loads:
-        for path in PATHS:
+        for path in paths:
             r = results.get((load.key, path.key))
             if r is None:
                 continue
@@ -230,6 +243,12 @@ def targets(results: dict[tuple[str, str], Run], loads: list[Load]) -> list[Figu
         if load.key == "image" and e is not None:
             floor = f"one shared-memory hop (f) takes {f.p50:.3f} ms, (e) makes two" if f is not None else ""
             out.append(Figure(ROS, f"{load.label} p50, wrapped camera (e)", e.p50, "ms", most=5.0, note=floor))
+        h = results.get((load.key, "h"))
+        if b is not None and h is not None and h.p50 is not None:  # issue 37: the exported package's relay
+            out += [Figure(ROS, f"{load.label} p50, exported package relay (h)", h.p50, "ms", "rclpy relay (b)", b.p50),
+                    Figure(ROS, f"{load.label} flat out, exported package relay (h)", h.flat_per_s, "msg/s",
+                           "rclpy relay (b)", b.flat_per_s),
+                    Figure(ROS, f"{load.label} lost at start, (h)", h.start_lost, "msgs", most=0)]
         g = results.get((load.key, "g"))
         if c is not None and g is not None and g.p50 is not None:  # issue 40: a guard's cost, beside (c)
             out += [Figure(ROS, f"{load.label} p50, guarded relay (g)", g.p50, "ms", "reuse relay (c)", c.p50),
@@ -251,8 +270,8 @@ def main(argv: Optional[list[str]] = None) -> int:
     repeats = args.repeats or (1 if args.quick else 3)
     seconds = 2 if args.quick else 4
     loads = [Load("twist", "twist", "TwistStamped (small)", 1000.0, 1000 * seconds, 5000 if args.quick else 20000,
-                  paths="abcgd"),
-             Load("image", "image", "Image 1 MiB", 50.0, 50 * seconds, 100 if args.quick else 200),
+                  paths="abcgdh"),
+             Load("image", "image", "Image 1 MiB", 50.0, 50 * seconds, 100 if args.quick else 200, paths="abcdefh"),
              # what shared memory changes: large messages, direct against a camera ipyros wrapped
              Load("image256k", "image256k", "Image 256 KiB", 50.0, 50 * seconds, 100, paths="aef"),
              Load("image4m", "image4m", "Image 4 MiB", 20.0, 20 * seconds, 40, paths="aef"),
@@ -262,10 +281,21 @@ def main(argv: Optional[list[str]] = None) -> int:
     env = environment()
     results: dict[tuple[str, str], Run] = {}
     status = 0
+    paths = list(PATHS)
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-ros2-") as workdir:
         env.update(ROS_HOME=workdir, ROS_LOG_DIR=str(Path(workdir) / "log"))
+        from bench import exported
+
+        print("relay bench: building path (h), the exported package (colcon build)...", flush=True)
+        try:
+            built = exported.build("ros2", Path(workdir), [ld.kind for ld in loads if "h" in ld.paths], TOPIC_OUT)
+            env["PYTHONPATH"] = os.pathsep.join([*exported.python_path(built), env["PYTHONPATH"]])
+            paths.append(exported_path(built))
+        except BenchError as error:
+            print(f"bench: {error}", file=sys.stderr, flush=True)
+            status = 1
         for load in loads:
-            for path in (p for p in PATHS if p.key in load.paths):
+            for path in (p for p in paths if p.key in load.paths):
                 runs = []
                 for _ in range(repeats):
                     try:
@@ -278,7 +308,7 @@ def main(argv: Optional[list[str]] = None) -> int:
                     p50 = "-" if r.p50 is None else f"{r.p50:.3f} ms"  # a path may deliver nothing: a figure too
                     print(f"  {load.key:9} ({path.key}) p50 {p50}, {r.flat_per_s:,.0f} msg/s, "
                           f"{r.paced_lost} of the stream lost", flush=True)
-    text = table(results, loads, repeats)
+    text = table(results, loads, repeats, paths)
     checks = targets(results, loads)
     text += "\n\nTargets:\n\n" + "\n".join(target_lines(checks))
     keep("ros2_relay", checks)

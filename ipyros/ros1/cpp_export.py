@@ -149,7 +149,7 @@ class _Writer:
                 self.types.add(spec.type)
                 pub = f"pub_{_ident(spec.topic)}_"
                 members.append(f"ros::Publisher {pub};")
-                setup.append(f"{pub} = nh_.advertise<{_cpp_type(spec.type)}>({_string(spec.topic)}, 10, "
+                setup.append(f"{pub} = nh_.advertise<{_cpp_type(spec.type)}>({_string(spec.topic)}, kQueue, "
                              f"{'true' if spec.latch else 'false'});")
                 guard = self.model.guard(spec.topic)
                 if guard is not None:
@@ -165,10 +165,11 @@ class _Writer:
                 members += [f"ros::Publisher {pub};", f"std::unique_ptr<{self._guard_class(guard)}> {name};",
                             f"ros::Subscriber {sub};"]
                 setup += [f"// {spec.source} -> {spec.target}: a guarded relay reads the values it checks",
-                          f"{pub} = nh_.advertise<{_cpp_type(spec.type)}>({_string(spec.target)}, 10);",
+                          f"{pub} = nh_.advertise<{_cpp_type(spec.type)}>({_string(spec.target)}, kQueue);",
                           f"{name}.reset(new {self._guard_class(guard)}(nh_, {pub}));",
-                          f"{sub} = nh_.subscribe<{_cpp_type(spec.type)}>({_string(spec.source)}, 10, "
-                          f"[this](const {_cpp_type(spec.type)}::ConstPtr& msg) {{ {name}->publish(*msg); }});"]
+                          f"{sub} = nh_.subscribe<{_cpp_type(spec.type)}>({_string(spec.source)}, kQueue, "
+                          f"[this](const {_cpp_type(spec.type)}::ConstPtr& msg) {{ {name}->publish(*msg); }}, "
+                          "ros::VoidConstPtr(), noDelay());"]
             elif isinstance(spec, planning.RelaySpec):
                 self.types.add(spec.type)
                 members.append(f"std::unique_ptr<ByteRelay> relay_{_ident(spec.target)}_;")
@@ -193,8 +194,8 @@ class _Writer:
                 self.types.add(spec.type)
                 method = self.script.names[spec.slot]
                 members.append(f"ros::Subscriber sub_{method}_;")
-                setup.append(f"sub_{method}_ = nh_.subscribe({_string(spec.topic)}, 10, &{self._class()}::{method}, "
-                             "this);")
+                setup.append(f"sub_{method}_ = nh_.subscribe({_string(spec.topic)}, kQueue, &{self._class()}::{method}, "
+                             "this, noDelay());")
                 methods.append(self._method(spec.slot, f"void {method}(const {_cpp_type(spec.type)}::ConstPtr& msg)",
                                             "(void)msg;", f"each message on {spec.topic}"))
             elif isinstance(spec, planning.TimerSpec):
@@ -433,10 +434,10 @@ class ByteRelay {
   static ByteRelay* make(ros::NodeHandle& nh, const std::string& source, const std::string& target) {
     auto* relay = new ByteRelay(nh, target);
     relay->advertise_ = [relay, target](bool latch) {
-      relay->pub_ = relay->nh_.advertise<M>(target, 10, latch);
+      relay->pub_ = relay->nh_.advertise<M>(target, kQueue, latch);
     };
     relay->advertise_(false);
-    relay->sub_ = nh.subscribe(source, 10, &ByteRelay::forward, relay);
+    relay->sub_ = nh.subscribe(source, kQueue, &ByteRelay::forward, relay, noDelay());
     return relay;
   }
 
@@ -535,6 +536,12 @@ _SOURCE = """\
 
 template <class T>
 using _t = std::remove_cv_t<std::remove_reference_t<T>>;  // a field's own type, to clamp it in
+
+// As the session's endpoints: a burst is queued, not dropped at roscpp's usual 10 (0: no bound, as the
+// session's rospy queues; give a number to bound memory under a sustained overload, and lose messages then),
+// and small messages go out at once (TCP_NODELAY asked of every publisher this node subscribes to).
+constexpr uint32_t kQueue = 0;
+inline ros::TransportHints noDelay() {{ return ros::TransportHints().tcpNoDelay(); }}
 
 {byte_relay}
 

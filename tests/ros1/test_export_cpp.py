@@ -70,6 +70,7 @@ def test_the_package_holds_cpp_boilerplate_and_says_what_to_port(make_node, tmp_
                     "source is beside each method; see cpp_pkg/PORTING.md"]
     source = (package / "src" / "cpp_wrap.cpp").read_text()
     assert "  // def shout_cpp(msg):" in source and "void shout_cpp(const std_msgs::String::ConstPtr& msg)" in source
+    assert "constexpr uint32_t kQueue = 0;" in source and "&CppWrapNode::shout_cpp, this, noDelay());" in source
     assert "topic_tools::ShapeShifter" in source and "createSteadyTimer" in source  # byte relays; steady watch
     porting = (package / "PORTING.md").read_text()
     assert "| `shout_cpp` | Subscribe | `/cpp_files/chatter` | `String`, `suffix` |" in porting
