@@ -26,9 +26,10 @@ from typing import Any, Callable, Mapping, Optional, Union
 
 from . import msgtypes
 from .errors import IpyrosError
-from .msgbuild import fields_of
+from .msgbuild import field_types, fields_of, nested_class
 
-__all__ = ["Field", "Filter", "Index", "MessagePath", "MessagePathError", "Slice", "is_path", "parse"]
+__all__ = ["Field", "Filter", "Index", "MessagePath", "MessagePathError", "Slice", "complete", "is_path", "parse",
+           "split_topic"]
 
 
 class MessagePathError(IpyrosError):
@@ -98,6 +99,41 @@ class MessagePath:
 def is_path(text: str) -> bool:
     """Whether ``text`` goes on past a topic name into its messages (``/a.b``, ``/a[0]``, ``/a{x>0}``)."""
     return any(mark in text for mark in ".[{")
+
+
+def split_topic(text: str) -> tuple[str, str]:
+    """``/odom.pose.x`` → ``("/odom", ".pose.x")``: the topic, and the way into its messages."""
+    at = min((text.index(mark) for mark in ".[{" if mark in text), default=len(text))
+    return text[:at], text[at:]
+
+
+_STEPS = re.compile(r"(?:\{[^{}]*\})*((?:\.[A-Za-z_]\w*(?:\[[^\[\]]*\]|\{[^{}]*\})*)*)\.([A-Za-z_]\w*)?")
+_STEP = re.compile(r"\.([A-Za-z_]\w*)((?:\[[^\[\]]*\]|\{[^{}]*\})*)")
+
+
+def complete(cls: Optional[type], typed: str) -> list[tuple[str, str]]:
+    """What TAB offers for the part of a path after its topic (``.pose.pose.po``): each field of the
+    message there whose name starts with what is typed, as ``(typed with the field's name in place of
+    its last word, the field's type)``. An index or a slice steps into an array's element type; a
+    filter keeps the type. Nothing after a number or a string, a name the type lacks, an array not
+    yet indexed, an unclosed ``[``/``{``, or no class (a type unknown here)."""
+    found = _STEPS.fullmatch(typed) if cls is not None else None
+    if found is None:
+        return []
+    steps, partial = found.group(1), found.group(2) or ""
+    for name, after in _STEP.findall(steps):
+        names, kinds = field_types(cls)
+        if name not in names:
+            return []
+        kind = kinds[names.index(name)]
+        if kind.endswith("]") and "[" not in after:
+            return []  # a field of an array's element needs an index or a slice first
+        inner = nested_class(re.sub(r"\[\d*\]$", "", kind))
+        if inner is None:
+            return []
+        cls = inner
+    head = typed[:len(typed) - len(partial)]
+    return [(head + name, kind) for name, kind in zip(*field_types(cls)) if name.startswith(partial)]
 
 
 def parse(text: str) -> MessagePath:

@@ -24,12 +24,14 @@ from typing import Any, Callable, Mapping, Optional
 
 from IPython.core import magic_arguments
 
-__all__ = ["ACTION", "ACTION_TYPE", "DEMO_ROBOT", "DSL_NODE", "EXECUTABLE", "FUNCTION", "GOAL_TEMPLATE",
-           "MSG_TEMPLATE", "MSG_TYPE", "NODE", "OWN_TOPIC", "PACKAGE", "REQUEST_TEMPLATE", "SERVICE", "SRV_TYPE",
+__all__ = ["ACTION", "ACTION_TYPE", "DEMO_ROBOT", "DSL_NODE", "EXECUTABLE", "FIELD", "FUNCTION", "GOAL_TEMPLATE",
+           "MSG_PATH", "MSG_TEMPLATE", "MSG_TYPE", "NODE", "OWN_TOPIC", "PACKAGE", "REQUEST_TEMPLATE", "SERVICE", "SRV_TYPE",
            "TIMER", "TOPIC", "TRANSITION", "Grammar", "Word", "argument", "grammar_of"]
 
 # What an argument is, i.e. where its completions come from.
 TOPIC = "topic"              # live topics (+ the node's own first, when a node is known)
+MSG_PATH = "message path"    # a live topic, then past a '.', '[' or '{' the fields of the type it carries
+FIELD = "field"              # a field of the topic before it, dotted (or a message path, when it starts with /)
 OWN_TOPIC = "own topic"      # the node's own topics only (live ones if no node is known)
 SERVICE = "service"          # live services + the node's own
 MSG_TYPE = "message type"

@@ -39,7 +39,7 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 
 from IPython.core.completer import CompletionContext, SimpleCompletion, SimpleMatcherResult, context_matcher
 
-from ..core import msgtypes, names
+from ..core import msgpath, msgtypes, names
 from ..core.graph import GraphSnapshot, actions_of, names_with_prefix
 from ..core.model import NodeModel
 from ..core.msgbuild import template
@@ -53,8 +53,10 @@ from .arguments import (
     DEMO_ROBOT,
     DSL_NODE,
     EXECUTABLE,
+    FIELD,
     FUNCTION,
     GOAL_TEMPLATE,
+    MSG_PATH,
     MSG_TEMPLATE,
     MSG_TYPE,
     NODE,
@@ -422,7 +424,13 @@ class Answerer:
 
     def _found(self, want: Want, user_ns: Mapping[str, Any], limit: Optional[int] = None) -> list[tuple[str, str]]:
         snap, frag, kind = self.graph.snapshot, want.fragment, want.kind
-        if kind in (TOPIC, OWN_TOPIC):
+        if kind == FIELD and not frag.startswith("/"):  # %plot TOPIC linear.<TAB>: a field of that topic
+            fields = msgpath.complete(self._carried(want.before[0], snap), "." + frag) if want.before else []
+            return [(text[1:], meta) for text, meta in fields]
+        if kind in (MSG_PATH, FIELD) and msgpath.is_path(frag):  # %echo /odom.pose.<TAB>: the fields there
+            topic, into = msgpath.split_topic(frag)
+            return [(topic + text, meta) for text, meta in msgpath.complete(self._carried(topic, snap), into)]
+        if kind in (TOPIC, OWN_TOPIC, MSG_PATH, FIELD):
             return self._topics(want, snap, limit)
         if kind == SERVICE:
             return self._services(want, snap)
@@ -473,6 +481,15 @@ class Answerer:
         if kind == EXECUTABLE and want.package:
             return [(e, kind) for e in names_with_prefix(self.catalog.executables(want.package), frag)]
         return []
+
+    @staticmethod
+    def _carried(topic: str, snap: GraphSnapshot) -> Any:
+        """The message class of the type ``topic`` carries (the graph's), or None if unknown here."""
+        type_name = snap.topics.get(_global(topic))
+        try:
+            return msgtypes.resolve_message(type_name)[1] if type_name else None
+        except Exception:  # a type this Python lacks: nothing to offer
+            return None
 
     def _action_words(self, want: Want, snap: GraphSnapshot) -> list[tuple[str, str]]:
         """``%action NAME <TAB>``: the live action's type first, then every action type; after the

@@ -138,6 +138,12 @@ def test_topics_magic_completes_live_topics_by_prefix(matcher):
     assert "/ct/tf" in texts(matcher, "%topics /ct/t")  # subscribed-only topics are live too
 
 
+def test_a_message_path_completes_the_fields_of_the_live_topics_type(matcher):
+    assert texts(matcher, "%echo /ct/turtle1/cmd_vel.lin") == ["/ct/turtle1/cmd_vel.linear"]
+    assert texts(matcher, "%echo /ct/turtle1/cmd_vel.linear.") == [f"/ct/turtle1/cmd_vel.linear.{f}" for f in "xyz"]
+    assert texts(matcher, "%plot /ct/turtle1/cmd_vel angular.") == [f"angular.{f}" for f in "xyz"]
+
+
 def test_relative_tail_completes_in_the_default_namespace(matcher):
     assert texts(matcher, "%echo ct/turtle1/c") == ["ct/turtle1/cmd_vel", "ct/turtle1/color_sensor"]
 

@@ -9,6 +9,8 @@ from ipyros.ipython import completion, magics
 from ipyros.ipython.arguments import (
     DSL_NODE,
     EXECUTABLE,
+    FIELD,
+    MSG_PATH,
     MSG_TEMPLATE,
     MSG_TYPE,
     NODE,
@@ -51,7 +53,10 @@ USER_NS = {"nd": Declared(NODE_MODEL), "f": open}
     ("%topics /tur", TOPIC, "/tur"),
     ("%topics --type geometry_msgs/Tw", MSG_TYPE, "geometry_msgs/Tw"),
     ("%topics --node /tu", NODE, "/tu"),
-    ("%echo ", TOPIC, ""),
+    ("%echo ", MSG_PATH, ""),
+    ("%echo /odom.pose.", MSG_PATH, "/odom.pose."),
+    ("%plot /odom lin", FIELD, "lin"),
+    ("%plot /odom.twist.x /odom.po", FIELD, "/odom.po"),
     ("%pub /t ", MSG_TYPE, ""),
     ("%pub /t std_msgs/String ", MSG_TEMPLATE, ""),
     ("%pub -r 5 /t std_msgs/Str", MSG_TYPE, "std_msgs/Str"),
@@ -62,10 +67,10 @@ USER_NS = {"nd": Declared(NODE_MODEL), "f": open}
     ("%call /reset ", SRV_TYPE, ""),
     ("%call ", SERVICE, ""),
     ("%hz /a /b /c", TOPIC, "/c"),
-    ("%plot /tu", TOPIC, "/tu"),  # the magics whose own parsers say so: no second table to forget them in
+    ("%plot /tu", MSG_PATH, "/tu"),  # the magics whose own parsers say so: no second table to forget them in
     ("%record out.bag /tu", TOPIC, "/tu"),
     ("%record out.bag /a /b", TOPIC, "/b"),
-    ("%echo -n 3 /tu", TOPIC, "/tu"),
+    ("%echo -n 3 /tu", MSG_PATH, "/tu"),
     ("%topics -n /tu", NODE, "/tu"),
     ("%topics --node=/tu", NODE, "/tu"),
     ("%try nd /t ", "function", ""),
@@ -153,3 +158,25 @@ def test_what_a_call_argument_completes():
     assert call_want(string_argument('f.write("'), USER_NS) is None  # a file's write is not ours
     assert call_want(string_argument('x.anything(msgType="std'), USER_NS).kind == MSG_TYPE
     assert call_want(string_argument('nd.service("/s", "'), USER_NS).kind == SRV_TYPE
+
+
+class Graph:
+    def __init__(self, topics: dict) -> None:
+        from ipyros.core.graph import GraphSnapshot
+
+        self.snapshot = GraphSnapshot(topics=topics)
+
+
+@pytest.mark.parametrize("line, offered", [
+    ("%echo /sample.poi", [("/sample.points", "unit_msgs/Vector3[]")]),
+    ("%echo /sample.points[:]{x>0}.", [("/sample.points[:]{x>0}." + f, "float64") for f in "xyz"]),
+    ("%echo /sample.points.", []),  # an array: an index or a slice first
+    ("%echo /sample.label.", []),  # a string has no fields
+    ("%echo /unknown.a", []),  # a topic the graph does not know: no type to read
+    ("%plot /sample points[0].", [("points[0]." + f, "float64") for f in "xyz"]),
+    ("%plot /sample.count /sample.ga", [("/sample.gains", "float64[]")]),
+])
+def test_tab_completes_the_fields_of_a_path_from_the_topics_type(line, offered):
+    want = magic_want(line, USER_NS, LINE_MAGICS)
+    answerer = completion.Answerer(Graph({"/sample": "unit_msgs/Sample"}), None)
+    assert [(c.text, c.type) for c in answerer.completions(want, USER_NS)] == offered

@@ -32,7 +32,7 @@ from ..api import (
     topic_and_field,
     type_once_live,
 )
-from ..arguments import MSG_TEMPLATE, MSG_TYPE, NODE, TOPIC, argument
+from ..arguments import MSG_PATH, MSG_TEMPLATE, MSG_TYPE, NODE, TOPIC, argument
 from ..display import endpoints_table, topics_table
 from .cell_output import OutputArea, in_kernel
 from .common import ExtensionMagics
@@ -145,7 +145,7 @@ class TopicMagics(ExtensionMagics):
 
     # -- %echo ---------------------------------------------------------------------------
     @magic_arguments()
-    @argument("topic", complete=TOPIC, help="the live topic to listen to, or a message path into it: "
+    @argument("topic", complete=MSG_PATH, help="the live topic to listen to, or a message path into it: "
               "/odom.pose.pose.position.x, /scan.ranges[:3], '/poses.poses[:]{position.x>0}.position.x'")
     @argument("-n", "--count", type=int, default=None,
               help="stop after this many messages (default c.RosMagics.echo_count; 0: until Ctrl-C)")

@@ -27,7 +27,7 @@ from ...core import msgpath
 from ...core.text import counted
 from ...tools.plot import Plot, figure, text_chart
 from ..api import global_topic, live_type
-from ..arguments import TOPIC, argument
+from ..arguments import FIELD, MSG_PATH, argument
 from .common import ExtensionMagics
 
 #: How often a live plot is redrawn (s).
@@ -65,8 +65,9 @@ class PlotMagics(ExtensionMagics):
         return stopped.stop() if stopped is not None else None
 
     @magic_arguments()
-    @argument("topic", nargs="?", complete=TOPIC, help="the live topic, or a message path into it: /odom.twist.twist.linear.x")
-    @argument("fields", nargs="*", help="its number fields to plot, dotted: linear.x angular.z (or more paths into it)")
+    @argument("topic", nargs="?", complete=MSG_PATH,
+              help="the live topic, or a message path into it: /odom.twist.twist.linear.x")
+    @argument("fields", nargs="*", complete=FIELD, help="its number fields to plot, dotted: linear.x angular.z (or more paths into it)")
     @argument("--xy", action="store_true", help="two fields drawn against each other: a trajectory")
     @argument("--window", type=float, default=30.0, help="keep (and draw) the last this many seconds (default 30)")
     @argument("--duration", type=float, default=None,
