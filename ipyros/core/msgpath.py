@@ -71,6 +71,8 @@ Step = Union[Field, Index, Slice, Filter]
 _OPS: dict[str, Callable[[Any, Any], bool]] = {"==": operator.eq, "!=": operator.ne, "<=": operator.le,
                                                 ">=": operator.ge, "<": operator.lt, ">": operator.gt}
 _NAME = re.compile(r"[A-Za-z_]\w*")
+_PRIMITIVES = {"bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
+               "float32", "float64", "string", "wstring"}
 _TOPIC = re.compile(r"/[A-Za-z0-9_/~]*")
 _FILTER = re.compile(r"\s*([A-Za-z_][\w.]*)\s*(==|!=|<=|>=|<|>)\s*(.+?)\s*$")
 
@@ -94,6 +96,53 @@ class MessagePath:
         for step in self.steps:
             found = [out for value in found for out in _apply(step, value, self, variables or {})]
         return found
+
+    def check(self, cls: Any) -> None:
+        """Say at once, in one line, if the path cannot select anything in messages of ``cls``: a field its
+        type lacks (and which fields there are), an index into what is no array, a field of an array not
+        indexed. What cannot be told from the type (a message not importable here) is left to the messages."""
+        at = _Typed(self, cls, msgtypes.type_name(cls) or getattr(cls, "__name__", "message"))
+        for step in self.steps:
+            if isinstance(step, (Index, Slice)):
+                if not at.array:
+                    raise MessagePathError(f"{self.text}: {step} needs an array, and this is a {at.kind}")
+                at = _Typed(self, at.cls, at.kind)  # each element, one value each
+            elif isinstance(step, Filter):
+                inner = at
+                for name in step.path:  # read, not stepped into: the value filtered keeps its type
+                    inner = inner.field(name)
+                    if inner is None:
+                        return
+            else:
+                at = at.field(step.name)
+                if at is None:
+                    return
+
+
+@dataclass(frozen=True)
+class _Typed:
+    """Where a path stands in a message's type, as :meth:`MessagePath.check` walks it."""
+
+    path: MessagePath
+    cls: Any  # the message class there; None for a primitive, or a message this Python cannot import
+    kind: str  # its type name (an array's element type when ``array``)
+    array: bool = False
+
+    def field(self, name: str) -> Optional["_Typed"]:
+        """The field ``name`` of this, or None when its type cannot be read here; one line if it is not there."""
+        text = self.path.text
+        if self.array:
+            raise MessagePathError(f"{text}: {self.kind}[] is an array: index it or slice it ([0], [:]) before .{name}")
+        if self.cls is None:
+            if self.kind in _PRIMITIVES:
+                raise MessagePathError(f"{text}: a {self.kind} has no field {name!r}")
+            return None
+        names, kinds = field_types(self.cls)
+        if name not in names:
+            raise MessagePathError(f"{text}: {self.kind} has no field {name!r} (it has {', '.join(names) or 'no fields'})")
+        kind = kinds[names.index(name)]
+        element = re.sub(r"\[\d*\]$", "", kind)
+        return _Typed(self.path, None if element in _PRIMITIVES else nested_class(element), element, element != kind)
 
 
 def is_path(text: str) -> bool:

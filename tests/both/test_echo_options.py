@@ -62,3 +62,5 @@ def test_echo_a_message_path_prints_exactly_the_values_it_selects(ip, capsys):
     assert "position.x>=$limit}.position.x:\n- 2.5\n" in capsys.readouterr().out
     error = error_of(ip, "%echo /echo_paths/poses.poses[0].place -n 1")
     assert "geometry_msgs/Pose has no field 'place' (it has position, orientation)" in str(error), error
+    error = error_of(ip, "%echo /echo_paths/poses.poses.position -n 1")  # told from the type, before a message
+    assert "geometry_msgs/Pose[] is an array: index it or slice it ([0], [:]) before .position" in str(error), error

@@ -79,3 +79,22 @@ def test_a_field_that_is_not_there_says_which_fields_are():
         parse("/t.linear[0]").values(Twist())
     with pytest.raises(MessagePathError, match=r"no variable \$limit"):
         parse("/t{linear.x>$limit}").values(Twist())
+
+
+@pytest.mark.parametrize("text", ["/s.label", "/s.points[:]{x>0}.x", "/s{label=='a'}.gains[1:2]", "/s.points[-1].z",
+                                  "/s.names[0]"])
+def test_a_path_its_type_can_hold_is_checked_quietly(text):
+    parse(text).check(Sample)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("/s.nope", "/s.nope: unit_msgs/Sample has no field 'nope' (it has label, on, count, small, level, gains, "),
+    ("/s.points.x", "/s.points.x: unit_msgs/Vector3[] is an array: index it or slice it ([0], [:]) before .x"),
+    ("/s.label[0]", "/s.label[0]: [0] needs an array, and this is a string"),
+    ("/s.label.x", "/s.label.x: a string has no field 'x'"),
+    ("/s.points[0]{q>1}", "/s.points[0]{q>1}: unit_msgs/Vector3 has no field 'q' (it has x, y, z)"),
+])
+def test_a_path_its_type_cannot_hold_is_one_line_before_any_message(text, message):
+    with pytest.raises(MessagePathError) as raised:
+        parse(text).check(Sample)
+    assert str(raised.value).startswith(message) and "\n" not in str(raised.value)
