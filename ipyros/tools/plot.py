@@ -27,7 +27,7 @@ from ..core.names import tool_name
 from ..core.text import counted
 from ..dsl import rosNode
 
-__all__ = ["Plot", "figure", "text_chart"]
+__all__ = ["Plot", "Series", "figure", "series_chart", "series_figure", "text_chart"]
 
 
 class Plot:
@@ -113,25 +113,36 @@ def _field(msg: Any, path: str) -> Any:
 
 # -- looking at it ---------------------------------------------------------------------------
 
+#: One line of a chart: its label, its x values and its y values (lists or numpy arrays of one length).
+Series = tuple[str, Sequence[float], Sequence[float]]
+
+
 def figure(plot: Plot) -> Any:
     """A matplotlib figure of the plot's data now (Agg: no display needed)."""
-    from matplotlib.figure import Figure
-
     data = plot.data
-    fig = Figure(figsize=(7, 3.5) if not plot.xy else (5, 5))
-    ax = fig.add_subplot()
     if plot.xy:
         x, y = plot.fields
-        ax.plot(data[x], data[y], ".-", ms=2, lw=0.8)
-        ax.set_xlabel(x)
-        ax.set_ylabel(y)
+        return series_figure(f"{plot.topic} ({counted(len(data['t']), 'message')})", [(y, data[x], data[y])], x,
+                             xy=True)
+    return series_figure(f"{plot.topic} ({counted(len(data['t']), 'message')})",
+                         [(path, data["t"], data[path]) for path in plot.fields], "time (s)")
+
+
+def series_figure(title: str, series: Sequence[Series], x_label: str, xy: bool = False) -> Any:
+    """A matplotlib figure of ``series`` against x (Agg: no display needed); ``xy``: one trajectory, equal axes."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 3.5) if not xy else (5, 5))
+    ax = fig.add_subplot()
+    for label, xs, ys in series:
+        ax.plot(xs, ys, ".-" if xy else "-", ms=2, lw=0.8 if xy else 1, label=label)
+    ax.set_xlabel(x_label)
+    if xy:
+        ax.set_ylabel(series[0][0])
         ax.set_aspect("equal", adjustable="datalim")
     else:
-        for path in plot.fields:
-            ax.plot(data["t"], data[path], lw=1, label=path)
-        ax.set_xlabel("time (s)")
         ax.legend(loc="upper left", fontsize=8)
-    ax.set_title(f"{plot.topic} ({counted(len(data['t']), 'message')})", fontsize=9)
+    ax.set_title(title, fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -142,18 +153,27 @@ _MARKS = "*o+x#@"
 def text_chart(plot: Plot, width: int = 72, height: int = 16) -> str:
     """The plot drawn with characters: a frame, the value range on the left, one mark per field."""
     data = plot.data
-    xs = data[plot.fields[0]] if plot.xy else data["t"]
-    series = [data[plot.fields[1]]] if plot.xy else [data[path] for path in plot.fields]
-    title = f"{plot.topic}: " + (" vs ".join(reversed(plot.fields)) if plot.xy else
-                                 "  ".join(f"{_MARKS[i % len(_MARKS)]} {p}" for i, p in enumerate(plot.fields)))
-    if len(xs) == 0:
+    if plot.xy:
+        x, y = plot.fields
+        return series_chart(f"{plot.topic}: {y} vs {x}", [(y, data[x], data[y])], x, width, height, legend=False)
+    return series_chart(plot.topic, [(path, data["t"], data[path]) for path in plot.fields], "time (s)", width, height)
+
+
+def series_chart(title: str, series: Sequence[Series], x_label: str, width: int = 72, height: int = 16,
+                 legend: bool = True) -> str:
+    """``series`` drawn with characters against a shared x: a frame, the value range on the left, one mark a
+    series (named in the title, after ``legend``)."""
+    if legend:
+        title = f"{title}: " + "  ".join(f"{_MARKS[i % len(_MARKS)]} {label}" for i, (label, _, _) in enumerate(series))
+    drawn = [(xs, ys) for _, xs, ys in series if len(xs)]
+    if not drawn:
         return f"{title}\n(no message yet)"
-    lows = [float(min(s.min() for s in series)), float(xs.min())]
-    highs = [float(max(s.max() for s in series)), float(xs.max())]
-    (y_low, x_low), (y_high, x_high) = lows, highs
+    y_low, y_high = min(min(ys) for _, ys in drawn), max(max(ys) for _, ys in drawn)
+    x_low, x_high = min(min(xs) for xs, _ in drawn), max(max(xs) for xs, _ in drawn)
+    y_low, y_high, x_low, x_high = float(y_low), float(y_high), float(x_low), float(x_high)
     y_span, x_span = (y_high - y_low) or 1.0, (x_high - x_low) or 1.0
     grid = [[" "] * width for _ in range(height)]
-    for i, ys in enumerate(series):
+    for i, (_, xs, ys) in enumerate(series):
         for x, y in zip(xs, ys):
             col = min(width - 1, int((x - x_low) / x_span * (width - 1)))
             row = height - 1 - min(height - 1, int((y - y_low) / y_span * (height - 1)))
@@ -164,6 +184,5 @@ def text_chart(plot: Plot, width: int = 72, height: int = 16) -> str:
         tick = f"{y_high:.3g}" if r == 0 else f"{y_low:.3g}" if r == height - 1 else ""
         lines.append(f"{tick:>{label}} │{''.join(row)}│")
     axis = f"{x_low:.3g}".ljust(width - len(f"{x_high:.3g}")) + f"{x_high:.3g}"
-    lines += [" " * label + " └" + "─" * width + "┘", " " * (label + 2) + axis,
-              " " * (label + 2) + (plot.fields[0] if plot.xy else "time (s)")]
+    lines += [" " * label + " └" + "─" * width + "┘", " " * (label + 2) + axis, " " * (label + 2) + x_label]
     return "\n".join(lines)

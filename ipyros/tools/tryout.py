@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator, Optional
 
-from ..core import msgtypes, plan as planning, streams
+from ..core import msgpath, msgtypes, plan as planning, streams
 from ..core.errors import IpyrosError, NotDeclaredError
 from ..core.msgbuild import copy_message, flow_yaml
 from ..core.slots import call_arity
@@ -180,6 +180,36 @@ class BagTrial:
 
     def __str__(self) -> str:
         return self.table().text()
+
+    def series(self, field: str) -> tuple[str, list[tuple[str, list[float], list[float]]]]:
+        """One number field of what each side wrote, over bag time, for a chart: ``(what is drawn, [(side,
+        times, values), ...])``. ``field`` is a path into the messages of the output topic (``linear.x``,
+        ``poses[0].position.x``), or, when the sides wrote on several, into one of them (``/cmd_vel.linear.x``).
+        A one-line error names the topics there are, or what is wrong with the field."""
+        topics = sorted({t for side in self.outputs.values() for t in side})
+        if not topics:
+            raise IpyrosError(f"neither {self.live_name} nor {self.candidate_name} wrote anything: nothing to plot")
+        topic = next((t for t in topics if field == t or field.startswith((t + ".", t + "["))), None)
+        if topic is None and len(topics) > 1:
+            raise IpyrosError(f"--plot {field}: the handlers wrote on {', '.join(topics)}: name the topic too, "
+                              f"e.g. --plot {topics[0]}.{field.lstrip('.')}")
+        topic = topic or topics[0]
+        rest = field[len(topic):] if field.startswith(topic) else field
+        path = msgpath.parse(topic + (rest if not rest or rest.startswith(("[", "{")) else "." + rest.lstrip(".")))
+        drawn = []
+        for side, name in (("live", self.live_name), ("candidate", self.candidate_name)):
+            times, values = [], []
+            for at, msg in self.outputs[side].get(topic, ()):
+                found = path.values(msg)
+                if not found:
+                    continue  # a filter left nothing in this message
+                if isinstance(found[0], bool) or not isinstance(found[0], (int, float)):
+                    raise IpyrosError(f"--plot {path.text}: a {type(found[0]).__name__}, not a number: plot a "
+                                      "number field")
+                times.append(at)
+                values.append(float(found[0]))
+            drawn.append((f"{name} ({side})", times, values))
+        return path.text, drawn
 
 
 def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, shown: int = 5) -> BagTrial:

@@ -45,3 +45,16 @@ def test_try_over_a_bag_runs_every_message_through_both_handlers_offline(ip, ses
     assert ip.user_ns["r2"].differing == 0
     assert "no bag at" in str(error_of(ip, f"%try tb /tb/in scale --bag {tmp_path / 'nothing'}"))
     assert "tb has no handler for /tb/out" in str(error_of(ip, f"%try tb /tb/out scale --bag {bag}"))
+
+
+def test_try_over_a_bag_plots_a_field_of_both_sides_over_bag_time(ip, session, capsys, tmp_path):
+    ok(ip, BUILD)
+    bag = tmp_path / ("plot.bag" if session.backend.name == "ROS 1" else "plot")
+    record(ip, bag)
+    capsys.readouterr()
+    ok(ip, f"r = %try tb /tb/in scale_v2 --bag {bag} --plot data")
+    chart = capsys.readouterr().out
+    assert f"/tb/out.data over bag time, from {bag}: * scale (live)  o scale_v2 (candidate)" in chart, chart
+    assert "150" in chart and "bag time (s)" in chart  # the top of the range: 3 x 50
+    assert "--plot draws a try over a bag" in str(error_of(ip, "%try tb /tb/in scale_v2 --plot data"))
+    assert "not a number" in str(error_of(ip, f"%try tb /tb/in scale_v2 --bag {bag} --plot /tb/out"))

@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import pytest
+from unit_msgs.msg import Twist, Vector3
+
+from ipyros.core.errors import IpyrosError
+from ipyros.tools.plot import series_chart
 from ipyros.tools.tryout import BagTrial, Difference, Outcome, Write
 
 
@@ -16,3 +21,30 @@ def test_a_bag_trial_shows_counts_per_output_and_the_first_differences_side_by_s
     rows = [line.split() for line in lines[3:]]
     assert rows[0] == ["/log", "0", "1"] and rows[1] == ["/out", "50", "49"]
     assert lines[-1].startswith("at 0.900 s: 10") and "write /out: 30" in lines[-1] and "write /out: 31" in lines[-1]
+
+
+def trial_of(outputs):
+    return BagTrial("n", "/in", "run", "scale", "scale_v2", total=3, differing=3, outputs=outputs, first=())
+
+
+def test_a_trial_gives_one_field_of_each_sides_outputs_over_bag_time():
+    twists = {"live": {"/cmd": [(t, Twist(linear=Vector3(x=t))) for t in (0.0, 0.5, 1.0)]},
+              "candidate": {"/cmd": [(t, Twist(linear=Vector3(x=2 * t))) for t in (0.0, 0.5)]}}
+    assert trial_of(twists).series("linear.x") == ("/cmd.linear.x", [("scale (live)", [0.0, 0.5, 1.0], [0.0, 0.5, 1.0]),
+                                                                     ("scale_v2 (candidate)", [0.0, 0.5], [0.0, 1.0])])
+    assert trial_of(twists).series("/cmd.linear.x")[0] == "/cmd.linear.x"
+    chart = series_chart("/cmd.linear.x", trial_of(twists).series("linear.x")[1], "bag time (s)", width=20, height=5)
+    assert chart.splitlines()[0] == "/cmd.linear.x: * scale (live)  o scale_v2 (candidate)" and "bag time (s)" in chart
+
+
+def test_a_field_to_plot_given_wrong_is_one_line():
+    several = {"live": {"/cmd": [(0.0, Twist())], "/log": [(0.0, Twist())]}, "candidate": {}}
+    with pytest.raises(IpyrosError, match=r"^--plot linear.x: the handlers wrote on /cmd, /log: name the topic too, "
+                                          r"e.g. --plot /cmd.linear.x$"):
+        trial_of(several).series("linear.x")
+    with pytest.raises(IpyrosError, match="a Vector3, not a number: plot a number field"):
+        trial_of({"live": {"/cmd": [(0.0, Twist())]}, "candidate": {}}).series("linear")
+    with pytest.raises(IpyrosError, match="neither scale nor scale_v2 wrote anything"):
+        trial_of({"live": {}, "candidate": {}}).series("linear.x")
+    with pytest.raises(IpyrosError, match="a Twist, not a number"):
+        trial_of({"live": {"/cmd": [(0.0, Twist())]}, "candidate": {}}).series("/cmd")

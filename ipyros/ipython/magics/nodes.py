@@ -21,10 +21,12 @@ from ...dsl import engine_of, keeping, node_of, restore, rosNode
 from ...files.modelfile import handler_sources
 from ...node.session import current
 from ...tools.editing import EditWatch, PendingEdit, fresh_name, handler_source, lambda_as_def, new_functions
+from ...tools.plot import series_chart, series_figure
 from ...tools.tryout import try_bag, try_candidate
 from ..api import evaluate, find_node, split_head
 from ..arguments import DSL_NODE, FUNCTION, OWN_TOPIC, argument
 from ..display import session_table
+from .cell_output import in_kernel
 from .common import ExtensionMagics
 
 
@@ -110,6 +112,8 @@ class NodeMagics(ExtensionMagics):
               "c.RosMagics.try_history)")
     @argument("--bag", default=None, help="every message of TOPIC in this bag instead (offline: the node need not "
               "run, nothing is published); returns the outcome (r.total, r.differing, r.outputs)")
+    @argument("--plot", metavar="FIELD", default=None,
+              help="with --bag: draw FIELD of both sides' outputs over bag time (linear.x, or /cmd_vel.linear.x)")
     @line_magic("try")
     def try_handler(self, line: str) -> Any:
         """Run CANDIDATE on the last messages TOPIC brought to NODE, beside the live handler.
@@ -128,12 +132,33 @@ class NodeMagics(ExtensionMagics):
             raise UsageError(f"-n must be 1 or more, not {args.last}")
         node = find_node(self.shell, args.node)
         candidate = evaluate(self.shell, expression, "candidate handler")
+        if args.plot is not None and args.bag is None:
+            raise UsageError("--plot draws a try over a bag, over bag time: give --bag FILE too")
         if args.bag is not None:
             if args.last is not None:
                 raise UsageError("-n counts the node's last messages; with --bag every message of the bag is tried")
-            return try_bag(node, args.topic, candidate, args.bag)  # shown as the cell's result: r = %try ... keeps it
+            trial = try_bag(node, args.topic, candidate, args.bag)
+            if args.plot is not None:
+                self._plot_trial(trial, args.plot)
+            return trial  # shown as the cell's result: r = %try ... keeps it
         self.ext.printer.show(try_candidate(node, args.topic, candidate, args.last))
         return None
+
+    def _plot_trial(self, trial: Any, field: str) -> None:
+        """Both sides' FIELD over bag time: a chart of characters in a terminal, a figure in Jupyter."""
+        drawn, series = trial.series(field)
+        title = f"{drawn} over bag time, from {trial.bag}"
+        if in_kernel(self.shell):
+            import io
+
+            from IPython.display import Image, display
+
+            buffer = io.BytesIO()
+            series_figure(title, series, "bag time (s)").savefig(buffer, format="png", dpi=80)
+            display(Image(data=buffer.getvalue()))
+        else:
+            width = max(20, self.ext.printer.console().width - 14)
+            print(series_chart(title, series, "bag time (s)", width=width))
 
     # -- %versions / %revert -------------------------------------------------------------------
     @magic_arguments()
