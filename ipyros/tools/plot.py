@@ -20,7 +20,7 @@ import importlib.util
 import threading
 import time
 from collections import deque
-from typing import Any, Optional, Sequence
+from typing import Any, Mapping, Optional, Sequence
 
 from ..core.errors import IpyrosError
 from ..core.names import tool_name
@@ -31,40 +31,49 @@ __all__ = ["Plot", "Series", "figure", "series_chart", "series_figure", "text_ch
 
 
 class Plot:
-    """The values of ``fields`` (dotted paths: ``linear.x``) of the messages on ``topic``, over time.
+    """The values of ``fields`` (dotted paths: ``linear.x``) of the messages on ``topic``, over time; ``others``
+    ({topic: (type, fields)}) adds fields of more topics, each on its own arrival times.
 
     ``xy``: the two fields are a trajectory (x, y), drawn against each other, not over time.
     """
 
     def __init__(self, topic: str, type_name: str, fields: Sequence[str], xy: bool = False,
-                 window: float = 30.0) -> None:
-        if not fields:
+                 window: float = 30.0, others: Optional[Mapping[str, tuple[str, Sequence[str]]]] = None) -> None:
+        streams = {topic: (type_name, list(fields)), **dict(others or {})}
+        if not all(f for _, f in streams.values()):
             raise IpyrosError(f"%plot {topic}: name the fields to plot, e.g. linear.x angular.z")
         if importlib.util.find_spec("numpy") is None or importlib.util.find_spec("matplotlib") is None:
             raise IpyrosError("%plot needs numpy and matplotlib: pip install 'ipyros[plot]' (bash run.sh has them)")
-        if xy and len(fields) != 2:
-            raise IpyrosError(f"--xy draws one field against another: give two fields, not {len(fields)}")
-        self.topic, self.type_name, self.fields, self.xy, self.window = topic, type_name, list(fields), xy, window
-        self._samples: deque[tuple[float, tuple[float, ...]]] = deque()
+        if xy and (len(fields) != 2 or len(streams) > 1):
+            raise IpyrosError(f"--xy draws one field against another of one topic: give two fields, not "
+                              f"{sum(len(f) for _, f in streams.values())}")
+        self.topic, self.type_name, self.xy, self.window = topic, type_name, xy, window
+        self.topics = list(streams)
+        self._fields = {t: f for t, (_, f) in streams.items()}
+        #: The series, as ``data`` names them: a field alone for one topic, ``topic.field`` for several.
+        self.fields = list(fields) if len(streams) == 1 else [f"{t}.{f}" for t, fs in self._fields.items() for f in fs]
+        self._samples: dict[str, deque[tuple[float, tuple[float, ...]]]] = {t: deque() for t in streams}
         self._lock = threading.Lock()
         self._t0 = time.monotonic()
         self.problem: Optional[str] = None  # why recording stopped early (a field that is not a number)
         self._node: Optional[rosNode] = rosNode(tool_name("plot"))
-        self._node.new.subscribe(topic, handler=self._record, msgType=type_name)
+        for name, (kind, _) in streams.items():
+            self._node.new.subscribe(name, handler=lambda msg, name=name: self._record(name, msg), msgType=kind)
         self._node.create()
 
     # -- recording (on the executor's thread) ------------------------------------------
-    def _record(self, msg: Any) -> None:
+    def _record(self, topic: str, msg: Any) -> None:
         try:
-            values = tuple(float(_field(msg, path)) for path in self.fields)
+            values = tuple(float(_field(msg, path)) for path in self._fields[topic])
         except (AttributeError, TypeError, ValueError) as error:
-            self.problem = f"%plot {self.topic}: {error}"
+            self.problem = f"%plot {topic}: {error}"
             return
         now = time.monotonic() - self._t0
         with self._lock:
-            self._samples.append((now, values))
-            while self._samples and self._samples[0][0] < now - self.window:
-                self._samples.popleft()
+            samples = self._samples[topic]
+            samples.append((now, values))
+            while samples and samples[0][0] < now - self.window:
+                samples.popleft()
 
     # -- the data ----------------------------------------------------------------------
     @property
@@ -80,24 +89,35 @@ class Plot:
 
     @property
     def data(self) -> dict[str, Any]:
-        """``{"t": times, field: values, ...}`` as numpy arrays, a copy: the last ``window`` seconds."""
+        """``{"t": times, field: values, ...}`` as numpy arrays, a copy: the last ``window`` seconds. With several
+        topics each field is ``topic.field`` and its times ``"t topic"`` (``"t"`` the first topic's)."""
         import numpy as np
 
         with self._lock:
-            samples = list(self._samples)
-        columns = {"t": np.array([t for t, _ in samples])}
-        for i, path in enumerate(self.fields):
-            columns[path] = np.array([values[i] for _, values in samples])
+            taken = {topic: list(samples) for topic, samples in self._samples.items()}
+        columns = {"t": np.array([t for t, _ in taken[self.topic]])}
+        for topic, samples in taken.items():
+            if len(taken) > 1:
+                columns[f"t {topic}"] = np.array([t for t, _ in samples])
+            for i, path in enumerate(self._fields[topic]):
+                columns[path if len(taken) == 1 else f"{topic}.{path}"] = np.array([v[i] for _, v in samples])
         return columns
 
+    def series(self) -> list[tuple[str, Any, Any]]:
+        """``(label, times, values)`` of each field, for a chart."""
+        data = self.data
+        if len(self.topics) == 1:
+            return [(path, data["t"], data[path]) for path in self.fields]
+        return [(f"{t}.{f}", data[f"t {t}"], data[f"{t}.{f}"]) for t, fs in self._fields.items() for f in fs]
+
     def __len__(self) -> int:
-        return len(self._samples)
+        return sum(len(samples) for samples in self._samples.values())
 
     def __repr__(self) -> str:
+        what = ", ".join(self.fields) if len(self.topics) > 1 else f"{self.topic} {', '.join(self.fields)}"
         if self.running:  # shown once, while the count still grows: a number here would be stale at once
-            return f"<Plot of {self.topic} {', '.join(self.fields)} (recording): .data holds the samples as arrays>"
-        return (f"<Plot of {self.topic} {', '.join(self.fields)} (stopped): {counted(len(self), 'sample')}; "
-                ".data holds them as arrays>")
+            return f"<Plot of {what} (recording): .data holds the samples as arrays>"
+        return f"<Plot of {what} (stopped): {counted(len(self), 'sample')}; .data holds them as arrays>"
 
 
 def _field(msg: Any, path: str) -> Any:
@@ -120,12 +140,11 @@ Series = tuple[str, Sequence[float], Sequence[float]]
 def figure(plot: Plot) -> Any:
     """A matplotlib figure of the plot's data now (Agg: no display needed)."""
     data = plot.data
+    title = f"{', '.join(plot.topics)} ({counted(len(plot), 'message')})"
     if plot.xy:
         x, y = plot.fields
-        return series_figure(f"{plot.topic} ({counted(len(data['t']), 'message')})", [(y, data[x], data[y])], x,
-                             xy=True)
-    return series_figure(f"{plot.topic} ({counted(len(data['t']), 'message')})",
-                         [(path, data["t"], data[path]) for path in plot.fields], "time (s)")
+        return series_figure(title, [(y, data[x], data[y])], x, xy=True)
+    return series_figure(title, plot.series(), "time (s)")
 
 
 def series_figure(title: str, series: Sequence[Series], x_label: str, xy: bool = False) -> Any:
@@ -152,11 +171,11 @@ _MARKS = "*o+x#@"
 
 def text_chart(plot: Plot, width: int = 72, height: int = 16) -> str:
     """The plot drawn with characters: a frame, the value range on the left, one mark per field."""
-    data = plot.data
     if plot.xy:
+        data = plot.data
         x, y = plot.fields
         return series_chart(f"{plot.topic}: {y} vs {x}", [(y, data[x], data[y])], x, width, height, legend=False)
-    return series_chart(plot.topic, [(path, data["t"], data[path]) for path in plot.fields], "time (s)", width, height)
+    return series_chart(", ".join(plot.topics), plot.series(), "time (s)", width, height)
 
 
 def series_chart(title: str, series: Sequence[Series], x_label: str, width: int = 72, height: int = 16,

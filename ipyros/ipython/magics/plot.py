@@ -34,21 +34,25 @@ from .common import ExtensionMagics
 REDRAW = 0.5
 
 
-def _topic_and_fields(topic: Optional[str], fields: list[str]) -> tuple[Optional[str], list[str]]:
-    """TOPIC FIELD ..., or message paths into one topic (``/odom.twist.twist.linear.x /odom.pose.pose.position.x``):
-    the topic and the dotted fields. A plot draws fields: an index, a slice or a filter is for %echo."""
+def _topic_and_fields(topic: Optional[str], fields: list[str]) -> tuple[Optional[str], list[str], dict[str, list[str]]]:
+    """TOPIC FIELD ..., or message paths (``/odom.twist.twist.linear.x /cmd_vel.linear.x``): the first topic, its
+    dotted fields, and the other topics' ({topic: fields}). A field after a path is of that path's topic. A plot
+    draws fields: an index, a slice or a filter is for %echo."""
     if not topic or not msgpath.is_path(topic):
-        return topic, fields
-    words = [topic, *fields]
-    paths = [msgpath.parse(word) if word.startswith("/") else None for word in words]
-    topics = {path.topic for path in paths if path is not None}
-    if len(topics) > 1:
-        raise UsageError(f"a plot draws the fields of one topic, not of {', '.join(sorted(topics))}: "
-                         "one %plot a topic")
-    for path in paths:
-        if path is not None and not all(isinstance(step, msgpath.Field) for step in path.steps):
+        return topic, fields, {}
+    found: dict[str, list[str]] = {}
+    current = ""
+    for word in [topic, *fields]:
+        if not word.startswith("/"):
+            found[current].append(word)
+            continue
+        path = msgpath.parse(word)
+        if not all(isinstance(step, msgpath.Field) for step in path.steps):
             raise UsageError(f"{path.text}: a plot draws number fields; an index, a slice or a filter is for %echo")
-    return topics.pop(), [path.field if path is not None else word for path, word in zip(paths, words)]
+        current = path.topic
+        found.setdefault(current, []).append(path.field)
+    first, *rest = found
+    return first, found[first], {name: found[name] for name in rest}
 
 
 @magics_class
@@ -67,7 +71,8 @@ class PlotMagics(ExtensionMagics):
     @magic_arguments()
     @argument("topic", nargs="?", complete=MSG_PATH,
               help="the live topic, or a message path into it: /odom.twist.twist.linear.x")
-    @argument("fields", nargs="*", complete=FIELD, help="its number fields to plot, dotted: linear.x angular.z (or more paths into it)")
+    @argument("fields", nargs="*", complete=FIELD,
+              help="its number fields to plot, dotted: linear.x angular.z (or more paths, into other topics too)")
     @argument("--xy", action="store_true", help="two fields drawn against each other: a trajectory")
     @argument("--window", type=float, default=30.0, help="keep (and draw) the last this many seconds (default 30)")
     @argument("--duration", type=float, default=None,
@@ -84,7 +89,8 @@ class PlotMagics(ExtensionMagics):
             stopped = self.stop_live()
             print(f"ipyros: stopped plotting {stopped.topic}" if stopped else "ipyros: no plot is live")
             return stopped
-        topic, fields = _topic_and_fields(args.topic and args.topic.strip("'\""), [f.strip("'\"") for f in args.fields])
+        topic, fields, more = _topic_and_fields(args.topic and args.topic.strip("'\""),
+                                                [f.strip("'\"") for f in args.fields])
         if not topic or not fields:
             raise UsageError("give a topic and its fields: %plot /turtle1/cmd_vel linear.x angular.z "
                              "(or message paths: %plot /turtle1/cmd_vel.linear.x /turtle1/cmd_vel.angular.z)")
@@ -92,8 +98,10 @@ class PlotMagics(ExtensionMagics):
             raise UsageError("--window and --duration are seconds: more than 0 (window up to an hour)")
         topic = global_topic(topic)
         type_name = live_type(self.ext, topic)
+        others = {name: (live_type(self.ext, name), words) for name, words in
+                  ((global_topic(name), words) for name, words in more.items())}
         self.stop_live()
-        plot = Plot(topic, type_name, fields, xy=args.xy, window=args.window)
+        plot = Plot(topic, type_name, fields, xy=args.xy, window=args.window, others=others)
         if args.png:
             return self._to_png(plot, args.png, args.duration or 5.0)
         if getattr(self.shell, "kernel", None) is not None:
@@ -110,7 +118,7 @@ class PlotMagics(ExtensionMagics):
             figure(plot).savefig(path, format="png", dpi=100)
         except OSError as error:
             raise UsageError(f"cannot write {path}: {error.strerror or error}") from None
-        print(f"ipyros: {counted(len(plot), 'message')} of {plot.topic} plotted to {path}")
+        print(f"ipyros: {counted(len(plot), 'message')} of {', '.join(plot.topics)} plotted to {path}")
         return plot
 
     def _in_terminal(self, plot: Plot, duration: Optional[float]) -> Plot:
@@ -129,7 +137,8 @@ class PlotMagics(ExtensionMagics):
         finally:
             plot.stop()
         _check(plot)
-        print(f"ipyros: plotted {counted(len(plot), 'message')} of {plot.topic}; {self._kept_as()} holds them")
+        print(f"ipyros: plotted {counted(len(plot), 'message')} of {', '.join(plot.topics)}; "
+              f"{self._kept_as()} holds them")
         return plot
 
     def _kept_as(self) -> str:
