@@ -50,7 +50,7 @@ ros1_setup() {
   fi
   stamp="$venv/.ipyros-installed"
   if [[ ! -f "$stamp" || "$here/pyproject.toml" -nt "$stamp" ]]; then
-    "$venv/bin/pip" install -q --disable-pip-version-check -e "$here[test]" >&2
+    "$venv/bin/pip" install -q --disable-pip-version-check -e "$here[test,bags]" >&2
     touch "$stamp"
   fi
 }
@@ -61,6 +61,7 @@ venv2="$here/.venv-ros2"
 ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs ros-rcl-interfaces
                ros-action-msgs ros-test-msgs  # actions: test_msgs/action/Fibonacci serves the tests and the README
                rosbags  # rosbags: ROS 2 bags (%record, baseBag); rosbag2 is not on PyPI
+               mcap  # the tests read back what %record wrote with MCAP's own reader too
                catkin_pkg  # build_messages: rosidl_adapter reads .msg files with it
                colcon-common-extensions)  # builds the ament_python package nd.export(DIR) writes
 ros2_venv() {

@@ -182,10 +182,16 @@ def _copy_value(value: Any) -> Any:
 
 
 def fields_of(msg: Any) -> list[str]:
-    """A message's (or message class's) field names, in order, on either ROS."""
+    """A message's (or message class's) field names, in order, on either ROS (and as rosbags reads a bag's:
+    dataclasses, whose fields name the message's)."""
     cls = msg if isinstance(msg, type) else type(msg)
     ros2_fields = getattr(cls, "get_fields_and_field_types", None)
-    return list(ros2_fields()) if ros2_fields is not None else list(getattr(cls, "__slots__", ()))
+    if ros2_fields is not None:
+        return list(ros2_fields())
+    dataclass_fields = getattr(cls, "__dataclass_fields__", None)
+    if dataclass_fields is not None and not hasattr(cls, "_slot_types"):
+        return [name for name in dataclass_fields if not name.startswith("__")]
+    return list(getattr(cls, "__slots__", ()))
 
 
 def _is_message(value: Any) -> bool:

@@ -137,7 +137,7 @@ class rosNode:  # noqa: N801 - the paper's name
         return self
 
     def baseBag(self, path: Any, rate: float = 1.0, loop: bool = False, topics: Optional[list[str]] = None,
-                delay: float = 5.0) -> "rosNode":  # noqa: N802 - named like baseNode
+                delay: float = 5.0, clock: bool = False) -> "rosNode":  # noqa: N802 - named like baseNode
         """Wrap a recorded bag as the basenode: a bag player (like ``rosbag play``) publishes its
         topics, remapped like any basenode's, so that ``reuse`` and ``new.subscribe`` work on
         recorded data as on a live node, and ``nd.base.restart()`` plays it again (after a
@@ -145,8 +145,11 @@ class rosNode:  # noqa: N801 - the paper's name
 
         ``rate`` scales the playing speed, ``loop`` plays it again and again, ``topics`` plays
         only these; the player waits until each topic has a subscriber, ``delay`` seconds at most.
+        ``clock``: the player publishes the bag's time on ``/clock`` as it plays, and this node
+        runs on it (``nd.now()``, and on ROS 2 its timers; see the guide's "Recorded data"). ``%bag
+        pause NODE`` (resume, step, seek, rate, loop) drives it while it plays.
         """
-        set_bag(self._engine, path, rate, loop, topics, delay)
+        set_bag(self._engine, path, rate, loop, topics, delay, clock)
         return self
 
     def discover(self, timeout: float = 10.0) -> Any:
@@ -165,6 +168,11 @@ class rosNode:  # noqa: N801 - the paper's name
     def shutdown(self) -> None:
         """Stop the node's publishers, subscribers, timers, services and its basenode."""
         self._engine.shutdown()
+
+    def now(self) -> float:
+        """The node's ROS time, in seconds: the bag's time while a ``baseBag(..., clock=True)`` plays (0 until
+        its first /clock), else the system's. On ROS 2 its timers run on the same clock."""
+        return self._engine.now()
 
     # -- timers -----------------------------------------------------------------------
     def timer(self, period: float, handler: Callable[..., Any], *, name: Optional[str] = None,

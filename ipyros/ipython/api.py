@@ -17,7 +17,7 @@ from typing import Any, Callable, Optional, Protocol
 
 from IPython.core.error import UsageError
 
-from ..core import names, plan as planning
+from ..core import msgpath, names, plan as planning
 from ..core.errors import MasterError
 from ..core.graph import GraphSnapshot, frozen
 from ..dsl import node_of, rosNode
@@ -179,22 +179,47 @@ def global_topic(name: str) -> str:
 
 
 def compile_filter(expression: str, namespace: dict) -> Any:
-    """``--filter EXPR`` compiled once; the returned test says for message ``m`` whether to keep it."""
+    """``--filter EXPR`` compiled once; the returned test, ``keep(msg, number=None, **names)``, says whether to keep
+    message ``m`` (``number``: which it is, counted if not given; ``names``: more the expression may read, a bag's
+    ``topic`` and ``t``)."""
     expression = expression.strip()
     if len(expression) > 1 and expression[0] == expression[-1] and expression[0] in "'\"":
         expression = expression[1:-1]  # IPython's argument split keeps the quotes
+    if expression.startswith("/"):
+        return _path_filter(expression, namespace)
     try:
         code = compile(expression, "<%echo --filter>", "eval")
     except SyntaxError as error:
         raise UsageError(f"--filter {expression!r} is not a Python expression ({error.msg}); "
                          "write one over the message m, e.g. --filter 'm.linear.x > 0'") from None
 
-    def keep(msg: Any, number: int) -> bool:
+    counted = iter(range(1, 1 << 62))
+
+    def keep(msg: Any, number: Optional[int] = None, **names: Any) -> bool:
+        number = next(counted) if number is None else number  # which message it is, for the error line
         try:
-            return bool(eval(code, namespace, {"m": msg}))  # noqa: S307 - the user's own expression
+            return bool(eval(code, namespace, {"m": msg, **names}))  # noqa: S307 - the user's own expression
         except Exception as error:  # noqa: BLE001 - said in one line, and the listening stops
             raise UsageError(f"--filter {expression!r} raised {type(error).__name__}: {error} on message "
                              f"{number}; fix the expression (the message is m)") from None
+
+    return keep
+
+
+def _path_filter(expression: str, namespace: dict) -> Any:
+    """``--filter '/cmd_vel{linear.x!=0}'``: a message path as a filter, Foxglove's way: a message of its topic is
+    kept when the path selects something in it (its filters hold); a message of another topic is kept as it is."""
+    path = msgpath.parse(expression)
+    counted = iter(range(1, 1 << 62))
+
+    def keep(msg: Any, number: Optional[int] = None, topic: Optional[str] = None, **names: Any) -> bool:
+        number = next(counted) if number is None else number
+        if topic is not None and topic != path.topic:
+            return True
+        try:
+            return bool(path.values(msg, namespace))
+        except msgpath.MessagePathError as error:
+            raise UsageError(f"--filter: {error} (message {number}); fix the path") from None
 
     return keep
 

@@ -34,6 +34,8 @@ actions (new / reuse)    ``action_server(host, name, cls, slot, forward)``: each
                          suffixes a basenode's action is remapped by; ``send_goal(name, cls,
                          goal, feedback, timeout)``: a :class:`~ipyros.core.actions.SentGoal`;
                          ``watch_action(name, cls, tell)``: the goals others send, as events
+a bag's time             ``bag_time(on)``: the session on a bag player's /clock (what applies,
+                         one line); ``now(host)``: a DSL node's ROS time
 a DSL node's life        ``open_host(host)`` at create(), ``close_host(host)`` at shutdown();
                          ``closing_hosts(hosts)``: several shut down together next
 its params               ``check_param``, ``get_param``, ``set_param``, ``has_param``,
@@ -128,6 +130,8 @@ class Backend(Protocol):
     def watch_action(self, name: str, cls: type, tell: Callable[[str, str, Any], None]) -> Any: ...
     def serialize(self, msg: Any) -> bytes: ...  # a message as its ROS sends it (a guard's stop message)
     def sentinel_command(self) -> list[str]: ...  # how a guard's own process is run (argv, before its two fds)
+    def bag_time(self, on: bool) -> str: ...  # run on a bag player's /clock (or not); what applies, one line
+    def now(self, host: str) -> float: ...  # a DSL node's ROS time (s): a bag's while its clock runs
     def open_host(self, host: str, parameters: bool = True) -> None: ...  # parameters: it has some now
     def close_host(self, host: str) -> None: ...
     def closing_hosts(self, hosts: list[str]) -> None: ...  # these are shut down next: stop their callbacks at once

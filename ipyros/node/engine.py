@@ -21,7 +21,7 @@ import threading
 from typing import Any, Callable, Optional
 
 from ..core import names, plan as planning
-from ..core.errors import NotDeclaredError, TopicTypeConflict
+from ..core.errors import NodeStateError, NotDeclaredError, TopicTypeConflict
 from ..core.model import NodeModel, TopicModel
 from ..core.plan import Spec
 from ..core.records import History, NodeStatus, StatusRow, Versions
@@ -36,7 +36,7 @@ from .session import Session
 from .targets import HandlerTarget, find_target, handler_slots, relayed_target
 from .versions import HandlerVersions, parse_versions
 from .writing import Writing
-from .wrapping import interrupted, learn_relayed_types, start_base
+from .wrapping import interrupted, learn_relayed_types, start_bag_clock, start_base, stop_bag_clock
 
 #: A slot key's new handler and whether it takes the message (or timer event) as its argument.
 Handlers = dict[str, tuple[Callable[..., Any], bool]]
@@ -274,6 +274,7 @@ class NodeEngine:
                 self.guards.ending = False
                 self._open(planning.plan(self._model), self._model)
                 self.created = True
+                start_bag_clock(self)
                 start_base(self)
                 self.record("create()")
             except KeyboardInterrupt:  # Ctrl-C at the prompt: one line, with everything of the node stopped
@@ -292,6 +293,7 @@ class NodeEngine:
             if self.base is not None:
                 self.base.stop()
                 self.base = None
+            stop_bag_clock(self)
             self.params.stop()
             for spec in reversed(list(self._live)):
                 try:
@@ -302,6 +304,12 @@ class NodeEngine:
             self.session.backend.close_host(self.fullname)
             self.created = False
             self.session.remove(self)
+
+    def now(self) -> float:
+        """The node's ROS time (s): a bag's time while the session runs on its clock."""
+        if not self.created:
+            raise NodeStateError(f"{self.name} is not running; call {self.called}.create() first")
+        return self.session.backend.now(self.fullname)
 
     def release_base(self) -> Any:
         """Hand the running basenode over to be stopped elsewhere (beside others: ``Session.shutdown_nodes``)."""

@@ -95,6 +95,8 @@ class Session:
         self.closed = False
         self._closes_at_exit = False
         self._guard_watch: Optional[Any] = None
+        #: The node whose bag's /clock the session runs on (``baseBag(..., clock=True)``), if any.
+        self.bag_clock: Optional[str] = None
 
     @property
     def guard_watch(self) -> Any:

@@ -27,6 +27,7 @@ from ..core.plan import RelaySpec, internal_name
 from ..core.records import Interface
 from ..core.remapping import base_fullname, base_namespace, base_node_name, basenode_remaps, check_wrapping, reresolve
 from ..processes.basenode import exit_reason
+from ..processes.playback import player_args
 from . import declaring
 
 
@@ -171,7 +172,7 @@ def set_launch_base(node: "NodeEngine", launch: Any, node_name: str, args: Optio
 
 
 def set_bag(node: "NodeEngine", path: Any, rate: float, loop: bool, topics: Optional[list[str]],
-            delay: float) -> None:
+            delay: float, clock: bool = False) -> None:
     """A recorded bag as the basenode: the backend's bag player, named ``bag_player`` (see ``rosNode.baseBag``)."""
     if not isinstance(path, (str, os.PathLike)):
         raise DeclarationError(f"baseBag({cut(path)}): give the bag's path, e.g. baseBag('run1.bag')")
@@ -188,10 +189,33 @@ def set_bag(node: "NodeEngine", path: Any, rate: float, loop: bool, topics: Opti
         raise DeclarationError(f"baseBag(rate={rate!r}, delay={delay!r}): rate a speed factor above 0 "
                                "(1.0 as recorded), delay seconds from 0 to 60")
     set_base(node, executable=str(bagfile.PLAYER), name="bag_player",
-             args=bagfile.player_args(bag, float(rate), bool(loop), topics, float(delay)))
+             args=player_args(bag, float(rate), bool(loop), topics, float(delay), bool(clock)))
     played = {"path": str(bag), "rate": float(rate), "loop": bool(loop), "topics": list(topics or []) or None,
-              "delay": float(delay)}
+              "delay": float(delay), **({"clock": True} if clock else {})}
     node.change(lambda model: setattr(model.base, "bag", played))  # saved as baseBag(...), shown as "bag FILE"
+
+
+def start_bag_clock(node: "NodeEngine") -> None:
+    """A bag played with ``clock=True``: the session runs on its /clock from now on (said in one line); one bag's
+    clock at a time."""
+    base = node.model().base
+    if base is None or not (base.bag or {}).get("clock"):
+        return
+    session = node.session
+    if session.bag_clock not in (None, node.fullname):
+        raise DeclarationError(f"{node.called}'s bag would publish /clock, but the bag of {session.bag_clock} does "
+                               "already: one bag's time at a time; shut that node down first, or give "
+                               "baseBag(..., clock=False)")
+    session.bag_clock = node.fullname
+    session.notify(session.backend.bag_time(True))
+
+
+def stop_bag_clock(node: "NodeEngine") -> None:
+    """The node whose bag's clock the session ran on stops: the wall clock again (said in one line)."""
+    session = node.session
+    if session.bag_clock == node.fullname:
+        session.bag_clock = None
+        session.notify(session.backend.bag_time(False))
 
 
 # -- the basenode process ------------------------------------------------------------------

@@ -254,6 +254,8 @@ class BaseProcess:
     backend's ``basenode()``); ``env`` adds to this process's environment.
     ``on_exit(proc, returncode, last_lines)`` is called, on a watcher thread, when the
     process ends without :meth:`stop` being asked, including a crash right at start.
+    ``control``: it reads lines from its stdin, which :meth:`tell` writes (a bag player's
+    pause, seek, ...); its answers come in its log.
 
         >>> base = BaseProcess(["/usr/lib/topic_tools/relay", "/in", "/out", "__name:=relay"],
         ...                    node_name="relay").start()
@@ -264,8 +266,9 @@ class BaseProcess:
 
     def __init__(self, argv: Sequence["str | os.PathLike[str]"], *, node_name: Optional[str] = None,
                  env: Optional[Mapping[str, str]] = None, log_path: "str | os.PathLike[str] | None" = None,
-                 on_exit: Optional[OnExit] = None) -> None:
+                 on_exit: Optional[OnExit] = None, control: bool = False) -> None:
         self.argv: list[str] = [str(word) for word in argv]
+        self.control = control
         self.executable = Path(self.argv[0])
         self.node_name = node_name
         self.env = {**child_env(self.argv[0], env), "PYTHONUNBUFFERED": "1"}  # a Python node's prints reach the log now
@@ -307,7 +310,7 @@ class BaseProcess:
             self._note(f"starting: {shlex.join(self.argv)}")
             with open(self.log_path, "ab", buffering=0) as log:
                 try:
-                    proc = spawn(self.argv, env=self.env, log=log.fileno())
+                    proc = spawn(self.argv, env=self.env, log=log.fileno(), stdin_pipe=self.control)
                 except OSError as exc:
                     self._note(f"could not start: {exc}")
                     raise BaseNodeError(
@@ -340,6 +343,19 @@ class BaseProcess:
             self._note(f"stopped ({exit_reason(returncode)})")
             return returncode
 
+    def tell(self, line: str) -> None:
+        """Write one line to its stdin (a process started with ``control``); a one-line error if it cannot."""
+        run = self._run
+        stdin = run.proc.stdin if run is not None and self.running else None
+        if stdin is None:
+            raise NodeStateError(f"{self.executable.name} is not running" if self.control else
+                                 f"{self.executable.name} takes no controls")
+        try:
+            stdin.write((line.rstrip("\n") + "\n").encode())
+            stdin.flush()
+        except (BrokenPipeError, OSError, ValueError):  # it ended meanwhile (ValueError: closed on its end)
+            raise NodeStateError(f"{self.executable.name} is not running") from None
+
     def restart(self, timeout: float = 5.0) -> "BaseProcess":
         """Stop (if running) and start again with the same argv: same remaps, params and log file."""
         with self._lifecycle:
@@ -359,6 +375,11 @@ class BaseProcess:
     def _watch(self, run: _Run) -> None:
         """Block until the process ends (no polling), then tell ``on_exit`` if nobody asked for it."""
         returncode = run.proc.wait()
+        if run.proc.stdin is not None:
+            try:
+                run.proc.stdin.close()
+            except OSError:  # its end closed first: nothing left to flush
+                pass
         with _running_lock:
             if self._run is run:
                 _running.discard(self)

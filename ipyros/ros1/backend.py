@@ -55,6 +55,7 @@ class Ros1:
         self.process = runtime.ProcessNode()
         self.connection = MasterConnection(self.process)
         self._goals: Any = None  # the session's action clients, made with the first goal sent
+        self._clock: Optional[runtime.ClockWatch] = None  # a bag's /clock, while its time runs
 
     @property
     def master(self) -> Any:
@@ -188,6 +189,31 @@ class Ros1:
     def watch_action(self, name: str, cls: type, tell: Callable[[str, str, Any], None]) -> Any:
         return _actions().ActionWatch(name, cls, tell)
 
+    # -- a bag's time ------------------------------------------------------------------------------
+    def bag_time(self, on: bool) -> str:
+        """Run on a bag player's ``/clock`` (``on``), or on the wall clock again: ``/use_sim_time`` on the master
+        for the basenodes started from now on; ``nd.now()`` reads /clock. What applies, in one line."""
+        if on:
+            self.set_param("/use_sim_time", True)
+            if self._clock is None:
+                self._clock = runtime.ClockWatch()
+            return ("ipyros: bag time on /clock: nd.now() and the basenodes started from now on run on it; ROS 1 "
+                    "has one clock a process, fixed when it starts, so this session's timers keep the wall clock")
+        if self._clock is not None:
+            self._clock.close()
+            self._clock = None
+        try:
+            if self.has_param("/use_sim_time"):
+                self.delete_param("/use_sim_time")
+        except (MasterError, OSError):  # the master is gone (the session ends after it): nothing to unset
+            pass
+        return "ipyros: bag time stopped: /use_sim_time is unset; basenodes started from now on run on the wall clock"
+
+    def now(self, host: str) -> float:
+        """ROS time (s): a bag's time while its clock runs, else rospy's."""
+        clock = self._clock
+        return clock.ns / 1e9 if clock is not None else runtime.ros_time()
+
     def open_host(self, host: str, parameters: bool = True) -> None:
         """Nothing to do: the DSL node's endpoints live in the process node."""
 
@@ -251,7 +277,7 @@ class Ros1:
     def basenode(self, base: BaseModel, *, log_path: Any = None, on_exit: Any = None) -> BaseProcess:
         """The process of the basenode ``base``: found as rosrun finds it, on the session's master."""
         return BaseProcess(nodes.command(base), node_name=base.node_name, log_path=log_path, on_exit=on_exit,
-                           env={**base.env, "ROS_MASTER_URI": self.connection.uri})
+                           env={**base.env, "ROS_MASTER_URI": self.connection.uri}, control=base.bag is not None)
 
     own_node_name = staticmethod(nodes.own_node_name)
 

@@ -1,20 +1,100 @@
-"""A ROS 1 bag played as a node: ``python bag_player.py BAG [--rate R] [--loop] [--delay S] [--topics T ...]``.
+"""A ROS 1 bag played as a node: ``python bag_player.py BAG [--rate R] [--loop] [--delay S] [--clock]
+[--topics T ...]``. BAG is a ``.bag`` file, or an ``.mcap`` file of ROS 1 messages.
 
 ipyros runs it as the basenode of ``baseBag``. Unlike ``rosbag play``, whose node name is
 always made anonymous, it runs under the name it is given (``__name:=``), so the wrapping
 node finds it in the graph like any basenode; its topics are remapped the ROS 1 way
 (``from:=to``). It advertises every topic first, waits until each has a subscriber (at
 most ``--delay`` seconds), then publishes the messages with their recorded spacing
-(divided by ``--rate``), and exits at the end unless ``--loop``. It needs only rospy and
-Debian's python3-rosbag, not ipyros.
+(divided by ``--rate``), and exits at the end unless ``--loop``. ``--clock`` publishes the
+bag's time on ``/clock`` as it plays (100 Hz, also while paused). Lines on its stdin pause,
+resume, step, seek, change the rate and the looping (:mod:`ipyros.processes.playback`,
+which it loads by its path). It needs only rospy and Debian's python3-rosbag (MCAP: mcap-ros1-support),
+not ipyros.
 """
 
 import argparse
 import sys
+import threading
 import time
+from pathlib import Path
 
 import rosbag
 import rospy
+
+# ipyros's playback module, by its folder: this file runs without ipyros importable
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "processes"))
+import playback  # noqa: E402
+
+
+class RosBag:
+    """A ROS 1 bag, read with rosbag."""
+
+    def __init__(self, path: str) -> None:
+        self._bag = rosbag.Bag(path)
+
+    def __enter__(self) -> "RosBag":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._bag.close()
+
+    def classes(self, topics) -> dict:
+        """The message class of each topic (of ``topics``, or all), from its first message."""
+        found: dict = {}
+        for topic, msg, _ in self._bag.read_messages(topics=topics):
+            found.setdefault(topic, type(msg))
+        return found
+
+    def span(self) -> tuple:
+        """The first and last stamps (ns)."""
+        if not self._bag.get_message_count():
+            return 0, 0
+        return tuple(int(round(t * 1e9)) for t in (self._bag.get_start_time(), self._bag.get_end_time()))
+
+    def read(self, topics, since):
+        found = self._bag.read_messages(topics=topics, start_time=None if since is None else rospy.Time(nsecs=since))
+        return ((topic, stamp.to_nsec(), msg) for topic, msg, stamp in found)
+
+
+class McapBag:
+    """An MCAP file of ROS 1 messages, read with mcap and mcap-ros1-support; classes from its own schemas."""
+
+    def __init__(self, path: str) -> None:
+        from mcap.reader import make_reader
+
+        self._path = path
+        with open(path, "rb") as stream:
+            self._summary = make_reader(stream).get_summary()
+
+    def __enter__(self) -> "McapBag":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def classes(self, topics) -> dict:
+        from genpy.dynamic import generate_dynamic
+
+        found = {}
+        for channel in self._summary.channels.values():
+            if not topics or channel.topic in topics:
+                schema = self._summary.schemas[channel.schema_id]
+                found[channel.topic] = generate_dynamic(schema.name, schema.data.decode())[schema.name]
+        return found
+
+    def span(self) -> tuple:
+        stats = self._summary.statistics
+        return (stats.message_start_time, stats.message_end_time) if stats and stats.message_count else (0, 0)
+
+    def read(self, topics, since):
+        from mcap.reader import make_reader
+        from mcap_ros1.decoder import DecoderFactory
+
+        with open(self._path, "rb") as stream:
+            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+            for _, channel, message, decoded in reader.iter_decoded_messages(topics=topics, start_time=since):
+                yield channel.topic, message.log_time, decoded
 
 
 def main() -> None:
@@ -23,32 +103,39 @@ def main() -> None:
     parser.add_argument("--rate", type=float, default=1.0)
     parser.add_argument("--loop", action="store_true")
     parser.add_argument("--delay", type=float, default=1.0)
+    parser.add_argument("--clock", action="store_true")
     parser.add_argument("--topics", nargs="*")
     args = parser.parse_args(rospy.myargv(sys.argv)[1:])
+    controls = playback.read_controls()
     rospy.init_node("bag_player", disable_signals=True)
-    with rosbag.Bag(args.bag) as bag:
-        first: dict = {}
-        for topic, msg, _ in bag.read_messages(topics=args.topics):
-            first.setdefault(topic, type(msg))
-        publishers = {topic: rospy.Publisher(topic, cls, queue_size=1000) for topic, cls in first.items()}
+    with (McapBag(args.bag) if args.bag.endswith(".mcap") else RosBag(args.bag)) as bag:
+        publishers = {topic: rospy.Publisher(topic, cls, queue_size=1000)
+                      for topic, cls in bag.classes(args.topics).items()}
         print(f"bag_player: {len(publishers)} topics from {args.bag}", flush=True)
+        start, end = bag.span()
+        state = playback.Playback(start, end, args.rate, args.loop)
+        if args.clock:
+            from rosgraph_msgs.msg import Clock
+
+            clock = rospy.Publisher("/clock", Clock, queue_size=10)
+
+            def tick() -> None:
+                while not rospy.is_shutdown():
+                    clock.publish(Clock(clock=rospy.Time(nsecs=state.now())))
+                    time.sleep(0.01)
+
+            threading.Thread(target=tick, name="clock", daemon=True).start()
         # Up to --delay seconds for the wrapping node to connect, then go.
         deadline = time.monotonic() + args.delay
         while time.monotonic() < deadline and not all(p.get_num_connections() for p in publishers.values()):
             time.sleep(0.05)
         time.sleep(0.2)  # the connection's header exchange done on the subscriber's side too
+        state.restarted()  # bag time starts now, after the wait, not when the player came up
+
         try:
-            while not rospy.is_shutdown():
-                start, recorded_start = time.monotonic(), None
-                for topic, msg, stamp in bag.read_messages(topics=args.topics):
-                    recorded_start = recorded_start if recorded_start is not None else stamp.to_sec()
-                    wait = start + (stamp.to_sec() - recorded_start) / args.rate - time.monotonic()
-                    if wait > 0:
-                        time.sleep(wait)
-                    publishers[topic].publish(msg)
-                print("bag_player: played to the end", flush=True)
-                if not args.loop:
-                    break
+            playback.play(state, lambda since: bag.read(args.topics, since),
+                          lambda topic, msg: publishers[topic].publish(msg), controls,
+                          lambda: not rospy.is_shutdown())
         except KeyboardInterrupt:
             pass
     time.sleep(0.5)  # the last messages on their way before the connections close

@@ -1,4 +1,5 @@
-"""ROS 1 bag files, through Debian's ``python3-rosbag``: what a bag holds, writing one, playing one.
+"""ROS 1 bag files, through Debian's ``python3-rosbag``: what a bag holds, writing one, playing one. A path ending in
+``.mcap`` is an MCAP file of ROS 1 messages instead (:mod:`.mcapfile`).
 
 Playing is ``bag_player.py`` (next to this file: rospy and python3-rosbag, like ``rosbag
 play`` but under the node name it is given), run as a basenode: remapped like any other,
@@ -10,15 +11,16 @@ from __future__ import annotations
 import threading
 import time
 from pathlib import Path
-from typing import Any, Collection, Iterator, Optional, Sequence
+from typing import Any, Collection, Iterator, Optional
 
 from ..core.errors import DeclarationError, first_line
 from ..core.records import BagInfo, BagTopic
+from . import mcapfile
 
-__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_messages", "bag_topics", "player_args"]
+__all__ = ["PLAYER", "STORAGES", "BagWriter", "RosbagWriter", "bag_info", "bag_messages", "bag_topics"]
 
-#: The storages a recording may be written in: a ROS 1 bag file.
-STORAGES = ("bag",)
+#: The storages a recording may be written in: a ROS 1 bag file, or an MCAP file of ROS 1 messages.
+STORAGES = ("bag", "mcap")
 
 #: The player run as ``baseBag``'s basenode (a .py file: ipyros runs it with its own Python).
 PLAYER = Path(__file__).resolve().parent / "bag_player.py"
@@ -40,6 +42,8 @@ def _unreadable(path: Path, error: Exception) -> DeclarationError:
 
 def bag_topics(path: Path) -> dict[str, str]:
     """The topics recorded in the bag at ``path``, with their types; a one-line error if it is no bag."""
+    if path.suffix == ".mcap":
+        return mcapfile.mcap_topics(path)
     rosbag = _rosbag()
     try:
         with rosbag.Bag(str(path)) as bag:
@@ -50,6 +54,8 @@ def bag_topics(path: Path) -> dict[str, str]:
 
 def bag_info(path: Path) -> BagInfo:
     """What the bag at ``path`` holds: topics, types, counts, start and end (as ``rosbag info``)."""
+    if path.suffix == ".mcap":
+        return mcapfile.mcap_info(path)
     rosbag = _rosbag()
     try:
         with rosbag.Bag(str(path)) as bag:
@@ -65,6 +71,9 @@ def bag_info(path: Path) -> BagInfo:
 def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int, Any]]:
     """``(topic, stamp in ns, message)`` of each message of ``topics`` in the bag, in recorded order (the
     messages of the types the bag recorded, as rosbag reads them)."""
+    if path.suffix == ".mcap":
+        yield from mcapfile.mcap_messages(path, topics)
+        return
     rosbag = _rosbag()
     try:
         bag = rosbag.Bag(str(path))
@@ -75,25 +84,22 @@ def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int
             yield topic, stamp.to_nsec(), msg
 
 
-def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[str]], delay: float) -> list[str]:
-    """The player's arguments: ``--delay`` lets the wrapping node's subscribers connect after each
-    advertise, so that the first messages are not lost."""
-    args = [str(path), "--rate", f"{rate:g}", "--delay", f"{delay:g}"]
-    if loop:
-        args.append("--loop")
-    if topics:
-        args += ["--topics", *topics]  # last: rosbag takes every word after it as a topic
-    return args
+def BagWriter(path: Path, storage: Optional[str] = None) -> Any:  # noqa: N802 - a class to its callers
+    """A writer of a new bag at ``path``: a ROS 1 bag, or an MCAP file when ``path`` ends in ``.mcap``."""
+    if storage not in (None, *STORAGES):
+        raise DeclarationError(f"storage={storage!r}: a ROS 1 recording is a .bag file or an .mcap file (sqlite3 "
+                               "is ROS 2's)")
+    if storage == "mcap" and path.suffix != ".mcap":
+        raise DeclarationError(f"{path}: an MCAP recording is a file ending in .mcap; name it {path.stem}.mcap")
+    return mcapfile.McapWriter(path) if path.suffix == ".mcap" else RosbagWriter(path)
 
 
-class BagWriter:
-    """Messages written to a new bag, from any thread, stamped with the wall clock on arrival."""
+class RosbagWriter:
+    """Messages written to a new ROS 1 bag, from any thread, stamped with the wall clock on arrival."""
 
-    def __init__(self, path: Path, storage: Optional[str] = None) -> None:
+
+    def __init__(self, path: Path) -> None:
         rosbag = _rosbag()
-        if storage not in (None, "bag"):
-            raise DeclarationError(f"storage={storage!r}: a ROS 1 recording is a .bag file (MCAP and sqlite3 are "
-                                   "ROS 2's)")
         try:
             self._bag = rosbag.Bag(str(path), "w")
         except (OSError, rosbag.ROSBagException) as error:
@@ -101,12 +107,13 @@ class BagWriter:
         self._lock = threading.Lock()
         self.count = 0
 
-    def write(self, topic: str, msg: Any) -> None:
+    def write(self, topic: str, msg: Any, stamp: Optional[int] = None) -> None:
+        """Write ``msg`` stamped ``stamp`` (ns; default: the wall clock now, as on ROS 2)."""
         import rospy
 
         with self._lock:
             if self._bag is not None:
-                self._bag.write(topic, msg, rospy.Time.from_sec(time.time()))  # the wall clock, as on ROS 2
+                self._bag.write(topic, msg, rospy.Time(nsecs=time.time_ns() if stamp is None else stamp))
                 self.count += 1
 
     def close(self) -> None:

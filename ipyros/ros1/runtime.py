@@ -281,6 +281,28 @@ def refuse_taken_name(master_uri: str, name: str) -> None:
 # -- endpoints ---------------------------------------------------------------------------
 
 
+def ros_time() -> float:
+    """This process's ROS time (s): rospy's clock."""
+    return rospy.get_rostime().to_sec()
+
+
+class ClockWatch:
+    """The time a bag's player publishes on ``/clock``: this process's rospy clock is fixed when rospy starts
+    (wall time, unless ``/use_sim_time`` was set before), so bag time is read here for ``nd.now()``."""
+
+    def __init__(self) -> None:
+        from rosgraph_msgs.msg import Clock
+
+        self.ns = 0  # ROS's rule: time is 0 until the first /clock
+        self._sub = rospy.Subscriber("/clock", Clock, self._heard, queue_size=1, tcp_nodelay=True)
+
+    def _heard(self, msg: Any) -> None:
+        self.ns = msg.clock.to_nsec()
+
+    def close(self) -> None:
+        self._sub.unregister()
+
+
 class Publication:
     """A publisher whose ``write`` serialises and sends in the caller's thread, never blocking.
 

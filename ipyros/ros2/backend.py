@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 import time
@@ -137,6 +138,19 @@ class Ros2:
         """The interface of the running node ``name`` once it has settled."""
         return runtime.wait_for_node(self._graph(), name, timeout, settle=settle, alive=alive)
 
+    # -- a bag's time ------------------------------------------------------------------------------
+    def bag_time(self, on: bool) -> str:
+        """Run the session's nodes on a bag player's ``/clock`` (``on``: their use_sim_time, and the basenodes
+        started from now on), or on the system clock again. What applies, in one line."""
+        self.process.use_sim_time(on)
+        if on:
+            return ("ipyros: bag time on /clock: the session's nodes (nd.now(), their timers) and the basenodes "
+                    "started from now on run on it")
+        return "ipyros: bag time stopped: the session's nodes run on the system clock again"
+
+    def now(self, host: str) -> float:
+        return self.process.now(host)
+
     def open_host(self, host: str, parameters: bool = True) -> None:
         if any(token[:1].isdigit() for token in host.split("/")):  # before rclpy, which warns as it refuses
             raise DeclarationError(f"ROS 2 refuses the node {host}: a part of a ROS 2 name may not start with a "
@@ -247,8 +261,10 @@ class Ros2:
     # -- basenodes, packages, launch files, bags, exports -------------------------------------
     def basenode(self, base: BaseModel, *, log_path: Any = None, on_exit: Any = None) -> BaseProcess:
         """The process of the basenode ``base``: found as ``ros2 run`` finds it, its rules after ``--ros-args``."""
+        if self.process.sim_time and base.bag is None and "use_sim_time" not in base.params:
+            base = dataclasses.replace(base, params={**base.params, "use_sim_time": True})  # a bag's time runs
         return BaseProcess(nodes.command(base), node_name=base.node_name, log_path=log_path, on_exit=on_exit,
-                           env=base.env)
+                           env=base.env, control=base.bag is not None)
 
     own_node_name = staticmethod(nodes.own_node_name)
 

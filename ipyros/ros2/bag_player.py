@@ -1,23 +1,32 @@
-"""A bag played as a ROS 2 node: ``python bag_player.py BAG [--rate R] [--loop] [--delay S] [--topics T ...]
-[--ros-args ...]``. BAG is a rosbag2 folder, or a ROS 1 ``.bag`` file (its messages turned into
+"""A bag played as a ROS 2 node: ``python bag_player.py BAG [--rate R] [--loop] [--delay S] [--clock]
+[--topics T ...] [--ros-args ...]``. BAG is a rosbag2 folder, or a ROS 1 ``.bag`` file (its messages turned into
 CDR as they are read, with the message definitions the bag carries).
 
 ipyros runs it as the basenode of ``baseBag`` on ROS 2, named and remapped with
 ``--ros-args`` like any basenode. It advertises every topic (reliable, volatile, 1000
 deep), waits until each has a subscriber (at most ``--delay`` seconds), then publishes the recorded
 CDR bytes unchanged with their recorded spacing (divided by ``--rate``), and exits at the
-end unless ``--loop``. It needs rclpy and rosbags, not ipyros.
+end unless ``--loop``. ``--clock`` publishes the bag's time on ``/clock`` as it plays (100 Hz,
+also while paused). Lines on its stdin pause, resume, step, seek, change the rate and the
+looping (:mod:`ipyros.processes.playback`, which it loads by its path). It needs rclpy and
+rosbags, not ipyros.
 """
 
 import argparse
 import importlib
 import sys
+import threading
 import time
+from pathlib import Path
 
 import rclpy
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.utilities import remove_ros_args
 from rosbags.rosbag2 import Reader
+
+# ipyros's playback module, by its folder: this file runs without ipyros importable
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "processes"))
+import playback  # noqa: E402
 
 
 class Ros1Bag:
@@ -41,8 +50,16 @@ class Ros1Bag:
     def connections(self) -> list:
         return list(self._reader.connections)
 
-    def messages(self, connections):
-        for connection, stamp, raw in self._reader.messages(connections=connections):
+    @property
+    def start_time(self) -> int:
+        return self._reader.start_time
+
+    @property
+    def end_time(self) -> int:
+        return self._reader.end_time
+
+    def messages(self, connections, start=None):
+        for connection, stamp, raw in self._reader.messages(connections=connections, start=start):
             yield connection, stamp, self._store.ros1_to_cdr(raw, connection.msgtype)
 
     def close(self) -> None:
@@ -60,8 +77,10 @@ def main() -> None:
     parser.add_argument("--rate", type=float, default=1.0)
     parser.add_argument("--loop", action="store_true")
     parser.add_argument("--delay", type=float, default=1.0)
+    parser.add_argument("--clock", action="store_true")
     parser.add_argument("--topics", nargs="*")
     args = parser.parse_args(remove_ros_args(sys.argv)[1:])
+    controls = playback.read_controls()
     rclpy.init(args=sys.argv)
     node = rclpy.create_node("bag_player")
     reader = Ros1Bag(args.bag) if args.bag.endswith(".bag") else Reader(args.bag)
@@ -70,25 +89,36 @@ def main() -> None:
     qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
     publishers = {c.topic: node.create_publisher(message_class(c.msgtype), c.topic, qos) for c in connections}
     print(f"bag_player: {len(publishers)} topics from {args.bag}", flush=True)
+    state = playback.Playback(reader.start_time, max(reader.end_time, reader.start_time), args.rate, args.loop)
+    if args.clock:
+        from builtin_interfaces.msg import Time
+        from rosgraph_msgs.msg import Clock
+
+        clock = node.create_publisher(Clock, "/clock", 10)
+
+        def tick() -> None:
+            while rclpy.ok():
+                now = state.now()
+                try:
+                    clock.publish(Clock(clock=Time(sec=now // 1_000_000_000, nanosec=now % 1_000_000_000)))
+                except Exception:  # noqa: BLE001 - the context shut down meanwhile
+                    return
+                time.sleep(0.01)
+
+        threading.Thread(target=tick, name="clock", daemon=True).start()
     try:
         # Up to --delay seconds for the wrapping node to subscribe (discovery takes a moment), then go.
         deadline = time.monotonic() + args.delay
         while time.monotonic() < deadline and not all(p.get_subscription_count() for p in publishers.values()):
             time.sleep(0.05)
         time.sleep(0.2)  # the matching settles on the subscriber's side too
-        while rclpy.ok():
-            start, recorded_start = time.monotonic(), None
-            for connection, stamp, raw in reader.messages(connections=connections):
-                recorded_start = recorded_start if recorded_start is not None else stamp
-                wait = start + (stamp - recorded_start) * 1e-9 / args.rate - time.monotonic()
-                if wait > 0:
-                    time.sleep(wait)
-                if not rclpy.ok():
-                    break
-                publishers[connection.topic].publish(bytes(raw))
-            print("bag_player: played to the end", flush=True)
-            if not args.loop:
-                break
+        state.restarted()  # bag time starts now, after the wait, not when the player came up
+
+        def read(since):
+            found = reader.messages(connections=connections, start=since)
+            return ((connection.topic, stamp, bytes(raw)) for connection, stamp, raw in found)
+
+        playback.play(state, read, lambda topic, raw: publishers[topic].publish(raw), controls, rclpy.ok)
         time.sleep(0.5)  # the last messages on their way
     except KeyboardInterrupt:
         pass

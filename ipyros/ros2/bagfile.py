@@ -13,13 +13,13 @@ import queue
 import threading
 import time
 from pathlib import Path
-from typing import Any, Collection, Iterator, Optional, Sequence
+from typing import Any, Collection, Iterator, Optional
 
 from ..core.errors import DeclarationError, first_line
 from ..core.msgtypes import type_name
 from ..core.records import BagInfo, BagTopic
 
-__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_messages", "bag_topics", "player_args"]
+__all__ = ["PLAYER", "STORAGES", "BagWriter", "bag_info", "bag_messages", "bag_topics"]
 
 #: The storages a recording may be written in; the first is the default.
 STORAGES = ("mcap", "sqlite3")
@@ -104,16 +104,6 @@ def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int
         reader.close()
 
 
-def player_args(path: Path, rate: float, loop: bool, topics: Optional[Sequence[str]], delay: float) -> list[str]:
-    """The player's arguments (as the ROS 1 one's: ``--delay`` lets the wrapping node connect first)."""
-    args = [str(path), "--rate", f"{rate:g}", "--delay", f"{delay:g}"]
-    if loop:
-        args.append("--loop")
-    if topics:
-        args += ["--topics", *topics]
-    return args
-
-
 class BagWriter:
     """Messages written to a new bag folder (``storage``: mcap, the default, or sqlite3), stamped with the wall
     clock on arrival.
@@ -164,13 +154,15 @@ class BagWriter:
         finally:
             bag.close()
 
-    def write(self, topic: str, msg: Any) -> None:
+    def write(self, topic: str, msg: Any, stamp: Optional[int] = None) -> None:
+        """Write ``msg`` stamped ``stamp`` (ns; default: the wall clock now)."""
         from rclpy.serialization import serialize_message
 
         if self._closed:
             return
         package, name = (type_name(type(msg)) or "?/?").split("/")
-        self._queue.put((topic, f"{package}/msg/{name}", serialize_message(msg), time.time_ns()))
+        self._queue.put((topic, f"{package}/msg/{name}", serialize_message(msg),
+                         time.time_ns() if stamp is None else stamp))
         self.count += 1
 
     def close(self) -> None:

@@ -163,6 +163,8 @@ class ProcessNode:
         self._typed: list[tuple[str, str, Complain]] = []  # (topic, type, complain): peers of another type are told
         self._told: set[tuple[str, str, str, Complain]] = set()
         self._caller: Optional[tuple[Node, Any, Spinner]] = None
+        #: Whether the session's nodes run on /clock (a bag's time): each node's use_sim_time, new ones too.
+        self.sim_time = False
 
     @property
     def started(self) -> bool:
@@ -216,7 +218,23 @@ class ProcessNode:
                 self._executor.add_node(node)
                 self._hosts[fullname] = node
                 self.hosted.add(fullname)
+                if self.sim_time:
+                    _use_sim_time(node, True)
             return node
+
+    def use_sim_time(self, on: bool) -> None:
+        """Run every node of the session on /clock (``on``: its timers and its now()), or on the system clock."""
+        with self._lock:
+            self.sim_time = on
+            for node in self._hosts.values():
+                _use_sim_time(node, on)
+
+    def now(self, fullname: str) -> float:
+        """The ROS time (s) of the DSL node ``fullname``'s clock: a bag's time while the session runs on /clock."""
+        node = self._hosts.get(fullname)
+        if node is None:
+            raise NodeStateError(f"{fullname} is not running; call create() first")
+        return node.get_clock().now().nanoseconds / 1e9
 
     def caller(self) -> Node:
         """A hidden node, spun by an executor of its own, for what must not run on the main one.
@@ -381,6 +399,12 @@ def _made(node: Node, make: Callable[[], Any], patience: float = 2.0) -> Any:
         if executor is not None:
             executor.wake()
         time.sleep(0.02)
+
+
+def _use_sim_time(node: Node, on: bool) -> None:
+    from rclpy.parameter import Parameter
+
+    node.set_parameters([Parameter("use_sim_time", Parameter.Type.BOOL, on)])
 
 
 class Publication:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import threading
 from pathlib import Path
-from typing import Any, Mapping, Optional
+from typing import Any, Callable, Mapping, Optional
 
 from ..core.names import tool_name
 from ..core.text import counted
@@ -30,15 +30,17 @@ class Recording:
     ``storage`` as the session's ROS writes bags (ROS 2: ``mcap``, the default, or ``sqlite3``)."""
 
     def __init__(self, path: Path, topics: Mapping[str, str], duration: Optional[float] = None,
-                 storage: Optional[str] = None) -> None:
+                 storage: Optional[str] = None, keep: Optional[Callable[[Any, str], bool]] = None) -> None:
         bagfile = bag_module()
 
         self.path, self.topics = Path(path), dict(topics)
         self._stopping = threading.Lock()
         self._writer = bagfile.BagWriter(self.path, storage)
+        self._keep = keep
+        self.problem: Optional[str] = None  # why it stopped early: its filter failed on a message
         self._node: Optional[rosNode] = rosNode(tool_name("record"))
         for topic, type_name in self.topics.items():
-            self._node.new.subscribe(topic, handler=lambda msg, topic=topic: self._writer.write(topic, msg),
+            self._node.new.subscribe(topic, handler=lambda msg, topic=topic: self._write(topic, msg),
                                      msgType=type_name)
         try:
             self._node.create()
@@ -49,6 +51,20 @@ class Recording:
         if self._timer is not None:
             self._timer.daemon = True
             self._timer.start()
+
+    def _write(self, topic: str, msg: Any) -> None:
+        keep = self._keep
+        if keep is not None:
+            try:
+                if not keep(msg, topic):
+                    return
+            except Exception as error:  # noqa: BLE001 - said once, and the recording stops: the bag holds what passed
+                if self.problem is None:
+                    self.problem = str(error)
+                    current().notify(f"ipyros: %record to {self.path} stopped: {error}")
+                    threading.Thread(target=self.stop, name="ipyros-record-stop", daemon=True).start()
+                return
+        self._writer.write(topic, msg)
 
     @property
     def running(self) -> bool:

@@ -347,7 +347,16 @@ def test_plot_in_the_terminal_until_ctrl_c_and_to_a_png(ip, capsys, rate_peer, t
 
     p = ok(ip, "%plot /mg/rate.data --duration 1").result  # a message path: the topic and its field
     assert p.topic == "/mg/rate" and p.fields == ["data"] and len(p.data["data"]) > 10
-    assert "one %plot a topic" in str(error_of(ip, "%plot /mg/rate.data /mg/other.data"))
+    ok(ip, "from std_msgs.msg import UInt32\nother = rosNode('mg_other').new.publish('/mg/other', msgType=UInt32)"
+           ".create()\nother.timer(0.02, lambda: other.write('/mg/other', UInt32(data=7)))")
+    wait_listed(ip, "/mg/other")
+    capsys.readouterr()
+    two = ok(ip, "%plot /mg/rate.data /mg/other.data --duration 1").result  # paths into two topics, one plot
+    assert two.topics == ["/mg/rate", "/mg/other"] and two.fields == ["/mg/rate.data", "/mg/other.data"]
+    assert len(two.data["/mg/other.data"]) > 10 and set(two.data["/mg/other.data"]) == {7.0}
+    assert len(two.data["t /mg/rate"]) == len(two.data["/mg/rate.data"]) > 10
+    assert "* /mg/rate.data  o /mg/other.data" in capsys.readouterr().out
+    ok(ip, "other.shutdown()")
     assert "a slice or a filter is for %echo" in str(error_of(ip, "%plot /mg/rate.data[0]"))
     assert "give two fields" in str(error_of(ip, "%plot /mg/rate data --xy"))
     assert "no field 'dta'" in str(error_of(ip, "%plot /mg/rate dta --duration 1"))
@@ -365,7 +374,9 @@ def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, cap
     wait_for(lambda: not ip.user_ns["rec"].running, timeout=10, what="the recording to end by itself")
     assert ip.user_ns["rec"].count >= 30 and "/mg/rate" not in master_state(_loaded[id(ip)].graph.where)["sub"]
     assert "exists; give a new file name" in str(error_of(ip, f"%record {bag} /mg/rate"))
-    assert "a ROS 1 recording is a .bag file" in str(error_of(ip, f"%record {tmp_path / 'x'} /mg/rate --storage mcap"))
+    assert "a ROS 1 recording is a .bag file or an .mcap file (sqlite3 is ROS 2's)" in str(
+        error_of(ip, f"%record {tmp_path / 'x'} /mg/rate --storage sqlite3"))
+    assert "name it x.mcap" in str(error_of(ip, f"%record {tmp_path / 'x'} /mg/rate --storage mcap"))
     capsys.readouterr()
     ok(ip, f"info = %bag info {bag}")
     info, shown = ip.user_ns["info"], capsys.readouterr().out
@@ -403,6 +414,32 @@ def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, cap
     ok(ip, "w.shutdown(); listener.shutdown()")
     assert "no such file" in str(error_of(ip, "rosNode('mg_b2').baseBag('/nonexistent.bag')"))
     assert "has no topic /nope" in str(error_of(ip, f"rosNode('mg_b3').baseBag({str(bag)!r}, topics=['/nope'])"))
+
+
+def test_record_an_mcap_file_of_ros1_messages_then_play_it_through_a_handler(ip, capsys, rate_peer, tmp_path):
+    """%record run.mcap on ROS 1 writes MCAP (the ros1 profile); %bag info reads it; baseBag plays it, in order."""
+    wait_listed(ip, "/mg/rate")
+    mcap = tmp_path / "rate.mcap"
+    capsys.readouterr()
+    ok(ip, f"rec = %record {mcap} /mg/rate --duration 1")
+    assert f"ipyros: recording /mg/rate to {mcap} (mcap) for 1 s" in capsys.readouterr().out
+    wait_for(lambda: not ip.user_ns["rec"].running, timeout=10, what="the recording to end by itself")
+    recorded = ip.user_ns["rec"].count
+    assert recorded >= 30 and mcap.read_bytes()[:8] == b"\x89MCAP0\r\n"
+    ok(ip, f"info = %bag info {mcap}")
+    info = ip.user_ns["info"]
+    assert (info.storage, [(r.topic, r.type, r.count) for r in info.rows]) == \
+        ("mcap", [("/mg/rate", "std_msgs/UInt32", recorded)])
+    ok(ip, "from std_msgs.msg import UInt32\nmc_outs = []\n"
+           "mc = rosNode('mg_mcap_wrapper')\n"
+           f"mc.baseBag({str(mcap)!r}, rate=4.0)\n"
+           "mc.reuse.publish('/mg/rate', type=UInt32)\n"
+           "mc.new.subscribe('/mg/rate', lambda m: mc_outs.append(m.data), msgType=UInt32)\n"
+           "mc.create()")
+    outs = ip.user_ns["mc_outs"]
+    wait_for(lambda: len(outs) >= recorded, timeout=20, what="the whole MCAP file through the handler")
+    assert outs == list(range(outs[0], outs[0] + recorded)), "in order, none lost"
+    ok(ip, "mc.shutdown()")
 
 
 def test_topics_names_the_sessions_dsl_nodes_not_the_ros_node_they_share(ip, capsys):

@@ -216,6 +216,13 @@ def test_record_on_ros2_then_replay_the_bag_through_two_handler_versions(ip, cap
     _ok(ip, "src.shutdown()")
     recorded = ip.user_ns["rec"].count
     assert recorded >= 25 and (bag / "metadata.yaml").exists() and list(bag.glob("*.mcap"))
+    from mcap.reader import make_reader  # read back by MCAP's own reader too, not only by rosbags
+
+    with next(bag.glob("*.mcap")).open("rb") as stream:
+        summary = make_reader(stream).get_summary()
+    assert [c.topic for c in summary.channels.values()] == ["/b2/counts"]
+    assert summary.statistics.message_count == recorded
+    assert [c.message_encoding for c in summary.channels.values()] == ["cdr"]
     assert list((tmp_path / "sqlite_bag").glob("*.db3"))
     capsys.readouterr()
     _ok(ip, f"info = %bag info {bag}")

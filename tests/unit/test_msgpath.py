@@ -98,3 +98,18 @@ def test_a_path_its_type_cannot_hold_is_one_line_before_any_message(text, messag
     with pytest.raises(MessagePathError) as raised:
         parse(text).check(Sample)
     assert str(raised.value).startswith(message) and "\n" not in str(raised.value)
+
+
+def test_a_path_reads_messages_as_rosbags_gives_them_dataclasses():
+    from dataclasses import dataclass
+
+    @dataclass
+    class Vec:
+        x: float
+        y: float
+
+    @dataclass
+    class Poses:
+        points: list
+
+    assert parse("/p.points[:]{x>0}.y").values(Poses([Vec(1.0, 2.0), Vec(-1.0, 3.0)])) == [2.0]

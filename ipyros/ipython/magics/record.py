@@ -1,9 +1,13 @@
 """``%record``: live topics written to a bag in the background, for a basenode to play back (``baseBag``);
-``%bag info``: what a bag holds.
+``%bag info``: what a bag holds; ``%bag convert IN OUT``: a bag rewritten (ROS 1 ↔ rosbag2, filtered);
+``%bag pause nd`` (resume, step, seek, rate, loop, state): the bag a node plays.
 
     %record run.bag /turtle1/pose /turtle1/cmd_vel --duration 20
     %record --stop
     %bag info run.bag
+    %bag convert run.bag run2 --topics /odom --start 5 --end 20 --filter 'm.twist.twist.linear.x > 0'
+    %bag pause nd
+    %bag seek nd 12.5
 """
 
 from __future__ import annotations
@@ -15,8 +19,10 @@ from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
 from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
+from ...files.bagconvert import Converted, convert
+from ...tools.bagplay import CONTROLS, control
 from ...tools.record import Recording, bag_module
-from ..api import global_topic, live_graph, live_type
+from ..api import compile_filter, find_node, global_topic, live_graph, live_type
 from ..arguments import TOPIC, argument
 from .common import ExtensionMagics
 
@@ -41,6 +47,8 @@ class RecordMagics(ExtensionMagics):
     @argument("--stop", action="store_true", help="stop recording and close the bag")
     @argument("--storage", choices=("mcap", "sqlite3"), default=None,
               help="ROS 2: how the bag folder stores its messages (default: mcap, as rosbag2 records)")
+    @argument("--filter", default=None, help="record only the messages this Python expression is true for: m is "
+              "the message, topic its topic, e.g. 'm.linear.x != 0'")
     @line_magic
     def record(self, line: str) -> Optional[Recording]:
         """Record TOPICS to FILE in the background (the prompt stays free); return the Recording."""
@@ -59,24 +67,65 @@ class RecordMagics(ExtensionMagics):
             raise UsageError(f"{path} exists; give a new file name (a recording never overwrites one)")
         snap = live_graph(self.ext)  # one read of the graph for every topic
         topics = {topic: live_type(self.ext, topic, snap=snap) for topic in map(global_topic, args.topics)}
+        test = compile_filter(args.filter, self.shell.user_ns) if args.filter is not None else None
+        keep = (lambda m, topic: test(m, topic=topic)) if test is not None else None
         self.stop()
-        self.recording = Recording(path, topics, args.duration, args.storage)
+        self.recording = Recording(path, topics, args.duration, args.storage, keep)
         until = f"for {args.duration:g} s" if args.duration else "until %record --stop"
         storage = getattr(self.recording.writer, "storage", "")
         print(f"ipyros: recording {', '.join(topics)} to {path}{f' ({storage})' if storage else ''} {until}")
         return self.recording
 
     @magic_arguments()
-    @argument("action", choices=("info",), help="info: what the bag holds")
-    @argument("file", help="the bag: ROS 1 a .bag file; ROS 2 a rosbag2 folder, an .mcap file or a .bag")
+    @argument("action", choices=("info", "convert", *CONTROLS), help="info: what the bag FILE holds; convert: FILE "
+              "to OUT; pause, resume, step [N], seek SECONDS, rate R, loop on|off, state: the bag NODE plays "
+              "(baseBag), while it plays")
+    @argument("target", help="info, convert: the bag (a ROS 1 .bag file, a rosbag2 folder, an .mcap file); "
+              "the rest: the variable holding the node that plays it")
+    @argument("value", nargs="?", default="", help="convert: the bag to write (a .bag: ROS 1; else a rosbag2 "
+              "folder); step: how many messages (1); seek: seconds from the bag's start; rate: the speed factor; "
+              "loop: on or off")
+    @argument("--topics", nargs="+", complete=TOPIC, help="convert: only these topics")
+    @argument("--start", type=float, help="convert: from this many seconds after the bag's start")
+    @argument("--end", type=float, help="convert: up to this many seconds after the bag's start")
+    @argument("--filter", help="convert: keep the messages this Python expression is true for: m is the message, "
+              "topic its topic, t its seconds from the bag's start, e.g. 'm.linear.x > 0'")
+    @argument("--storage", choices=("mcap", "sqlite3"), help="convert: how a rosbag2 folder stores its messages "
+              "(default: mcap)")
     @line_magic
     def bag(self, line: str) -> Any:
-        """What a bag holds: each topic with its type and message count, the storage, start, end and duration
-        (as rosbag info / ros2 bag info); return it as a record (its rows, start, end, duration)."""
+        """What a bag holds (info: each topic with its type and message count, the storage, start, end and
+        duration, as rosbag info / ros2 bag info); or drive the bag a node plays, while it plays: where it
+        stands after (bag time, paused or playing, rate, looping, messages sent)."""
         args = parse_argstring(self.bag, line)
-        path = Path(args.file).expanduser()
+        converting = (args.topics, args.start, args.end, args.filter, args.storage)
+        if args.action != "convert" and any(option is not None for option in converting):
+            raise UsageError("--topics, --start, --end, --filter and --storage are for %bag convert IN OUT")
+        if args.action == "convert":
+            return self._convert(args)
+        if args.action != "info":
+            wants = {"seek": ("seconds from the bag's start", "12.5"), "rate": ("a speed factor", "2"),
+                     "loop": ("on or off", "on")}
+            if args.action in wants and not args.value:
+                what, example = wants[args.action]
+                raise UsageError(f"%bag {args.action} {args.target} needs {what}, e.g. "
+                                 f"%bag {args.action} {args.target} {example}")
+            state = control(find_node(self.shell, args.target), f"{args.action} {args.value}".strip())
+            print(f"ipyros: {state}")
+            return state
+        path = Path(args.target).expanduser()
         if not path.exists():
             raise UsageError(f"no bag at {path}: give a bag file or a rosbag2 folder (%record writes one)")
         info = bag_module().bag_info(path)
         self.ext.printer.show(info)
         return info
+
+    def _convert(self, args: Any) -> Converted:
+        if not args.value:
+            raise UsageError(f"give the bag to write: %bag convert {args.target} OUT (OUT.bag: ROS 1; a folder: "
+                             "rosbag2)")
+        test = compile_filter(args.filter, self.shell.user_ns) if args.filter is not None else None
+        keep = (lambda m, topic, t: test(m, topic=topic, t=t)) if test is not None else None
+        done = convert(Path(args.target), Path(args.value), args.topics, args.start, args.end, keep, args.storage)
+        print(f"ipyros: {done}")
+        return done
