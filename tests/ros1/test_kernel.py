@@ -183,3 +183,23 @@ def test_action_feedback_in_a_kernel_is_one_view_updated_in_place(kernel):
     assert "/e2e_kernel_act/count: " in shown and "feedback: {feedback:" in shown, shown
     assert "succeeded after" in cell.stdout(), cell.stdout()
     assert "result: 10" in cell.stdout() + cell.shown(), "the result, as YAML"
+
+
+def test_pub_widget_in_a_kernel_is_a_form_that_publishes_as_its_slider_moves(kernel, make_node):
+    """%pub --widget in Jupyter: a widget view (the form) below the cell; a slider moved publishes its value."""
+    from geometry_msgs.msg import Twist
+
+    heard: list = []
+    make_node("e2e_wg_ear").new.subscribe("/e2e_wg/cmd", heard.append, msgType=Twist).create()
+    kernel.ok("%load_ext ipyros")
+    cell = kernel.ok("%pub --widget /e2e_wg/cmd geometry_msgs/Twist")
+    views = [c["data"] for c in cell.outputs("display_data", "execute_result")
+             if "application/vnd.jupyter.widget-view+json" in c["data"]]
+    assert views, cell.messages
+    kernel.ok("form = _")
+    step = iter(range(1, 1000))
+    wait_for(lambda: kernel.ok(f"form.fields['linear.x'].value = {next(step) / 10}") and
+             any(m.linear.x > 0 for m in heard), timeout=30, interval=0.3, what="a slider's value at a subscriber")
+    x = heard[-1].linear.x
+    assert x > 0 and abs(x * 10 - round(x * 10)) < 1e-9 and kernel.value("form.sent") >= 1  # a slider's value
+    kernel.ok("form.close()")

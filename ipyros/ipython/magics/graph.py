@@ -35,6 +35,7 @@ from ..api import (
 )
 from ..arguments import MSG_PATH, MSG_TEMPLATE, MSG_TYPE, NODE, TOPIC, argument
 from ..display import endpoints_table, topics_table
+from ..widgets import PublisherForm
 from .cell_output import OutputArea, in_kernel
 from .common import ExtensionMagics
 
@@ -245,9 +246,11 @@ class TopicMagics(ExtensionMagics):
               "(ROS 1 latched, ROS 2 transient local), until the extension is unloaded")
     @argument("--nonfinite", action="store_true", help="let NaN and infinities through (refused otherwise: "
               "typed by mistake they reach a controller as a command)")
+    @argument("--widget", action="store_true", help="Jupyter: a form of the message's fields (sliders, toggles, "
+              "text) that publishes as they move, or at a rate; returns it (form.fields['linear.x'].value = 0.3)")
     @no_var_expand
     @line_cell_magic
-    def pub(self, line: str, cell: Optional[str] = None) -> None:
+    def pub(self, line: str, cell: Optional[str] = None) -> Any:
         """Publish one message on TOPIC, built and checked field by field.
 
             %pub /chatter std_msgs/String hello
@@ -278,6 +281,8 @@ class TopicMagics(ExtensionMagics):
         given = args.type or args.type_option
         type_name = msgtypes.resolve_message(given)[0] if given else live_type(self.ext, topic, for_pub=True)
         msg = build_message(type_name, parse_data(data), nonfinite=args.nonfinite)
+        if args.widget:
+            return self._form(topic, type_name, msg, args.latch)
         if args.rate is None:
             sender, reached = self.ext.publisher.publish(topic, type_name, msg, latch=args.latch)
             later = "; latched: subscribers that come later get it too" if args.latch else ""
@@ -285,6 +290,19 @@ class TopicMagics(ExtensionMagics):
                   f"{'s' * (reached != 1)}{later}")
             return
         self._publish_at(args.rate, topic, type_name, msg, args.latch)
+
+    def _form(self, topic: str, type_name: str, initial: Any, latch: bool) -> PublisherForm:
+        """``%pub --widget``: the form, in Jupyter; in a terminal, one line saying what to do instead."""
+        if not in_kernel(self.shell):
+            raise UsageError(f"widgets need Jupyter: %pub --widget draws a form in a notebook; here give the message: "
+                             f"%pub {topic} {type_name} {{...}} (-r RATE to repeat it)")
+        first = [True]
+
+        def send(msg: Any) -> None:
+            self.ext.publisher.publish(topic, type_name, msg, latch=latch, wait=first[0])
+            first[0] = False
+
+        return PublisherForm(topic, type(initial), send, initial)
 
     def _publish_at(self, rate: float, topic: str, type_name: str, msg: Any, latch: bool) -> None:
         period, sent = 1.0 / rate, 0

@@ -40,6 +40,8 @@ from ...files.atomic import write_atomic
 from ...tools import paramwatch
 from ..api import global_topic, live_graph, split_head
 from ..arguments import MSG_TYPE, NODE, REQUEST_TEMPLATE, SERVICE, SRV_TYPE, TRANSITION, argument
+from ..widgets import ParamsForm
+from .cell_output import in_kernel
 from .common import ExtensionMagics
 
 
@@ -149,12 +151,24 @@ class IntrospectMagics(ExtensionMagics):
     @argument("-w", "--watch", action="store_true", help="show each change as it happens (a parameter set, added "
               "or deleted, by anyone) until Ctrl-C")
     @argument("-n", type=int, metavar="N", help="with --watch: stop after N changes")
+    @argument("--widget", action="store_true", help="Jupyter: sliders (toggles, text) for the parameters, within "
+              "the ranges their nodes give, each set as it moves; returns the form")
     @line_magic
-    def params(self, line: str) -> None:
+    def params(self, line: str) -> Any:
         """List the parameters under NAMESPACE with their values (ROS 2: the parameters of the nodes there)."""
         args = parse_argstring(self.params, line)
         namespace = global_topic(args.namespace)
+        if args.widget and not in_kernel(self.shell):
+            raise UsageError(f"widgets need Jupyter: %params --widget draws sliders in a notebook; here set one with "
+                             f"%param NAME VALUE (%params {namespace} lists them)")
         backend = self._ready()
+        if args.widget:
+            values = backend.params_under(namespace)
+            values = values if args.all else {k: v for k, v in values.items()
+                                              if k.rsplit("/", 1)[-1] not in backend.standard_params}
+            if not values:
+                raise UsageError(f"no parameters under {namespace} to draw (%params {namespace} --all lists every one)")
+            return ParamsForm(values, backend.describe_param, backend.write_param)
         if args.load:
             self._load_params(backend, args.load, namespace)
             return

@@ -1,0 +1,163 @@
+"""Jupyter widgets (ipywidgets 8): a form that publishes a message as its sliders move (``%pub --widget``), and
+one that sets parameters as they move (``%params --widget``).
+
+The form's controls come from the message type (:func:`ipyros.core.msgform.form_fields`):
+a slider a number, a toggle a bool, a text box a string. Moving one publishes the message at
+once; a rate above 0 and the play button publish it again and again until the button is
+pressed again (or the form closed). In a terminal there is no widget: the magic says so.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable
+
+from IPython.core.error import UsageError
+
+from ..core import msgtypes
+from ..core.msgform import FormField, form_fields, message_from, param_field
+
+__all__ = ["ParamsForm", "PublisherForm", "widgets_module"]
+
+
+def widgets_module() -> Any:
+    """ipywidgets, or a one-line error saying how to get it."""
+    try:
+        import ipywidgets
+    except ImportError:
+        raise UsageError("widgets need ipywidgets: pip install 'ipyros[jupyter]' (bash run.sh notebook installs "
+                         "it)") from None
+    return ipywidgets
+
+
+class PublisherForm:
+    """A form for messages of ``cls`` on ``topic``: ``send(msg)`` publishes one; ``fields`` maps each dotted path to
+    its control (``form.fields["linear.x"].value = 0.3`` publishes, as moving the slider does)."""
+
+    def __init__(self, topic: str, cls: type, send: Callable[[Any], None], initial: Any = None) -> None:
+        widgets = widgets_module()
+        self.topic, self._cls, self._send = topic, cls, send
+        specs, left_out = form_fields(cls, initial)
+        self.fields: dict[str, Any] = {spec.path: _control(widgets, spec) for spec in specs}
+        self.sent = 0
+        self.problem = ""  # the last message that could not be sent, and why
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._stop.set()  # not publishing at a rate
+        self.rate = widgets.BoundedFloatText(value=0.0, min=0.0, max=1000.0, step=1.0, description="rate (Hz)")
+        self.play = widgets.ToggleButton(value=False, description="publish at rate", icon="play")
+        self.status = widgets.Label(value=f"{topic}: nothing sent yet")
+        for control in self.fields.values():
+            control.observe(lambda change: self._changed(), names="value")
+        self.play.observe(lambda change: self._playing(change["new"]), names="value")
+        note = [widgets.Label(value=f"not in the form: {', '.join(left_out)}")] if left_out else []
+        self.widget = widgets.VBox([widgets.HTML(value=f"<b>{topic}</b> ({msgtypes.type_name(cls)})"),
+                                    *self.fields.values(), widgets.HBox([self.rate, self.play]), self.status, *note])
+
+    # -- what it sends ---------------------------------------------------------------------------
+    def message(self) -> Any:
+        """The message the controls say now."""
+        return message_from(self._cls, {path: control.value for path, control in self.fields.items()})
+
+    def publish(self) -> None:
+        """Send the message the controls say, once (what a change does)."""
+        try:
+            msg = self.message()
+            self._send(msg)
+        except Exception as error:  # noqa: BLE001 - said on the form, in one line: a form must not raise at a slider
+            self.problem = str(error).splitlines()[0]
+            self.status.value = f"{self.topic}: not sent: {self.problem}"
+            return
+        with self._lock:
+            self.sent += 1
+            self.status.value = f"{self.topic}: {self.sent} sent"
+
+    def _changed(self) -> None:
+        if self._stop.is_set():  # at a rate, the next tick sends the new values
+            self.publish()
+
+    def _playing(self, on: bool) -> None:
+        if not on:
+            self._stop.set()
+            return
+        if not self.rate.value > 0:
+            self.status.value = f"{self.topic}: give a rate above 0 Hz to publish again and again"
+            self.play.value = False
+            return
+        self._stop.clear()
+        threading.Thread(target=self._repeat, name="ipyros-widget-pub", daemon=True).start()
+
+    def _repeat(self) -> None:
+        while not self._stop.is_set():
+            self.publish()
+            self._stop.wait(1.0 / max(self.rate.value, 1e-3))
+
+    def close(self) -> None:
+        """Stop publishing and close the form's widgets."""
+        self._stop.set()
+        self.widget.close()
+
+    def _ipython_display_(self) -> None:
+        from IPython.display import display
+
+        display(self.widget)
+
+    def __repr__(self) -> str:
+        return f"<PublisherForm of {self.topic}: {len(self.fields)} controls, {self.sent} sent>"
+
+
+class ParamsForm:
+    """The parameters ``values`` ({global name: value}) as controls within the ranges their nodes give (``describe``),
+    each set with ``write(name, value)`` as it moves (``form.fields[name].value = 3`` sets it, as the slider does)."""
+
+    def __init__(self, values: dict[str, Any], describe: Callable[[str], dict[str, Any]],
+                 write: Callable[[str, Any], Any]) -> None:
+        widgets = widgets_module()
+        self._write = write
+        self.fields: dict[str, Any] = {}
+        left_out = []
+        for name, value in sorted(values.items()):
+            try:
+                described = describe(name)
+            except Exception:  # noqa: BLE001 - a node that does not say: a range around the value
+                described = {}
+            spec = param_field(name, value, described)
+            if spec is None:
+                left_out.append(name)
+                continue
+            control = self.fields[name] = _control(widgets, spec)
+            control.observe(lambda change, name=name: self._set(name, change["new"]), names="value")
+        self.status = widgets.Label(value=f"{len(self.fields)} parameter{'s' * (len(self.fields) != 1)}: move one "
+                                          "to set it")
+        note = [widgets.Label(value=f"not in the form: {', '.join(left_out)}")] if left_out else []
+        self.widget = widgets.VBox([*self.fields.values(), self.status, *note])
+
+    def _set(self, name: str, value: Any) -> None:
+        try:
+            kept = self._write(name, value)
+        except Exception as error:  # noqa: BLE001 - said on the form, in one line
+            self.status.value = f"{name}: not set: {str(error).splitlines()[0]}"
+            return
+        self.status.value = f"{name} = {kept!r}"
+
+    def close(self) -> None:
+        self.widget.close()
+
+    def _ipython_display_(self) -> None:
+        from IPython.display import display
+
+        display(self.widget)
+
+    def __repr__(self) -> str:
+        return f"<ParamsForm: {len(self.fields)} parameters>"
+
+
+def _control(widgets: Any, spec: FormField) -> Any:
+    if spec.kind == "float":
+        return widgets.FloatSlider(value=spec.value, min=spec.low, max=spec.high, step=spec.step, description=spec.path,
+                                   continuous_update=True, readout_format=".3f")
+    if spec.kind == "int":
+        return widgets.IntSlider(value=spec.value, min=int(spec.low), max=int(spec.high), step=1, description=spec.path)
+    if spec.kind == "bool":
+        return widgets.ToggleButton(value=spec.value, description=spec.path)
+    return widgets.Text(value=spec.value, description=spec.path, continuous_update=False)
