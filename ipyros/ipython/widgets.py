@@ -1,5 +1,5 @@
-"""Jupyter widgets (ipywidgets 8): a form that publishes a message as its sliders move (``%pub --widget``), and
-one that sets parameters as they move (``%params --widget``).
+"""Jupyter widgets (ipywidgets 8): a form that publishes a message as its sliders move (``%pub --widget``),
+one that sets parameters as they move (``%params --widget``), and a bag player's controls (``%bag widget NODE``).
 
 The form's controls come from the message type (:func:`ipyros.core.msgform.form_fields`):
 a slider a number, a toggle a bool, a text box a string. Moving one publishes the message at
@@ -17,7 +17,7 @@ from IPython.core.error import UsageError
 from ..core import msgtypes
 from ..core.msgform import FormField, form_fields, message_from, param_field
 
-__all__ = ["ParamsForm", "PublisherForm", "widgets_module"]
+__all__ = ["BagPlayerForm", "ParamsForm", "PublisherForm", "widgets_module"]
 
 
 def widgets_module() -> Any:
@@ -150,6 +150,45 @@ class ParamsForm:
 
     def __repr__(self) -> str:
         return f"<ParamsForm: {len(self.fields)} parameters>"
+
+
+class BagPlayerForm:
+    """The controls of the bag a node plays (``baseBag``): pause/resume, step, a seek slider over the bag's length,
+    the rate and looping, each a control the player answers (``control(text)``: a
+    :class:`~ipyros.tools.bagplay.PlayerState`); the state the last answer gave, below them."""
+
+    def __init__(self, control: Callable[[str], Any]) -> None:
+        widgets = widgets_module()
+        self._control = control
+        state = control("state")
+        self.paused = widgets.ToggleButton(value=state.paused, description="paused", icon="pause")
+        self.step = widgets.Button(description="step", icon="step-forward")
+        self.seek = widgets.FloatSlider(value=state.at, min=0.0, max=max(state.length, 1e-3), step=0.01,
+                                        description="seek (s)", continuous_update=False, readout_format=".2f")
+        self.rate = widgets.FloatLogSlider(value=state.rate, base=10, min=-2, max=2, step=0.05, description="rate")
+        self.loop = widgets.Checkbox(value=state.loop, description="loop")
+        self.status = widgets.Label(value=str(state))
+        self.paused.observe(lambda change: self._do("pause" if change["new"] else "resume"), names="value")
+        self.step.on_click(lambda button: self._do("step 1"))
+        self.seek.observe(lambda change: self._do(f"seek {change['new']:.3f}"), names="value")
+        self.rate.observe(lambda change: self._do(f"rate {change['new']:.4g}"), names="value")
+        self.loop.observe(lambda change: self._do(f"loop {'on' if change['new'] else 'off'}"), names="value")
+        self.widget = widgets.VBox([widgets.HBox([self.paused, self.step, self.loop]), self.seek, self.rate,
+                                    self.status])
+
+    def _do(self, text: str) -> None:
+        try:
+            self.status.value = str(self._control(text))
+        except Exception as error:  # noqa: BLE001 - said on the form, in one line (the bag ended, a control refused)
+            self.status.value = f"{text}: {str(error).splitlines()[0]}"
+
+    def close(self) -> None:
+        self.widget.close()
+
+    def _ipython_display_(self) -> None:
+        from IPython.display import display
+
+        display(self.widget)
 
 
 def _control(widgets: Any, spec: FormField) -> Any:

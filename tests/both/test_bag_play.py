@@ -118,3 +118,30 @@ def test_a_bags_clock_is_the_nodes_time(make_node, session, tmp_path, notices):
         assert not engine_of(nd).session.backend.has_param("/use_sim_time")
     with pytest.raises(NodeStateError, match="bp_clock is not running"):
         nd.now()
+
+
+def test_a_bag_player_form_pauses_steps_seeks_and_changes_the_rate(make_node, session, tmp_path):
+    pytest.importorskip("ipywidgets", reason="the test extra installs ipywidgets")
+    from ipyros.ipython.widgets import BagPlayerForm
+
+    path = bag_path(session, tmp_path, "form")
+    write_bag(path)
+    nd, heard = playing(make_node, path, "bp_form")
+    wait_for(lambda: len(heard) >= 3, timeout=30, what="the bag's first messages")
+    form = BagPlayerForm(lambda text: control(nd, text))
+    assert (form.seek.min, form.seek.max) == (0.0, pytest.approx(3.9))
+    form.paused.value = True
+    assert "paused at rate 1" in form.status.value
+    time.sleep(0.3)  # what was sent before the pause arrives
+    count = len(heard)
+    form.step.click()
+    wait_for(lambda: len(heard) == count + 1, what="one message, stepped")
+    form.seek.value = 0.0
+    form.rate.value = 4.0
+    assert "rate 4" in form.status.value
+    form.paused.value = False
+    wait_for(lambda: [d for d, _ in heard[count + 1:]][:1] == [1], what="the bag again from its start")
+    nd.shutdown()
+    form.paused.value = True
+    assert form.status.value.startswith("pause: bp_form's bag is not playing")
+    form.close()

@@ -72,3 +72,8 @@ def test_a_params_form_sets_each_parameter_as_its_control_moves(make_node, sessi
              what="the parameters set as their controls moved")
     assert form.status.value == f"{nd.fullname}/label = 'fast'"
     form.close()
+
+
+def test_bag_widget_in_a_terminal_says_widgets_need_jupyter(ip):
+    error = str(error_of(ip, "%bag widget nd"))
+    assert error.startswith("widgets need Jupyter: %bag widget draws the player's controls in a notebook")

@@ -24,6 +24,8 @@ from ...tools.bagplay import CONTROLS, control
 from ...tools.record import Recording, bag_module
 from ..api import compile_filter, find_node, global_topic, live_graph, live_type
 from ..arguments import TOPIC, argument
+from ..widgets import BagPlayerForm
+from .cell_output import in_kernel
 from .common import ExtensionMagics
 
 
@@ -77,9 +79,9 @@ class RecordMagics(ExtensionMagics):
         return self.recording
 
     @magic_arguments()
-    @argument("action", choices=("info", "convert", *CONTROLS), help="info: what the bag FILE holds; convert: FILE "
-              "to OUT; pause, resume, step [N], seek SECONDS, rate R, loop on|off, state: the bag NODE plays "
-              "(baseBag), while it plays")
+    @argument("action", choices=("info", "convert", *CONTROLS, "widget"), help="info: what the bag FILE holds; "
+              "convert: FILE to OUT; pause, resume, step [N], seek SECONDS, rate R, loop on|off, state: the bag NODE "
+              "plays (baseBag), while it plays; widget: those controls in Jupyter")
     @argument("target", help="info, convert: the bag (a ROS 1 .bag file, a rosbag2 folder, an .mcap file); "
               "the rest: the variable holding the node that plays it")
     @argument("value", nargs="?", default="", help="convert: the bag to write (a .bag: ROS 1; else a rosbag2 "
@@ -103,6 +105,12 @@ class RecordMagics(ExtensionMagics):
             raise UsageError("--topics, --start, --end, --filter and --storage are for %bag convert IN OUT")
         if args.action == "convert":
             return self._convert(args)
+        if args.action == "widget":
+            if not in_kernel(self.shell):
+                raise UsageError(f"widgets need Jupyter: %bag widget draws the player's controls in a notebook; here "
+                                 f"type them: %bag pause {args.target}, %bag seek {args.target} 12.5, ...")
+            node = find_node(self.shell, args.target)
+            return BagPlayerForm(lambda text: control(node, text))
         if args.action != "info":
             wants = {"seek": ("seconds from the bag's start", "12.5"), "rate": ("a speed factor", "2"),
                      "loop": ("on or off", "on")}
