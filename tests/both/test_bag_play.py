@@ -5,6 +5,7 @@ timers run on it too. Real players, on either ROS."""
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import pytest
 from shell import error_of, ok
@@ -16,6 +17,7 @@ from ipyros.dsl import engine_of
 from ipyros.tools.bagplay import control
 from ipyros.tools.record import bag_module
 
+PEERS = Path(__file__).parent / "peers"
 S = 1_000_000_000
 START = 1000 * S  # the bag was recorded at 1000 s (sim time), 0.1 s between messages
 
@@ -109,6 +111,12 @@ def test_a_bags_clock_is_the_nodes_time(make_node, session, tmp_path, notices):
         assert len(ticks) <= count + 1, "the timer ticked on while the bag's time stood still"
         control(nd, "resume")
         wait_for(lambda: len(ticks) > count + 2, what="the timer again, with the bag's time")
+        other = make_node("bp_clock_base")  # a basenode started while the bag's time runs runs on it too
+        other.baseNode(str(PEERS / "talk.py"), name="bp_talker", args=["/bp/talk", "std_msgs/String", "5"])
+        other.reuse.publish("/bp/talk", type="std_msgs/String")
+        other.create()
+        assert engine_of(nd).session.backend.read_param(f"{other.basenode_name}/use_sim_time") is True
+        other.shutdown()
     else:  # one clock a process: the session's timers keep the wall clock, as said
         assert any("this session's timers keep the wall clock" in n for n in notices), notices
         assert engine_of(nd).session.backend.get_param("/use_sim_time") is True

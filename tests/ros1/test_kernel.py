@@ -203,3 +203,19 @@ def test_pub_widget_in_a_kernel_is_a_form_that_publishes_as_its_slider_moves(ker
     x = heard[-1].linear.x
     assert x > 0 and abs(x * 10 - round(x * 10)) < 1e-9 and kernel.value("form.sent") >= 1  # a slider's value
     kernel.ok("form.close()")
+
+
+def test_try_over_a_bag_with_plot_in_a_kernel_is_a_figure(kernel, tmp_path):
+    """%try ... --bag FILE --plot FIELD in Jupyter: both sides' field over bag time, as a figure below the cell."""
+    bag = tmp_path / "kt.bag"
+    kernel.ok("%load_ext ipyros")
+    kernel.ok("from std_msgs.msg import UInt32\nfrom pathlib import Path\nfrom ipyros.tools.record import bag_module\n"
+              f"writer = bag_module().BagWriter(Path({str(bag)!r}))\n"
+              "for i in range(1, 21):\n    writer.write('/kt/in', UInt32(data=i), stamp=(1000 + i) * 10**9)\n"
+              "writer.close()\n"
+              "def double(m):\n    kt.write('/kt/out', UInt32(data=m.data * 2))\n"
+              "def triple(m):\n    kt.write('/kt/out', UInt32(data=m.data * 3))\n"
+              "kt = rosNode('kt')\nkt.new.subscribe('/kt/in', double, msgType=UInt32).publish('/kt/out', msgType=UInt32)")
+    cell = kernel.ok(f"r = %try kt /kt/in triple --bag {bag} --plot data")
+    pngs = [c["data"]["image/png"] for c in cell.outputs("display_data") if "image/png" in c["data"]]
+    assert len(pngs) == 1 and kernel.value("r.differing") == 20
