@@ -20,6 +20,9 @@ from ipyros.dsl import engine_of
 
 PEERS = Path(__file__).parent / "peers"
 LIMITS = {"linear.x": (-0.5, 0.5), "angular.z": (-1.0, 1.0)}
+#: A stop on silence long enough that a loaded machine's stall of a 20 Hz stream is not silence (the bench measures
+#: how soon the stop comes: bench/guard.py).
+SILENCE = 0.6
 
 
 def twists(listener) -> list[tuple[float, float, float, float]]:
@@ -63,7 +66,7 @@ def test_the_basenode_stopped_the_stop_message_comes_within_the_timeout_and_comm
     nd.baseNode(str(PEERS / "talk.py"), name="steady_cmd",
                 args=["/guarded2/cmd_vel", "geometry_msgs/Twist", "20", "linear.x=0.3"])
     nd.reuse.publish("/guarded2/cmd_vel", type=Twist)
-    nd.guard("/guarded2/cmd_vel", limits=LIMITS, timeout=0.3, grace=0.3)
+    nd.guard("/guarded2/cmd_vel", limits=LIMITS, timeout=SILENCE, grace=0.3)  # commands come every 50 ms
     nd.create()
     wait_for(lambda: any(x == 0.3 for x, *_ in twists(robot)), timeout=30, what="commands at the robot")
     flowing = time.monotonic()
@@ -76,7 +79,7 @@ def test_the_basenode_stopped_the_stop_message_comes_within_the_timeout_and_comm
         last_command = max(t for x, *_, t in twists(robot) if x == 0.3)
         first_stop = min(stops(robot, frozen_at))
         around = [(x, round(t - frozen_at, 3)) for x, *_, t in twists(robot) if abs(t - frozen_at) < 1.0]
-        assert first_stop - last_command <= 0.3 + 0.5, around  # the timeout, and what delivery takes
+        assert first_stop - last_command <= SILENCE + 0.5, around  # the timeout, and what delivery takes
         wait_for(lambda: len(stops(robot, frozen_at)) >= 3, what="the stop message again, at its rate")
     finally:
         os.kill(nd.base.pid, signal.SIGCONT)

@@ -125,6 +125,12 @@ class CountingRos2(Counting):
         spinner.start()
         try:
             assert client.wait_for_server(timeout_sec=timeout), f"no action server {name}"
+            # The server's services answer before its feedback publisher is matched with this client (discovery of
+            # each endpoint apart): a quick goal's feedback would be lost, a loss of the client's, not the server's.
+            deadline = time.monotonic() + timeout
+            while node.count_publishers(f"{name}/_action/feedback") < 1 and time.monotonic() < deadline:
+                time.sleep(0.02)
+            time.sleep(0.1)  # discovered is not yet matched: the reader's side takes a moment more
             seen: list[int] = []
             for _ in range(5):  # right after discovery a server's reply can be lost (rmw waits 100 ms for our
                 # reader): as ROS 2 clients do, the goal is sent again
