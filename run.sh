@@ -5,7 +5,8 @@
 #   bash run.sh ipython   the same without the demo robot
 #   bash run.sh notebook  the notebooks in Jupyter (installs Jupyter into the venv the first time)
 #   bash run.sh test      install what is missing, then run the whole test suite: the unit layer (no ROS),
-#                         the guide built with warnings as errors, then tests/both + tests/ros1 on ROS 1, then tests/both + tests/ros2 on ROS 2
+#                         the guide built with warnings as errors, then tests/both + tests/ros1 on ROS 1 (the notebooks
+#                         among them in JupyterLab in a headless Chromium), then tests/both + tests/ros2 on ROS 2
 #                         (rclpy from PyPI, in a venv of its own); each is run and reported, whatever
 #                         the one before it did
 #   bash run.sh unit      the unit layer alone, in a venv without ROS (seconds)
@@ -31,6 +32,7 @@ ros1_setup() {
     # nd.export(DIR, language="cpp"): the roscpp node it writes is built with catkin_make
     catkin g++ cmake libroscpp-dev libtopic-tools-dev libstd-msgs-dev libgeometry-msgs-dev libstd-srvs-dev
     libsensor-msgs-dev  # the relay bench's path (h) relays images too
+    chromium  # the notebooks checked in a real browser (tests/ros1/test_browser.py, playwright drives it)
   )
 
   local missing=() p stamp
@@ -50,7 +52,7 @@ ros1_setup() {
   fi
   stamp="$venv/.ipyros-installed"
   if [[ ! -f "$stamp" || "$here/pyproject.toml" -nt "$stamp" ]]; then
-    "$venv/bin/pip" install -q --disable-pip-version-check -e "$here[test,bags]" >&2
+    "$venv/bin/pip" install -q --disable-pip-version-check -e "$here[test,bags,browser]" >&2
     touch "$stamp"
   fi
 }

@@ -19,6 +19,7 @@ from notebooks import (
     check_kobuki,
     check_turtle_circle,
     html_of,
+    images,
     number,
     run_notebook,
     text_of,
@@ -31,6 +32,7 @@ def check_tour(nb: nbformat.NotebookNode, text: str) -> None:
     assert "rosNode /turtle_control_node (running)" in text
     assert "the turtle is at x=" in text and "x=0.00, y=0.00" not in text
     assert "/turtle1/pose" in text and "geometry_msgs/Pose" in text
+    assert images(nb) == 1, "the live plot of the turtle's path is missing"
     assert "status of /turtle_control_node" in text
     # In Jupyter a status is an HTML table, and what a handler prints stays below the cell that made its node.
     assert '<caption style="text-align:left">status of /turtle_control_node</caption>' in html_of(cell_with(nb, "%status nd"))

@@ -1,0 +1,167 @@
+"""The notebook face checked in a real browser: JupyterLab (from PyPI) in Debian's headless Chromium, driven by
+playwright, its kernels on the test master.
+
+What a person sees, read from the page: the tour runs top to bottom from the Run menu with no error output;
+``%topics`` is an HTML table and ``%plot`` a figure redrawn while the tour goes on; a ``%pub --widget`` slider
+dragged with the mouse publishes the value it shows, as a plain subscriber receives it. Screenshots land in the
+test's temporary folder (``pytest --basetemp DIR`` keeps them to look at). Through kernel messages alone the same
+is tested in test_kernel.py and test_notebook.py; here it is the browser's rendering that must hold.
+"""
+
+from __future__ import annotations
+
+import shutil
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import nbformat
+import pytest
+from browser import TIMEOUT, Browser, Lab, NotebookPage
+from support import wait_for
+
+from notebooks import NOTEBOOKS
+
+pytestmark = pytest.mark.timeout(4 * TIMEOUT)  # JupyterLab and Chromium on a loaded machine of 2 cores
+
+@pytest.fixture(scope="module")
+def lab(ros_master, tmp_path_factory):
+    """A JupyterLab server of this module's own, serving a folder with a copy of the tour."""
+    root = tmp_path_factory.mktemp("lab")
+    shutil.copy(NOTEBOOKS / "tour.ipynb", root)
+    running = Lab(root, tmp_path_factory.mktemp("lab_home"), ros_master)
+    try:
+        yield running
+    finally:
+        running.stop()
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    running = Browser(tmp_path_factory.mktemp("chromium_home"))
+    try:
+        yield running
+    finally:
+        running.close()
+
+
+@dataclass
+class Tour:
+    """The tour as it ran in the browser: its page, the error outputs once every cell had run, each picture the
+    live plot showed meanwhile (its ``src``), and the folder of the screenshots."""
+
+    notebook: NotebookPage
+    errors: list[str]
+    figures: list[str] = field(default_factory=list)
+    shots: Path = Path()
+
+
+def _pictures(cell: Any) -> list[str]:
+    """The ``src`` of every image the cell's outputs show now (none yet: an empty list, at once)."""
+    return cell.locator(".jp-OutputArea-output img").evaluate_all("images => images.map(image => image.src)")
+
+
+@pytest.fixture(scope="module")
+def tour(lab, browser, tmp_path_factory):
+    """The tour run top to bottom from the Run menu; the live plot watched while the other cells run."""
+    shots = tmp_path_factory.mktemp("screenshots")
+    notebook = NotebookPage(lab, browser, "tour.ipynb", shots)
+    try:
+        notebook.run_all()
+        plot = notebook.cell("%plot /turtle1/pose")
+        figures: list[str] = []
+        deadline = time.monotonic() + TIMEOUT
+        while not notebook.ran() and not notebook.errors():  # Run All stops at an error: the rest never runs
+            assert time.monotonic() < deadline, f"the tour did not finish within {TIMEOUT} s"
+            figures += [src for src in _pictures(plot) if src not in figures]
+            time.sleep(0.2)
+        yield Tour(notebook, notebook.errors(), figures, shots)
+    finally:
+        notebook.close()
+
+
+#: Colours read from screenshots: text as JupyterLab draws it, and matplotlib's first line colour ("C0").
+TEXT, LINE = (0, 0, 0), (31, 119, 180)
+
+
+def _pixels_like(png: Path, colour: tuple[int, int, int], within: int = 60) -> int:
+    """How many pixels of a screenshot are close to ``colour`` (each channel within ``within``)."""
+    from PIL import Image
+
+    with Image.open(png) as picture:
+        colours = picture.convert("RGB").getcolors(maxcolors=picture.width * picture.height)
+    return sum(count for count, rgb in colours if all(abs(a - b) <= within for a, b in zip(rgb, colour)))
+
+
+def test_the_tour_runs_top_to_bottom_in_the_browser_with_no_error_output(tour):
+    assert tour.errors == [], "the tour shows error output in the browser:\n" + "\n---\n".join(tour.errors)
+    said = tour.notebook.cell("%load_nodes $saved").locator(".jp-OutputArea-output").all_inner_texts()
+    assert any("poses since the restore:" in text for text in said), said  # the last cells ran, and saw poses
+
+
+def test_topics_is_an_html_table_in_the_browser(tour):
+    table = tour.notebook.cell("%topics /turtle1").locator(".jp-OutputArea-output table")
+    assert table.count() == 1 and table.is_visible()
+    rows = table.locator("tr").all_inner_texts()
+    assert any("/turtle1/pose" in row and "geometry_msgs/Pose" in row for row in rows), rows
+    assert any("/turtle1/cmd_vel" in row and "geometry_msgs/Twist" in row for row in rows), rows
+    shot = tour.shots / "topics.png"
+    table.screenshot(path=str(shot))
+    assert _pixels_like(shot, TEXT) > 500, f"no text in the table's screenshot: {shot}"
+
+
+def test_plot_is_a_live_figure_in_the_browser(tour):
+    assert len(tour.figures) >= 3, f"the plot was not redrawn while the tour ran: {len(tour.figures)} pictures shown"
+    outputs = tour.notebook.cell("%plot /turtle1/pose").locator(".jp-Cell-outputArea")
+    figure = outputs.locator("img")
+    assert figure.count() == 1, "one figure below the cell, redrawn in place (not one more each time)"
+    width, height = figure.evaluate("image => [image.naturalWidth, image.naturalHeight]")
+    assert width > 200 and height > 150, "the browser did not draw the figure"
+    shot = tour.shots / "plot.png"
+    outputs.screenshot(path=str(shot))  # the area, not the picture: a live one is replaced as it is taken
+    assert _pixels_like(shot, LINE, within=30) > 100, f"no line drawn in the figure's screenshot: {shot}"
+
+
+def test_a_pub_widget_slider_moved_in_the_browser_publishes_what_it_shows(lab, browser, peer, tmp_path):
+    nbformat.write(nbformat.v4.new_notebook(
+        cells=[nbformat.v4.new_code_cell("%load_ext ipyros"),
+               nbformat.v4.new_code_cell("%pub --widget /browser/cmd geometry_msgs/Twist")],
+        metadata={"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}}),
+        lab.root / "widget.ipynb")
+    robot = peer("listen_twist.py", "/browser/cmd", "--name=browser_robot")  # a plain rospy subscriber
+    robot.wait_line("ready")
+
+    def received() -> float | None:
+        """The linear.x of the last message the subscriber printed."""
+        last = next((line for line in reversed(robot.lines) if line.startswith("twist ")), None)
+        return float(last.split()[1]) if last else None
+
+    notebook = NotebookPage(lab, browser, "widget.ipynb", tmp_path)
+    try:
+        notebook.run_all()
+        slider = notebook.page.locator(".widget-slider").filter(has_text="linear.x")
+        slider.wait_for(timeout=TIMEOUT * 1000)
+        readout = slider.locator(".widget-readout")
+        assert float(readout.inner_text()) == 0.0 and received() is None, "published before anything moved"
+
+        handle = slider.locator(".noUi-handle").bounding_box()
+        x, y = handle["x"] + handle["width"] / 2, handle["y"] + handle["height"] / 2
+        notebook.page.mouse.move(x, y)
+        notebook.page.mouse.down()
+        notebook.page.mouse.move(x + 25, y, steps=5)  # dragged to the right: positive, a few m/s
+        notebook.page.mouse.up()
+        shown = float(readout.inner_text())
+        assert shown > 0, "the drag did not move the slider"
+        wait_for(lambda: received() == pytest.approx(shown, abs=5e-4), timeout=30, interval=0.1,
+                 what=f"the subscriber to receive linear.x = {shown}, shown on the slider (last: {received()})")
+
+        slider.locator(".noUi-handle").press("ArrowLeft")  # the keyboard moves it one step
+        wait_for(lambda: float(readout.inner_text()) < shown, timeout=10, what="the slider to move a step left")
+        stepped = float(readout.inner_text())
+        wait_for(lambda: received() == pytest.approx(stepped, abs=5e-4), timeout=30, interval=0.1,
+                 what=f"the subscriber to receive linear.x = {stepped} (last: {received()})")
+        assert notebook.page.get_by_text("/browser/cmd: ").inner_text().endswith(" sent")
+        assert notebook.errors() == []
+    finally:
+        notebook.close()
