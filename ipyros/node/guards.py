@@ -50,6 +50,7 @@ class LiveGuard:
         self.lost: Optional[str] = None
         self._closing = False
         self._stopped_at = 0.0  # when the session last sent the stop message for a lost process (monotonic)
+        self._unsent: Optional[str] = None  # why the session's last stop message could not be sent, if it could not
 
     # -- rules ------------------------------------------------------------------------------------
     def _make_stop(self, model: GuardModel) -> Any:
@@ -124,28 +125,41 @@ class LiveGuard:
             self.sentinel = None
         self.shared.ready, self.shared.state = False, PASSING
         self.start()
-        self.lost = None
+        self.lost, self._unsent = None, None
         self._noticed = PASSING
 
-    def tend(self, now: float) -> Optional[str]:
+    def tend(self, now: float) -> list[str]:
         """Fail closed when its process ended on its own (killed, crashed): one line the first time; then, for as
         long as the session runs, every message is replaced by the stop message and the session itself sends it
-        at the guard's rate (stop on silence no longer holds if the session freezes) until released."""
-        sentinel, said = self.sentinel, None
+        at the guard's rate (stop on silence no longer holds if the session freezes) until released. A stop
+        message the session cannot send is said too, once until it can again: nothing else passes meanwhile,
+        but the robot gets no stop message from the session either."""
+        sentinel, said = self.sentinel, []
         if self.lost is None:
             if sentinel is None or self._closing or sentinel.running:
-                return None
+                return said
             code = sentinel.returncode
             self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
-            said = (f"guard {self.topic}: its process ended ({self.lost}; its log: {sentinel.log_path}): the stop "
-                    f"message goes in place of every message until released (%estop --release starts it again)")
+            said.append(f"guard {self.topic}: its process ended ({self.lost}; its log: {sentinel.log_path}): the stop "
+                        f"message goes in place of every message until released (%estop --release starts it again)")
         if now - self._stopped_at >= 1.0 / self.model.repeat:
             self._stopped_at = now
-            try:
-                self._send(self.topic, self.stop_message())
-            except Exception:  # noqa: BLE001 - the node closing meanwhile: the next look sends it again
-                pass
+            problem = self._send_stop()
+            if problem is not None and self._unsent is None:
+                said.append(f"guard {self.topic}: the session cannot send the stop message ({problem}): nothing else "
+                            f"passes, but no stop message reaches the robot from here; stop it with its own e-stop")
+            elif problem is None and self._unsent is not None:
+                said.append(f"guard {self.topic}: the session sends the stop message again")
+            self._unsent = problem
         return said
+
+    def _send_stop(self) -> Optional[str]:
+        """The stop message sent by the session on the guarded output; why not, if it could not be."""
+        try:
+            sent = self._send(self.topic, self.stop_message())
+        except Exception as error:  # noqa: BLE001 - said by tend(), once; the next look sends it again
+            return str(error).splitlines()[0] if str(error) else type(error).__name__
+        return None if sent else "the node has no output open on it"
 
     def close(self, hold: bool) -> None:
         """End the guard: its sentinel holds the stop message for its grace first (``hold``: the node stops), or
@@ -224,7 +238,7 @@ class Watch:
                     self._thread = None
                     return
             for guard in guards:
-                for news in (guard.tend(time.monotonic()), guard.news()):
+                for news in (*guard.tend(time.monotonic()), guard.news()):
                     if news is not None:
                         self._notify(f"ipyros: {news}")
             time.sleep(self.LOOK)
