@@ -17,7 +17,7 @@ from IPython.core.error import UsageError
 from ..core import msgtypes
 from ..core.msgform import FormField, form_fields, message_from, param_field
 
-__all__ = ["BagPlayerForm", "ParamsForm", "PublisherForm", "widgets_module"]
+__all__ = ["BagPlayerForm", "Form", "ParamsForm", "PublisherForm", "widgets_module"]
 
 
 def widgets_module() -> Any:
@@ -30,7 +30,27 @@ def widgets_module() -> Any:
     return ipywidgets
 
 
-class PublisherForm:
+class Form:
+    """What each form here is: one box of controls (``widget``), shown as the cell's result, closed as a whole."""
+
+    widget: Any
+
+    def close(self) -> None:
+        """Close the form's widgets (a closed form changes nothing any more)."""
+        self.widget.close()
+
+    def _ipython_display_(self) -> None:
+        from IPython.display import display
+
+        display(self.widget)
+
+
+def _left_out(widgets: Any, paths: list[str]) -> list[Any]:
+    """A line naming what the form has no control for (none: no line)."""
+    return [widgets.Label(value=f"not in the form: {', '.join(paths)}")] if paths else []
+
+
+class PublisherForm(Form):
     """A form for messages of ``cls`` on ``topic``: ``send(msg)`` publishes one; ``fields`` maps each dotted path to
     its control (``form.fields["linear.x"].value = 0.3`` publishes, as moving the slider does)."""
 
@@ -50,9 +70,9 @@ class PublisherForm:
         for control in self.fields.values():
             control.observe(lambda change: self._changed(), names="value")
         self.play.observe(lambda change: self._playing(change["new"]), names="value")
-        note = [widgets.Label(value=f"not in the form: {', '.join(left_out)}")] if left_out else []
         self.widget = widgets.VBox([widgets.HTML(value=f"<b>{topic}</b> ({msgtypes.type_name(cls)})"),
-                                    *self.fields.values(), widgets.HBox([self.rate, self.play]), self.status, *note])
+                                    *self.fields.values(), widgets.HBox([self.rate, self.play]), self.status,
+                                    *_left_out(widgets, left_out)])
 
     # -- what it sends ---------------------------------------------------------------------------
     def message(self) -> Any:
@@ -95,18 +115,13 @@ class PublisherForm:
     def close(self) -> None:
         """Stop publishing and close the form's widgets."""
         self._stop.set()
-        self.widget.close()
-
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
-
-        display(self.widget)
+        super().close()
 
     def __repr__(self) -> str:
         return f"<PublisherForm of {self.topic}: {len(self.fields)} controls, {self.sent} sent>"
 
 
-class ParamsForm:
+class ParamsForm(Form):
     """The parameters ``values`` ({global name: value}) as controls within the ranges their nodes give (``describe``),
     each set with ``write(name, value)`` as it moves (``form.fields[name].value = 3`` sets it, as the slider does)."""
 
@@ -129,8 +144,7 @@ class ParamsForm:
             control.observe(lambda change, name=name: self._set(name, change["new"]), names="value")
         self.status = widgets.Label(value=f"{len(self.fields)} parameter{'s' * (len(self.fields) != 1)}: move one "
                                           "to set it")
-        note = [widgets.Label(value=f"not in the form: {', '.join(left_out)}")] if left_out else []
-        self.widget = widgets.VBox([*self.fields.values(), self.status, *note])
+        self.widget = widgets.VBox([*self.fields.values(), self.status, *_left_out(widgets, left_out)])
 
     def _set(self, name: str, value: Any) -> None:
         try:
@@ -140,19 +154,11 @@ class ParamsForm:
             return
         self.status.value = f"{name} = {kept!r}"
 
-    def close(self) -> None:
-        self.widget.close()
-
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
-
-        display(self.widget)
-
     def __repr__(self) -> str:
         return f"<ParamsForm: {len(self.fields)} parameters>"
 
 
-class BagPlayerForm:
+class BagPlayerForm(Form):
     """The controls of the bag a node plays (``baseBag``): pause/resume, step, a seek slider over the bag's length,
     the rate and looping, each a control the player answers (``control(text)``: a
     :class:`~ipyros.tools.bagplay.PlayerState`); the state the last answer gave, below them."""
@@ -181,14 +187,6 @@ class BagPlayerForm:
             self.status.value = str(self._control(text))
         except Exception as error:  # noqa: BLE001 - said on the form, in one line (the bag ended, a control refused)
             self.status.value = f"{text}: {str(error).splitlines()[0]}"
-
-    def close(self) -> None:
-        self.widget.close()
-
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
-
-        display(self.widget)
 
 
 def _control(widgets: Any, spec: FormField) -> Any:
