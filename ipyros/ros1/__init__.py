@@ -18,7 +18,8 @@ rospy or speaks to a ROS 1 master:
 - :mod:`.nodes`: executables found as rosrun finds them, and a node's command line;
 - :mod:`.launchfile`, :mod:`.launch_rest`: a node of a launch file as a basenode, and
   the rest of the file run by roslaunch;
-- :mod:`.bagfile`, :mod:`.bag_player`: bags written and played; :mod:`.export`: rospy
+- :mod:`.bagfile`, :mod:`.bag_player`: bags written and played; :mod:`.mcapfile`, :mod:`.mcapread`:
+  MCAP files of ROS 1 messages (the reader alone, for the player too); :mod:`.export`: rospy
   scripts and catkin packages.
 
 May import: core, processes, demo. Nothing above the node layer imports it: the node

@@ -22,8 +22,9 @@ from pathlib import Path
 import rosbag
 import rospy
 
-# ipyros's playback module, by its folder: this file runs without ipyros importable
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "processes"))
+# ipyros's playback module by its folder, and the MCAP reader beside this file: it runs without ipyros importable
+sys.path[:0] = [str(Path(__file__).resolve().parents[1] / "processes"), str(Path(__file__).resolve().parent)]
+import mcapread  # noqa: E402
 import playback  # noqa: E402
 
 
@@ -58,14 +59,11 @@ class RosBag:
 
 
 class McapBag:
-    """An MCAP file of ROS 1 messages, read with mcap and mcap-ros1-support; classes from its own schemas."""
+    """An MCAP file of ROS 1 messages (:mod:`mcapread`): classes from its own schemas."""
 
     def __init__(self, path: str) -> None:
-        from mcap.reader import make_reader
-
         self._path = path
-        with open(path, "rb") as stream:
-            self._summary = make_reader(stream).get_summary()
+        self._summary = mcapread.summary(path)
 
     def __enter__(self) -> "McapBag":
         return self
@@ -74,27 +72,13 @@ class McapBag:
         pass
 
     def classes(self, topics) -> dict:
-        from genpy.dynamic import generate_dynamic
-
-        found = {}
-        for channel in self._summary.channels.values():
-            if not topics or channel.topic in topics:
-                schema = self._summary.schemas[channel.schema_id]
-                found[channel.topic] = generate_dynamic(schema.name, schema.data.decode())[schema.name]
-        return found
+        return mcapread.message_classes(self._summary, topics)
 
     def span(self) -> tuple:
-        stats = self._summary.statistics
-        return (stats.message_start_time, stats.message_end_time) if stats and stats.message_count else (0, 0)
+        return mcapread.span(self._summary)
 
     def read(self, topics, since):
-        from mcap.reader import make_reader
-        from mcap_ros1.decoder import DecoderFactory
-
-        with open(self._path, "rb") as stream:
-            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
-            for _, channel, message, decoded in reader.iter_decoded_messages(topics=topics, start_time=since):
-                yield channel.topic, message.log_time, decoded
+        return mcapread.messages(self._path, topics, since)
 
 
 def main() -> None:

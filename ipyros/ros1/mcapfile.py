@@ -15,25 +15,23 @@ from typing import Any, Collection, Iterator, Optional
 
 from ..core.errors import DeclarationError, first_line
 from ..core.records import BagInfo, BagTopic
+from . import mcapread
 
 __all__ = ["McapWriter", "mcap_info", "mcap_messages", "mcap_topics"]
 
 
 def _summary(path: Path) -> Any:
     try:
-        from mcap.reader import make_reader
+        found = mcapread.summary(path)
     except ImportError:
         raise DeclarationError("MCAP bags on ROS 1 need mcap and mcap-ros1-support: pip install 'ipyros[bags]' "
                                "(bash run.sh installs them)") from None
-    try:
-        with open(path, "rb") as stream:
-            summary = make_reader(stream).get_summary()
     except Exception as error:  # noqa: BLE001 - mcap's errors of any kind: not an MCAP file it reads
         raise DeclarationError(f"cannot read the MCAP file {path}: {first_line(error)}") from None
-    if summary is None:
+    if found is None:
         raise DeclarationError(f"the MCAP file {path} has no summary (it was not closed when written); "
                                "rewrite it with mcap recover")
-    return summary
+    return found
 
 
 def mcap_topics(path: Path) -> dict[str, str]:
@@ -49,24 +47,16 @@ def mcap_info(path: Path) -> BagInfo:
     counts = stats.channel_message_counts if stats is not None else {}
     rows = tuple(sorted(BagTopic(channel.topic, summary.schemas[channel.schema_id].name, counts.get(key, 0))
                         for key, channel in summary.channels.items()))
-    empty = stats is None or not stats.message_count
-    return BagInfo(str(path), "mcap", 0.0 if empty else stats.message_start_time / 1e9,
-                   0.0 if empty else stats.message_end_time / 1e9, rows)
+    start, end = mcapread.span(summary)
+    return BagInfo(str(path), "mcap", start / 1e9, end / 1e9, rows)
 
 
 def mcap_messages(path: Path, topics: Optional[Collection[str]] = None,
                   start: Optional[int] = None) -> Iterator[tuple[str, int, Any]]:
     """``(topic, log time in ns, message)`` of each message of ``topics`` (all: None), in recorded order, from the
     log time ``start`` on."""
-    from mcap.reader import make_reader
-    from mcap_ros1.decoder import DecoderFactory
-
     _summary(path)  # a one-line error first, if it is no MCAP file
-    with open(path, "rb") as stream:
-        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
-        for _, channel, message, decoded in reader.iter_decoded_messages(
-                topics=None if topics is None else list(topics), start_time=start):
-            yield channel.topic, message.log_time, decoded
+    return mcapread.messages(path, topics, start)
 
 
 class McapWriter:
