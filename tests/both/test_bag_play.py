@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from shell import error_of, ok
 from std_msgs.msg import UInt32
-from support import wait_for
+from support import settled, wait_for
 
 from ipyros.core.errors import IpyrosError, NodeStateError
 from ipyros.dsl import engine_of
@@ -50,8 +50,7 @@ def test_pause_step_seek_rate_and_loop_drive_the_bag_while_it_plays(make_node, s
     wait_for(lambda: len(heard) >= 3, timeout=30, what="the bag's first messages")
     paused = control(nd, "pause")
     assert paused.paused and 0.0 < paused.at < 3.9 and paused.length == pytest.approx(3.9)
-    time.sleep(0.3)  # what was sent before the pause arrives
-    count = len(heard)
+    count = settled(lambda: len(heard), what="what was sent before the pause")
     time.sleep(0.5)  # five messages' time: none comes while paused
     assert len(heard) == count, "a message came while paused"
     stepped = control(nd, "step 3")
@@ -105,9 +104,8 @@ def test_a_bags_clock_is_the_nodes_time(make_node, session, tmp_path, notices):
     if session.backend.name == "ROS 2":  # its timers run on the bag's time: still while the bag is paused
         wait_for(lambda: ticks, what="the timer on bag time")
         control(nd, "pause")
-        time.sleep(0.3)
-        count = len(ticks)
-        time.sleep(0.6)
+        count = settled(lambda: len(ticks), what="the ticks due before the pause")
+        time.sleep(0.6)  # six ticks' time: at most one comes while the bag's time stands still
         assert len(ticks) <= count + 1, "the timer ticked on while the bag's time stood still"
         control(nd, "resume")
         wait_for(lambda: len(ticks) > count + 2, what="the timer again, with the bag's time")
@@ -140,8 +138,7 @@ def test_a_bag_player_form_pauses_steps_seeks_and_changes_the_rate(make_node, se
     assert (form.seek.min, form.seek.max) == (0.0, pytest.approx(3.9))
     form.paused.value = True
     assert "paused at rate 1" in form.status.value
-    time.sleep(0.3)  # what was sent before the pause arrives
-    count = len(heard)
+    count = settled(lambda: len(heard), what="what was sent before the pause")
     form.step.click()
     wait_for(lambda: len(heard) == count + 1, what="one message, stepped")
     form.seek.value = 0.0

@@ -20,6 +20,21 @@ def wait_for(predicate: Callable[[], Any], timeout: float = 10.0, interval: floa
         time.sleep(interval)
 
 
+def settled(count: Callable[[], int], quiet: float = 0.3, timeout: float = 10.0, what: str = "the count") -> int:
+    """``count()`` once it has stood still for ``quiet`` seconds: what was on its way has arrived (a message sent
+    before a pause, say). Fails after ``timeout`` if it never stands still."""
+    deadline = time.monotonic() + timeout
+    last, since = count(), time.monotonic()
+    while time.monotonic() - since < quiet:
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout}s waiting for {what} to stand still (at {last})")
+        time.sleep(0.02)
+        now = count()
+        if now != last:
+            last, since = now, time.monotonic()
+    return last
+
+
 def graph_knows(topic: str, side: str = "subscribers", timeout: float = 20.0) -> tuple[str, ...]:
     """Wait until the session's graph lists a node on ``side`` (``"subscribers"``, ``"publishers"``) of ``topic``.
 
