@@ -10,6 +10,7 @@ slider per element of an array of unknown length means nothing.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import Any, Optional
@@ -41,28 +42,39 @@ class FormField:
     step: float = 0.0
 
 
-def form_fields(cls: type, msg: Optional[Any] = None) -> tuple[list[FormField], list[str]]:
+def form_fields(cls: type, msg: Optional[Any] = None,
+                bounds: Optional[dict[str, tuple[float, float]]] = None) -> tuple[list[FormField], list[str]]:
     """The controls of a form for messages of ``cls`` (at the values of ``msg``, else the type's defaults), and the
-    paths left out of it (arrays, times)."""
+    paths left out of it (arrays, times). ``bounds`` ({dotted path: (low, high)}, a guard's limits) are the ranges
+    of those numbers' sliders, their values brought within them: a slider then shows only what passes the guard."""
     fields: list[FormField] = []
     left_out: list[str] = []
-    _walk(cls, msg if msg is not None else cls(), "", fields, left_out)
+    _walk(cls, msg if msg is not None else cls(), "", fields, left_out, bounds or {})
     return fields, left_out
 
 
-def _walk(cls: type, msg: Any, prefix: str, fields: list[FormField], left_out: list[str]) -> None:
+def _walk(cls: type, msg: Any, prefix: str, fields: list[FormField], left_out: list[str],
+          bounds: dict[str, tuple[float, float]]) -> None:
     names, kinds = field_types(cls)
     for name, kind in zip(names, kinds):
         path, value = f"{prefix}{name}", getattr(msg, name)
+        bound = bounds.get(path)
         if kind.endswith("]") or kind in _TIMES:
             left_out.append(path)
         elif kind in _FLOATS:
-            reach = max(FLOAT_RANGE, 2 * abs(float(value)))
-            fields.append(FormField(path, "float", float(value), -reach, reach, reach / 1000))
+            if bound is not None:
+                low, high = float(bound[0]), float(bound[1])
+            else:
+                low, high = -max(FLOAT_RANGE, 2 * abs(float(value))), max(FLOAT_RANGE, 2 * abs(float(value)))
+            fields.append(FormField(path, "float", min(max(float(value), low), high), low, high, (high - low) / 2000))
         elif kind in _INTS:
-            low = 0 if kind.startswith("u") or kind in _UNSIGNED_BYTES else -INT_RANGE
-            high = 255 if kind in _UNSIGNED_BYTES else INT_RANGE
-            fields.append(FormField(path, "int", int(value), min(low, int(value)), max(high, int(value)), 1))
+            if bound is not None:  # the whole numbers within the guard's limits
+                low, high = math.ceil(bound[0]), math.floor(bound[1])
+            else:
+                low = 0 if kind.startswith("u") or kind in _UNSIGNED_BYTES else -INT_RANGE
+                high = 255 if kind in _UNSIGNED_BYTES else INT_RANGE
+                low, high = min(low, int(value)), max(high, int(value))
+            fields.append(FormField(path, "int", min(max(int(value), low), high), low, high, 1))
         elif kind == "bool":
             fields.append(FormField(path, "bool", bool(value)))
         elif kind in ("string", "wstring"):
@@ -72,7 +84,7 @@ def _walk(cls: type, msg: Any, prefix: str, fields: list[FormField], left_out: l
             if inner is None:
                 left_out.append(path)
             else:
-                _walk(inner, value, f"{path}.", fields, left_out)
+                _walk(inner, value, f"{path}.", fields, left_out, bounds)
 
 
 def message_from(cls: type, values: dict[str, Any]) -> Any:

@@ -10,7 +10,7 @@ pressed again (or the form closed). In a terminal there is no widget: the magic 
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable
+from typing import Any, Callable, Optional
 
 from IPython.core.error import UsageError
 
@@ -52,12 +52,15 @@ def _left_out(widgets: Any, paths: list[str]) -> list[Any]:
 
 class PublisherForm(Form):
     """A form for messages of ``cls`` on ``topic``: ``send(msg)`` publishes one; ``fields`` maps each dotted path to
-    its control (``form.fields["linear.x"].value = 0.3`` publishes, as moving the slider does)."""
+    its control (``form.fields["linear.x"].value = 0.3`` publishes, as moving the slider does). ``guarded_by``
+    (a guard's limits, and whose it is) spans those sliders within the limits: what they show is what passes."""
 
-    def __init__(self, topic: str, cls: type, send: Callable[[Any], None], initial: Any = None) -> None:
+    def __init__(self, topic: str, cls: type, send: Callable[[Any], None], initial: Any = None,
+                 guarded_by: Optional[tuple[str, dict[str, Any]]] = None) -> None:
         widgets = widgets_module()
         self.topic, self._cls, self._send = topic, cls, send
-        specs, left_out = form_fields(cls, initial)
+        owner, limits = guarded_by or ("", {})
+        specs, left_out = form_fields(cls, initial, {path: (low, high) for path, (low, high) in limits.items()})
         self.fields: dict[str, Any] = {spec.path: _control(widgets, spec) for spec in specs}
         self.sent = 0
         self.problem = ""  # the last message that could not be sent, and why
@@ -70,7 +73,8 @@ class PublisherForm(Form):
         for control in self.fields.values():
             control.observe(lambda change: self._changed(), names="value")
         self.play.observe(lambda change: self._playing(change["new"]), names="value")
-        self.widget = widgets.VBox([widgets.HTML(value=f"<b>{topic}</b> ({msgtypes.type_name(cls)})"),
+        through = f": through the guard of {owner}, sliders within its limits" if guarded_by else ""
+        self.widget = widgets.VBox([widgets.HTML(value=f"<b>{topic}</b> ({msgtypes.type_name(cls)}){through}"),
                                     *self.fields.values(), widgets.HBox([self.rate, self.play]), self.status,
                                     *_left_out(widgets, left_out)])
 

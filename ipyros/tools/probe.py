@@ -27,6 +27,7 @@ from typing import Any, Mapping, Optional
 
 from ..core import msgtypes
 from ..core.errors import MessageTypeError
+from ..core.model import GuardModel
 from ..core.names import tool_name
 from ..core.slots import arrival
 from ..dsl import engine_of, node_of, rosNode
@@ -224,6 +225,13 @@ class PromptPublisher:
             time.sleep(0.02)
         node.write(topic, msg)
         return node.name, _connections(node, topic)
+
+    def guard(self, topic: str, type_name: str) -> Optional[tuple[str, GuardModel]]:
+        """The guard what :meth:`publish` sends on ``topic`` passes, with the name of the node it stands on (a
+        running node of the session guards the topic), if any."""
+        owner = self._owner(topic, type_name)
+        guard = None if owner is None else engine_of(owner).model().guard(topic)
+        return None if guard is None else (owner.name, guard)
 
     def _owner(self, topic: str, type_name: str) -> Optional[rosNode]:
         """A running node of the session (not ours) that publishes ``topic`` with that type, or guards it (then

@@ -77,3 +77,32 @@ def test_a_params_form_sets_each_parameter_as_its_control_moves(make_node, sessi
 def test_bag_widget_in_a_terminal_says_widgets_need_jupyter(ip):
     error = str(error_of(ip, "%bag widget nd"))
     assert error.startswith("widgets need Jupyter: %bag widget draws the player's controls in a notebook")
+
+
+def test_a_form_on_a_guarded_topic_spans_the_guards_limits_so_what_it_shows_passes(make_node):
+    """%pub --widget on a topic a node of the session guards: the form publishes through that node (and its guard),
+    and the guarded fields' sliders span the guard's limits, so that no slider shows what the robot will not get."""
+    from ipyros.dsl import engine_of
+    from ipyros.tools.probe import PromptPublisher
+
+    heard: list = []
+    make_node("wg_robot").new.subscribe("/wg/guarded", heard.append, msgType=Twist).create()
+    nd = make_node("wg_guarded")
+    nd.new.publish("/wg/guarded", msgType=Twist)
+    nd.guard("/wg/guarded", limits={"linear.x": (-0.5, 0.5)})
+    nd.create()
+    publisher = PromptPublisher()
+    assert publisher.guard("/wg/other", "geometry_msgs/Twist") is None
+    owner, guard = publisher.guard("/wg/guarded", "geometry_msgs/Twist")
+    assert owner == nd.name and guard.limits == {"linear.x": [-0.5, 0.5]}
+    form = PublisherForm("/wg/guarded", Twist, lambda msg: publisher.publish("/wg/guarded", "geometry_msgs/Twist", msg),
+                         None, (owner, guard.limits))
+    assert (form.fields["linear.x"].min, form.fields["linear.x"].max) == (-0.5, 0.5)
+    assert (form.fields["angular.z"].min, form.fields["angular.z"].max) == (-10.0, 10.0)
+    assert "through the guard of wg_guarded" in form.widget.children[0].value
+    wait_for(lambda: any(sent.topic == "/wg/guarded" and sent.connections for sent in engine_of(nd).sent()),
+             timeout=30, what="the subscriber connected")
+    form.fields["linear.x"].value = 2.0  # beyond the slider: it stops at the limit, and so does what is sent
+    assert form.fields["linear.x"].value == 0.5
+    wait_for(lambda: heard and heard[-1].linear.x == 0.5, timeout=30, what="the slider's value at the subscriber")
+    form.close()

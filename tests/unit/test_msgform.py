@@ -41,3 +41,13 @@ def test_a_parameter_is_a_control_in_its_nodes_range_or_one_around_its_value():
     assert param_field("/n/on", True, {}).kind == "bool" and param_field("/n/name", "x", {}).kind == "text"
     assert param_field("/n/list", [1, 2], {}) is None
     assert param_field("/n/gain", 0.5, {"range": "0.0 to 2.0 by 0.5"}) == FormField("/n/gain", "float", 0.5, 0.0, 2.0, 0.5)
+
+
+def test_a_guards_limits_are_the_ranges_of_their_sliders_and_hold_their_values():
+    bounds = {"linear.x": (-0.5, 0.5), "angular.z": (-1.0, 1.0), "linear.q": (0.0, 1.0)}  # no such field: no effect
+    fields = {f.path: f for f in form_fields(Twist, Twist(linear=Vector3(x=3.0)), bounds)[0]}
+    assert fields["linear.x"] == FormField("linear.x", "float", 0.5, -0.5, 0.5, 0.0005)  # 3.0 would not pass
+    assert (fields["angular.z"].low, fields["angular.z"].high, fields["angular.z"].value) == (-1.0, 1.0, 0.0)
+    assert (fields["linear.y"].low, fields["linear.y"].high) == (-10.0, 10.0)  # unguarded: as before
+    counts = {f.path: f for f in form_fields(Sample, None, {"count": (-2.5, 7.5)})[0]}
+    assert (counts["count"].low, counts["count"].high, counts["count"].value) == (-2, 7, 0)

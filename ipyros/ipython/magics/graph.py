@@ -247,7 +247,8 @@ class TopicMagics(ExtensionMagics):
     @argument("--nonfinite", action="store_true", help="let NaN and infinities through (refused otherwise: "
               "typed by mistake they reach a controller as a command)")
     @argument("--widget", action="store_true", help="Jupyter: a form of the message's fields (sliders, toggles, "
-              "text) that publishes as they move, or at a rate; returns it (form.fields['linear.x'].value = 0.3)")
+              "text) that publishes as they move, or at a rate; a guarded topic's sliders span the guard's limits; "
+              "returns it (form.fields['linear.x'].value = 0.3)")
     @no_var_expand
     @line_cell_magic
     def pub(self, line: str, cell: Optional[str] = None) -> Any:
@@ -302,7 +303,9 @@ class TopicMagics(ExtensionMagics):
             self.ext.publisher.publish(topic, type_name, msg, latch=latch, wait=first[0])
             first[0] = False
 
-        return PublisherForm(topic, type(initial), send, initial)
+        guarded = self.ext.publisher.guard(topic, type_name)  # its sliders then span the guard's limits
+        return PublisherForm(topic, type(initial), send, initial,
+                             guarded and (guarded[0], guarded[1].limits))
 
     def _publish_at(self, rate: float, topic: str, type_name: str, msg: Any, latch: bool) -> None:
         period, sent = 1.0 / rate, 0
