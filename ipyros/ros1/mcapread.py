@@ -49,5 +49,5 @@ def messages(path: Any, topics: Optional[Collection[str]] = None,
     with open(path, "rb") as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         for _, channel, message, decoded in reader.iter_decoded_messages(
-                topics=None if topics is None else list(topics), start_time=start):
+                topics=None if topics is None else list(topics), starting_at=start):
             yield channel.topic, message.log_time, decoded
