@@ -74,6 +74,12 @@ class CountingRos1(Counting):
         client = actionlib.ActionClient(name, TestAction)
         try:
             assert client.wait_for_server(rospy.Duration(timeout)), f"no action server {name}"
+            # wait_for_server knows the server hears our goals, not that we hear its feedback and result: a quick
+            # goal's first feedback would go to no one (seen once on a loaded machine)
+            deadline = time.monotonic() + timeout
+            while not (client.feedback_sub.get_num_connections() and client.result_sub.get_num_connections()):
+                assert time.monotonic() < deadline, f"{name}'s feedback and result never connected"
+                time.sleep(0.01)
             seen: list[int] = []
             done = threading.Event()
 
