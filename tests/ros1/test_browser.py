@@ -123,45 +123,70 @@ def test_plot_is_a_live_figure_in_the_browser(tour):
     assert _pixels_like(shot, LINE, within=30) > 100, f"no line drawn in the figure's screenshot: {shot}"
 
 
+GUARDED = """\
+from geometry_msgs.msg import Twist
+base = rosNode("browser_base")
+base.new.publish("/browser/guarded", msgType=Twist)
+base.guard("/browser/guarded", limits={"linear.x": (-0.5, 0.5)})
+base.create()"""
+
+
+def _drag(page: Any, slider: Any, dx: float) -> float:
+    """Drag a slider's handle ``dx`` pixels with the mouse, as a person does; the value it then shows."""
+    handle = slider.locator(".noUi-handle").bounding_box()
+    x, y = handle["x"] + handle["width"] / 2, handle["y"] + handle["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + dx, y, steps=5)
+    page.mouse.up()
+    return float(slider.locator(".widget-readout").inner_text())
+
+
 def test_a_pub_widget_slider_moved_in_the_browser_publishes_what_it_shows(lab, browser, peer, tmp_path):
+    """An unguarded topic's slider, dragged then stepped; a guarded topic's slider dragged far past the guard's
+    limit: it stops there, and the robot gets the value it shows, not more."""
     nbformat.write(nbformat.v4.new_notebook(
         cells=[nbformat.v4.new_code_cell("%load_ext ipyros"),
-               nbformat.v4.new_code_cell("%pub --widget /browser/cmd geometry_msgs/Twist")],
+               nbformat.v4.new_code_cell("%pub --widget /browser/cmd geometry_msgs/Twist"),
+               nbformat.v4.new_code_cell(GUARDED),
+               nbformat.v4.new_code_cell("%pub --widget /browser/guarded geometry_msgs/Twist")],
         metadata={"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}}),
         lab.root / "widget.ipynb")
-    robot = peer("listen_twist.py", "/browser/cmd", "--name=browser_robot")  # a plain rospy subscriber
-    robot.wait_line("ready")
+    robots = {topic: peer("listen_twist.py", topic, f"--name=browser_robot{n}")  # plain rospy subscribers
+              for n, topic in enumerate(("/browser/cmd", "/browser/guarded"))}
+    for robot in robots.values():
+        robot.wait_line("ready")
 
-    def received() -> float | None:
-        """The linear.x of the last message the subscriber printed."""
-        last = next((line for line in reversed(robot.lines) if line.startswith("twist ")), None)
+    def received(topic: str) -> float | None:
+        """The linear.x of the last message the subscriber of ``topic`` printed."""
+        last = next((line for line in reversed(robots[topic].lines) if line.startswith("twist ")), None)
         return float(last.split()[1]) if last else None
+
+    def arrives(topic: str, value: float) -> None:
+        wait_for(lambda: received(topic) == pytest.approx(value, abs=5e-4), timeout=30, interval=0.1,
+                 what=f"the subscriber of {topic} to receive linear.x = {value}, shown on the slider "
+                      f"(last: {received(topic)})")
 
     notebook = NotebookPage(lab, browser, "widget.ipynb", tmp_path)
     try:
         notebook.run_all()
-        slider = notebook.page.locator(".widget-slider").filter(has_text="linear.x")
+        slider = notebook.cell("%pub --widget /browser/cmd").locator(".widget-slider").filter(has_text="linear.x")
         slider.wait_for(timeout=TIMEOUT * 1000)
         readout = slider.locator(".widget-readout")
-        assert float(readout.inner_text()) == 0.0 and received() is None, "published before anything moved"
-
-        handle = slider.locator(".noUi-handle").bounding_box()
-        x, y = handle["x"] + handle["width"] / 2, handle["y"] + handle["height"] / 2
-        notebook.page.mouse.move(x, y)
-        notebook.page.mouse.down()
-        notebook.page.mouse.move(x + 25, y, steps=5)  # dragged to the right: positive, a few m/s
-        notebook.page.mouse.up()
-        shown = float(readout.inner_text())
+        assert float(readout.inner_text()) == 0.0 and received("/browser/cmd") is None, "sent before it moved"
+        shown = _drag(notebook.page, slider, 25)  # to the right: positive, a few m/s
         assert shown > 0, "the drag did not move the slider"
-        wait_for(lambda: received() == pytest.approx(shown, abs=5e-4), timeout=30, interval=0.1,
-                 what=f"the subscriber to receive linear.x = {shown}, shown on the slider (last: {received()})")
-
+        arrives("/browser/cmd", shown)
         slider.locator(".noUi-handle").press("ArrowLeft")  # the keyboard moves it one step
         wait_for(lambda: float(readout.inner_text()) < shown, timeout=10, what="the slider to move a step left")
-        stepped = float(readout.inner_text())
-        wait_for(lambda: received() == pytest.approx(stepped, abs=5e-4), timeout=30, interval=0.1,
-                 what=f"the subscriber to receive linear.x = {stepped} (last: {received()})")
+        arrives("/browser/cmd", float(readout.inner_text()))
         assert notebook.page.get_by_text("/browser/cmd: ").inner_text().endswith(" sent")
+
+        guarded = notebook.cell("%pub --widget /browser/guarded")
+        assert "through the guard of browser_base" in guarded.inner_text()
+        slider = guarded.locator(".widget-slider").filter(has_text="linear.x")
+        assert _drag(notebook.page, slider, 300) == 0.5, "the guarded slider goes past the guard's limit"
+        arrives("/browser/guarded", 0.5)
         assert notebook.errors() == []
     finally:
         notebook.close()
