@@ -51,7 +51,7 @@ def test_a_lost_process_is_said_once_and_the_session_sends_the_stop_message_at_i
 @pytest.mark.parametrize("failure, why", [(RuntimeError("publisher closed"), "publisher closed"),
                                           (False, "the node has no output open on it")])
 def test_a_stop_message_the_session_cannot_send_is_said_once_until_it_can_again(lost, failure, why):
-    guard, sent, outcome = lost
+    guard, _, outcome = lost
     guard.tend(100.0)
     outcome[0] = failure
     (said,) = guard.tend(100.25)
