@@ -21,7 +21,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from bench.relay import BenchError
+from bench.errors import BenchError
 
 HERE = Path(__file__).resolve().parent
 #: The message of each kind the benches send, by ROS type name (the same on both ROS).

@@ -53,6 +53,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from bench import figures
+from bench.errors import BenchError
 from bench.figures import Figure, keep, target_lines
 from bench.nodes import wire  # message kinds; the node scripts import it as plain `wire`
 
@@ -337,10 +338,6 @@ def memory_mib(pid: int, field: str = "VmRSS") -> Optional[float]:
     except OSError:
         pass
     return None
-
-
-class BenchError(RuntimeError):
-    """A scenario could not run; the message names the process and its log's last lines."""
 
 
 def free_port() -> int:
@@ -759,7 +756,7 @@ def _run(opts: argparse.Namespace, routes: list[Route], load_list: list[Load], r
             print("relay bench: building path (h), the exported C++ node (catkin_make)...", flush=True)
             try:
                 built = exported.build("ros1", workdir, [ld.kind for ld in load_list], TOPIC_OUT)
-            except exported.BenchError as error:  # bench.relay's (this module may run as __main__)
+            except BenchError as error:
                 print(f"bench: {error}", file=sys.stderr, flush=True)
                 return 1
             routes = [*routes, exported_route(built)]
