@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import stat
+import time
 
 import pytest
 
@@ -59,3 +60,44 @@ def test_a_torn_last_line_is_skipped(tmp_path):
 def test_the_default_directory_follows_the_environment(monkeypatch, tmp_path):
     monkeypatch.setenv(journal.ENV_DIR, str(tmp_path / "mine"))
     assert journal.default_dir() == tmp_path / "mine"
+
+
+@pytest.fixture
+def syncs(monkeypatch):
+    """Every sync of a history file to the disk, counted (os.fsync as the journal calls it)."""
+    counted: list[int] = []
+    real = os.fsync
+    monkeypatch.setattr(journal.os, "fsync", lambda fd: (counted.append(fd), real(fd)))
+    return counted
+
+
+def test_lines_written_together_share_one_sync_within_a_moment(tmp_path, syncs):
+    kept = journal.Journal(tmp_path)
+    for n in range(50):  # 150 nodes shut down: a line each
+        kept.append(journal.Change(float(n), f"/n{n}", "shutdown()"))
+    assert len(journal.read(kept.path)) == 50  # handed to the system at once: an interpreter crash loses none
+    deadline = time.monotonic() + 10 * journal.SYNC_WITHIN + 5
+    while not syncs and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert 1 <= len(syncs) <= 2, f"the fifty lines are synced together within a moment, not {len(syncs)} times"
+    before = len(syncs)
+    kept.append(journal.Change(51.0, "/n", "create()"))
+    kept.close()  # what is left is synced as the file closes
+    assert len(syncs) >= before + 1
+
+
+def test_a_sync_that_fails_is_raised_once_by_the_next_change(tmp_path, monkeypatch):
+    def broken(fd):
+        raise OSError(5, "Input/output error")
+
+    monkeypatch.setattr(journal.os, "fsync", broken)
+    kept = journal.Journal(tmp_path)
+    kept.append(journal.Change(1.0, "/n", "create()"))
+    deadline = time.monotonic() + 10 * journal.SYNC_WITHIN + 5
+    with pytest.raises(OSError, match="Input/output error"):
+        while time.monotonic() < deadline:
+            kept.append(journal.Change(2.0, "/n", "timer t every 1 s -> tick"))
+            time.sleep(0.01)
+    kept.append(journal.Change(3.0, "/n", "shutdown()"))  # off now: no second error
+    assert kept.failed
+    kept.close()
