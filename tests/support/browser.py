@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from helpers import free_port
 from support import wait_for
 
 #: Debian's Chromium (run.sh installs the package ``chromium``).
@@ -48,14 +49,6 @@ def require_browser() -> Any:
     return sync_playwright
 
 
-def _free_port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def _processes_naming(text: str) -> dict[int, str]:
     """Living processes whose command line contains ``text`` (a folder of this test's own)."""
     found = {}
@@ -78,7 +71,7 @@ class Lab:
     def __init__(self, root: Path, home: Path, master_uri: str) -> None:
         self.root, self.home = root, home
         self.token = secrets.token_hex(16)
-        self.port = _free_port()
+        self.port = free_port()
         self.runtime = home / "runtime"
         data = home / "data"
         spec = data / "kernels" / "python3"  # the notebooks' own kernel name, here this venv's Python

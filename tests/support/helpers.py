@@ -1,8 +1,9 @@
-"""Helpers shared by tests: the test basenodes package, and whether a process is still alive."""
+"""Helpers shared by tests: the test basenodes package, whether a process is still alive, a free port."""
 
 from __future__ import annotations
 
 import os
+import socket
 from pathlib import Path
 
 #: Put this on ROS_PACKAGE_PATH to find the package ``ipyros_test_nodes`` (echo_node, ...).
@@ -22,3 +23,10 @@ def pid_alive(pid: int) -> bool:
     except OSError:
         return False
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
+
+
+def free_port() -> int:
+    """A TCP port of 127.0.0.1 that nothing listens on now (a master's, a Jupyter server's)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]

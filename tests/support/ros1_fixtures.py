@@ -11,7 +11,6 @@ tests in ``both/`` use; ``ros2_fixtures`` gives the same on ROS 2.
 from __future__ import annotations
 
 import os
-import socket
 import subprocess
 import xmlrpc.client
 from pathlib import Path
@@ -20,6 +19,7 @@ import pytest
 
 TESTS = Path(__file__).resolve().parents[1]
 
+from helpers import free_port  # noqa: E402,F401 - the tests import it from here too
 from peer import Peer as SharedPeer  # noqa: E402
 from support import SESSION_PIDS, node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
 
@@ -60,12 +60,6 @@ class Peer(SharedPeer):
     """A rospy peer process from ``ros1/peers/``."""
 
     PEERS = TESTS / "ros1" / "peers"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def _master_answers(uri: str) -> bool:
