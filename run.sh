@@ -66,12 +66,16 @@ ros2_packages=("ros-rclpy[fastrtps]" ros-std-msgs ros-geometry-msgs ros-sensor-m
                mcap  # the tests read back what %record wrote with MCAP's own reader too
                catkin_pkg  # build_messages: rosidl_adapter reads .msg files with it
                colcon-common-extensions)  # builds the ament_python package nd.export(DIR) writes
-ros2_venv() {
-  if ! /usr/bin/python3 -c "import ensurepip" 2>/dev/null; then  # Debian splits venv support out
+# Debian splits venv support out of Python: the venvs without ROS 1 need it before apt installs the rest.
+venv_support() {
+  if ! /usr/bin/python3 -c "import ensurepip" 2>/dev/null; then
     echo "run.sh: installing python3-venv" >&2
     DEBIAN_FRONTEND=noninteractive apt-get update -q >&2
     DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends python3-venv >&2
   fi
+}
+ros2_venv() {
+  venv_support
   if [[ ! -x "$venv2/bin/python" ]]; then
     /usr/bin/python3 -m venv "$venv2"
   fi
@@ -86,6 +90,7 @@ ros2_venv() {
 # The unit layer runs where no ROS is: a venv of its own, without the system's site-packages.
 venv0="$here/.venv-unit"
 unit_venv() {
+  venv_support
   if [[ ! -x "$venv0/bin/python" ]]; then
     /usr/bin/python3 -m venv "$venv0"
   fi
@@ -155,7 +160,7 @@ handle.stop()' &
 
 cmd="${1:-demo}"
 shift || true
-[[ "$cmd" == ros2 || "$cmd" == test-ros2 || "$cmd" == unit ]] || ros1_setup
+[[ "$cmd" == ros2 || "$cmd" == test-ros2 || "$cmd" == unit || "$cmd" == docs || "$cmd" == test ]] || ros1_setup
 case "$cmd" in
   ros2)     # discovery kept to this machine unless asked (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET reaches a robot)
             ros2_venv && AMENT_PREFIX_PATH="${AMENT_PREFIX_PATH:-$venv2}" IPYROS_ROS=2 \
@@ -166,9 +171,15 @@ case "$cmd" in
   notebook) notebook "$@" ;;
   test)     # every layer, each reported; with arguments, pytest gets them in the ROS 1 venv only
             cd "$here"
-            if (($# > 0)); then exec "$venv/bin/python" -m pytest "$@"; fi
-            unit_venv
-            ros2_venv
+            if (($# > 0)); then ros1_setup && exec "$venv/bin/python" -m pytest "$@"; fi
+            # The venvs without ROS 1 are made while apt and the ROS 1 venv install (minutes saved on a fresh
+            # machine); apt runs alone, as the ROS 1 venv's pip must see what it installed.
+            venv_support
+            unit_venv & unit_pid=$!
+            ros2_venv & ros2_pid=$!
+            ros1_setup
+            wait "$unit_pid"
+            wait "$ros2_pid"
             layer "unit (no ROS)" "$venv0/bin/python" -m pytest -q tests/unit
             layer "guide (sphinx -W)" build_docs
             # One after the other: side by side on two cores the load made timing-bound tests fail.
