@@ -50,6 +50,10 @@ class DemoNode:
             import rospy
 
             rospy.init_node(name)
+            # Asked to stop, rospy unregisters the node, then joins its XML-RPC server's thread, which notices
+            # its closed socket only at its next half-second poll: 0.6 s a node for nothing (the thread is a
+            # daemon: it ends with the process). Without the join a demo node is gone in a tenth of a second.
+            rospy.core._shutdown_threads.clear()
             self._node = None
 
     def _spin(self) -> None:
