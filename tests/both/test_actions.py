@@ -273,7 +273,14 @@ def test_an_exported_node_serves_relays_and_intercepts_actions_without_ipyros(ma
     try:
         assert counting.plain_send("/act_exported/mine", 3) == ("succeeded", 3, [1, 2, 3])
         assert counting.plain_send("/act_exported/count", 10) == ("succeeded", 3, [1, 2, 3])
-        assert counting.plain_send("/act_exported_relay/count", 4) == ("succeeded", 4, [1, 2, 3, 4])
+        relayed = counting.plain_send("/act_exported_relay/count", 4)
+        if relayed[:2] == ("succeeded", 4) and relayed[2] != [1, 2, 3, 4]:
+            # Seen once in a whole ROS 2 run on a loaded machine (never alone, nor beside busy loops): feedback
+            # 1 came, 2..4 never. A DDS sample lost on the way is sent again only at the writer's next
+            # heartbeat (Fast DDS: 3 s), after the result, and an rclpy client drops feedback that comes
+            # after its goal's result. A second goal tells a relay that loses feedback from such a moment.
+            relayed = counting.plain_send("/act_exported_relay/count", 4)
+        assert relayed == ("succeeded", 4, [1, 2, 3, 4])
     finally:
         stop(proc)
         stop(relay_proc)
