@@ -21,13 +21,13 @@ from __future__ import annotations
 import time
 from typing import Callable, Optional
 
-from ..core.errors import BaseNodeError, MasterError
+from ..core.errors import BaseNodeError, IpyrosError, MasterError
 from ..core.graph import GraphSnapshot
 from ..core.records import Interface
+from . import introspect
 from .graph import fetch_snapshot
-from .master import master_proxy
 
-__all__ = ["discover", "global_node_name", "service_type", "wait_for_node"]
+__all__ = ["discover", "global_node_name", "wait_for_node"]
 
 CALLER_ID = "/ipyros_discovery"
 
@@ -133,22 +133,14 @@ def _read(snapshot: GraphSnapshot, node: str) -> Interface:
 
 
 def _with_service_types(master_uri: str, interface: Interface) -> Interface:
-    interface.services = [(name, service_type(master_uri, name)) for name, _ in interface.services]
+    interface.services = [(name, _service_type(master_uri, name)) for name, _ in interface.services]
     return interface
 
 
-def service_type(master_uri: str, service: str, timeout: float = 2.0) -> str:
-    """The type of a live service, by asking the master where it is and probing it there; ``""`` if unknown.
-
-    The probe is a TCPROS connection header with ``probe=1``: the service answers with
-    its header (type, md5sum) and hangs up, without being called.
-    """
-    import rosservice  # imports rospy (the module only; no node is started)
-
+def _service_type(master_uri: str, service: str) -> str:
+    """The type of a live service (:func:`.introspect.service_type`: a probe with a timeout, so a hung server
+    cannot hang discovery); ``""`` if it cannot be told (its server gone or silent): discovery lists what it can."""
     try:
-        code, _, uri = master_proxy(master_uri, timeout).lookupService(CALLER_ID, service)
-        if code != 1:
-            return ""
-        return rosservice.get_service_headers(service, uri).get("type", "")
-    except (OSError, rosservice.ROSServiceException):
+        return introspect.service_type(master_uri, service)
+    except (IpyrosError, OSError):
         return ""

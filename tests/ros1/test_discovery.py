@@ -107,3 +107,26 @@ def test_no_master_is_a_master_error():
 def test_an_empty_interface_renders_as_such():
     text = render(interface_table(Interface(node="/quiet")))
     assert "Interface of /quiet" in text and "no topics or services" in text
+
+
+def test_a_service_whose_server_never_answers_is_listed_without_a_type_and_hangs_nothing(ros_master):
+    """A node frozen in a debugger still accepts connections (the kernel does) and never answers: its
+    services are listed with their type unknown, after the probe's timeout, instead of discovery hanging."""
+    import socket
+    import threading
+    import xmlrpc.client
+
+    with socket.create_server(("127.0.0.1", 0)) as frozen:  # listens; nobody ever reads or writes
+        port = frozen.getsockname()[1]
+        master = xmlrpc.client.ServerProxy(ros_master)
+        api = f"http://127.0.0.1:{free_port()}/"
+        master.registerService("/frozen", "/frozen/reset", f"rosrpc://127.0.0.1:{port}", api)
+        try:
+            found: list[Interface] = []
+            asking = threading.Thread(target=lambda: found.append(discover(ros_master, "/frozen")), daemon=True)
+            asking.start()
+            asking.join(20)
+            assert found, "discovery hung on a server that never answers"
+            assert found[0].services == [("/frozen/reset", "")]
+        finally:
+            master.unregisterService("/frozen", "/frozen/reset", f"rosrpc://127.0.0.1:{port}")
