@@ -30,6 +30,19 @@ def _ros2() -> bool:
     return wanted == "2" or (wanted != "1" and importlib.util.find_spec("rospy") is None)
 
 
+def rospy_node(name: str, **options: Any) -> None:
+    """``rospy.init_node(name, **options)`` for a node that ends at once when asked to (or at exit).
+
+    Asked to stop, rospy unregisters the node, then joins its XML-RPC server's thread, which notices
+    its closed socket only at its next half-second poll: 0.6 s a node for nothing (the thread is a
+    daemon: it ends with the process). Without the join a node is gone in a fifth of a second.
+    """
+    import rospy
+
+    rospy.init_node(name, **options)
+    rospy.core._shutdown_threads.clear()
+
+
 class DemoNode:
     """A node of the demo robot: parameters, publishers, subscriptions, a service, a loop."""
 
@@ -47,13 +60,7 @@ class DemoNode:
             self._spinner.start()
             atexit.register(self.close)  # however the script ends: after run(), or a script of its own
         else:
-            import rospy
-
-            rospy.init_node(name)
-            # Asked to stop, rospy unregisters the node, then joins its XML-RPC server's thread, which notices
-            # its closed socket only at its next half-second poll: 0.6 s a node for nothing (the thread is a
-            # daemon: it ends with the process). Without the join a demo node is gone in a tenth of a second.
-            rospy.core._shutdown_threads.clear()
+            rospy_node(name)
             self._node = None
 
     def _spin(self) -> None:

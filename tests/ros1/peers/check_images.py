@@ -7,7 +7,9 @@ import sys
 import rospy
 from sensor_msgs.msg import Image
 
-rospy.init_node("check_images", anonymous=True, disable_signals=True)
+from ipyros.demo.demonode import rospy_node  # ends at once when asked
+
+rospy_node("check_images", anonymous=True, disable_signals=True)
 count = 0
 
 

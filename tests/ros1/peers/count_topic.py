@@ -9,12 +9,14 @@ import time
 import roslib.message
 import rospy
 
+from ipyros.demo.demonode import rospy_node  # ends at once when asked
+
 parser = argparse.ArgumentParser()
 parser.add_argument("topic")
 parser.add_argument("type")
 parser.add_argument("--sleep", type=float, default=0.0)
 args, _ = parser.parse_known_args(rospy.myargv()[1:])
-rospy.init_node("count_topic", anonymous=True, disable_signals=True)
+rospy_node("count_topic", anonymous=True, disable_signals=True)
 count = 0
 
 

@@ -5,8 +5,10 @@ import sys
 import roslib.message
 import rospy
 
+from ipyros.demo.demonode import rospy_node  # ends at once when asked
+
 topic, type_name = sys.argv[1], sys.argv[2]
-rospy.init_node("echo_topic", anonymous=True, disable_signals=True)
+rospy_node("echo_topic", anonymous=True, disable_signals=True)
 
 
 def show(msg):

@@ -13,6 +13,8 @@ import threading
 import rospy
 from sensor_msgs.msg import Image
 
+from ipyros.demo.demonode import rospy_node  # ends at once when asked
+
 parser = argparse.ArgumentParser()
 parser.add_argument("topic")
 parser.add_argument("--size", type=int, default=1 << 20)
@@ -21,7 +23,7 @@ parser.add_argument("--count", type=int, default=0)
 parser.add_argument("--first", type=int, default=1, help="the first image's i")
 parser.add_argument("--when-heard", action="store_true")
 args, _ = parser.parse_known_args(rospy.myargv()[1:])
-rospy.init_node("publish_images", anonymous=True, disable_signals=True)
+rospy_node("publish_images", anonymous=True, disable_signals=True)
 pub = rospy.Publisher(args.topic, Image, queue_size=None)
 stop = threading.Event()
 threading.Thread(target=lambda: (sys.stdin.read(), stop.set()), daemon=True).start()

@@ -11,8 +11,10 @@ import time
 import rospy
 from std_msgs.msg import UInt32
 
+from ipyros.demo.demonode import rospy_node  # ends at once when asked
+
 topic, rate = sys.argv[1], float(sys.argv[2])
-rospy.init_node("publish_rate", anonymous=True, disable_signals=True)
+rospy_node("publish_rate", anonymous=True, disable_signals=True)
 pub = rospy.Publisher(topic, UInt32, queue_size=100)
 print("ready", flush=True)
 period, i = 1.0 / rate, 0

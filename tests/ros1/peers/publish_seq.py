@@ -10,9 +10,11 @@ import time
 import rospy
 from std_msgs.msg import UInt32
 
+from ipyros.demo.demonode import rospy_node  # ends at once when asked
+
 topic, count, rate = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
 subscribers = int(sys.argv[4]) if len(sys.argv) > 4 else 1
-rospy.init_node("publish_seq", anonymous=True, disable_signals=True)
+rospy_node("publish_seq", anonymous=True, disable_signals=True)
 pub = rospy.Publisher(topic, UInt32, queue_size=count)
 deadline = time.monotonic() + 30
 while pub.get_num_connections() < subscribers and time.monotonic() < deadline:

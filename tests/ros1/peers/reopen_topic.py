@@ -12,8 +12,10 @@ import time
 import rospy
 from std_msgs.msg import UInt32
 
+from ipyros.demo.demonode import rospy_node  # ends at once when asked
+
 topic = sys.argv[1]
-rospy.init_node("reopen_topic", anonymous=True, disable_signals=True)
+rospy_node("reopen_topic", anonymous=True, disable_signals=True)
 lock = threading.Lock()
 pub = rospy.Publisher(topic, UInt32, queue_size=10)
 

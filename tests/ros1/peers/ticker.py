@@ -14,8 +14,10 @@ import time
 import rospy
 from std_msgs.msg import UInt32
 
+from ipyros.demo.demonode import rospy_node  # ends at once when asked
+
 topic, rate = sys.argv[1], float(sys.argv[2])
-rospy.init_node("ticker", anonymous=True, disable_signals=True)
+rospy_node("ticker", anonymous=True, disable_signals=True)
 signal.signal(signal.SIGTERM, lambda *_: rospy.signal_shutdown("stopped by the test"))
 pub = rospy.Publisher(topic, UInt32, queue_size=100)
 print("ready", flush=True)
