@@ -529,7 +529,15 @@ class Subscription:
 
     It takes the message's bytes and deserialises them itself (what rclpy would do), so the
     slot can keep the bytes for ``%try``: the handler may change its message in place.
+
+    A latched message is handled once: when the subscription turns transient-local (its publishers
+    showed up so), the new one is sent the publisher's last messages again, and the old one may
+    have heard them live. A message sent before the current subscription opened is dropped when
+    one from the same publisher with the same source stamp was handled already.
     """
+
+    #: How many messages' identities (publisher, source stamp) are kept to tell one sent again.
+    REMEMBERED = 256
 
     def __init__(self, process: ProcessNode, node: Node, topic: str, cls: type, slot: HandlerSlot,
                  qos: Qos = Qos(), complain: Optional[Complain] = None) -> None:
@@ -538,6 +546,7 @@ class Subscription:
         self._lock = threading.Lock()
         self._lane = Lane(slot, complain, topic, process.spinner)
         self._follows = qos.reliability is None and qos.durability is None
+        self._handled: dict[tuple[bytes, int], None] = {}  # identities of the last messages, oldest first
         self._publishers = _Publishers(node, topic)
         self.qos = self._wanted() or Qos(qos.depth, qos.reliability or "reliable", qos.durability or "volatile")
         self._sub = self._open(self.qos)
@@ -562,7 +571,15 @@ class Subscription:
         # A transient-local publisher sends its last messages again to a new subscription:
         # they were published before it existed.
         gid = info.get("publisher_gid")
-        came = Arrival(bytes(gid["data"]).hex() if gid else "?", len(data), info["source_timestamp"] < self._since)
+        sender = bytes(gid["data"]) if gid else b""
+        came = Arrival(sender.hex() if gid else "?", len(data), info["source_timestamp"] < self._since)
+        if self._follows and gid:
+            identity = (sender, info["source_timestamp"])
+            if came.replayed and identity in self._handled:
+                return  # heard before the swap to transient-local: sent again, not published again
+            self._handled[identity] = None
+            if len(self._handled) > self.REMEMBERED:
+                del self._handled[next(iter(self._handled))]
         self._lane(deserialize_message(data, self.cls), Pristine(functools.partial(deserialize_message, data, self.cls)),
                    came)
 

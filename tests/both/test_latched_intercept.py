@@ -26,11 +26,11 @@ def test_an_intercepted_latched_output_reaches_a_late_subscriber(ip, peer):
            "lw.create()")
     try:
         wait_for(lambda: ip.user_ns["taken"], timeout=30, interval=0.1, what="the basenode's latched status")
-        for round_ in range(3):  # each joins after the one message was written, and gets it
-            late = peer("listen.py", "/latch_robot/status", "std_msgs/String", "data", "--latched",
-                        f"--name=late_{round_}")
-            late.wait_line("heard 'READY'", timeout=30)
-            late.stop()
+        # three join after the one message was written (side by side: they need not take turns), each gets it
+        late = [peer("listen.py", "/latch_robot/status", "std_msgs/String", "data", "--latched", f"--name=late_{i}")
+                for i in range(3)]
+        for one in late:
+            one.wait_line("heard 'READY'", timeout=30)
         assert ip.user_ns["taken"] == ["ready"], "the basenode's message was handled once"
     finally:
         ok(ip, "lw.shutdown()")
