@@ -177,9 +177,11 @@ case "$cmd" in
             venv_support
             unit_venv & unit_pid=$!
             ros2_venv & ros2_pid=$!
+            trap wait EXIT  # one install failing: the others end before the script does, none left running
             ros1_setup
             wait "$unit_pid"
             wait "$ros2_pid"
+            trap - EXIT
             layer "unit (no ROS)" "$venv0/bin/python" -m pytest -q tests/unit
             layer "guide (sphinx -W)" build_docs
             # One after the other: side by side on two cores the load made timing-bound tests fail.

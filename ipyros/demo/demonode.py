@@ -40,7 +40,9 @@ def rospy_node(name: str, **options: Any) -> None:
     import rospy
 
     rospy.init_node(name, **options)
-    rospy.core._shutdown_threads.clear()
+    joined = getattr(rospy.core, "_shutdown_threads", None)  # rospy's own: another rospy only stops slower
+    if isinstance(joined, list):
+        joined.clear()
 
 
 class DemoNode:
