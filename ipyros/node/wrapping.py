@@ -312,6 +312,12 @@ def interrupted(doing: str, outcome: str) -> BaseNodeError:
     return BaseNodeError(f"Ctrl-C while {doing}: {outcome}; nothing is left half-declared")
 
 
+def names_like(name: str, seen: list[str]) -> list[str]:
+    """Up to three of ``seen`` that look like ``name`` (a typo, a namespace, a suffix a launch added), best first;
+    none for names that merely share letters, so a hint never points at an unrelated node."""
+    return difflib.get_close_matches(name, seen, n=3, cutoff=0.7)
+
+
 def _never_seen(node: "NodeEngine", model: NodeModel, timeout: float) -> BaseNodeError:
     """The one line for a basenode that ran but never showed up in the graph (create() then stops it): the
     graph's nodes of a name like the one it was given, in case it took another."""
@@ -320,7 +326,7 @@ def _never_seen(node: "NodeEngine", model: NodeModel, timeout: float) -> BaseNod
         seen = [n for n in backend.graph_snapshot().nodes if n not in node.session.nodes]  # not its own
     except IpyrosError:
         seen = []
-    like = difflib.get_close_matches(name, seen, n=3, cutoff=0.5)
+    like = names_like(name, seen)
     return BaseNodeError(f"basenode {name} of {node.called} ran {timeout:g} s without showing up in the graph "
                          f"({backend.where()}), so it was stopped; is it a ROS node that keeps the name it is given?"
                          + (f" nodes of a name like it: {', '.join(like)}" if like else ""))

@@ -224,7 +224,9 @@ def test_a_basenode_that_runs_but_never_shows_up_fails_create_in_one_line_and_is
     message = str(caught.value)
     assert "\n" not in message and message.startswith(
         "basenode /absent_base of absent_wrap ran 2 s without showing up in the graph ("), message
-    assert message.endswith("so it was stopped; is it a ROS node that keeps the name it is given?"), message
+    question = "so it was stopped; is it a ROS node that keeps the name it is given?"
+    hint = message.partition(question)[2]  # if the graph holds a node of a name like it (pure test: test_wrapping)
+    assert question in message and (not hint or hint.startswith(" nodes of a name like it: ")), message
     assert not w.created and w.base is None
     assert children() <= before, "the basenode was stopped"
 
