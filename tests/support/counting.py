@@ -76,10 +76,13 @@ class CountingRos1(Counting):
             assert client.wait_for_server(rospy.Duration(timeout)), f"no action server {name}"
             # wait_for_server knows the server hears our goals, not that we hear its feedback and result: a quick
             # goal's first feedback would go to no one (seen once on a loaded machine)
+            # Nor is our side of a connection enough: rospy counts it once the publisher's header came, a moment
+            # before the publisher adds it to those it sends to (a first feedback lost so, 2 CI runs in 4): the
+            # publisher is asked (getBusInfo) whom it sends to.
             deadline = time.monotonic() + timeout
-            while not (client.feedback_sub.get_num_connections() and client.result_sub.get_num_connections()):
+            while not (_sends_to_us(f"{name}/feedback") and _sends_to_us(f"{name}/result")):
                 assert time.monotonic() < deadline, f"{name}'s feedback and result never connected"
-                time.sleep(0.01)
+                time.sleep(0.02)
             seen: list[int] = []
             done = threading.Event()
 
@@ -100,6 +103,23 @@ class CountingRos1(Counting):
             return state, reached, late_feedback(seen, reached if state == "succeeded" else 0)
         finally:
             client.stop()
+
+
+def _sends_to_us(topic: str) -> bool:
+    """Whether every ROS 1 publisher of ``topic`` has a connection open to this process's node."""
+    from xmlrpc.client import ServerProxy
+
+    import rosgraph
+    import rospy
+
+    me = rospy.get_caller_id()
+    master = rosgraph.Master(me)
+    publishers = next((nodes for name, nodes in master.getSystemState()[0] if name == topic), [])
+    for node in publishers:
+        code, _, connections = ServerProxy(master.lookupNode(node)).getBusInfo(me)
+        if code != 1 or not any(c[1] == me and c[2] == "o" and c[4] == topic for c in connections):
+            return False
+    return bool(publishers)
 
 
 class CountingRos2(Counting):
