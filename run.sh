@@ -109,13 +109,13 @@ build_docs() {
 # Runs one layer of the suite and notes how it ended, so that every layer runs and is reported.
 results=()
 layer() {
-  local label="$1" rc=0
+  local label="$1" rc=0 start=$SECONDS
   shift
   "$@" || rc=$?
-  record "$label" "$rc"
+  record "$label" "$rc" "$((SECONDS - start))"
 }
 record() {
-  if (($2 == 0)); then results+=("$1: passed"); else results+=("$1: FAILED (pytest exit $2)"); fi
+  if (($2 == 0)); then results+=("$1: passed in $3 s"); else results+=("$1: FAILED (pytest exit $2) in $3 s"); fi
   return 0
 }
 report() {
@@ -182,6 +182,7 @@ case "$cmd" in
             wait "$unit_pid"
             wait "$ros2_pid"
             trap - EXIT
+            results+=("installs: done in $SECONDS s")
             layer "unit (no ROS)" "$venv0/bin/python" -m pytest -q tests/unit
             layer "guide (sphinx -W)" build_docs
             # One after the other: side by side on two cores the load made timing-bound tests fail.
