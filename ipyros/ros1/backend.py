@@ -308,7 +308,8 @@ class Ros1:
 
     # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----
     def service_type(self, name: str) -> str:
-        return introspect.service_type(self.connection.uri, name)
+        uri = introspect.service_uri(self.connection.uri, name)
+        return runtime.served_here(name, uri) or introspect.probe_type(uri, name)
 
     def call(self, name: str, cls: type, request: Any, timeout: float) -> Any:
         return introspect.call(self.connection.uri, name, cls, request, timeout)

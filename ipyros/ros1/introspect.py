@@ -21,16 +21,26 @@ from ..core.errors import IpyrosError
 from .master import master_proxy
 
 __all__ = ["call", "cleanup_nodes", "kill_node", "node_connections", "node_pid", "params_under", "ping_node",
-           "service_type", "topic_endpoints"]
+           "probe_type", "service_type", "service_uri", "topic_endpoints"]
 
 CALLER_ID = "/ipyros_introspect"
 
 
 def service_type(master_uri: str, name: str, timeout: float = 2.0) -> str:
     """The type (``pkg/Service``) of the live service ``name``, asked of its server."""
+    return probe_type(service_uri(master_uri, name, timeout), name, timeout)
+
+
+def service_uri(master_uri: str, name: str, timeout: float = 2.0) -> str:
+    """Where the live service ``name`` is served (``rosrpc://host:port``), as the master says."""
     code, message, uri = master_proxy(master_uri, timeout).lookupService(CALLER_ID, name)
     if code != 1:
         raise IpyrosError(f"no live service {name} ({message}); %services lists them")
+    return uri
+
+
+def probe_type(uri: str, name: str, timeout: float = 2.0) -> str:
+    """The type the server of ``name`` at ``uri`` says in answer to a probe."""
     where = urlparse(uri)  # rosrpc://host:port
     fields = {"probe": "1", "md5sum": "*", "callerid": CALLER_ID, "service": name}
     try:

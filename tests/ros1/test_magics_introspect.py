@@ -89,3 +89,27 @@ def test_a_dynamic_reconfigure_server_is_shown_with_its_ranges_and_set_through(i
         ip.run_line_magic("param", "/dr_node/double_ --describe")
         described = capsys.readouterr().out
         assert described.startswith("/dr_node/double_: type double, min -2.0, max 10.0, default 0.0"), described
+
+
+def test_the_sessions_own_service_shows_its_type_without_a_probe(ip, capsys, monkeypatch):
+    """A service of the session's own nodes is typed from what serves it here: a probe through the session's own
+    socket needs its server thread, which a loaded session may not run within the probe's timeout (was "?")."""
+    from ipyros.core.errors import IpyrosError
+    from ipyros.ros1 import introspect
+
+    def no_probe(uri: str, name: str, timeout: float = 2.0) -> str:
+        raise IpyrosError(f"the server of {name} does not answer")
+
+    ok(ip, SERVER)
+    try:
+        graph = _loaded[id(ip)].graph
+        wait_for(lambda: "/mi/check" in graph.refresh_now().services, what="/mi/check on the master")
+        monkeypatch.setattr(introspect, "probe_type", no_probe)
+        capsys.readouterr()
+        ok(ip, "%services /mi/")
+        out = capsys.readouterr().out
+        assert "std_srvs/SetBool" in next(line for line in out.splitlines() if "/mi/check" in line), out
+        ok(ip, "%node /ipyros_test")
+        assert "std_srvs/SetBool" in next(line for line in capsys.readouterr().out.splitlines() if "/mi/check" in line)
+    finally:
+        ok(ip, "srv.shutdown()")
