@@ -101,3 +101,32 @@ def test_a_sync_that_fails_is_raised_once_by_the_next_change(tmp_path, monkeypat
     kept.append(journal.Change(3.0, "/n", "shutdown()"))  # off now: no second error
     assert kept.failed
     kept.close()
+
+
+def test_a_change_never_waits_for_a_slow_disk(tmp_path, monkeypatch):
+    """The sync runs outside the journal's lock: a change made while the disk takes its time is written at once
+    (a handler edited at the prompt does not wait for a slow SD card), and close() still syncs it."""
+    import threading
+
+    syncing, release = threading.Event(), threading.Event()
+    real = os.fsync
+
+    def slow(fd):
+        syncing.set()
+        release.wait(10)
+        real(fd)
+
+    monkeypatch.setattr(journal.os, "fsync", slow)
+    kept = journal.Journal(tmp_path)
+    kept.append(journal.Change(1.0, "/n", "create()"))
+    assert syncing.wait(10), "the first line was never synced"
+    written = threading.Thread(target=kept.append, args=(journal.Change(2.0, "/n", "shutdown()"),))
+    written.start()
+    written.join(2)
+    try:
+        assert not written.is_alive(), "a change waited for the sync of the one before"
+        assert len(journal.read(kept.path)) == 2
+    finally:
+        release.set()
+        written.join(10)
+        kept.close()
