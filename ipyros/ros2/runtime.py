@@ -670,8 +670,9 @@ class Relay:
             self._pub, self._sub = self._endpoints(wanted)
             if self._last is not None and wanted.latched:
                 # The last message came before the swap, on the volatile endpoints: the new publisher must
-                # hold it for later subscribers. Written now, before any reader has matched this new writer,
-                # it is kept in its history and not delivered a second time to the readers that had it.
+                # hold it for later subscribers. Written now, before a reader of another process has matched this
+                # new writer, it is kept in its history and not delivered a second time to those that had it; a
+                # reader of this session matches at once and gets it twice (seen; it is one latched message).
                 self._pub.publish(self._last)
             self._reader.destroy_subscription(old[1])
             self._node.destroy_publisher(old[0])
