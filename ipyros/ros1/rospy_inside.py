@@ -25,7 +25,8 @@ What is read (private, not changed)
    name the topic, the thread that logged it holds it;
 6. rospy's registration state (:func:`topic_manager`, :func:`service_manager`,
    :func:`registration_manager`, :func:`node_uri`) and its logger services: what the process has
-   registered, to register it again after a master restart or under a new name;
+   registered, to register it again after a master restart or under a new name, and the type of a
+   service it serves itself (``runtime.served_here``: no probe through its own socket);
 7. a publication's impl (``acquire``, ``publish``, ``release``, ``enable_latch``): bytes are written
    as they came, without rospy's type check (relays and exported relays);
 8. the parameter cache's notifier (:func:`notify_param_sets`, set, the one patch of a rospy-wide

@@ -34,7 +34,6 @@ from typing import Any, Callable, Optional
 
 import genpy
 import rospy
-from rospy.impl.registration import get_service_manager
 from rospy.msg import serialize_message
 
 from ..core.errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
@@ -823,7 +822,7 @@ class ServiceServer:
 def served_here(name: str, uri: str) -> Optional[str]:
     """The type of ``name`` if this process serves it at ``uri``: no probe through our own socket (under load
     the server's thread, the session's own, could miss the probe's timeout and the type show as "?")."""
-    service = get_service_manager().get_service(name)
+    service = rospy_inside.service_manager().get_service(name)
     return service.service_class._type if service is not None and service.uri == uri else None
 
 
