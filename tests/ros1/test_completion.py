@@ -15,6 +15,7 @@ import pytest
 from IPython.core.completer import CompletionContext, provisionalcompleter
 from IPython.core.interactiveshell import InteractiveShell
 from ros1_fixtures import free_port, master_graph, wait_for
+from shell import end_shell
 from topic_nodes import many_topics
 from traitlets.config import Config
 
@@ -100,6 +101,7 @@ def ip():
     ]))
     shell.user_ns["not_a_node"] = 42
     yield shell
+    end_shell(shell)
     InteractiveShell.clear_instance()
 
 

@@ -14,7 +14,7 @@ import pytest
 from IPython.core.error import UsageError
 from peer import Peer
 from ros1_fixtures import free_port, wait_for
-from shell import error_of, interactive_shell, ok
+from shell import end_shell, error_of, interactive_shell, ok
 from traitlets.config import Config
 
 from ipyros import IpyrosError, build_messages, rosNode
@@ -349,4 +349,5 @@ def test_terminal_menus_show_ros_names_whole(ros_session):
         finally:
             if "ipyros" in shell.extension_manager.loaded:
                 shell.run_line_magic("unload_ext", "ipyros")
+            end_shell(shell)
             TerminalInteractiveShell.clear_instance()

@@ -7,7 +7,7 @@ import os
 import pytest
 from IPython.core.interactiveshell import InteractiveShell
 from traitlets.config import Config
-from shell import error_of
+from shell import end_shell, error_of
 
 
 @pytest.fixture
@@ -20,6 +20,7 @@ def ip(ros2_session, capsys):
     yield shell
     if "ipyros" in shell.extension_manager.loaded:
         shell.run_line_magic("unload_ext", "ipyros")
+    end_shell(shell)
     InteractiveShell.clear_instance()
 
 

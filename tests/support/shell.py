@@ -8,14 +8,31 @@ master or DDS domain, and its DSL nodes live in the pytest process.
 from __future__ import annotations
 
 import _thread
+import atexit
 import contextlib
 import os
+import shutil
 import threading
 from typing import Iterator, Optional
 
 import pytest
 from IPython.core.interactiveshell import ExecutionResult, InteractiveShell
 from traitlets.config import Config
+
+
+def end_shell(shell: InteractiveShell) -> None:
+    """End a test's shell now as its exit hook would at the interpreter's exit (history closed, its temporary files
+    removed), but without the full garbage collection that hook's reset does: one per shell of the run, with the
+    heap a whole run leaves, they took 110 s at the end of the ROS 1 layer."""
+    atexit.unregister(shell.atexit_operations)
+    if shell.history_manager is not None:
+        shell.history_manager.end_session()
+        shell.history_manager.close()
+    for path in shell.tempfiles:
+        path.unlink(missing_ok=True)
+    for folder in shell.tempdirs:
+        shutil.rmtree(folder, ignore_errors=True)
+    shell.tempfiles, shell.tempdirs = [], []
 
 
 @contextlib.contextmanager
@@ -35,6 +52,7 @@ def interactive_shell(config: Optional[Config] = None, load: bool = True) -> Ite
     finally:
         if "ipyros" in shell.extension_manager.loaded:
             shell.run_line_magic("unload_ext", "ipyros")
+        end_shell(shell)
         InteractiveShell.clear_instance()
         if columns is None:
             os.environ.pop("COLUMNS", None)
