@@ -98,17 +98,18 @@ class Journal:
             self._unsynced.wait()
             time.sleep(SYNC_WITHIN)  # the lines written meanwhile share this sync
             self._unsynced.clear()
-            with self._lock:  # the sync itself is outside: an append (a handler edited) never waits for the disk
-                if self._file is None:
-                    return
-                fd = os.dup(self._file.fileno())  # close() may close the file meanwhile; a copy syncs the same one
             try:
-                os.fsync(fd)
-            except OSError as error:  # raised by the next append, at the prompt
+                with self._lock:  # the sync itself is outside: an append (a handler edited) never waits for the disk
+                    if self._file is None:
+                        return
+                    fd = os.dup(self._file.fileno())  # close() may close the file meanwhile; a copy syncs the same
+                try:
+                    os.fsync(fd)
+                finally:
+                    os.close(fd)
+            except OSError as error:  # raised by the next append, at the prompt (no descriptor left: the same)
                 self._sync_error = error
                 return
-            finally:
-                os.close(fd)
 
     def _open(self):  # type: ignore[no-untyped-def]
         # Handler sources and parameter values (tokens, passwords typed at the prompt) are in
