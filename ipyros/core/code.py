@@ -156,6 +156,11 @@ def import_of(value: Any, own_module: str) -> Optional[tuple[str, Optional[str]]
     return None
 
 
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def import_statement(name: str, origin: tuple[str, Optional[str]]) -> str:
     module, attr = origin
     if attr is None:
@@ -202,12 +207,13 @@ class Bindings:
              skip: Callable[[str, Any], bool] = lambda name, value: False) -> None:
         """Bind the globals of ``fn`` (whose source is ``source``); ``skip(name, value)`` leaves one out."""
         for name in global_names(source):
-            if self.has(name):
-                continue
             value = lookup(name, fn, namespace)
             if skip(name, value):
                 continue
             origin = None if value is _MISSING else import_of(value, fn.__module__)
+            if self.has(name):
+                self._same(name, value, origin, fn)
+                continue
             if origin is not None:
                 self.imports[name] = origin
             elif isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
@@ -223,6 +229,25 @@ class Bindings:
             else:
                 self.unbound[name] = (f"used by {fn.__name__}, not defined when saved" if value is _MISSING else
                                       f"used by {fn.__name__}, a {type(value).__name__}: not a literal, not importable")
+
+    def _same(self, name: str, value: Any, origin: Optional[tuple[str, Optional[str]]],
+              fn: types.FunctionType) -> None:
+        """``name`` is bound already (an import of the file's own, another handler's global): refuse a value that
+        means something else under it, rather than let the file change what ``fn`` reads without a word."""
+        if name in self.imports:
+            if value is _MISSING or origin == self.imports[name]:
+                return
+            module, attr = self.imports[name]
+            meant = f"the module {module}" if attr is None else f"{attr} from {module}"
+        elif name in self.values:
+            literal = _is_literal(value) and f"{name} = {value!r}" == self.values[name]
+            if value is _MISSING or literal or self.values[name].startswith(f"{name} = {type(value).__name__}()"):
+                return
+            meant = self.values[name].partition(" = ")[2]
+        else:  # a function's source (compared where handlers are named), or a name already unbound
+            return
+        raise IpyrosError(f"handler {fn.__name__} reads the global {name} = {_shown(value)}, but {name} is "
+                          f"{meant} in the file; rename the global (it would silently read the other)")
 
     def import_lines(self, skip: Iterable[str] = ()) -> list[str]:
         """``import m`` lines, then ``from m import a, b`` lines (one per module), sorted."""

@@ -36,7 +36,7 @@ from .errors import DeclarationError, cut
 from .msgbuild import field_types, nested_class
 
 __all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "Gate", "GuardFigures", "Path", "Verdict", "check_rules",
-           "finite_checker", "parse_path"]
+           "check_stop", "finite_checker", "parse_path"]
 
 #: How long the stop message is held after the session ends for good (s), unless the guard says.
 DEFAULT_GRACE = 3.0
@@ -189,6 +189,23 @@ def check_rules(cls: type, limits: Any, rate: Any, on_limit: Any, timeout: Any, 
         raise DeclarationError(f"{where}: repeat={cut(repeat)}: give how often (Hz) the stop message is sent again "
                                "while it holds, from 0.5 to 1000")
     return checked_limits, checked_rates
+
+
+def check_stop(cls: type, stop: Any, limits: dict[str, tuple[float, float]], where: str, given: bool) -> None:
+    """Refuse a stop message the guard's own gate would not pass (a NaN, or a value outside its limits): the
+    e-stop and the stop on silence send it unchecked, so it must be within the rules it stands for. ``given``:
+    the user gave it (``stop=``), else it is the type's zero message."""
+    bad = finite_checker(cls)(stop)
+    if bad is not None:
+        raise DeclarationError(f"{where}: the stop message's {bad} is not a finite number; give a stop message "
+                               "of finite values within the limits")
+    for text, (low, high) in limits.items():
+        path = parse_path(cls, text, where)
+        for _, _, value in path.values(stop):
+            if not low <= value <= high:
+                whose = "the stop message" if given else "the stop message (the type's zero message)"
+                raise DeclarationError(f"{where}: {whose} has {path.text} = {value:g}, outside the guard's own limits "
+                                       f"{low:g}..{high:g}: the e-stop would send it; give stop= within the limits")
 
 
 # -- NaN and infinities, anywhere ----------------------------------------------------------------

@@ -180,6 +180,9 @@ def _fill(msg, data):
     return msg
 '''
 
+#: What GUARD_FUNCTIONS and the imports it needs name in the script.
+GUARD_NAMES = {"Guard", "_fields", "_finite", "_values", "_put", "_fill", "copy", "math", "threading", "time"}
+
 
 class ExportWarning(UserWarning):
     """The exported script has names to fill in by hand (``NAME = None  # set me``)."""
@@ -333,7 +336,7 @@ class Script:
         """Globals the script binds itself: the node the handlers write with; refuse one it needs for itself."""
         if name in self.writers:
             return True
-        if name in self.flavour.SCRIPT_NAMES and import_of(value, fn.__module__) != (name, None):
+        if name in self.flavour.SCRIPT_NAMES | GUARD_NAMES and import_of(value, fn.__module__) != (name, None):
             raise IpyrosError(f"handler {fn.__name__} uses the global {name}, a name the exported script "
                               "needs for itself; rename it")
         return False

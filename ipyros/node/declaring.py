@@ -20,7 +20,7 @@ from typing import Any, Callable, Optional, Protocol
 
 from ..core import msgtypes, plan as planning, qos as qos_mod
 from ..core.errors import DeclarationError, HandlerError, MessageTypeError, NotDeclaredError, TopicTypeConflict, cut
-from ..core.guard import DEFAULT_GRACE, DEFAULT_REPEAT, check_rules
+from ..core.guard import DEFAULT_GRACE, DEFAULT_REPEAT, check_rules, check_stop
 from ..core.model import ActionModel, GuardModel, NodeModel, ServiceModel, TimerModel, TopicModel
 from ..core.msgbuild import as_data, build_message
 from ..core.remapping import check_reuse
@@ -239,8 +239,10 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
         raise MessageTypeError(f"{where}: a guard reads the values it checks, and {output.type} is not installed "
                                f"here ({msgtypes.install_hint(output.type.split('/')[0])})") from None
     limits_, rates = check_rules(cls, limits, rate, on_limit, timeout, grace, repeat, where)
+    stop_message = build_message(cls, stop) if stop is not None else cls()  # checked field by field
+    check_stop(cls, stop_message, limits_, where, given=stop is not None)
     if stop is not None:
-        stop = as_data(build_message(cls, stop))  # checked field by field; kept as data (a model file's)
+        stop = as_data(stop_message)  # kept as data (a model file's)
     estop = engine.resolve(estop_topic) if estop_topic is not None else None
     entry = GuardModel(topic, output.resolved, output.type, {p: list(b) for p, b in limits_.items()}, rates, on_limit,
                        float(timeout) if timeout is not None else None, stop, float(repeat), float(grace), estop)

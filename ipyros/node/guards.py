@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, Callable, Optional
 
 from ..core import msgtypes
-from ..core.guard import Gate, GuardState, Verdict
+from ..core.guard import Gate, GuardState, Verdict, check_stop
 from ..core.model import GuardModel, TopicModel
 from ..core.msgbuild import build_message
 from ..core.names import tool_name
@@ -54,7 +54,11 @@ class LiveGuard:
 
     # -- rules ------------------------------------------------------------------------------------
     def _make_stop(self, model: GuardModel) -> Any:
-        return build_message(self.cls, model.stop) if model.stop is not None else self.cls()
+        stop = build_message(self.cls, model.stop) if model.stop is not None else self.cls()
+        # checked when declared; again here, so that no way into the model sends one the gate would not pass
+        check_stop(self.cls, stop, {p: (b[0], b[1]) for p, b in model.limits.items()}, f"guard {self.topic}",
+                   given=model.stop is not None)
+        return stop
 
     def _gate(self, model: GuardModel) -> Gate:
         return Gate(self.topic, self.cls, {p: (b[0], b[1]) for p, b in model.limits.items()}, dict(model.rate),

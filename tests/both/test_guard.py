@@ -223,6 +223,11 @@ def test_a_guard_is_not_weakened_by_accident(make_node):
     (lambda nd: nd.guard("/guarded6/cmd_vel", timeout=-1), "give the seconds of silence"),
     (lambda nd: nd.guard("/guarded6/cmd_vel", stop={"linear": {"x": "fast"}}), "linear.x: expected a number"),
     (lambda nd: nd.estop(), "has no guard to e-stop"),
+    # the e-stop would send 3.0 m/s past the guard's own limit of 0.5 (the fourth hostile round)
+    (lambda nd: nd.guard("/guarded6/cmd_vel", limits=LIMITS, stop={"linear": {"x": 3.0}}),
+     "the stop message has linear.x = 3, outside the guard's own limits -0.5..0.5"),
+    (lambda nd: nd.guard("/guarded6/cmd_vel", limits={"linear.x": (0.1, 0.5)}),
+     "the stop message (the type's zero message) has linear.x = 0, outside the guard's own limits"),
 ])
 def test_a_guard_given_wrong_is_one_line(make_node, call, says):
     nd = make_node("guard_wrong")

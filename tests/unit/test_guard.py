@@ -189,3 +189,18 @@ def test_the_senders_message_is_left_as_it_was():
     mine = Twist(linear=Vector3(x=3.0))
     sent = g.check(mine).send
     assert mine.linear.x == 3.0 and sent.linear.x == 0.5 and sent is not mine
+
+
+def test_a_stop_message_the_gate_would_not_pass_is_refused_in_one_line():
+    """The e-stop and the stop on silence send the stop message unchecked: one outside the guard's own limits (3 m/s
+    under a limit of 0.5) or holding a NaN is refused when declared; the zero message outside them too."""
+    with pytest.raises(DeclarationError) as caught:
+        guard.check_stop(Twist, Twist(linear=Vector3(x=3.0)), LIMITS, "nd.guard('/cmd_vel')", given=True)
+    assert str(caught.value) == ("nd.guard('/cmd_vel'): the stop message has linear.x = 3, outside the guard's own "
+                                 "limits -0.5..0.5: the e-stop would send it; give stop= within the limits")
+    with pytest.raises(DeclarationError, match=r"the stop message \(the type's zero message\) has linear.x = 0, "
+                                               r"outside the guard's own limits 0.1..0.5"):
+        guard.check_stop(Twist, Twist(), {"linear.x": (0.1, 0.5)}, "g", given=False)
+    with pytest.raises(DeclarationError, match="the stop message's angular.z is not a finite number"):
+        guard.check_stop(Twist, Twist(angular=Vector3(z=math.nan)), {}, "g", given=True)
+    guard.check_stop(Twist, Twist(linear=Vector3(x=-0.5)), LIMITS, "g", given=True)  # on the limit: within
