@@ -35,9 +35,11 @@ from typing import Any, Callable, Optional
 from .errors import DeclarationError, cut
 from .msgbuild import field_types, nested_class
 
-__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "Gate", "GuardFigures", "Path", "Verdict", "check_rules",
+__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE", "Gate", "GuardFigures", "Path", "Verdict", "check_rules",
            "check_stop", "finite_checker", "parse_path"]
 
+#: The type of a guard's e-stop topic: ``True`` holds the stop message.
+ESTOP_TYPE = "std_msgs/Bool"
 #: How long the stop message is held after the session ends for good (s), unless the guard says.
 DEFAULT_GRACE = 3.0
 #: The most a guard holds it: its process must end (no process of the session outlives it for long).

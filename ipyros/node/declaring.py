@@ -20,7 +20,7 @@ from typing import Any, Callable, Optional, Protocol
 
 from ..core import msgtypes, plan as planning, qos as qos_mod
 from ..core.errors import DeclarationError, HandlerError, MessageTypeError, NotDeclaredError, TopicTypeConflict, cut
-from ..core.guard import DEFAULT_GRACE, DEFAULT_REPEAT, check_rules, check_stop
+from ..core.guard import DEFAULT_GRACE, DEFAULT_REPEAT, ESTOP_TYPE, check_rules, check_stop
 from ..core.model import ActionModel, GuardModel, NodeModel, ServiceModel, TimerModel, TopicModel
 from ..core.msgbuild import as_data, build_message
 from ..core.remapping import check_reuse
@@ -244,6 +244,10 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
     if stop is not None:
         stop = as_data(stop_message)  # kept as data (a model file's)
     estop = engine.resolve(estop_topic) if estop_topic is not None else None
+    taken = next((t for t in model.topics if t.resolved == estop and t.type != ESTOP_TYPE), None)
+    if taken is not None:
+        raise TopicTypeConflict(f"{where}: estop_topic {estop} carries {taken.type} on {engine.name}, not "
+                                f"{ESTOP_TYPE}: an e-stop topic is a {ESTOP_TYPE} of its own; give it another name")
     entry = GuardModel(topic, output.resolved, output.type, {p: list(b) for p, b in limits_.items()}, rates, on_limit,
                        float(timeout) if timeout is not None else None, stop, float(repeat), float(grace), estop)
 

@@ -22,6 +22,7 @@ from typing import Any, Callable, Optional
 
 from ..core import names, plan as planning
 from ..core.errors import NodeStateError, NotDeclaredError, TopicTypeConflict
+from ..core.guard import ESTOP_TYPE
 from ..core.model import NodeModel, TopicModel
 from ..core.plan import Spec
 from ..core.records import History, NodeStatus, StatusRow, Versions
@@ -194,6 +195,8 @@ class NodeEngine:
             if self.created:
                 check_wrapping(new_model)  # e.g. a reuse declared on a running node with no basenode
                 check_live_types(self, check)
+                before = {(g.resolved, g.estop_topic) for g in self._model.guards}
+                check_estop_topics(self, [g for g in new_model.guards if (g.resolved, g.estop_topic) not in before])
                 self._reconcile(new_model, handlers or {})
             for key in drop:
                 self._handlers.pop(key, None)
@@ -267,6 +270,7 @@ class NodeEngine:
                 session.backend.open_host(self.fullname, parameters=bool(self._model.params))
                 session.require_graph(f"{self.called}.create()")
                 check_live_types(self, self._model.topics)
+                check_estop_topics(self, self._model.guards)
                 self.params.start()
                 self._output = session.output_scope(self.owner)
                 for slot in self._slots.values():  # heard again (quietened by a shutdown)
@@ -335,6 +339,9 @@ class NodeEngine:
             if not self._model.guards:
                 raise NotDeclaredError(f"{self.name} has no guard to {'e-stop' if on else 'release'}; guard an "
                                        f"output first: {self.called}.guard(TOPIC, limits=..., timeout=...)")
+            if not self.created:
+                raise NodeStateError(f"nothing was {'e-stopped' if on else 'released'}: {self.name} is not running, so "
+                                     f"it sends nothing; its guards stand from {self.called}.create() on")
             topics = self.guards.estop(on)
             for topic in topics if on else ():
                 self.writing.send(topic, self.guards.live[topic].stop_message())
@@ -476,3 +483,18 @@ def check_live_types(engine: NodeEngine, topics: Any) -> None:
                 continue
         raise TopicTypeConflict(f"{t.resolved} already carries {have}, not {t.type}; "
                                 f"declare msgType={have!r} or use another topic name")
+
+
+def check_estop_topics(engine: NodeEngine, guards: Any) -> None:
+    """Refuse an e-stop topic that carries another type than ``std_msgs/Bool`` in the live graph: its guard's process
+    would never hear a press there (ROS 1 connects nothing, ROS 2 matches nothing). Read from the graph on both ROS
+    (ROS 2's declarations are not checked against it otherwise: DDS keeps a type per endpoint)."""
+    wanted = [g.estop_topic for g in guards if g.estop_topic]
+    if not wanted:
+        return
+    topics = engine.session.backend.graph_snapshot().topics
+    for topic in wanted:
+        have = topics.get(topic, "")
+        if have and have != ESTOP_TYPE:
+            raise TopicTypeConflict(f"{topic} already carries {have}, not {ESTOP_TYPE}; an e-stop topic is a "
+                                    f"{ESTOP_TYPE} of its own: give estop_topic another name")

@@ -223,11 +223,18 @@ def test_a_guard_is_not_weakened_by_accident(make_node):
     (lambda nd: nd.guard("/guarded6/cmd_vel", timeout=-1), "give the seconds of silence"),
     (lambda nd: nd.guard("/guarded6/cmd_vel", stop={"linear": {"x": "fast"}}), "linear.x: expected a number"),
     (lambda nd: nd.estop(), "has no guard to e-stop"),
+    # declared, not running: said, not an empty list without a word
+    (lambda nd: nd.guard("/guarded6/cmd_vel", limits=LIMITS) and nd.estop(),
+     "nothing was e-stopped: guard_wrong is not running, so it sends nothing; its guards stand from "
+     "guard_wrong.create() on"),
     # the e-stop would send 3.0 m/s past the guard's own limit of 0.5 (the fourth hostile round)
     (lambda nd: nd.guard("/guarded6/cmd_vel", limits=LIMITS, stop={"linear": {"x": 3.0}}),
      "the stop message has linear.x = 3, outside the guard's own limits -0.5..0.5"),
     (lambda nd: nd.guard("/guarded6/cmd_vel", limits={"linear.x": (0.1, 0.5)}),
      "the stop message (the type's zero message) has linear.x = 0, outside the guard's own limits"),
+    # a Twist topic taken as the std_msgs/Bool e-stop (ROS 1 accepted it)
+    (lambda nd: nd.guard("/guarded6/cmd_vel", estop_topic="/guarded6/cmd_vel"),
+     "estop_topic /guarded6/cmd_vel carries geometry_msgs/Twist on guard_wrong, not std_msgs/Bool"),
 ])
 def test_a_guard_given_wrong_is_one_line(make_node, call, says):
     nd = make_node("guard_wrong")
@@ -235,7 +242,32 @@ def test_a_guard_given_wrong_is_one_line(make_node, call, says):
     with pytest.raises(errors.IpyrosError) as caught:
         call(nd)
     assert says in str(caught.value) and "\n" not in str(caught.value), str(caught.value)
-    assert nd.model().guards == []
+    assert nd.model().guards == [] or "nothing was e-stopped" in says
+
+
+def test_an_estop_topic_that_carries_another_type_live_is_refused(make_node, peer):
+    """Another process publishes a Twist on the topic named as the e-stop: refused in one line, when the guard is
+    declared on a running node and when a node declared with it is created; nothing is left running."""
+    other = peer("talk.py", "/guarded11/estop", "geometry_msgs/Twist", "5")
+    other.wait_line("ready")
+    nd = make_node("guard_estop_typed")
+    nd.new.publish("/guarded11/cmd_vel", msgType=Twist)
+    nd.create()
+    says = "/guarded11/estop already carries geometry_msgs/Twist, not std_msgs/Bool; an e-stop topic is a " \
+           "std_msgs/Bool of its own: give estop_topic another name"
+    backend = engine_of(nd).session.backend
+    wait_for(lambda: backend.graph_snapshot().topics.get("/guarded11/estop") == "geometry_msgs/Twist",
+             timeout=20, what="the e-stop topic's live type to be seen")
+    with pytest.raises(errors.TopicTypeConflict) as caught:
+        nd.guard("/guarded11/cmd_vel", estop_topic="/guarded11/estop")
+    assert str(caught.value) == says
+    assert nd.model().guards == [] and engine_of(nd).status().guards == ()
+    later = make_node("guard_estop_typed2")
+    later.new.publish("/guarded11/cmd2", msgType=Twist)
+    later.guard("/guarded11/cmd2", estop_topic="/guarded11/estop")
+    with pytest.raises(errors.TopicTypeConflict, match=says):
+        later.create()
+    assert not engine_of(later).created
 
 
 SESSION = """
