@@ -35,8 +35,8 @@ from typing import Any, Callable, Optional
 from .errors import DeclarationError, cut
 from .msgbuild import field_types, nested_class
 
-__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE", "Gate", "GuardFigures", "Path", "Verdict", "check_rules",
-           "check_stop", "finite_checker", "parse_path"]
+__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE", "Gate", "GuardFigures", "Path", "Verdict",
+           "check_rules", "check_stop", "finite_checker", "parse_path"]
 
 #: The type of a guard's e-stop topic: ``True`` holds the stop message.
 ESTOP_TYPE = "std_msgs/Bool"
