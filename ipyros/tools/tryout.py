@@ -162,6 +162,7 @@ class BagTrial:
     first: tuple[Difference, ...]
     others: int = 0  # messages of the node's other subscriptions run through their live handlers
     seconds: float = 0.0  # how long the run took
+    stopped: bool = False  # Ctrl-C ended it: what ran until then
 
     def table(self) -> TextTable:
         """Counts per output topic on each side, then the first differences side by side."""
@@ -174,7 +175,8 @@ class BagTrial:
                          "\n".join(diff.candidate.lines()) or "-"))
         others = f" (and {self.others} of its other subscriptions, through their live handlers)" if self.others else ""
         title = (f"{self.candidate_name} against {self.live_name} on {self.total} messages of {self.topic} from "
-                 f"{self.bag}{others}: {self.differing} differ ({self.seconds:.2f} s)")
+                 f"{self.bag}{others}: {self.differing} differ ({self.seconds:.2f} s"
+                 f"{'; stopped by Ctrl-C, the rest of the bag not tried' if self.stopped else ''})")
         return TextTable(title, (Column("output / message", fold=True), Column(self.live_name, fold=True),
                                  Column(self.candidate_name, fold=True)), tuple(rows), sections)
 
@@ -235,27 +237,34 @@ def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, 
     total = differing = others = 0
     start: Optional[int] = None
     began = time.perf_counter()
-    with _intercepted() as run:
-        for name, stamp, msg in bag_module().bag_messages(path, {resolved, *handlers}):
-            start = stamp if start is None else start
-            at = (stamp - start) / 1e9
-            if name != resolved:
-                run(handlers[name], msg)
-                others += 1
-                continue
-            total += 1
-            sides = {"live": run(live, msg), "candidate": run(candidate, msg)}
-            for side, outcome in sides.items():
-                for write in outcome.writes:
-                    outputs[side].setdefault(write.topic, []).append((at, write.message))
-            if not sides["live"].same_as(sides["candidate"]):
-                differing += 1
-                if len(first) < shown:
-                    first.append(Difference(at, msg, sides["live"], sides["candidate"]))
+    stopped = False
+    messages = bag_module().bag_messages(path, {resolved, *handlers})
+    with _intercepted() as run, contextlib.closing(messages):  # the bag's reader closed at once, even on Ctrl-C
+        try:
+            for name, stamp, msg in messages:
+                start = stamp if start is None else start
+                at = (stamp - start) / 1e9
+                if name != resolved:
+                    run(handlers[name], msg)
+                    others += 1
+                    continue
+                sides = {"live": run(live, msg), "candidate": run(candidate, msg)}
+                total += 1  # counted once both sides ran: a message Ctrl-C cut in half is not half-counted
+                for side, outcome in sides.items():
+                    for write in outcome.writes:
+                        outputs[side].setdefault(write.topic, []).append((at, write.message))
+                if not sides["live"].same_as(sides["candidate"]):
+                    differing += 1
+                    if len(first) < shown:
+                        first.append(Difference(at, msg, sides["live"], sides["candidate"]))
+        except KeyboardInterrupt:
+            stopped = True  # what ran until now is the answer
+    if stopped and total == 0:
+        raise IpyrosError(f"%try stopped by Ctrl-C before any message of {resolved} was tried")
     if total == 0:
         raise IpyrosError(f"the bag {path} holds no message of {resolved}; %bag info {path} lists what it holds")
     return BagTrial(node.name, resolved, str(path), _name(live), _name(candidate), total, differing, outputs,
-                    tuple(first), others, time.perf_counter() - began)
+                    tuple(first), others, time.perf_counter() - began, stopped)
 
 
 # -- capturing one thread's prints and writes -----------------------------------------------
@@ -311,7 +320,8 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
         try:
             with streams.into(buffer):
                 handler(copy_message(msg))
-        except Exception as exc:  # shown in the table: it is what the handler would do live
+        except (Exception, SystemExit) as exc:  # shown in the table: what the handler would do live (its slot catches
+            # a SystemExit too); Ctrl-C is the person's, and stops the try
             error = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         finally:
             elapsed = (time.perf_counter() - start) * 1e3

@@ -58,3 +58,28 @@ def test_try_over_a_bag_plots_a_field_of_both_sides_over_bag_time(ip, session, c
     assert "151" in chart and "bag time (s)" in chart  # the top of the range: 3 x 50, and scale_v2 adds 1
     assert "--plot draws a try over a bag" in str(error_of(ip, "%try tb /tb/in scale_v2 --plot data"))
     assert "not a number" in str(error_of(ip, f"%try tb /tb/in scale_v2 --bag {bag} --plot /tb/out"))
+
+
+def test_ctrl_c_stops_a_rehearsal_in_one_line_and_gives_what_ran_a_systemexit_is_the_candidates_error(
+        ip, session, capsys, tmp_path):
+    """Ctrl-C (a real SIGINT) at the 20th message: no traceback, the trial of the first 19 messages, said to be
+    stopped. A candidate raising SystemExit is its error, counted like any other (it escaped %try before)."""
+    ok(ip, BUILD)
+    bag = tmp_path / ("stop.bag" if session.backend.name == "ROS 1" else "stop")
+    record(ip, bag)
+    ok(ip, "import os, signal\n"
+           "def impatient(msg):\n"
+           "    if msg.data == 20:\n        os.kill(os.getpid(), signal.SIGINT)\n"
+           "    scale(msg)\n"
+           "def leaves(msg):\n    raise SystemExit(3)")
+    capsys.readouterr()
+    ok(ip, f"r = %try tb /tb/in impatient --bag {bag}")
+    r = ip.user_ns["r"]
+    assert r.stopped and 19 <= r.total < 50 and r.differing == 0, (r.total, r.differing)
+    out = capsys.readouterr()
+    assert "KeyboardInterrupt" not in out.out + out.err
+    assert "stopped by Ctrl-C, the rest of the bag not tried" in str(r)
+    ok(ip, f"r = %try tb /tb/in leaves --bag {bag}")
+    r = ip.user_ns["r"]
+    assert (r.total, r.differing, r.stopped) == (50, 50, False)
+    assert r.first[0].candidate.error == "SystemExit: 3"
