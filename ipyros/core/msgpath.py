@@ -73,6 +73,7 @@ _OPS: dict[str, Callable[[Any, Any], bool]] = {"==": operator.eq, "!=": operator
 _NAME = re.compile(r"[A-Za-z_]\w*")
 _PRIMITIVES = {"bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
                "float32", "float64", "string", "wstring"}
+_NUMBERS = _PRIMITIVES - {"string", "wstring", "bool"}
 _TOPIC = re.compile(r"/[A-Za-z0-9_/~]*")
 _FILTER = re.compile(r"\s*([A-Za-z_][\w.]*)\s*(==|!=|<=|>=|<|>)\s*(.+?)\s*$")
 
@@ -101,6 +102,21 @@ class MessagePath:
         """Say at once, in one line, if the path cannot select anything in messages of ``cls``: a field its
         type lacks (and which fields there are), an index into what is no array, a field of an array not
         indexed. What cannot be told from the type (a message not importable here) is left to the messages."""
+        self._walk(cls)
+
+    def check_number(self, cls: Any, doing: str = "a plot draws") -> None:
+        """:meth:`check`, and then that the path ends on a number, one value each: a string, a bool, a message or a
+        whole array is refused in one line. Types not known here are left to the messages."""
+        at = self._walk(cls)
+        if at is None:
+            return
+        what = f"an array of {at.kind}" if at.array else f"a {at.kind}" if at.cls is None else f"a {at.kind} message"
+        if at.array or at.kind not in _NUMBERS:
+            fix = "index it ([0]) or slice it ([:])" if at.array and at.kind in _NUMBERS else "name a number field"
+            raise MessagePathError(f"{self.text}: {what}, not a number: {doing} numbers; {fix}")
+
+    def _walk(self, cls: Any) -> Optional["_Typed"]:
+        """Where the path ends in messages of ``cls``, checked on the way; None if a type on it is not known."""
         at = _Typed(self, cls, msgtypes.type_name(cls) or getattr(cls, "__name__", "message"))
         for step in self.steps:
             if isinstance(step, (Index, Slice)):
@@ -108,15 +124,17 @@ class MessagePath:
                     raise MessagePathError(f"{self.text}: {step} needs an array, and this is a {at.kind}")
                 at = _Typed(self, at.cls, at.kind)  # each element, one value each
             elif isinstance(step, Filter):
-                inner = at
+                inner: Optional[_Typed] = at
                 for name in step.path:  # read, not stepped into: the value filtered keeps its type
-                    inner = inner.field(name)
+                    inner = inner.field(name) if inner is not None else None
                     if inner is None:
-                        return
+                        return None
             else:
-                at = at.field(step.name)
-                if at is None:
-                    return
+                found = at.field(step.name)
+                if found is None:
+                    return None
+                at = found
+        return at
 
 
 @dataclass(frozen=True)
@@ -261,7 +279,8 @@ def _field(value: Any, name: str, path: MessagePath) -> Any:
 
 
 def _sequence(value: Any, path: MessagePath, step: Step) -> Any:
-    if isinstance(value, (str, bytes)) or not hasattr(value, "__getitem__") or not hasattr(value, "__len__"):
+    # a uint8[] or char[] is bytes on ROS 1 (genpy), a list or an array on ROS 2: indexed alike, to ints
+    if isinstance(value, str) or not hasattr(value, "__getitem__") or not hasattr(value, "__len__"):
         kind = msgtypes.type_name(value) or type(value).__name__
         raise MessagePathError(f"{path.text}: {step} needs an array, and this is a {kind}")
     return value

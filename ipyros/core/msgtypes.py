@@ -124,6 +124,15 @@ def resolve_message(spec: Any) -> tuple[str, type]:
     return _resolve(spec, "msg")
 
 
+def message_class_or_none(type_name: str) -> Any:
+    """The message class of ``type_name``, or None if this Python cannot import it (a check of a path into its
+    messages is then left to the messages themselves)."""
+    try:
+        return resolve_message(type_name)[1]
+    except MessageTypeError:
+        return None
+
+
 def resolve_service(spec: Any) -> tuple[str, type]:
     """Return ``(type_name, class)`` for a service class or a ``"pkg/Type"`` string."""
     return _resolve(spec, "srv")

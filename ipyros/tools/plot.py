@@ -22,6 +22,7 @@ import time
 from collections import deque
 from typing import Any, Mapping, Optional, Sequence
 
+from ..core import msgpath, msgtypes
 from ..core.errors import IpyrosError
 from ..core.names import tool_name
 from ..core.text import counted
@@ -47,6 +48,10 @@ class Plot:
         if xy and (len(fields) != 2 or len(streams) > 1):
             raise IpyrosError(f"--xy draws one field against another of one topic: give two fields, not "
                               f"{sum(len(f) for _, f in streams.values())}")
+        for name, (kind, paths) in streams.items():  # a field its type lacks, or no number: said before any message
+            cls = msgtypes.message_class_or_none(kind)
+            for path in paths:
+                msgpath.parse(f"{name}.{path}").check_number(cls)
         self.topic, self.type_name, self.xy, self.window = topic, type_name, xy, window
         self.topics = list(streams)
         self._fields = {t: f for t, (_, f) in streams.items()}

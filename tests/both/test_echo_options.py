@@ -64,3 +64,16 @@ def test_echo_a_message_path_prints_exactly_the_values_it_selects(ip, capsys):
     assert "geometry_msgs/Pose has no field 'place' (it has position, orientation)" in str(error), error
     error = error_of(ip, "%echo /echo_paths/poses.poses.position -n 1")  # told from the type, before a message
     assert "geometry_msgs/Pose[] is an array: index it or slice it ([0], [:]) before .position" in str(error), error
+
+
+def test_echo_a_message_path_indexes_and_slices_a_uint8_array(ip, capsys):
+    """/image.data[0:4]: a uint8[] is bytes on ROS 1 (it could not be indexed there) and an array on ROS 2."""
+    ok(ip, "from sensor_msgs.msg import Image\n"
+           "pixels = rosNode('echo_pixels').new.publish('/echo_pixels/image', msgType=Image).create()\n"
+           "pixels.timer(0.05, lambda: pixels.write('/echo_pixels/image', Image(height=1, width=5, step=5, "
+           "encoding='mono8', data=bytes([7, 8, 9, 250, 11]))))")
+    capsys.readouterr()
+    ok(ip, "%echo /echo_pixels/image.data[0:4] -n 1")
+    assert "data[0:4]:\n- 7\n- 8\n- 9\n- 250\n" in capsys.readouterr().out
+    ok(ip, "%echo /echo_pixels/image.data[-1] -n 1")
+    assert "data[-1]: 11\n" in capsys.readouterr().out

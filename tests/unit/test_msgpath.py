@@ -113,3 +113,32 @@ def test_a_path_reads_messages_as_rosbags_gives_them_dataclasses():
         points: list
 
     assert parse("/p.points[:]{x>0}.y").values(Poses([Vec(1.0, 2.0), Vec(-1.0, 3.0)])) == [2.0]
+
+
+def test_a_uint8_array_held_as_bytes_is_indexed_and_sliced_to_numbers():
+    """ROS 1's genpy gives uint8[] as bytes (ROS 2 a list or an array): /image.data[0:4] is four numbers on both."""
+    msg = Sample(raw=bytes([7, 8, 9, 250, 1]))
+    assert parse("/s.raw[0:4]").values(msg) == [7, 8, 9, 250]
+    assert parse("/s.raw[-1]").values(msg) == [1]
+    parse("/s.raw[0]").check_number(Sample)
+    with pytest.raises(MessagePathError, match=r"/s.label\[0\]: \[0\] needs an array, and this is a str"):
+        parse("/s.label[0]").values(msg)
+
+
+@pytest.mark.parametrize("text, says", [
+    ("/s.label", "/s.label: a string, not a number: a plot draws numbers; name a number field"),
+    ("/s.on", "/s.on: a bool, not a number"),
+    ("/s.gains", "/s.gains: an array of float64, not a number: a plot draws numbers; index it ([0]) or slice it"),
+    ("/s.points[0]", "/s.points[0]: a unit_msgs/Vector3 message, not a number"),
+    ("/s.nothing", "/s.nothing: unit_msgs/Sample has no field 'nothing' (it has label, on, count"),
+])
+def test_a_path_to_plot_must_end_on_a_number(text, says):
+    with pytest.raises(MessagePathError) as caught:
+        parse(text).check_number(Sample)
+    assert str(caught.value).startswith(says), str(caught.value)
+
+
+def test_numbers_to_plot_pass_and_unknown_types_are_left_to_the_messages():
+    for text in ("/s.count", "/s.level", "/s.gains[1]", "/s.points[:].x", "/s.fixed[2]"):
+        parse(text).check_number(Sample)
+    parse("/s.anything.at_all").check_number(None)

@@ -18,7 +18,6 @@ from rich.syntax import Syntax
 from rich.table import Table
 
 from ...core import msgpath, msgtypes
-from ...core.errors import IpyrosError
 from ...core.msgbuild import build_message, fields_of, flat_fields, parse_data, to_yaml
 from ...tools.probe import Echo, measure_rates
 from ..api import (
@@ -79,14 +78,6 @@ def _message_path(snap: Any, text: str) -> Optional[msgpath.MessagePath]:
     if slash_field:
         path = msgpath.parse(head + "." + slash_field + text[len(path.topic):])
     return msgpath.MessagePath(path.text, global_topic(path.topic), path.steps)
-
-
-def _class_or_none(type_name: str) -> Any:
-    """The message class of ``type_name``, or None if this Python cannot import it (nothing to check then)."""
-    try:
-        return msgtypes.resolve_message(type_name)[1]
-    except IpyrosError:
-        return None
 
 
 def _path_yaml(field: str, values: list[Any]) -> str:
@@ -197,7 +188,7 @@ class TopicMagics(ExtensionMagics):
         if type_name is None:  # Ctrl-C while waiting for it
             return seen
         if path is not None:  # a field its type lacks: said now, not after the first message
-            path.check(_class_or_none(type_name))
+            path.check(msgtypes.message_class_or_none(type_name))
         if args.csv and args.table:
             raise UsageError("give --csv or --table, not both (without either: YAML, which %pub takes back)")
         printer = self.ext.printer
