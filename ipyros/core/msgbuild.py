@@ -35,6 +35,8 @@ from .userdata import literal_or_yaml
 _INT_BITS = {"int8": 8, "int16": 16, "int32": 32, "int64": 64, "byte": 8}
 _UINT_BITS = {"uint8": 8, "uint16": 16, "uint32": 32, "uint64": 64, "char": 8}
 _FLOATS = {"float32", "float64"}
+#: The largest finite float32: past it the wire would carry an infinity (rclpy) or the send fails (genpy).
+FLOAT32_MAX = 3.4028234663852886e38
 _ARRAY = re.compile(r"^(?P<base>[^\[\]]+)\[(?P<size>\d*)\]$")
 
 
@@ -308,6 +310,8 @@ class _Builder:
             if not self.nonfinite and not math.isfinite(value):
                 raise _FieldError(path, f"{value} is not a number a robot can use; give a finite number "
                                         "(or, if it is meant, e.g. a Range's inf, allow it: %pub --nonfinite)")
+            if field_type == "float32" and not _float32_fits(value):
+                raise _FieldError(path, _float32_range(value))
             return float(value)
         if field_type == "bool":
             if not isinstance(value, bool):
@@ -466,7 +470,7 @@ def _checker(cls: type) -> Any:
     if found is not None:
         return found
     fields, types = field_types(cls)
-    scope: dict[str, Any] = {"_conform": _conform, "_fix": _fix, "_ok": _int_fits}
+    scope: dict[str, Any] = {"_conform": _conform, "_fix": _fix, "_ok": _int_fits, "_f32": _float32_fits}
     lines = ["def check(m, p):"]
     for i, (name, field_type) in enumerate(zip(fields, types)):
         if not name.isidentifier():
@@ -476,7 +480,8 @@ def _checker(cls: type) -> Any:
             continue
         scope[f"t{i}"] = field_type
         if kind == "float":
-            lines.append(f"    if type(m.{name}) is not float: m.{name} = _fix(t{i}, m.{name}, p + {name!r})")
+            extra = "" if field_type != "float32" else f" or not _f32(m.{name})"
+            lines.append(f"    if type(m.{name}) is not float{extra}: m.{name} = _fix(t{i}, m.{name}, p + {name!r})")
         elif kind in ("int", "bool", "string"):
             want = {"int": "int", "bool": "bool", "string": "str"}[kind]
             extra = "" if kind != "int" else f" or not _ok(t{i}, m.{name})"
@@ -531,6 +536,15 @@ def _integer_range(field_type: str) -> tuple[int, int]:
     return -half, half - 1
 
 
+def _float32_fits(value: float) -> bool:
+    """Whether ``value`` is a float32 as it is: an infinity or a NaN is (what a guard makes of it is the guard's)."""
+    return -FLOAT32_MAX <= value <= FLOAT32_MAX or not math.isfinite(value)
+
+
+def _float32_range(value: float) -> str:
+    return f"{value:g} is out of range for float32 (-{FLOAT32_MAX:.6g}..{FLOAT32_MAX:.6g})"
+
+
 def _int_fits(field_type: str, value: int) -> bool:
     low, high = _integer_range(field_type)
     return low <= value <= high
@@ -552,7 +566,10 @@ def _fix(field_type: str, value: Any, path: str) -> Any:
         if isinstance(value, (bool, str, bytes)) or not isinstance(value, (int, float)) and \
                 not hasattr(value, "__float__"):
             raise _refuse(path, f"a number ({field_type})", value)
-        return float(value)  # an int, or numpy's float32
+        value = float(value)  # an int, or numpy's float32
+        if field_type == "float32" and not _float32_fits(value):
+            raise MessageTypeError(f"{path}: {_float32_range(value)}; nothing was sent")
+        return value
     if kind == "int":
         if isinstance(value, (bool, float, str, bytes)) or not hasattr(value, "__index__"):
             raise _refuse(path, f"an integer ({field_type})", value)

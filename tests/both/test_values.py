@@ -12,7 +12,7 @@ import contextlib
 import pytest
 from geometry_msgs.msg import Twist, Vector3
 from shell import ok
-from std_msgs.msg import Int32, String
+from std_msgs.msg import Float32, Int32, String, UInt8
 from std_srvs.srv import SetBool
 from support import graph_knows, request_of, response_of, wait_for
 
@@ -61,6 +61,9 @@ def test_a_handler_that_builds_a_message_with_an_int_sends_the_float(make_node, 
     (Int32(data=2**40), "data", "out of range for int32"),
     (Int32(data=1.5), "data", "an integer (int32)"),
     (String(data=5), "data", "a string"),
+    # the wire would carry inf on ROS 2 (rclpy converts without a word)
+    (Float32(data=1e40), "data", "1e+40 is out of range for float32"),
+    (UInt8(data=300), "data", "300 is out of range for uint8 (0..255)"),
 ])
 def test_a_value_that_does_not_fit_is_refused_naming_the_field(make_node, msg, field, expected):
     cls = type(msg)
@@ -102,3 +105,11 @@ def test_pub_converts_an_int_for_a_float_field(ip, peer):  # noqa: F811 - the ip
     graph_knows("/values/pub")
     ok(ip, "%pub /values/pub geometry_msgs/Twist {linear: {x: 1}}")
     assert listener.wait_line("heard") == "heard 1.0"
+
+
+def test_pub_refuses_a_float32_past_its_range_in_one_line(ip):
+    """%pub /t std_msgs/Float32 'data: 1e40': ROS 2 would send inf without a word; refused before anything is sent."""
+    from shell import error_of
+
+    error = error_of(ip, "%pub /values/f32 std_msgs/Float32 {data: 1.0e+40}")
+    assert "data: 1e+40 is out of range for float32 (-3.40282e+38..3.40282e+38)" in one_line(error), str(error)
