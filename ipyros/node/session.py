@@ -10,6 +10,7 @@ start and watch) is the backend's: the session reads the same on both.
 from __future__ import annotations
 
 import atexit
+import ctypes
 import difflib
 import os
 import signal
@@ -92,6 +93,8 @@ class Session:
         #: ``nd.reuse.publish.``; empty without one.
         self.known_graph: Callable[[], GraphSnapshot] = lambda: EMPTY
         self._lock = threading.RLock()
+        self._closing: Optional[threading.Thread] = None  # the thread that closes the session, once one does
+        self._closed = threading.Event()  # set once it closed
         self.closed = False
         self._closes_at_exit = False
         self._guard_watch: Optional[Any] = None
@@ -217,11 +220,20 @@ class Session:
             stopping.join()
 
     def close(self) -> None:
-        """Stop every node and basenode, the ROS side of this process, and the master if ipyros started it."""
+        """Stop every node and basenode, the ROS side of this process, and the master if ipyros started it.
+
+        The session's lock is held only to mark it closed: a node's own ``create()`` or ``shutdown()``, going on in
+        another thread, takes the node's lock and then the session's, and a closing that held the session's while
+        waiting for the node's would wait for ever (SIGTERM while a Ctrl-C'd ``create()`` stops its basenode). A
+        second caller waits until the first has closed it (the interpreter's exit after a terminating signal)."""
         with self._lock:
             if self.closed:
+                closing = self._closing
+                if closing is not None and closing is not threading.current_thread():
+                    self._closed.wait()
                 return
-            self.closed = True
+            self.closed, self._closing = True, threading.current_thread()
+        try:
             self.backend.closing()
             for stop in reversed(self._on_close):
                 try:
@@ -232,6 +244,8 @@ class Session:
             self.backend.close()
             if self._journal is not None:
                 self._journal.close()
+        finally:
+            self._closed.set()
 
 
 _current: Optional[Session] = None
@@ -287,14 +301,38 @@ def stop_on_termination() -> None:
             signal.signal(signum, _terminated)
 
 
-def _terminated(signum: int, frame: Any) -> None:
-    """Close the session (nodes unregistered, basenodes stopped with SIGINT), then die of ``signum``.
+#: How long the session may take to close once a terminating signal came, before it dies all the same (s).
+TERMINATION_DEADLINE = 10.0
+_terminating: list[threading.Thread] = []  # the closing thread, once a terminating signal came
 
-    The closing runs on a thread of its own with a deadline: the main thread, interrupted
-    here, may hold a lock the closing needs.
+
+def _terminated(signum: int, frame: Any) -> None:
+    """Close the session (nodes unregistered, basenodes stopped with SIGINT) on a thread of its own, which then makes
+    the process die of ``signum``; a second terminating signal meanwhile dies at once.
+
+    The main thread is not held here: it may be inside ipyros holding a lock the closing needs (a ``create()``
+    interrupted by Ctrl-C, stopping its basenode), and it lets go of it only by going on. The closing waits for
+    it, and for nothing longer than :data:`TERMINATION_DEADLINE`.
     """
-    closing = threading.Thread(target=_close_at_exit, name="ipyros-terminated", daemon=True)
+    if _terminating:
+        _die(signum)
+    closing = threading.Thread(target=_close_then_die, args=(signum,), name="ipyros-terminated", daemon=True)
+    _terminating.append(closing)
     closing.start()
-    closing.join(10.0)
-    signal.signal(signum, signal.SIG_DFL)
+
+
+def _close_then_die(signum: int) -> None:
+    deadline = threading.Timer(TERMINATION_DEADLINE, _die, args=(signum,))
+    deadline.daemon = True
+    deadline.start()
+    try:
+        _close_at_exit()
+    finally:
+        _die(signum)
+
+
+def _die(signum: int) -> None:
+    """End the process of ``signum``, as it would have ended without ipyros (from any thread: Python's signal
+    module sets handlers from the main thread only, so the default action is set through libc)."""
+    ctypes.CDLL(None).signal(signum, ctypes.c_void_p(0))  # SIG_DFL
     os.kill(os.getpid(), signum)

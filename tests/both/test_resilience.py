@@ -266,3 +266,71 @@ def test_ctrl_c_while_create_waits_for_a_basenode_ends_it_in_one_line_with_nothi
     assert caught.value.__cause__ is None and caught.value.__suppress_context__, "no traceback from inside the wait"
     assert not w.created and w.base is None and w.model() == declared
     wait_for(lambda: children() <= before, what="the basenode to be stopped")
+
+
+SLOW_TO_STOP = """
+import pathlib, signal, sys, time
+def stop(*_):
+    pathlib.Path(sys.argv[1]).write_text("asked")
+    time.sleep(1.5)  # a driver parking its motors before it exits
+    sys.exit(0)
+signal.signal(signal.SIGINT, stop)
+print("up", flush=True)
+time.sleep(600)
+"""
+
+INTERRUPTED_SESSION = """
+import _thread, threading, time
+from std_msgs.msg import UInt32
+from ipyros import rosNode
+from ipyros.node import session, wrapping
+wrapping.SLOW_START_NOTICE = 0.2
+session.current().notify = lambda text: (print(text, flush=True),
+                                         "not in the graph yet" in text and _thread.interrupt_main())
+w = rosNode("terminated_wrap")
+w.baseNode({base!r}, name="terminated_base", args=[{marker!r}])
+w.reuse.publish("level", type=UInt32)
+try:
+    w.create()
+except Exception as error:
+    print("CREATE", error, flush=True)
+while True:
+    time.sleep(1)
+"""
+
+
+def test_sigterm_while_an_interrupted_create_stops_its_basenode_ends_the_session_at_once(session, tmp_path):
+    """Ctrl-C during create(), then SIGTERM while create() is stopping the basenode (which takes 1.5 s to park): the
+    session dies of the signal once the basenode stopped, not after the 10 s deadline of a lock held by the
+    interrupted main thread; nothing is left running."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    from helpers import pid_alive
+
+    marker = tmp_path / "asked"
+    base = tmp_path / "slow_to_stop.py"
+    base.write_text(SLOW_TO_STOP)
+    script = tmp_path / "session.py"
+    script.write_text(INTERRUPTED_SESSION.format(base=str(base), marker=str(marker)))
+    proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        wait_for(marker.exists, timeout=60, what="create() interrupted, stopping the basenode")
+        pids = [int(p) for task in os.listdir(f"/proc/{proc.pid}/task")  # the basenode: a child of the session
+                for p in open(f"/proc/{proc.pid}/task/{task}/children").read().split()]
+        assert pids, "the basenode runs"
+        terminated = time.monotonic()
+        proc.send_signal(signal.SIGTERM)
+        code = proc.wait(30)
+        took = time.monotonic() - terminated
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        out = proc.stdout.read()
+        proc.stdout.close()
+    assert code == -signal.SIGTERM, out
+    assert took < 6, f"died {took:.1f} s after SIGTERM: {out}"
+    assert not any(pid_alive(pid) for pid in pids), "the basenode was stopped"
