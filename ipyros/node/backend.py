@@ -132,7 +132,8 @@ class Backend(Protocol):
     def sentinel_command(self) -> list[str]: ...  # how a guard's own process is run (argv, before its two fds)
     def bag_time(self, on: bool) -> str: ...  # run on a bag player's /clock (or not); what applies, one line
     def now(self, host: str) -> float: ...  # a DSL node's ROS time (s): a bag's while its clock runs
-    def open_host(self, host: str, parameters: bool = True) -> None: ...  # parameters: it has some now
+    # parameters: it has some now; complain: told of a namesake that shows up as it starts (ROS 2)
+    def open_host(self, host: str, parameters: bool = True, complain: Optional[Complain] = None) -> None: ...
     def close_host(self, host: str) -> None: ...
     def closing_hosts(self, hosts: list[str]) -> None: ...  # these are shut down next: stop their callbacks at once
 

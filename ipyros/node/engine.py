@@ -267,7 +267,7 @@ class NodeEngine:
             session.add(self)
             try:
                 session.start_process_node(self.fullname)
-                session.backend.open_host(self.fullname, parameters=bool(self._model.params))
+                session.backend.open_host(self.fullname, parameters=bool(self._model.params), complain=self.complain)
                 session.require_graph(f"{self.called}.create()")
                 check_live_types(self, self._model.topics)
                 check_estop_topics(self, self._model.guards)

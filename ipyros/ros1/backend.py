@@ -214,8 +214,8 @@ class Ros1:
         clock = self._clock
         return clock.ns / 1e9 if clock is not None else runtime.ros_time()
 
-    def open_host(self, host: str, parameters: bool = True) -> None:
-        """Nothing to do: the DSL node's endpoints live in the process node."""
+    def open_host(self, host: str, parameters: bool = True, complain: Any = None) -> None:
+        """Nothing to do: the DSL node's endpoints live in the process node (a namesake: the master ends one)."""
 
     def close_host(self, host: str) -> None:
         """Nothing to do: the process node stays for the session's other nodes."""

@@ -151,11 +151,12 @@ class Ros2:
     def now(self, host: str) -> float:
         return self.process.now(host)
 
-    def open_host(self, host: str, parameters: bool = True) -> None:
+    def open_host(self, host: str, parameters: bool = True, complain: Optional[Complain] = None) -> None:
         if any(token[:1].isdigit() for token in host.split("/")):  # before rclpy, which warns as it refuses
             raise DeclarationError(f"ROS 2 refuses the node {host}: a part of a ROS 2 name may not start with a "
                                    "digit; ROS 2 names are letters, digits and _, each part starting with a letter")
-        if host not in self.process.hosted:  # a name of ours lingers in the graph for a while after shutdown
+        fresh = host not in self.process.hosted  # a name of ours lingers in the graph for a while after shutdown
+        if fresh:
             self.refuse_taken_name(host)
         try:
             self.process.host(host, parameters)
@@ -163,6 +164,8 @@ class Ros2:
             # may not start with a digit), which are stricter than ROS 1's
             raise DeclarationError(f"ROS 2 refuses the node {host}: {first_line(error)}; ROS 2 names are letters, "
                                    "digits and _, each part starting with a letter") from None
+        if fresh and complain is not None:  # a namesake started a moment ago is not in the graph yet
+            self.process.watch_name(host, complain)
 
     def close_host(self, host: str) -> None:
         self.process.close_host(host)

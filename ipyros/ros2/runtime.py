@@ -222,6 +222,15 @@ class ProcessNode:
                     _use_sim_time(node, True)
             return node
 
+    #: How long a new node's name is watched for a namesake that discovery had not shown yet (s).
+    NAME_SETTLE = 3.0
+
+    def watch_name(self, fullname: str, complain: Complain, seconds: float = NAME_SETTLE) -> None:
+        """Tell ``complain`` once if, within ``seconds`` of this node's start, the graph shows a second node named
+        ``fullname``: another process started one a moment before, which discovery had not shown when the name
+        was checked (ROS 2 lets two nodes share a name; tools then mix them up)."""
+        self.watch(_NameWatch(self, fullname, complain, time.monotonic() + seconds).look)
+
     def use_sim_time(self, on: bool) -> None:
         """Run every node of the session on /clock (``on``: its timers and its now()), or on the system clock."""
         with self._lock:
@@ -824,6 +833,26 @@ class ServiceServer:
 #: topic of its own that keeps no order with the result's service, may still be on its way, and an rclpy client
 #: drops feedback that comes after the result. The session's action relay and an exported one both wait it.
 RESULT_SETTLE = 0.02
+
+
+class _NameWatch:
+    """Looks, for a while after a node started, for a second node of its name in the graph (see
+    :meth:`ProcessNode.watch_name`); ended by the node's shutdown as the relays' watches are (``_node``)."""
+
+    def __init__(self, process: ProcessNode, fullname: str, complain: Complain, until: float) -> None:
+        self._process, self.fullname, self._complain, self._until = process, fullname, complain, until
+        self._node = process.host(fullname)
+        namespace, base = fullname.rsplit("/", 1)
+        self._key = (base, namespace or "/")
+
+    def look(self) -> None:
+        if self._process.caller().get_node_names_and_namespaces().count(self._key) > 1:
+            self._process.unwatch(self.look)
+            self._complain(f"a second node named {self.fullname} showed up in the ROS 2 graph (ROS_DOMAIN_ID "
+                           f"{domain_id()}) as this one started: two nodes now share the name, and tools mix them up "
+                           "(parameters, ros2 node info); shut this one down and create it under another name")
+        elif time.monotonic() > self._until:
+            self._process.unwatch(self.look)
 
 
 class ServiceRelay:
