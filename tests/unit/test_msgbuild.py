@@ -141,3 +141,24 @@ def test_a_message_copy_is_deep_and_equal_on_both_shapes():
     pose = Pose()
     assert copy_message(pose) == pose and copy_message(pose) is not pose
     assert copy_message([1, 2]) == [1, 2] and copy_message(3) == 3
+
+
+def test_a_message_copy_shares_nothing_mutable_and_copies_what_its_fields_do_not_declare():
+    """The copier made for a class (a straight-line copy of each field): arrays are new lists, nested messages new
+    objects, a value of another kind than declared (a list in a number field, a message of another class in a
+    nested field, as a bag's own classes are) copied the general way."""
+    from unit2_msgs.msg import Pose
+    from unit_msgs.msg import Sample, Vector3
+
+    from ipyros.core.msgbuild import copy_message
+
+    odd = Sample(label="s", gains=(1.0, 2.0), fixed=[1.0, 2.0, 3.0], raw=b"\x01\x02", names=["a"],
+                 points=[Vector3(x=1.0), Pose()])  # a message of another class in the list
+    odd.count = [1, [2]]  # not what the field declares
+    copied = copy_message(odd)
+    assert copied == odd
+    assert copied.fixed is not odd.fixed and copied.names is not odd.names and copied.points is not odd.points
+    assert copied.points[0] is not odd.points[0] and copied.points[1] is not odd.points[1]
+    assert copied.count == [1, [2]] and copied.count[1] is not odd.count[1]
+    copied.fixed[0], copied.names[0], copied.points[1].position.x = 7.0, "b", 7.0
+    assert (odd.fixed[0], odd.names[0], odd.points[1].position.x) == (1.0, "a", 0.0)
