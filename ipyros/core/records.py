@@ -15,7 +15,7 @@ from typing import Any, Iterator, Optional, Union
 
 from .tables import Cell, Column, TextTable
 
-__all__ = ["BagInfo", "BagTopic", "History", "Interface", "NodeStatus", "Rows", "StatusRow", "Versions"]
+__all__ = ["BagInfo", "BagTopic", "History", "Interface", "NodeStatus", "Rows", "StatusRow", "Versions", "short_repr"]
 
 
 class Rows:
@@ -37,6 +37,18 @@ class Rows:
 
     def __str__(self) -> str:
         return self.table().text()
+
+    def __repr__(self) -> str:
+        """Short, and naming what it is: its table's title (the table itself is ``str()``, or the prompt's view)."""
+        return short_repr(self, self.table().title)
+
+
+def short_repr(record: Any, summary: str, limit: int = 100) -> str:
+    """``<Kind: summary>`` on one line, cut to about ``limit`` characters: a record's repr at the prompt."""
+    summary = " ".join(summary.split())
+    if len(summary) > limit:
+        summary = summary[: limit - 1] + "…"
+    return f"<{type(record).__name__}: {summary}>"
 
 
 @dataclass(frozen=True)
@@ -61,7 +73,7 @@ class StatusRow:
     dropped: int = 0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class NodeStatus(Rows):
     """Per handler and per topic sent on: calls, rate, handler time, exceptions, drops."""
 
@@ -105,7 +117,7 @@ class NodeStatus(Rows):
         return TextTable(title, columns, tuple(rows))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class History(Rows):
     """A node's changes, oldest first (:class:`ipyros.core.journal.Change`)."""
 
@@ -120,7 +132,7 @@ class History(Rows):
                                for number, change in enumerate(self.rows, 1)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Versions(Rows):
     """The versions of one handler (:class:`ipyros.core.versions.HandlerVersion`), oldest first."""
 
@@ -153,7 +165,7 @@ class BagTopic:
     count: int
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class BagInfo(Rows):
     """What a bag holds, as ``rosbag info`` / ``ros2 bag info`` say it: its topics, start, end and length.
 

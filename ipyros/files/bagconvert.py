@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Sequence
 
 from ..core.errors import DeclarationError, first_line
+from ..core.records import short_repr
 
 __all__ = ["Converted", "convert"]
 
@@ -25,7 +26,7 @@ __all__ = ["Converted", "convert"]
 Keep = Callable[[Any, str, float], bool]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Converted:
     """What a conversion wrote: how many messages of how many read, of which topics."""
 
@@ -38,6 +39,9 @@ class Converted:
     def __str__(self) -> str:
         return (f"{self.target}: {self.kept} of {self.read} message{'s' * (self.read != 1)} of "
                 f"{', '.join(self.topics) or 'no topic'} from {self.source}")
+
+    def __repr__(self) -> str:
+        return short_repr(self, str(self), limit=200)
 
 
 def _rosbags() -> Any:

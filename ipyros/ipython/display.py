@@ -327,11 +327,24 @@ def register(shell: Any) -> list[tuple[Any, type, Any]]:
     takes to put things back as they were."""
     formatters = shell.display_formatter.formatters
     done = []
-    for cls in RENDERERS:
+    for cls in _with_subclasses(RENDERERS):
         for mime, show in (("text/plain", _pretty), ("text/html", render_html)):
             formatter = formatters[mime]
             done.append((formatter, cls, formatter.for_type(cls, show)))
     return done
+
+
+def _with_subclasses(classes: Any) -> list[type]:
+    """Each class and all its subclasses: IPython's pretty printer takes a subclass's own ``__repr__`` (a dataclass
+    has one) before a printer registered for its base, so each record class is registered by name."""
+    found: list[type] = []
+    todo = list(classes)
+    while todo:
+        cls = todo.pop(0)
+        if cls not in found:
+            found.append(cls)
+            todo += cls.__subclasses__()
+    return found
 
 
 def unregister(done: list[tuple[Any, type, Any]]) -> None:

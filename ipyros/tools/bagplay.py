@@ -13,6 +13,7 @@ import time
 from dataclasses import dataclass
 
 from ..core.errors import IpyrosError, NodeStateError, NotDeclaredError
+from ..core.records import short_repr
 from ..dsl import engine_of, rosNode
 from ..processes.playback import parse_state
 
@@ -24,7 +25,7 @@ CONTROLS = ("pause", "resume", "step", "seek", "rate", "loop", "state")
 _ids = itertools.count(1)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class PlayerState:
     """Where a bag's playing stands: bag time from its start (s), paused or not, rate, looping, messages sent."""
 
@@ -40,6 +41,9 @@ class PlayerState:
         return (f"{self.node}'s bag: at {self.at:.3f} of {self.length:.3f} s, "
                 f"{'paused' if self.paused else 'playing'} at rate {self.rate:g}{', looping' if self.loop else ''}; "
                 f"{self.sent} message{'s' * (self.sent != 1)} sent")
+
+    def __repr__(self) -> str:
+        return short_repr(self, str(self), limit=200)
 
 
 def control(node: rosNode, text: str, timeout: float = 5.0) -> PlayerState:

@@ -38,6 +38,7 @@ from ..core import msgpath, msgtypes, plan as planning, streams
 from ..core.errors import IpyrosError, NotDeclaredError
 from ..core.msgbuild import copy_message, flow_yaml
 from ..core.slots import call_arity
+from ..core.records import short_repr
 from ..core.tables import Column, TextTable
 from ..dsl import engine_of, rosNode
 from ..node.engine import NodeEngine
@@ -146,7 +147,7 @@ class Difference:
     candidate: Outcome
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class BagTrial:
     """The live handler and a candidate over a whole bag: what each sent, and where they differ.
 
@@ -185,6 +186,9 @@ class BagTrial:
 
     def __str__(self) -> str:
         return self.table().text()
+
+    def __repr__(self) -> str:
+        return short_repr(self, self.table().title)
 
     def series(self, field: str) -> tuple[str, list[tuple[str, list[float], list[float]]]]:
         """One number field of what each side wrote, over bag time, for a chart: ``(what is drawn, [(side,

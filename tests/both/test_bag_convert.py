@@ -28,7 +28,9 @@ def test_record_with_a_filter_then_convert_across_formats_and_back(ip, session, 
     ok(ip, f"c = %bag convert {bag} {other} --filter 'm.data % 4 == 0 and topic == \"/bc/n\" and t >= 0'")
     kept = [x for x in recorded if x % 4 == 0]
     assert (ip.user_ns["c"].kept, ip.user_ns["c"].read) == (len(kept), len(recorded))
-    assert f"ipyros: {other}: {len(kept)} of {len(recorded)} messages of /bc/n" in capsys.readouterr().out
+    assert repr(ip.user_ns["c"]).startswith(f"<Converted: {other}: {len(kept)} of {len(recorded)} messages of /bc/n")
+    ok(ip, "c")  # shown once, as the cell's result: its sentence, not a dataclass's fields
+    assert capsys.readouterr().out.count(f"{len(kept)} of {len(recorded)} messages") == 1
     back = tmp_path / ("back.bag" if ros1 else "back")
     ok(ip, f"%bag convert {other} {back} --start 0")
     assert numbers(back) == kept

@@ -84,8 +84,11 @@ def test_bag_magic_drives_a_node_and_says_what_is_wrong_in_one_line(ip, session,
            "plain = rosNode('bp_plain')")
     wait_for(lambda: ip.user_ns["heard"], timeout=30, what="the bag's messages")
     capsys.readouterr()
+    ok(ip, "%bag pause bm")
+    out = capsys.readouterr().out  # shown once, as the cell's result
+    assert out.count("bp_magic's bag: at ") == 1 and out.count("paused") == 1 and "PlayerState(" not in out, out
     ok(ip, "state = %bag pause bm")
-    assert ip.user_ns["state"].paused and "bp_magic's bag: at " in capsys.readouterr().out
+    assert ip.user_ns["state"].paused
     assert "needs seconds from the bag's start, e.g. %bag seek bm 12.5" in str(error_of(ip, "%bag seek bm"))
     assert "bp_plain plays no bag; declare one first" in str(error_of(ip, "%bag pause plain"))
     ok(ip, "bm.shutdown()")

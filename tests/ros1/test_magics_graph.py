@@ -378,8 +378,10 @@ def test_record_a_live_topic_then_replay_it_through_two_handler_versions(ip, cap
         error_of(ip, f"%record {tmp_path / 'x'} /mg/rate --storage sqlite3"))
     assert "name it x.mcap" in str(error_of(ip, f"%record {tmp_path / 'x'} /mg/rate --storage mcap"))
     capsys.readouterr()
+    ok(ip, f"%bag info {bag}")  # shown once, as the cell's result
     ok(ip, f"info = %bag info {bag}")
     info, shown = ip.user_ns["info"], capsys.readouterr().out
+    assert shown.count("/mg/rate") == 1 and "BagInfo(" not in shown, shown
     assert (info.storage, [(r.topic, r.type, r.count) for r in info.rows]) == \
         ("bag", [("/mg/rate", "std_msgs/UInt32", ip.user_ns["rec"].count)])
     assert 0.5 < info.duration < 1.5 and "/mg/rate" in shown

@@ -226,8 +226,10 @@ def test_record_on_ros2_then_replay_the_bag_through_two_handler_versions(ip, cap
     assert [c.message_encoding for c in summary.channels.values()] == ["cdr"]
     assert list((tmp_path / "sqlite_bag").glob("*.db3"))
     capsys.readouterr()
+    _ok(ip, f"%bag info {bag}")  # shown once, as the cell's result
     _ok(ip, f"info = %bag info {bag}")
     info, shown = ip.user_ns["info"], capsys.readouterr().out
+    assert shown.count("/b2/counts") == 1 and "BagInfo(" not in shown, shown
     assert (info.storage, [(r.topic, r.type, r.count) for r in info.rows]) == \
         ("mcap", [("/b2/counts", "std_msgs/msg/UInt32", recorded)])
     assert 0.5 < info.duration < 1.5 and "/b2/counts" in shown and f"{recorded} messages" in shown

@@ -62,3 +62,15 @@ def test_a_bags_info_is_a_table_of_its_topics_with_the_storage_count_and_span():
     assert text[0].startswith("bag run (mcap): 10 messages, ") and text[0].endswith("(2.500 s)")
     assert text[3].split() == ["/a", "std_msgs/msg/String", "3"]
     assert str(BagInfo("empty", "bag", 0.0, 0.0, ())).splitlines()[0] == "bag empty (bag): 0 messages"
+
+
+def test_a_records_repr_is_short_and_names_what_it_is():
+    """At the prompt a record shows as its table; its repr (a list of them, a debugger) is one short line naming
+    its kind and its title, not a dataclass's every field (a BagInfo's was 300 characters)."""
+    from ipyros.core.records import BagInfo, BagTopic
+
+    info = BagInfo("/data/" + "long_name_" * 20 + ".bag", "bag", 0.0, 2.0,
+                   tuple(BagTopic(f"/t{i}", "std_msgs/UInt32", 5) for i in range(30)))
+    text = repr(info)
+    assert text.startswith("<BagInfo: bag /data/long_name_") and text.endswith("…>") and len(text) <= 115, text
+    assert "\n" not in text and "BagTopic" not in text

@@ -118,15 +118,12 @@ class RecordMagics(ExtensionMagics):
                 what, example = wants[args.action]
                 raise UsageError(f"%bag {args.action} {args.target} needs {what}, e.g. "
                                  f"%bag {args.action} {args.target} {example}")
-            state = control(find_node(self.shell, args.target), f"{args.action} {args.value}".strip())
-            print(f"ipyros: {state}")
-            return state
+            # shown once, as the cell's result (state = %bag pause nd keeps it)
+            return control(find_node(self.shell, args.target), f"{args.action} {args.value}".strip())
         path = Path(args.target).expanduser()
         if not path.exists():
             raise UsageError(f"no bag at {path}: give a bag file or a rosbag2 folder (%record writes one)")
-        info = bag_module().bag_info(path)
-        self.ext.printer.show(info)
-        return info
+        return bag_module().bag_info(path)  # shown once, as the cell's result (info = %bag info keeps it)
 
     def _convert(self, args: Any) -> Converted:
         if not args.value:
@@ -134,6 +131,5 @@ class RecordMagics(ExtensionMagics):
                              "rosbag2)")
         test = compile_filter(args.filter, self.shell.user_ns) if args.filter is not None else None
         keep = (lambda m, topic, t: test(m, topic=topic, t=t)) if test is not None else None
-        done = convert(Path(args.target), Path(args.value), args.topics, args.start, args.end, keep, args.storage)
-        print(f"ipyros: {done}")
-        return done
+        # shown once, as the cell's result (c = %bag convert ... keeps it)
+        return convert(Path(args.target), Path(args.value), args.topics, args.start, args.end, keep, args.storage)
