@@ -300,6 +300,9 @@ class Gate:
         self._said: set[str] = set()  # the kinds of acting said in this episode
         self._acted_at = -math.inf  # when the gate last acted on a message (its clock)
         self.figures = GuardFigures()
+        self._replacing, self._replaced_at = "", -math.inf  # why the last message was replaced, and when
+        self._passed_at = -math.inf  # when a command last passed
+        self.commands = 0  # messages that passed as commands (as they came, or clamped): not replaced, not dropped
 
     def check(self, msg: Any) -> Verdict:
         """What to send for ``msg``, which is left as it is (a clamped message is a copy of it)."""
@@ -319,6 +322,7 @@ class Gate:
         bad = self._finite(msg)
         if bad is not None:
             self.figures.replaced += 1
+            self._replacing, self._replaced_at = f"{bad} not finite", self._clock()
             self._episode_of(f"{bad} is not a finite number: the stop message was sent in its place")
             return Verdict(self._stop(), f"non-finite {bad}")
         outside = self._outside(msg)
@@ -333,12 +337,23 @@ class Gate:
         for path, owner, key, _, clamped in outside:
             Path.set(owner, key, _cast(path.kind, clamped))
         ramped = self._ramp(msg)
+        self.commands += 1
+        self._passed_at = self._clock()
         if outside or ramped:
             self.figures.clamped += 1
             what = [f"{p.text} {v:g} -> {c:g}" for p, _, _, v, c in outside] + ramped
             self._episode_of(f"clamped ({', '.join(what[:3])}{' ...' if len(what) > 3 else ''})")
             return Verdict(msg, "clamped")
         return Verdict(msg)
+
+    @property
+    def replacing(self) -> str:
+        """Why the stop message goes out in place of every message sent now ("linear.x not finite"): one was
+        replaced within the last :data:`EPISODE_QUIET` s and no command passed in it; else "". The output then
+        sends, but no command passes (``%status`` says "stopping", not "passing")."""
+        now = self._clock()
+        replacing = now - self._replaced_at < EPISODE_QUIET and now - self._passed_at >= EPISODE_QUIET
+        return self._replacing if replacing else ""
 
     def _outside(self, msg: Any) -> list[tuple[Path, Any, Any, Any, float]]:
         """``(path, owner, key, value, clamped)`` of each value of ``msg`` outside its limits."""

@@ -46,6 +46,7 @@ class LiveGuard:
         self.gate = self._gate(model)
         self.sentinel: Optional[Sentinel] = None
         self._noticed, self._by_topic = self.shared.state, False
+        self._commands_at = -1  # commands the gate had passed when the state last changed (none yet: -1)
         #: Why its process is gone, if it ended on its own: the guard then fails closed (see :meth:`tend`).
         self.lost: Optional[str] = None
         self._closing = False
@@ -74,10 +75,10 @@ class LiveGuard:
 
     def update(self, model: GuardModel) -> None:
         """The guard declared again: its new rules from the next message on (its figures kept)."""
-        figures = self.gate.figures
+        figures, commands = self.gate.figures, self.gate.commands
         self._stop_message = self._make_stop(model)
         self.gate = self._gate(model)
-        self.gate.figures = figures
+        self.gate.figures, self.gate.commands = figures, commands
         self.model = model
         self._tell({"settings": self._settings()})
 
@@ -181,6 +182,8 @@ class LiveGuard:
             state = f"{STATES[ESTOPPED]} (its process ended: {self.lost})"
         elif shared.estopped:
             state = STATES[ESTOPPED] + (" (by its e-stop topic)" if shared.estop_topic else "")
+        elif state == STATES[PASSING] and self.gate.replacing:  # messages go out, but each as the stop message
+            state = f"stopping: {self.gate.replacing}"
         return GuardState(self.topic, state, self.gate.figures, shared.stops_sent, shared.reach)
 
     def news(self) -> Optional[str]:
@@ -192,7 +195,10 @@ class LiveGuard:
             return None
         if state == self._noticed:
             return None
+        if state == PASSING and self.gate.commands == self._commands_at:  # stop messages in place of each one
+            return None  # went out, but no command has passed yet
         before, self._noticed, self._by_topic = self._noticed, state, by_topic
+        self._commands_at = self.gate.commands
         if state == STOPPED:
             return (f"guard {self.topic}: nothing passed for {self.model.timeout:g} s: its process sends the stop "
                     f"message ({self.model.repeat:g} Hz) until a command passes")

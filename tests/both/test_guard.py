@@ -92,6 +92,36 @@ def test_the_basenode_stopped_the_stop_message_comes_within_the_timeout_and_comm
     assert state.stops_sent >= 3 and state.state == "passing"
 
 
+def test_a_guard_replacing_every_message_says_stopping_and_commands_pass_again_only_when_one_passes(make_node,
+                                                                                                     notices):
+    """Messages that each go out as the stop message (NaN) are no commands passing: %status says "stopping:
+    linear.x not finite", not "passing"; after a stop on silence, "commands pass again" is said only once a command
+    really passes, not when a replacement goes out."""
+    nd = make_node("guard_words")
+    nd.new.publish("/guarded12/cmd_vel", msgType=Twist)
+    nd.guard("/guarded12/cmd_vel", limits=LIMITS, timeout=0.3, grace=0.2)
+    nd.create()
+    drive, broken = Twist(), Twist()
+    drive.linear.x, broken.linear.x = 0.2, math.nan
+
+    def state() -> str:
+        return engine_of(nd).status().guards[0].state
+
+    wait_for(lambda: nd.write("/guarded12/cmd_vel", drive) or state() == "passing", interval=0.05, timeout=30,
+             what="commands passing")
+    wait_for(lambda: any("nothing passed for 0.3 s" in n for n in notices), timeout=10, what="the stop on silence")
+    said = "ipyros: guard /guarded12/cmd_vel: commands pass again"
+    wait_for(lambda: nd.write("/guarded12/cmd_vel", broken) or state() == "stopping: linear.x not finite",
+             interval=0.05, timeout=10, what="the guard to say it is stopping")
+    for _ in range(10):  # a second of replacements: still no command passes
+        nd.write("/guarded12/cmd_vel", broken)
+        time.sleep(0.1)
+    assert state() == "stopping: linear.x not finite" and said not in notices, notices
+    wait_for(lambda: nd.write("/guarded12/cmd_vel", drive) or said in notices, interval=0.05, timeout=10,
+             what="commands passing again, said")
+    assert state() == "passing" and notices.count(said) == 1, notices
+
+
 def test_a_guard_added_to_a_moving_output_sends_no_stop_while_commands_pass(make_node, peer):
     robot = peer("listen_twist.py", "/guarded9/cmd_vel", "--name=robot9")
     robot.wait_line("ready")

@@ -204,3 +204,20 @@ def test_a_stop_message_the_gate_would_not_pass_is_refused_in_one_line():
     with pytest.raises(DeclarationError, match="the stop message's angular.z is not a finite number"):
         guard.check_stop(Twist, Twist(angular=Vector3(z=math.nan)), {}, "g", given=True)
     guard.check_stop(Twist, Twist(linear=Vector3(x=-0.5)), LIMITS, "g", given=True)  # on the limit: within
+
+
+def test_while_messages_are_replaced_the_gate_says_why_and_stops_saying_it_once_one_passes_or_a_while_after():
+    clock = Clock()
+    g, _, _ = gate(limits=LIMITS, clock=clock)
+    assert g.replacing == ""
+    g.check(Twist(linear=Vector3(x=math.nan)))
+    assert g.replacing == "linear.x not finite"
+    g.check(Twist(linear=Vector3(x=9.0)))  # clamped: a command passes
+    assert g.replacing == ""
+    g.check(Twist(angular=Vector3(z=math.inf)))
+    assert g.replacing == "", "a command passed within the second: commands and replacements mixed pass"
+    clock.now += guard.EPISODE_QUIET
+    g.check(Twist(angular=Vector3(z=math.inf)))
+    assert g.replacing == "angular.z not finite"
+    clock.now += guard.EPISODE_QUIET  # nothing sent since: no longer "stopping"
+    assert g.replacing == ""
