@@ -174,13 +174,16 @@ class BagTrial:
         rows: list[tuple[str, ...]] = [(topic, str(len(self.outputs["live"].get(topic, ()))),
                                         str(len(self.outputs["candidate"].get(topic, ())))) for topic in topics]
         sections = (len(rows),) if self.first else ()
-        for diff in self.first:
-            rows.append((f"at {diff.at:.3f} s: {one_line(diff.message, 40)}", "\n".join(diff.live.lines()) or "-",
-                         "\n".join(diff.candidate.lines()) or "-"))
+        for diff in self.first:  # a side that did nothing is an empty cell, said once in the title
+            rows.append((f"at {diff.at:.3f} s: {one_line(diff.message, 40)}", "\n".join(diff.live.lines()),
+                         "\n".join(diff.candidate.lines())))
+        silent = [name for name, side in ((self.live_name, "live"), (self.candidate_name, "candidate"))
+                  if self.first and not any(getattr(diff, side).lines() for diff in self.first)]
+        quiet = f"; {' and '.join(silent)} did nothing on the first differences shown" if silent else ""
         others = f" (and {self.others} of its other subscriptions, through their live handlers)" if self.others else ""
         title = (f"{self.candidate_name} against {self.live_name} on {self.total} messages of {self.topic} from "
                  f"{self.bag}{others}: {self.differing} differ ({self.seconds:.2f} s"
-                 f"{'; stopped by Ctrl-C, the rest of the bag not tried' if self.stopped else ''})")
+                 f"{'; stopped by Ctrl-C, the rest of the bag not tried' if self.stopped else ''}){quiet}")
         return TextTable(title, (Column("output / message", fold=True), Column(self.live_name, fold=True),
                                  Column(self.candidate_name, fold=True)), tuple(rows), sections)
 

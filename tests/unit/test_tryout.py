@@ -48,3 +48,28 @@ def test_a_field_to_plot_given_wrong_is_one_line():
         trial_of({"live": {}, "candidate": {}}).series("linear.x")
     with pytest.raises(IpyrosError, match="a Twist, not a number"):
         trial_of({"live": {"/cmd": [(0.0, Twist())]}, "candidate": {}}).series("/cmd")
+
+
+def test_a_side_that_did_nothing_is_said_once_not_a_column_of_dashes():
+    """A handler that writes nothing (a logger, a candidate that only prints elsewhere): said once in the title, its
+    cells empty; in the live %try view its column is left out and the heading says why."""
+    import io
+
+    from rich.console import Console
+
+    from ipyros.ipython.display import trial_view
+    from ipyros.tools.tryout import TrialReport, TrialRow
+
+    nothing, wrote = Outcome("", (), None, 0.1), Outcome("", (Write("n", "/out", 31),), None, 0.1)
+    trial = BagTrial("n", "/in", "run", "scale", "quiet", total=2, differing=2,
+                     outputs={"live": {"/out": [(0.0, 31)] * 2}, "candidate": {}},
+                     first=(Difference(0.1, 1, wrote, nothing), Difference(0.2, 2, wrote, nothing)))
+    text = str(trial)
+    assert text.splitlines()[0].endswith("; quiet did nothing on the first differences shown"), text
+    assert not any(line.rstrip().endswith(" -") for line in text.splitlines()), text
+    report = TrialReport("n", "/in", "scale", "quiet", tuple(TrialRow(i, i, wrote, nothing) for i in (1, 2)))
+    buffer = io.StringIO()
+    Console(file=buffer, width=120, color_system=None).print(trial_view(report))
+    shown = " ".join(buffer.getvalue().split())
+    assert "(candidate quiet printed, wrote and raised nothing)" in shown and "(nothing)" not in shown, shown
+    assert "candidate: quiet" not in shown and "live: scale" in shown, shown
