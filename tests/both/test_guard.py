@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from geometry_msgs.msg import Twist
+from helpers import descendants, pid_alive
 from support import children, wait_for
 
 from ipyros.core import errors
@@ -361,30 +362,16 @@ def test_the_session_frozen_then_killed_the_guards_own_process_stops_the_robot(g
     os.killpg(session.pid, signal.SIGCONT)
     thawed = time.monotonic()
     wait_for(lambda: any(x == 0.25 and t > thawed for x, *_, t in twists(robot)), what="commands after the thaw")
+    guards = descendants(session.pid)  # its guard's process among them: what this test waits for, nothing else
+    assert guards, "the session's guard runs in a process of its own"
     session.kill()  # SIGKILL: no atexit, no goodbye
     killed = time.monotonic()
     session.wait(10)
     wait_for(lambda: len(stops(robot, killed)) >= 5, what="the stop message held after the session died")
     held = stops(robot, killed)
     assert held[-1] - held[0] <= 1.0 + 0.5, "held for its grace, not longer"
-    wait_for(lambda: not [pid for pid in _guard_processes()], timeout=10, what="the guard's process to end")
+    wait_for(lambda: not any(map(pid_alive, guards)), timeout=10, what="the session's processes to end")
     assert children() <= before
-
-
-def _guard_processes() -> list[int]:
-    """The pids of guard processes (``ipyros.ros1.sentinel``, ``ipyros.ros2.sentinel``) that are not this test
-    process's own: a killed session's, whose parent is gone."""
-    found = []
-    for proc in Path("/proc").iterdir():
-        if proc.name.isdigit():
-            try:
-                cmdline = (proc / "cmdline").read_bytes().decode(errors="replace")
-                parent = int((proc / "stat").read_text().rsplit(")", 1)[1].split()[1])
-            except (OSError, ValueError, IndexError):
-                continue
-            if "ipyros.ros" in cmdline and "sentinel" in cmdline and parent != os.getpid():
-                found.append(int(proc.name))
-    return found
 
 
 def test_pub_at_the_prompt_passes_the_guard_and_estop_holds_the_session(ip, peer, capsys):

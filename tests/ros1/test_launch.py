@@ -49,17 +49,23 @@ def node_pid(name: str) -> int:
     return xmlrpc.client.ServerProxy(uri).getPid("/pytest")[2]
 
 
-def processes_named(node_name: str) -> list[int]:
-    """Pids of processes started as ROS node ``node_name`` (``__name:=...`` in their argv), wherever they are."""
+def processes_named(node_name: str, master_uri: str = "") -> list[int]:
+    """Pids of processes started as ROS node ``node_name`` (``__name:=...`` in their argv) on this test's master
+    (``ROS_MASTER_URI`` in their environment: this run's, or ``master_uri``), and on no other: a person's own ROS
+    session beside the suite may run nodes of the same names."""
+    master = (master_uri or os.environ.get("ROS_MASTER_URI", "")).encode()
     found = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
         try:
             argv = (entry / "cmdline").read_bytes().split(b"\0")
+            if f"__name:={node_name}".encode() not in argv:
+                continue
+            environ = (entry / "environ").read_bytes().split(b"\0")
         except OSError:
             continue
-        if f"__name:={node_name}".encode() in argv and pid_alive(int(entry.name)):
+        if b"ROS_MASTER_URI=" + master in environ and pid_alive(int(entry.name)):
             found.append(int(entry.name))
     return found
 
@@ -254,12 +260,13 @@ def test_the_runner_refuses_to_start_a_master(tmp_path):
     """The rest runs on the session's master only: with none there, the runner says so and starts nothing."""
     from ros1_fixtures import free_port
 
-    env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{free_port()}/"}
+    uri = f"http://127.0.0.1:{free_port()}/"
+    env = {**os.environ, "ROS_MASTER_URI": uri}
     done = subprocess.run([sys.executable, "-m", "ipyros.ros1.launch_rest", ROBOT, "--exclude", "/robot1/planner"],
                           env=env, capture_output=True, text=True, timeout=60)
     assert done.returncode == 2
     assert "ipyros-launch-rest: failed: no ROS master answers at" in done.stdout
-    assert not processes_named("controller")
+    assert not processes_named("controller", uri)
 
 
 def test_the_rest_dies_with_its_runner_and_the_user_is_told(make_node, ros_session):

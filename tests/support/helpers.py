@@ -25,6 +25,29 @@ def pid_alive(pid: int) -> bool:
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
+def descendants(pid: int) -> set[int]:
+    """The pids of the processes ``pid`` started, and theirs, now (children of every thread): what a test started
+    through one process, and may wait for, without looking at anything else on the machine."""
+    found: set[int] = set()
+    todo = [pid]
+    while todo:
+        parent = todo.pop()
+        try:
+            tasks = list(Path(f"/proc/{parent}/task").iterdir())
+        except OSError:
+            continue
+        for task in tasks:
+            try:
+                kids = [int(k) for k in (task / "children").read_text().split()]
+            except OSError:
+                continue
+            for kid in kids:
+                if kid not in found:
+                    found.add(kid)
+                    todo.append(kid)
+    return found
+
+
 def free_port() -> int:
     """A TCP port of 127.0.0.1 that nothing listens on now (a master's, a Jupyter server's)."""
     with socket.socket() as s:
