@@ -3,8 +3,8 @@
 Every magic is declared once, with ``@magic_arguments`` and :func:`ipyros.ipython.arguments.argument`
 (usage, options, help, completion). The guide's reference page (``docs/magics-reference.rst``) and
 ``%magic?`` both come from that one declaration: :func:`entries` reads each registered ``Magics``
-class, and :func:`as_text` lays an entry out as plain text blocks for whoever draws it (the Sphinx
-directive in ``docs/_ext``; a test).
+class, and each :class:`MagicEntry` lays itself out as plain text blocks (``title``, ``blocks()``) for whoever
+draws it (the Sphinx directive in ``docs/_ext``; a test).
 """
 
 from __future__ import annotations

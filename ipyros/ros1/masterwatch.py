@@ -9,7 +9,7 @@ although the connections made before keep working. rospy and roscpp nodes do not
 call with a timeout): no answer means down, an answer from another pid means restarted.
 It calls ``on_down`` once when the master stops answering and ``on_back`` once when it
 answers again; the session then registers everything of its own again
-(:meth:`ipyros.node.session.Session.master_back`). :meth:`check_now` probes in the caller's
+(:meth:`ipyros.ros1.connection.MasterConnection.back`). :meth:`check_now` probes in the caller's
 thread, for a magic that must not show a graph the session has not registered in yet.
 """
 

@@ -15,7 +15,7 @@ own within about a tenth of a second, and a new thread spins the executor.
 
 Endpoints mirror :mod:`ipyros.ros1.runtime`: each has ``close()``; handlers go through
 a :class:`~ipyros.core.slots.HandlerSlot`; relays forward serialized bytes (``raw=True``),
-never deserialising.
+deserialising nothing unless a guard stands on the output (it reads the values it checks).
 """
 
 from __future__ import annotations
@@ -618,7 +618,8 @@ class Subscription:
 
 
 class Relay:
-    """Forward ``source`` to ``target`` as serialized bytes, never deserialised.
+    """Forward ``source`` to ``target`` as serialized bytes: deserialised only when a guard stands on ``target``
+    (``gate``: it reads the values it checks).
 
     The relay takes the QoS of the publishers it relays, so that wrapping changes
     nothing a subscriber can see: a transient-local (latched) source stays latched
