@@ -70,8 +70,9 @@ class Shared:
         os.ftruncate(fd, cls.SIZE)
         return cls(fd)
 
-    def passed(self) -> None:
-        self._words[0] = time.monotonic_ns()
+    def passed(self, at: Optional[int] = None) -> None:
+        """A message passed the gate, now (or ``at``, a monotonic time in ns: a test's clock)."""
+        self._words[0] = time.monotonic_ns() if at is None else at
 
     @property
     def last_pass(self) -> int:
@@ -185,7 +186,7 @@ def watch(shared: Shared, settings: dict[str, Any], publish_stop: Callable[[], N
         timeout = settings.get("timeout")
         period = 1.0 / settings.get("repeat", 10.0)
         if gone.is_set():
-            _hold(shared, publish_stop, period, float(settings.get("grace", 3.0)), quit_now)
+            _hold(shared, publish_stop, period, float(settings.get("grace", 3.0)), quit_now, clock)
             return
         last = shared.last_pass
         silent = timeout is not None and now - last >= timeout * 1e9
@@ -217,14 +218,14 @@ def _wait_while_stopped(shared: Shared, last: int, period: float, wake: threadin
 
 
 def _hold(shared: Shared, publish_stop: Callable[[], None], period: float, grace: float,
-          quit_now: threading.Event) -> None:
+          quit_now: threading.Event, clock: Callable[[], int] = time.monotonic_ns) -> None:
     """The session is gone: the stop message, again and again, for ``grace`` seconds."""
     shared.state = STOPPED
-    end = time.monotonic() + grace
-    while time.monotonic() < end and not quit_now.is_set():
+    end = clock() + grace * 1e9
+    while clock() < end and not quit_now.is_set():
         publish_stop()
         shared.stops_sent += 1
-        quit_now.wait(min(period, max(end - time.monotonic(), 0.0)))
+        quit_now.wait(min(period, max((end - clock()) / 1e9, 0.0)))
 
 
 #: How often the sentinel notes how many subscribers it reaches (s).
