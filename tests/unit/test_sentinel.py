@@ -9,7 +9,9 @@ import threading
 import pytest
 
 from ipyros.processes import sentinel
-from ipyros.processes.sentinel import ESTOPPED, PASSING, STOPPED, Shared
+from ipyros.processes.sentinel import Shared
+
+PASSING, STOPPED, ESTOPPED = sentinel.PASSING, sentinel.STOPPED, sentinel.ESTOPPED
 
 MS = 1_000_000  # ns
 
