@@ -128,7 +128,7 @@ def global_names(source: str) -> list[str]:
     return [n for n in names if n not in defined and not hasattr(builtins, n)]
 
 
-def lookup(name: str, fn: types.FunctionType, namespace: Optional[dict]) -> Any:
+def lookup(name: str, fn: Callable[..., Any], namespace: Optional[dict]) -> Any:
     """What ``name`` means to ``fn``: its closure, then ``namespace``, then its own globals."""
     if name in fn.__code__.co_freevars:
         cell = fn.__closure__[fn.__code__.co_freevars.index(name)]  # type: ignore[index]
@@ -203,7 +203,7 @@ class Bindings:
     def has(self, name: str) -> bool:
         return any(name in d for d in (self.imports, self.values, self.functions, self.unbound))
 
-    def bind(self, fn: types.FunctionType, source: str, namespace: Optional[dict],
+    def bind(self, fn: Callable[..., Any], source: str, namespace: Optional[dict],
              skip: Callable[[str, Any], bool] = lambda name, value: False) -> None:
         """Bind the globals of ``fn`` (whose source is ``source``); ``skip(name, value)`` leaves one out."""
         for name in global_names(source):
@@ -231,7 +231,7 @@ class Bindings:
                                       f"used by {fn.__name__}, a {type(value).__name__}: not a literal, not importable")
 
     def _same(self, name: str, value: Any, origin: Optional[tuple[str, Optional[str]]],
-              fn: types.FunctionType) -> None:
+              fn: Callable[..., Any]) -> None:
         """``name`` is bound already (an import of the file's own, another handler's global): refuse a value that
         means something else under it, rather than let the file change what ``fn`` reads without a word."""
         if name in self.imports:
@@ -251,7 +251,8 @@ class Bindings:
 
     def import_lines(self, skip: Iterable[str] = ()) -> list[str]:
         """``import m`` lines, then ``from m import a, b`` lines (one per module), sorted."""
-        lines, froms = [], {}
+        lines: list[str] = []
+        froms: dict[str, list[str]] = {}
         for name, (module, attr) in self.imports.items():
             if name in skip:
                 continue
@@ -275,7 +276,11 @@ def define_function(name: str, source: str, namespace: dict, what: str,
     except SyntaxError as error:
         raise IpyrosError(f"{what} does not compile: {error.msg} at line {error.lineno}") from None
     try:
-        fn = eval(code, namespace) if lambda_ else (exec(code, namespace), namespace.get(name))[1]  # noqa: S307
+        if lambda_:
+            fn = eval(code, namespace)  # noqa: S307 - the user's own handler source
+        else:
+            exec(code, namespace)  # noqa: S102 - the user's own handler source
+            fn = namespace.get(name)
     except Exception as error:  # noqa: BLE001
         raise IpyrosError(f"{what}: running its definition failed: {error!r}") from None
     if not callable(fn):

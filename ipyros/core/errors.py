@@ -9,7 +9,8 @@ that is what it is, so generic code can still catch them the usual way.
 from __future__ import annotations
 
 import re
-from typing import Sequence
+import types
+from typing import Optional, Sequence
 
 
 #: The most characters an error or notice line keeps: past it, the values quoted in it are cut (see :func:`shorten`).
@@ -114,7 +115,8 @@ def warn_user(message: str, category: type[Warning]) -> None:
     import sys
     import warnings
 
-    frame, level = sys._getframe(1), 2  # stacklevel 2: the caller of warn_user
+    frame: Optional[types.FrameType] = sys._getframe(1)
+    level = 2  # stacklevel 2: the caller of warn_user
     while frame is not None and _internal(frame.f_code.co_filename):
         frame, level = frame.f_back, level + 1
     warnings.warn(message, category, stacklevel=level)

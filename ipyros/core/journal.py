@@ -24,7 +24,7 @@ import threading
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Optional
+from typing import Optional, TextIO
 
 __all__ = ["Change", "Journal", "default_dir", "read"]
 
@@ -68,7 +68,7 @@ class Journal:
         self.directory = directory or default_dir()
         self.path: Optional[Path] = None
         self.failed = False
-        self._file = None
+        self._file: Optional[TextIO] = None
         self._lock = threading.Lock()
         self._unsynced = threading.Event()
         self._sync_error: Optional[OSError] = None
@@ -81,12 +81,13 @@ class Journal:
             with self._lock:
                 if self._sync_error is not None:
                     raise self._sync_error
-                if self._file is None:
-                    self._file = self._open()
+                file = self._file
+                if file is None:
+                    file = self._file = self._open()
                     self._syncer = threading.Thread(target=self._sync, name="ipyros-history-sync", daemon=True)
                     self._syncer.start()
-                self._file.write(json.dumps({k: v for k, v in asdict(change).items() if v is not None}) + "\n")
-                self._file.flush()
+                file.write(json.dumps({k: v for k, v in asdict(change).items() if v is not None}) + "\n")
+                file.flush()
             self._unsynced.set()
         except OSError:
             self.failed = True
@@ -111,7 +112,7 @@ class Journal:
                 self._sync_error = error
                 return
 
-    def _open(self):  # type: ignore[no-untyped-def]
+    def _open(self) -> TextIO:
         # Handler sources and parameter values (tokens, passwords typed at the prompt) are in
         # here: the directory is the user's alone (0700), each file too (0600).
         self.directory.mkdir(mode=0o700, parents=True, exist_ok=True)

@@ -88,7 +88,7 @@ def definition(type_name: str, expand: bool = False) -> str:
         parts = [msgtypes.resolve_message(type_name)[1]]
     except MessageTypeError as not_message:
         try:
-            cls = msgtypes.resolve_service(type_name)[1]
+            cls: Any = msgtypes.resolve_service(type_name)[1]
             parts = [cls._request_class, cls._response_class] if hasattr(cls, "_request_class") else \
                 [cls.Request, cls.Response]
         except MessageTypeError:
@@ -235,7 +235,7 @@ def _copy_stamp(value: Any) -> Any:
     if known is None:
         known = _STAMPS[kind] = _is_ros1_stamp(value) and set(getattr(kind, "__slots__", ())) >= {"secs", "nsecs"}
     if known:
-        new = kind.__new__(kind)
+        new: Any = object.__new__(kind)
         new.secs, new.nsecs = value.secs, value.nsecs
         return new
     return _copy_value(value)
@@ -280,7 +280,7 @@ def _is_ros1_stamp(value: Any) -> bool:
 
 
 @functools.cache
-def _stamp_class(field_type: str) -> type:
+def _stamp_class(field_type: str) -> Any:
     """ROS 1's Time or Duration class, as its std_msgs make them (the core imports no ROS library;
     ``time`` and ``duration`` fields are ROS 1's only, and std_msgs is there wherever they are)."""
     if field_type == "time":

@@ -103,7 +103,9 @@ def param_field(name: str, value: Any, described: dict[str, Any]) -> Optional[Fo
     """The control of a parameter (``%params --widget``), its range from what its node says of it (``min``/``max``:
     a dynamic_reconfigure server's, or a ROS 2 descriptor's range), else one around its value; None for a value no
     control holds (a list, bytes)."""
-    low, high, step = described.get("min"), described.get("max"), described.get("step")
+    low: Any = described.get("min")
+    high: Any = described.get("max")
+    step: Any = described.get("step")
     span = re.fullmatch(r"\s*(\S+) to (\S+?)(?: by (\S+))?\s*", str(described.get("range", "")))
     if span:  # a ROS 2 descriptor's, as %param --describe says it: "0.0 to 2.0 by 0.1"
         low, high, step = float(span[1]), float(span[2]), float(span[3]) if span[3] else None
@@ -116,8 +118,8 @@ def param_field(name: str, value: Any, described: dict[str, Any]) -> Optional[Fo
         return FormField(name, "int", value, int(low), int(high), int(step or 1))
     if isinstance(value, float):
         if low is None or high is None:
-            reach = max(FLOAT_RANGE, 2 * abs(value))
-            low, high = -reach, reach
+            spread = max(FLOAT_RANGE, 2 * abs(value))
+            low, high = -spread, spread
         return FormField(name, "float", value, float(low), float(high),
                          float(step or (float(high) - float(low)) / 1000))
     if isinstance(value, str):

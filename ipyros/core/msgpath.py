@@ -117,7 +117,7 @@ class MessagePath:
 
     def _walk(self, cls: Any) -> Optional["_Typed"]:
         """Where the path ends in messages of ``cls``, checked on the way; None if a type on it is not known."""
-        at = _Typed(self, cls, msgtypes.type_name(cls) or getattr(cls, "__name__", "message"))
+        at = _Typed(self, cls, msgtypes.type_name(cls) or str(getattr(cls, "__name__", "message")))
         for step in self.steps:
             if isinstance(step, (Index, Slice)):
                 if not at.array:
@@ -178,7 +178,7 @@ _STEPS = re.compile(r"(?:\{[^{}]*\})*((?:\.[A-Za-z_]\w*(?:\[[^\[\]]*\]|\{[^{}]*\
 _STEP = re.compile(r"\.([A-Za-z_]\w*)((?:\[[^\[\]]*\]|\{[^{}]*\})*)")
 
 
-def complete(cls: Optional[type], typed: str) -> list[tuple[str, str]]:
+def complete(cls: Any, typed: str) -> list[tuple[str, str]]:
     """What TAB offers for the part of a path after its topic (``.pose.pose.po``): each field of the
     message there whose name starts with what is typed, as ``(typed with the field's name in place of
     its last word, the field's type)``. An index or a slice steps into an array's element type; a
@@ -209,7 +209,7 @@ def parse(text: str) -> MessagePath:
     topic = _TOPIC.match(text)
     if topic is None or topic.group(0) in ("", "/"):
         raise MessagePathError(f"{text!r}: a message path starts with a topic, e.g. /odom.pose.pose.position.x")
-    rest, steps = text[topic.end():], []
+    rest, steps = text[topic.end():], list[Step]()
     position = topic.end()
     while rest:
         if rest[0] == ".":

@@ -66,7 +66,7 @@ def action_type_name(cls: type) -> str:
     return f"{cls.__module__.split('.')[0]}/{cls.__name__}"
 
 
-def action_messages(cls: type) -> tuple[type, type, type]:
+def action_messages(cls: Any) -> tuple[type, type, type]:
     """The Goal, Result and Feedback message classes of an action class of either ROS."""
     if hasattr(cls, "Goal"):  # ROS 2: nested in the action class
         return cls.Goal, cls.Result, cls.Feedback
@@ -103,7 +103,7 @@ def resolve_action(spec: Any) -> tuple[str, type]:
             cls = getattr(importlib.import_module(module_name), attribute, None)
         except ImportError:
             continue
-        if is_action(cls):
+        if cls is not None and is_action(cls):
             return f"{package}/{name}", cls
     close = difflib.get_close_matches(f"{package}/{name}", known_action_types(), n=3)
     hint = f"; did you mean {', '.join(close)}?" if close else \

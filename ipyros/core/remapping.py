@@ -21,7 +21,7 @@ from typing import Sequence
 
 from . import names
 from .errors import DeclarationError
-from .model import BaseModel, NodeModel
+from .model import ActionModel, BaseModel, NodeModel, ServiceModel, TopicModel
 from .plan import internal_name, node_fullname
 
 __all__ = ["base_fullname", "base_namespace", "base_node_name", "basenode_remaps", "check_reuse", "check_wrapping",
@@ -57,7 +57,9 @@ def resolve_for(model: NodeModel, role: str, name: str, kind: str, rules: names.
     basenode's name: that is how a reused topic or service is intercepted.
     """
     if role == "new" and model.base is not None:
-        declared = {"topic": model.topics, "service": model.services, "action": model.actions}[kind]
+        lists: dict[str, Sequence[TopicModel | ServiceModel | ActionModel]] = {
+            "topic": model.topics, "service": model.services, "action": model.actions}
+        declared = lists[kind]
         if any(d.role == "reuse" and d.name == name for d in declared):
             role = "reuse"
     if role == "reuse" and model.base is not None:
@@ -117,9 +119,10 @@ def check_reuse(model: NodeModel, resolved: str, direction: str, kind: str = "to
                                f"remove it first ({model.name}.remove({resolved!r}))")
 
 
-def check_wrapping(model: NodeModel, others: list[NodeModel] = ()) -> None:  # type: ignore[assignment]
+def check_wrapping(model: NodeModel, others: Sequence[NodeModel] = ()) -> None:
     """Refuse to create a node whose wrapping declarations are incomplete or clash."""
-    reuses = [d.name for d in (*model.topics, *model.services, *model.actions) if d.role == "reuse"]
+    every: list[TopicModel | ServiceModel | ActionModel] = [*model.topics, *model.services, *model.actions]
+    reuses = [d.name for d in every if d.role == "reuse"]
     if model.base is None:
         if reuses:
             raise DeclarationError(f"{model.name} reuses {', '.join(reuses)} but has no basenode; declare it: "

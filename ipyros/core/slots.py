@@ -149,7 +149,7 @@ class HandlerSlot:
 
     @property
     def pass_argument(self) -> bool:
-        return self._current[1]
+        return bool(self._current[1])
 
     def __call__(self, arg: Any = None) -> Any:
         return self.run(arg)[1]

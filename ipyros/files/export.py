@@ -226,8 +226,7 @@ class Script:
         self.writers = sorted({w for src in sources.values() for w in WRITER.findall(src)}) or ["this_node"]
         for slot, _label in handler_slots(self.model):
             fn = self.handlers[slot]
-            self.bindings.bind(fn, sources[slot], namespace,
-                               skip=lambda name, value, fn=fn: self._skip(fn, name, value))
+            self.bindings.bind(fn, sources[slot], namespace, skip=partial(self._skip, fn))
             for name in [n for n in self.bindings.unbound if n not in self.unset]:
                 self.unset[name] = f"{name} = None  # set me: used by handler {fn.__name__}"
 
@@ -248,7 +247,7 @@ class Script:
 
     def takes_event(self, slot: str) -> bool:
         """Whether the timer handler of ``slot`` takes the timer event."""
-        return call_arity(self.handlers[slot], "timer", self.names[slot])
+        return bool(call_arity(self.handlers[slot], "timer", self.names[slot]))
 
     def takes_action(self, slot: str) -> bool:
         """Whether the action handler of ``slot`` takes the action beside the goal (``def h(goal, action)``)."""
@@ -256,7 +255,8 @@ class Script:
 
     def writes_to(self) -> dict[str, str]:
         """Each publication of the plan → the name the handlers ``write`` to it by."""
-        return {planning.write_target(self.model, t.resolved): t.resolved for t in self.model.topics}
+        targets = {t.resolved: planning.write_target(self.model, t.resolved) for t in self.model.topics}
+        return {target: topic for topic, target in targets.items() if target is not None}
 
     def plan(self) -> list[Any]:
         """The endpoints, publishers first: a handler may write as soon as its subscriber is up. A guard is not an
@@ -292,7 +292,7 @@ class Script:
         if values:
             head += ["", "# Globals the handlers read, as they were at export.", *values]
         parts = ["\n".join(head), *flavour.handle(self), f"{' = '.join(self.writers)} = NodeHandle()"]
-        if base is not None:
+        if base is not None and self.model.base is not None:
             parts.append("# The basenode, remapped so that it talks only to this node on the topics it wraps.\n"
                          "BASENODE = [\n" + "".join(f"    {arg!r},\n" for arg in base) + "]\n"
                          f"BASENODE_ENV = {self.model.base.env!r}  # its launch file's <env> tags, if any")
@@ -332,7 +332,7 @@ class Script:
         functions[name], self.names[slot] = source, name
         return source
 
-    def _skip(self, fn: types.FunctionType, name: str, value: Any) -> bool:
+    def _skip(self, fn: Callable[..., Any], name: str, value: Any) -> bool:
         """Globals the script binds itself: the node the handlers write with; refuse one it needs for itself."""
         if name in self.writers:
             return True
@@ -435,7 +435,7 @@ def package_xml(model: NodeModel, package: str, description: str, depends: list[
             + ET.tostring(root, encoding="unicode") + "\n")
 
 
-def xml_comment(*lines: str) -> ET.Element:
+def xml_comment(*lines: str) -> Any:  # an ET.Element: a comment's, of a tag that is no string
     """A comment of a launch file's top level, one line each (``--`` may not stand in an XML comment)."""
     return ET.Comment(" " + "\n       ".join(lines).replace("--", "- -") + " ")
 

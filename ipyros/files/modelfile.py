@@ -185,7 +185,7 @@ def _command_of(base: Any) -> str:
     """What a model file's ``base`` would start, in words: a launch file's node, a package's executable, a file."""
     if not isinstance(base, dict):
         return repr(base)[:80]
-    args = base.get("args") if isinstance(base.get("args"), list) else []
+    args: list[Any] = base["args"] if isinstance(base.get("args"), list) else []
     line = " ".join(shlex.quote(str(word)) for word in [base.get("executable") or "?", *args])
     if len(line) > 200:
         line = line[:197] + "..."
@@ -210,8 +210,8 @@ def _by_name(path: Path, model: NodeModel, functions: dict[str, Any], namespace:
 def _slot_handlers(model: NodeModel) -> Iterator[tuple[str, str]]:
     """``(slot key, handler name)`` of every handler the model declares."""
     names = {planning.topic_slot(t.resolved): t.handler for t in model.topics if t.handler}
-    names.update({planning.service_slot(s.resolved): s.handler for s in model.services if s.role == "new"})
-    names.update({planning.action_slot(a.resolved): a.handler for a in model.actions if a.role == "new"})
+    names.update({planning.service_slot(s.resolved): s.handler for s in model.services if s.role == "new" and s.handler})
+    names.update({planning.action_slot(a.resolved): a.handler for a in model.actions if a.role == "new" and a.handler})
     names.update({planning.timer_slot(t.name): t.handler for t in model.timers})
     for slot, _ in handler_slots(model):
         yield slot, names[slot] or "?"

@@ -21,7 +21,7 @@ from typing import Any, Callable, Optional, Protocol
 from ..core import msgtypes, plan as planning, qos as qos_mod
 from ..core.errors import DeclarationError, HandlerError, MessageTypeError, NotDeclaredError, TopicTypeConflict, cut
 from ..core.guard import DEFAULT_GRACE, DEFAULT_REPEAT, ESTOP_TYPE, check_rules, check_stop
-from ..core.model import ActionModel, GuardModel, NodeModel, ServiceModel, TimerModel, TopicModel
+from ..core.model import ActionModel, GuardModel, NodeModel, Role, ServiceModel, TimerModel, TopicModel
 from ..core.msgbuild import as_data, build_message
 from ..core.remapping import check_reuse
 from ..core.slots import call_arity
@@ -33,7 +33,8 @@ class NodeEngine(Protocol):
     """What declaring needs of a node (its :class:`~ipyros.node.engine.NodeEngine`, which declares through here:
     named as a protocol, so that this module does not import the engine back)."""
 
-    name: str
+    @property
+    def name(self) -> str: ...
     session: Any
 
     def model(self) -> NodeModel: ...
@@ -51,7 +52,7 @@ MIN_TIMER_PERIOD = 1e-4  # seconds; below it a timer would only spin a core (and
 
 # -- topics ---------------------------------------------------------------------------------------
 
-def subscribe(engine: NodeEngine, role: str, topic: str, handler: Optional[Callable[..., Any]], msg_type: Any,
+def subscribe(engine: NodeEngine, role: Role, topic: str, handler: Optional[Callable[..., Any]], msg_type: Any,
               qos: Any = None) -> str:
     """Subscribe ``handler(msg)`` to ``topic`` (``new``), or relay the basenode's input (``reuse``); declared again,
     the handler is swapped live."""
@@ -77,7 +78,7 @@ def subscribe(engine: NodeEngine, role: str, topic: str, handler: Optional[Calla
     return _done(engine, role, f"subscribe {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
 
 
-def publish(engine: NodeEngine, role: str, topic: str, msg_type: Any, latch: bool = False, qos: Any = None) -> str:
+def publish(engine: NodeEngine, role: Role, topic: str, msg_type: Any, latch: bool = False, qos: Any = None) -> str:
     """Publish ``topic`` (``new``: ``write`` sends on it), or relay the basenode's output (``reuse``)."""
     resolved = engine.resolve_as(role, topic, "topic")
     type_name = _type_name(engine, msg_type, relayed=role == "reuse")
@@ -157,7 +158,7 @@ _SERVED = {"service": ("called with each request, returns the response", "to ans
            "action": ("called with each goal, returns the result", "to serve or change its goals")}
 
 
-def serve(engine: NodeEngine, role: str, kind: str, name: str, type_: Any,
+def serve(engine: NodeEngine, role: Role, kind: str, name: str, type_: Any,
           handler: Optional[Callable[..., Any]]) -> str:
     """A service or an action (``kind``): served by ``handler`` (new) or relayed from the basenode (reuse).
 

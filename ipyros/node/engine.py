@@ -262,7 +262,7 @@ class NodeEngine:
         with self._lock:
             if self.created:
                 return
-            check_wrapping(self._model, [n._model for n in self.session.nodes.values() if n is not self and n.created])
+            check_wrapping(self._model, [n.model() for n in self.session.nodes.values() if n is not self and n.created])
             session = self.session
             session.add(self)
             try:

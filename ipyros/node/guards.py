@@ -139,7 +139,7 @@ class LiveGuard:
         at the guard's rate (stop on silence no longer holds if the session freezes) until released. A stop
         message the session cannot send is said too, once until it can again: nothing else passes meanwhile,
         but the robot gets no stop message from the session either."""
-        sentinel, said = self.sentinel, []
+        sentinel, said = self.sentinel, list[str]()
         if self.lost is None:
             if sentinel is None or self._closing or sentinel.running:
                 return said

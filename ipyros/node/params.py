@@ -19,8 +19,10 @@ __all__ = ["NodeParameters"]
 class ParamOwner(Protocol):
     """What a node's parameters need of it (its :class:`~ipyros.node.engine.NodeEngine`)."""
 
-    name: str
-    called: str
+    @property
+    def name(self) -> str: ...
+    @property
+    def called(self) -> str: ...
     created: bool
     session: Any
 

@@ -25,6 +25,7 @@ from ..core import msgtypes
 from ..core.errors import NodeStateError, NotDeclaredError, shorten
 from ..core.graph import EMPTY, GraphSnapshot, actions_of
 from ..core.journal import Change, Journal
+from ..core.model import NodeModel
 from ..core.slots import HandlerFailure, OutputScope
 from ..processes.basenode import stop_together
 from .backend import Backend, choose as choose_backend
@@ -39,6 +40,10 @@ class SessionNode(Protocol):
     def name(self) -> str: ...
     @property
     def fullname(self) -> str: ...
+    @property
+    def called(self) -> str: ...  # how advice names it (the user's variable)
+    created: bool
+    def model(self) -> NodeModel: ...
     def release_base(self) -> Any: ...  # its running basenode (stop()), handed over to be stopped elsewhere
     def quieten(self) -> None: ...
     def shutdown(self) -> None: ...

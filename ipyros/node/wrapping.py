@@ -34,11 +34,15 @@ from . import declaring
 class NodeEngine(Protocol):
     """What wrapping needs of a node (its :class:`~ipyros.node.engine.NodeEngine` has it)."""
 
-    name: str
-    fullname: str
+    @property
+    def name(self) -> str: ...
+    @property
+    def fullname(self) -> str: ...
     created: bool
-    called: str
-    explicit_namespace: bool
+    @property
+    def called(self) -> str: ...
+    @property
+    def explicit_namespace(self) -> bool: ...
     session: Any
     base: Any
 
@@ -98,7 +102,8 @@ def _own_name(node: "NodeEngine", fields: dict[str, Any]) -> Optional[str]:
     """The name the code of the basenode that ``fields`` make gives its node: without ``name=`` it runs under
     that name, as it does when run by hand (the backend reads it; a binary's is not known)."""
     base = node.model().base or BaseModel()
-    merged = BaseModel(**{**base.__dict__, **{key: fields[key] for key in ("executable", "package") if key in fields}})
+    given: dict[str, Any] = {key: fields[key] for key in ("executable", "package") if key in fields}
+    merged = BaseModel(**{**base.__dict__, **given})
     return node.session.backend.own_node_name(merged) if merged.executable else None
 
 
@@ -426,7 +431,8 @@ _LATE = "a node may advertise only after its first input (topic_tools throttle a
 def _run_as_it_is(node: "NodeEngine", timeout: float, ask: Callable[[Interface], None]) -> Interface:
     """Run the basenode briefly as it is (no remaps), ``ask`` its interface while it runs, and stop it."""
     model = node.model()
-    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),  # type: ignore[union-attr]
+    assert model.base is not None  # a node that wraps nothing is never run as it is
+    base = BaseModel(**{**model.base.__dict__, "node_name": base_node_name(model.base),
                         "namespace": base_namespace(model)})
     probe = node.session.backend.basenode(base).start()
     try:

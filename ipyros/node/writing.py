@@ -39,8 +39,10 @@ def writes_recorded(record: Callable[[Any, str, Any], None]) -> Iterator[None]:
 class WritingNode(Protocol):
     """What writing needs of a node (its :class:`~ipyros.node.engine.NodeEngine`)."""
 
-    name: str
-    called: str
+    @property
+    def name(self) -> str: ...
+    @property
+    def called(self) -> str: ...
     created: bool
     session: Any
 

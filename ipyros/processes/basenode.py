@@ -229,8 +229,10 @@ def _reads_back_as_itself(text: str) -> bool:
         return False
 
 
-def exit_reason(returncode: int) -> str:
+def exit_reason(returncode: Optional[int]) -> str:
     """``exited with code 3`` or ``killed by SIGSEGV``: what a return code means, in words."""
+    if returncode is None:
+        return "still running"
     if returncode < 0:
         try:
             return f"killed by {signal.Signals(-returncode).name}"
@@ -281,7 +283,8 @@ class BaseProcess:
     @property
     def pid(self) -> Optional[int]:
         """The process id while it runs, else None."""
-        return self._run.proc.pid if self.running else None
+        run = self._run
+        return run.proc.pid if run is not None and run.proc.returncode is None else None
 
     @property
     def running(self) -> bool:

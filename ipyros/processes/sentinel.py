@@ -246,7 +246,11 @@ def serve(pipe_fd: int, shared_fd: int,
         return 0
     settings = json.loads(first)
     gone, wake, quit_now = threading.Event(), threading.Event(), threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: (gone.set(), wake.set()))  # ended from outside: as the session's end
+    def ended(*_: Any) -> None:  # ended from outside: as the session's end
+        gone.set()
+        wake.set()
+
+    signal.signal(signal.SIGTERM, ended)
     publish_stop, reach = start(settings, shared, wake)
     if not shared.last_pass:  # the silence counts from the guard's start, not from the machine's boot
         shared.passed()

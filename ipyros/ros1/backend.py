@@ -49,7 +49,7 @@ class Ros1:
     name_rules = names.ROS1
     #: The QoS fields a declaration's ``qos=`` means something in here (TCP is reliable and ipyros's queues
     #: unbounded: only durability, as latching).
-    qos_fields = ("durability",)
+    qos_fields: tuple[str, ...] = ("durability",)
 
     def __init__(self) -> None:
         self.process = runtime.ProcessNode()
@@ -171,7 +171,7 @@ class Ros1:
         return runtime.ServiceRelay(source, target, cls)  # a basenode's failure reaches the caller as an error
 
     # -- actions (actionlib: imported when first used, so that a ROS 1 without python3-actionlib runs the rest)
-    action_parts = tuple("/" + part for part in ROS1_ACTION_TOPICS)  # ROS 1 remaps names, one topic each
+    action_parts: tuple[str, ...] = tuple("/" + part for part in ROS1_ACTION_TOPICS)  # ROS 1 remaps names, one topic each
 
     def action_server(self, host: str, name: str, cls: type, slot: HandlerSlot, forward: Optional[str]) -> Any:
         return _actions().ActionServer(name, cls, slot, forward)

@@ -34,7 +34,7 @@ class Ros2:
     name = "ROS 2"
     name_rules = names.ROS2
     #: The QoS fields a declaration's ``qos=`` means something in: all of them.
-    qos_fields = ("depth", "reliability", "durability")
+    qos_fields: tuple[str, ...] = ("depth", "reliability", "durability")
 
     def __init__(self) -> None:
         #: Which Fast DDS configuration this session (and what it starts) runs with, in words.
@@ -113,7 +113,7 @@ class Ros2:
         return runtime.ServiceRelay(self.process, self.process.host(host), source, target, cls, complain)
 
     # -- actions: an action is remapped by its name, as a whole ------------------------------
-    action_parts = ("",)
+    action_parts: tuple[str, ...] = ("",)
 
     def action_server(self, host: str, name: str, cls: type, slot: HandlerSlot,
                       forward: Optional[str]) -> actions.ActionServer:
@@ -351,7 +351,7 @@ class Ros2:
         return fastdds.size_note(size)
 
     #: Parameters every rclpy node has, which %params leaves out unless asked.
-    standard_params = ("use_sim_time", "start_type_description_service")
+    standard_params: tuple[str, ...] = ("use_sim_time", "start_type_description_service")
 
     def write_param(self, name: str, value: Any) -> Any:
         """Set the parameter ``/ns/node/key`` of any live node (``%param NAME VALUE``); the value set.
