@@ -103,6 +103,9 @@ def test_the_tour_runs_top_to_bottom_in_the_browser_with_no_error_output(tour):
 def test_topics_is_an_html_table_in_the_browser(tour):
     table = tour.notebook.cell("%topics /turtle1").locator(".jp-OutputArea-output table")
     assert table.count() == 1 and table.is_visible()
+    # scrolled into view, the rows are drawn a moment later (until then their text reads as empty: once in CI)
+    wait_for(lambda: any("/turtle1" in row for row in table.locator("tr").all_inner_texts()), timeout=10,
+             what="the table's rows drawn")
     rows = table.locator("tr").all_inner_texts()
     assert any("/turtle1/pose" in row and "geometry_msgs/Pose" in row for row in rows), rows
     assert any("/turtle1/cmd_vel" in row and "geometry_msgs/Twist" in row for row in rows), rows
