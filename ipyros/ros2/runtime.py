@@ -54,7 +54,7 @@ def domain_id() -> str:
     return os.environ.get("ROS_DOMAIN_ID") or "0"
 
 
-def _profile(qos: Qos = Qos()) -> QoSProfile:
+def profile_of(qos: Qos = Qos()) -> QoSProfile:
     """rclpy's profile for ``qos``; what it leaves out is reliable, volatile, depth 1000
     (depth 1 when transient-local: the last message, as a ROS 1 latched topic)."""
     return QoSProfile(depth=qos.depth or (1 if qos.latched else _DEPTH),
@@ -114,7 +114,7 @@ def _mismatch_report(node: Node, topic: str, mine: Qos, what: str, complain: Opt
     peers_of = node.get_subscriptions_info_by_topic if what == "publication" else node.get_publishers_info_by_topic
     peer_kind = "subscription" if what == "publication" else "publisher"
 
-    here = qos_of(_profile(mine))
+    here = qos_of(profile_of(mine))
 
     def report(event: Any, final: bool = False) -> None:
         policy = qos_policy_name_from_kind(event.last_policy_kind).lower()
@@ -444,7 +444,7 @@ class Publication:
     def _open(self, qos: Qos) -> Any:
         node, topic = self._node, self.topic
         return _made(node, lambda: node.create_publisher(
-            self.cls, topic, _profile(qos), event_callbacks=_mismatch_report(node, topic, qos, "publication",
+            self.cls, topic, profile_of(qos), event_callbacks=_mismatch_report(node, topic, qos, "publication",
                                                                              self._complain)))
 
     def take(self, source: Qos) -> None:
@@ -573,7 +573,7 @@ class Subscription:
     def _open(self, qos: Qos) -> Any:
         self._since = time.time_ns()
         return _made(self._node, lambda: self._node.create_subscription(
-            self.cls, self.topic, self._deliver, _profile(qos), raw=True,
+            self.cls, self.topic, self._deliver, profile_of(qos), raw=True,
             event_callbacks=_mismatch_report(self._node, self.topic, qos, "subscription", self._complain)))
 
     def _deliver(self, data: bytes, info: Any) -> None:
@@ -654,7 +654,7 @@ class Relay:
     def _endpoints(self, qos: Qos) -> tuple[Any, Any]:
         node = self._node
         pub = _made(node, lambda: node.create_publisher(
-            self.cls, self.target, _profile(qos),
+            self.cls, self.target, profile_of(qos),
             event_callbacks=_mismatch_report(node, self.target, qos, "publication", self._complain)))
         # Until the source's publishers show up, a mismatch with them is expected, and
         # mended by _follow_source: no warning for it.
@@ -662,7 +662,7 @@ class Relay:
 
         reader = self._reader
         sub = _made(reader, lambda: reader.create_subscription(
-            self.cls, self.source, self._forward, _profile(qos), raw=True,
+            self.cls, self.source, self._forward, profile_of(qos), raw=True,
             event_callbacks=SubscriptionEventCallbacks(incompatible_qos=lambda _: None)))
         return pub, sub
 

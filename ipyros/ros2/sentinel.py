@@ -25,7 +25,7 @@ def start(settings: dict[str, Any], shared: Shared,
 
     from ..core import msgtypes
     from ..core.qos import from_model
-    from .runtime import _profile
+    from .runtime import profile_of
 
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     namespace, _, name = ("/" + settings["node"]).rpartition("/")
@@ -36,7 +36,7 @@ def start(settings: dict[str, Any], shared: Shared,
         from dataclasses import replace
 
         qos = replace(qos, durability="transient_local")
-    publisher = node.create_publisher(cls, settings["topic"], _profile(qos))
+    publisher = node.create_publisher(cls, settings["topic"], profile_of(qos))
 
     def estop(msg: Any) -> None:
         shared.estop_topic = msg.data
