@@ -25,6 +25,7 @@ too), on messages of either ROS (:mod:`ipyros.core.msgbuild` reads their fields)
 from __future__ import annotations
 
 import copy
+import enum
 import math
 import re
 import threading
@@ -35,8 +36,8 @@ from typing import Any, Callable, Optional
 from .errors import DeclarationError, cut
 from .msgbuild import field_types, nested_class
 
-__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE", "Gate", "GuardFigures", "Path", "Verdict",
-           "check_rules", "check_stop", "finite_checker", "parse_path"]
+__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE", "Acting", "Gate", "GuardFigures", "Path",
+           "Verdict", "check_rules", "check_stop", "finite_checker", "parse_path"]
 
 #: The type of a guard's e-stop topic: ``True`` holds the stop message.
 ESTOP_TYPE = "std_msgs/Bool"
@@ -254,12 +255,34 @@ def finite_checker(cls: type) -> Callable[[Any], Optional[str]]:
 
 # -- the gate --------------------------------------------------------------------------------------
 
+class Acting(enum.Enum):
+    """What a gate did with one message: a value, for whoever reads verdicts (the prompt's lines, %status, a
+    recording of them), not English to be parsed."""
+
+    PASSED = "passed"  # as it came
+    CLAMPED = "clamped"  # a value set within its limits, or its rate
+    DROPPED = "dropped"  # outside its limits, with on_limit="drop": nothing sent
+    NOT_FINITE = "not finite"  # a NaN or an infinity: the stop message in its place
+    ESTOPPED = "e-stopped"  # the stop message in its place, whatever came
+
+
 @dataclass(frozen=True)
 class Verdict:
-    """What the gate made of one message: ``send`` it (clamped, or the stop message in its place), or nothing."""
+    """What the gate made of one message: ``send`` it (clamped, or the stop message in its place), or nothing;
+    ``acting`` says which, ``path`` the field that made it so (a non-finite one's)."""
 
     send: Any  # the message to send, or None: dropped
-    why: str = ""  # "" when it passed as it came
+    acting: Acting = Acting.PASSED
+    path: str = ""
+
+    @property
+    def why(self) -> str:
+        """In words: "" when it passed as it came, "clamped", "non-finite linear.x", ..."""
+        if self.acting is Acting.PASSED:
+            return ""
+        if self.acting is Acting.NOT_FINITE:
+            return f"non-finite {self.path}"
+        return "outside its limits" if self.acting is Acting.DROPPED else self.acting.value
 
 
 @dataclass
@@ -297,7 +320,7 @@ class Gate:
         self._finite = finite_checker(cls)
         self._lock = threading.Lock()
         self._last: dict[tuple[str, int], tuple[float, float]] = {}  # (path, n-th value) → (value, when) that passed
-        self._said: set[str] = set()  # the kinds of acting said in this episode
+        self._said: set[Acting] = set()  # the kinds of acting said in this episode
         self._acted_at = -math.inf  # when the gate last acted on a message (its clock)
         self.figures = GuardFigures()
         self._replacing, self._replaced_at = "", -math.inf  # why the last message was replaced, and when
@@ -317,20 +340,21 @@ class Gate:
         if self._estopped():
             self.figures.replaced += 1
             # said once by who e-stopped it (%estop, nd.estop()) or, for its e-stop topic, by the session's watch
-            self._episode_of("e-stopped: the stop message is sent in place of every message until released", say=False)
-            return Verdict(self._stop(), "e-stopped")
+            self._episode_of(Acting.ESTOPPED, "e-stopped: the stop message is sent in place of every message until "
+                                              "released", say=False)
+            return Verdict(self._stop(), Acting.ESTOPPED)
         bad = self._finite(msg)
         if bad is not None:
             self.figures.replaced += 1
             self._replacing, self._replaced_at = f"{bad} not finite", self._clock()
-            self._episode_of(f"{bad} is not a finite number: the stop message was sent in its place")
-            return Verdict(self._stop(), f"non-finite {bad}")
+            self._episode_of(Acting.NOT_FINITE, f"{bad} is not a finite number: the stop message was sent in its place")
+            return Verdict(self._stop(), Acting.NOT_FINITE, bad)
         outside = self._outside(msg)
         if outside and self._drop:
             self.figures.dropped += 1
             path, _, _, value, _ = outside[0]
-            self._episode_of(f"{path.text} = {value:g} is outside its limits: dropped")
-            return Verdict(None, "outside its limits")
+            self._episode_of(Acting.DROPPED, f"{path.text} = {value:g} is outside its limits: dropped")
+            return Verdict(None, Acting.DROPPED, path.text)
         if outside or self._rates and self._ramp(msg, change=False):
             msg = copy.deepcopy(msg)  # the sender's message is left as it was
             outside = self._outside(msg)
@@ -342,8 +366,8 @@ class Gate:
         if outside or ramped:
             self.figures.clamped += 1
             what = [f"{p.text} {v:g} -> {c:g}" for p, _, _, v, c in outside] + ramped
-            self._episode_of(f"clamped ({', '.join(what[:3])}{' ...' if len(what) > 3 else ''})")
-            return Verdict(msg, "clamped")
+            self._episode_of(Acting.CLAMPED, f"clamped ({', '.join(what[:3])}{' ...' if len(what) > 3 else ''})")
+            return Verdict(msg, Acting.CLAMPED)
         return Verdict(msg)
 
     @property
@@ -391,14 +415,14 @@ class Gate:
                 for place, (_, _, value) in enumerate(path.values(stop)):
                     self._last[(path.text, place)] = (value, now)
 
-    def _episode_of(self, what: str, say: bool = True) -> None:
-        kind = what.split(" ")[0] if what.startswith(("e-stopped", "clamped")) else what.split(":")[-1]
+    def _episode_of(self, acting: Acting, what: str, say: bool = True) -> None:
+        """Note that the gate acted (``what``, in words, for the prompt), said once an episode and kind of acting."""
         now = self._clock()
         if now - self._acted_at >= EPISODE_QUIET:
             self._said.clear()  # a quiet second: a new episode
         self._acted_at = now
-        if kind not in self._said:
-            self._said.add(kind)
+        if acting not in self._said:
+            self._said.add(acting)
             self.figures.last_trip, self.figures.last_trip_at = what, time.time()
             if say:
                 self._say(f"guard {self.topic}: {what}")

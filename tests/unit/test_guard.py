@@ -221,3 +221,21 @@ def test_while_messages_are_replaced_the_gate_says_why_and_stops_saying_it_once_
     assert g.replacing == "angular.z not finite"
     clock.now += guard.EPISODE_QUIET  # nothing sent since: no longer "stopping"
     assert g.replacing == ""
+
+
+def test_a_verdict_says_what_the_gate_did_as_a_value():
+    """Verdicts are values (an enum and the field that made them so), for whoever reads them, not a sentence to
+    parse; ``why`` is the same in words."""
+    g, _, _ = gate(limits=LIMITS)
+    cases = [(Twist(linear=Vector3(x=0.1)), guard.Acting.PASSED, ""),
+             (Twist(linear=Vector3(x=3.0)), guard.Acting.CLAMPED, ""),
+             (Twist(angular=Vector3(y=math.nan)), guard.Acting.NOT_FINITE, "angular.y")]
+    for msg, acting, path in cases:
+        verdict = g.check(msg)
+        assert (verdict.acting, verdict.path) == (acting, path)
+    dropping, _, _ = gate(limits=LIMITS, on_limit="drop")
+    verdict = dropping.check(Twist(angular=Vector3(z=-2.0)))
+    assert (verdict.send, verdict.acting, verdict.path, verdict.why) == (None, guard.Acting.DROPPED, "angular.z",
+                                                                         "outside its limits")
+    held, _, _ = gate(limits=LIMITS, estopped=lambda: True)
+    assert held.check(Twist()).acting is guard.Acting.ESTOPPED
