@@ -197,7 +197,7 @@ class BagInfo(Rows):
         return TextTable(title, (Column("topic"), Column("type"), Column("messages", True)), rows)
 
 
-@dataclass
+@dataclass(repr=False)
 class Interface:
     """The publish/subscribe/service interface of one running node, as plain data.
 
@@ -244,6 +244,10 @@ class Interface:
         return replace(self, publications=[e for e in self.publications if not part(e)],
                        subscriptions=[e for e in self.subscriptions if not part(e)],
                        services=[e for e in self.services if not part(e)], actions=sorted(found.items()))
+
+    def __repr__(self) -> str:
+        return short_repr(self, f"{self.node}: {len(self.publications)} published, {len(self.subscriptions)} "
+                                f"subscribed, {len(self.services)} services, {len(self.actions)} actions")
 
     def table(self) -> TextTable:
         """A row per topic, service or action with its direction and type; what was not seen, and the plumbing

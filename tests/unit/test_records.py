@@ -74,3 +74,11 @@ def test_a_records_repr_is_short_and_names_what_it_is():
     text = repr(info)
     assert text.startswith("<BagInfo: bag /data/long_name_") and text.endswith("…>") and len(text) <= 115, text
     assert "\n" not in text and "BagTopic" not in text
+
+
+def test_an_interfaces_repr_counts_what_it_holds():
+    from ipyros.core.records import Interface
+
+    interface = Interface("/turtle_sim", publications=[("/turtle1/pose", "turtlesim/Pose")] * 3,
+                          subscriptions=[("/turtle1/cmd_vel", "geometry_msgs/Twist")])
+    assert repr(interface) == "<Interface: /turtle_sim: 3 published, 1 subscribed, 0 services, 0 actions>"
