@@ -332,5 +332,5 @@ def test_sigterm_while_an_interrupted_create_stops_its_basenode_ends_the_session
         out = proc.stdout.read()
         proc.stdout.close()
     assert code == -signal.SIGTERM, out
-    assert took < 6, f"died {took:.1f} s after SIGTERM: {out}"
+    assert took < 8, f"died {took:.1f} s after SIGTERM: {out}"  # the basenode's 1.5 s, and closing; was 10 s
     assert not any(pid_alive(pid) for pid in pids), "the basenode was stopped"

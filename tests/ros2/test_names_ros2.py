@@ -48,7 +48,9 @@ def test_a_namesake_another_process_started_a_moment_before_is_said_not_accepted
     other = peer("talk.py", "/namesake/out", "std_msgs/String", "5", "--ros-args", "-r", "__node:=namesake")
     other.wait_line("ready")
     nd = make_node("namesake")
-    monkeypatch.setattr(type(engine_of(nd).session.backend), "refuse_taken_name", lambda self, name: None)
+    backend = engine_of(nd).session.backend
+    wait_for(lambda: "/namesake" in backend.graph_snapshot().nodes, timeout=30, what="the other node discovered")
+    monkeypatch.setattr(type(backend), "refuse_taken_name", lambda self, name: None)
     nd.create()
     said = "ipyros: namesake: a second node named /namesake showed up in the ROS 2 graph (ROS_DOMAIN_ID "
     wait_for(lambda: any(n.startswith(said) for n in notices), timeout=10, what="the namesake to be said")
