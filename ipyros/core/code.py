@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Optional
 
 from . import plan as planning
-from .errors import IpyrosError
+from .errors import IpyrosError, cut
 from .model import NodeModel
 
 __all__ = ["WRITER", "Bindings", "define_function", "global_names", "handler_slots", "handler_source", "import_of",
@@ -156,11 +156,6 @@ def import_of(value: Any, own_module: str) -> Optional[tuple[str, Optional[str]]
     return None
 
 
-def _shown(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
 def import_statement(name: str, origin: tuple[str, Optional[str]]) -> str:
     module, attr = origin
     if attr is None:
@@ -246,7 +241,7 @@ class Bindings:
             meant = self.values[name].partition(" = ")[2]
         else:  # a function's source (compared where handlers are named), or a name already unbound
             return
-        raise IpyrosError(f"handler {fn.__name__} reads the global {name} = {_shown(value)}, but {name} is "
+        raise IpyrosError(f"handler {fn.__name__} reads the global {name} = {cut(value, 40)}, but {name} is "
                           f"{meant} in the file; rename the global (it would silently read the other)")
 
     def import_lines(self, skip: Iterable[str] = ()) -> list[str]:

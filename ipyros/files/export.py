@@ -180,8 +180,9 @@ def _fill(msg, data):
     return msg
 '''
 
-#: What GUARD_FUNCTIONS and the imports it needs name in the script.
-GUARD_NAMES = {"Guard", "_fields", "_finite", "_values", "_put", "_fill", "copy", "math", "threading", "time"}
+#: The modules GUARD_FUNCTIONS uses, imported by a script with a guard; with what it defines, the script's own names.
+GUARD_IMPORTS = ("copy", "math", "threading", "time")
+GUARD_NAMES = {*GUARD_IMPORTS, *re.findall(r"^(?:def|class) (\w+)", GUARD_FUNCTIONS, re.M)}
 
 
 class ExportWarning(UserWarning):
@@ -285,7 +286,7 @@ class Script:
         base = self._base_argv() if self.starts_base else None
         stdlib = flavour.stdlib(self, base is not None)
         if self.model.guards:
-            stdlib = sorted({*stdlib, "copy", "math", "threading", "time"})
+            stdlib = sorted({*stdlib, *GUARD_IMPORTS})
         head = [flavour.shebang(), docstring(flavour.about(self)), *(f"import {m}" for m in stdlib),
                 *flavour.before_imports(self), "", *self.bindings.import_lines(skip=stdlib), *flavour.imports(self)]
         values = [*self.bindings.values.values(), *self.unset.values()]

@@ -28,7 +28,7 @@ from ..core.text import counted
 from ..dsl import rosNode
 from ..tools.probe import Rate
 from ..tools.robot import DemoRobot
-from ..tools.tryout import BagTrial, TrialReport, one_line
+from ..tools.tryout import BagTrial, TrialReport, one_line, silent_sides
 
 __all__ = ["LARGE_TABLE", "RENDERERS", "endpoints_table", "interface_table", "is_large", "node_table", "register",
            "render_html", "render_plain", "render_text", "renderable", "rich_table", "session_table", "status_table",
@@ -112,21 +112,18 @@ def trial_view(report: TrialReport) -> Group:
     """``%try``: the live handler and the candidate side by side, one row per message, differences marked."""
     summary = (f"{report.differing} of {counted(len(report.rows), 'message')} give different results"
                if report.differing else f"same results on all {counted(len(report.rows), 'message')}")
-    # a side that did nothing on any message is said once, not a column of "(nothing)"
-    silent = [name for name, side in ((f"live {report.live_name}", "live"),
-                                      (f"candidate {report.candidate_name}", "candidate"))
-              if report.rows and not any(getattr(row, side).lines() for row in report.rows)]
-    quiet = f" ({' and '.join(silent)} printed, wrote and raised nothing)" if silent else ""
+    names = {"live": report.live_name, "candidate": report.candidate_name}
+    silent = silent_sides(report.rows)  # said once, not a column of "(nothing)"
+    quiet = f" ({' and '.join(f'{side} {names[side]}' for side in silent)} printed, wrote and raised nothing)" \
+        if silent else ""
     heading = Text.assemble((f"{report.node} {report.topic}", "bold"), f": live {report.live_name} vs candidate "
                             f"{report.candidate_name}: ", (summary, "yellow" if report.differing else "green"), quiet)
     table = Table(show_lines=True)
     table.add_column("#", justify="right")
     table.add_column("message", overflow="fold", max_width=40)
-    sides = [side for side, name in (("live", report.live_name), ("candidate", report.candidate_name))
-             if f"{side} {name}" not in silent]
+    sides = [side for side in names if side not in silent]
     for side in sides:
-        table.add_column(f"{side}: {report.live_name if side == 'live' else report.candidate_name}", overflow="fold",
-                         max_width=60)
+        table.add_column(f"{side}: {names[side]}", overflow="fold", max_width=60)
     for row in report.rows:
         mark = Text(f"{row.index}" if row.same else f"{row.index} ≠", style="" if row.same else "bold yellow")
         lines = {"live": row.live.lines(), "candidate": row.candidate.lines()}

@@ -100,6 +100,11 @@ class NodeEngine:
         with self._lock:
             return copy.deepcopy(self._model)
 
+    def declared(self) -> NodeModel:
+        """The declared structure as it stands, not a copy: for reading alone (what the session's other nodes
+        check a new one against: a copy of each at every create() was quadratic in the session's nodes)."""
+        return self._model
+
     def declared_params(self) -> dict[str, Any]:
         """The model's own parameters (edited in place by :attr:`params`, under the node's lock)."""
         return self._model.params
@@ -262,7 +267,7 @@ class NodeEngine:
         with self._lock:
             if self.created:
                 return
-            check_wrapping(self._model, [n.model() for n in self.session.nodes.values() if n is not self and n.created])
+            check_wrapping(self._model, [n.declared() for n in self.session.nodes.values() if n is not self and n.created])
             session = self.session
             session.add(self)
             try:
@@ -478,7 +483,7 @@ def check_live_types(engine: NodeEngine, topics: Any) -> None:
             continue
         if ours_only:
             have = next((o.type for n in session.nodes.values() if n is not engine
-                         for o in n.model().topics if o.resolved == t.resolved and o.type != t.type), None)
+                         for o in n.declared().topics if o.resolved == t.resolved and o.type != t.type), None)
             if have is None:
                 continue
         raise TopicTypeConflict(f"{t.resolved} already carries {have}, not {t.type}; "

@@ -57,12 +57,11 @@ class LiveGuard:
     def _make_stop(self, model: GuardModel) -> Any:
         stop = build_message(self.cls, model.stop) if model.stop is not None else self.cls()
         # checked when declared; again here, so that no way into the model sends one the gate would not pass
-        check_stop(self.cls, stop, {p: (b[0], b[1]) for p, b in model.limits.items()}, f"guard {self.topic}",
-                   given=model.stop is not None)
+        check_stop(self.cls, stop, _limits(model), f"guard {self.topic}", given=model.stop is not None)
         return stop
 
     def _gate(self, model: GuardModel) -> Gate:
-        return Gate(self.topic, self.cls, {p: (b[0], b[1]) for p, b in model.limits.items()}, dict(model.rate),
+        return Gate(self.topic, self.cls, _limits(model), dict(model.rate),
                     model.on_limit, self.stop_message, self.holding, self.shared.passed, self._say)
 
     def holding(self) -> bool:
@@ -205,6 +204,11 @@ class LiveGuard:
         if state == ESTOPPED:
             return f"guard {self.topic}: e-stopped by {self.model.estop_topic}: the stop message holds until released"
         return f"guard {self.topic}: commands pass again" if before in (STOPPED, ESTOPPED) else None
+
+
+def _limits(model: GuardModel) -> dict[str, tuple[float, float]]:
+    """A guard model's limits as the gate takes them (the model keeps lists: plain data)."""
+    return {path: (bounds[0], bounds[1]) for path, bounds in model.limits.items()}
 
 
 def guard_of(outputs: list[TopicModel], resolved: str) -> Optional[TopicModel]:

@@ -43,7 +43,8 @@ class SessionNode(Protocol):
     @property
     def called(self) -> str: ...  # how advice names it (the user's variable)
     created: bool
-    def model(self) -> NodeModel: ...
+    def model(self) -> NodeModel: ...  # a copy
+    def declared(self) -> NodeModel: ...  # as it stands, for reading alone
     def release_base(self) -> Any: ...  # its running basenode (stop()), handed over to be stopped elsewhere
     def quieten(self) -> None: ...
     def shutdown(self) -> None: ...

@@ -162,6 +162,8 @@ class ProcessNode:
         self._looks = 0
         self._typed: list[tuple[str, str, Complain]] = []  # (topic, type, complain): peers of another type are told
         self._told: set[tuple[str, str, str, Complain]] = set()
+        #: New nodes whose name is watched for a namesake: {fullname: (complain, until)}; one look for them all.
+        self._named: dict[str, tuple[Complain, float]] = {}
         self._caller: Optional[tuple[Node, Any, Spinner]] = None
         #: Whether the session's nodes run on /clock (a bag's time): each node's use_sim_time, new ones too.
         self.sim_time = False
@@ -229,7 +231,31 @@ class ProcessNode:
         """Tell ``complain`` once if, within ``seconds`` of this node's start, the graph shows a second node named
         ``fullname``: another process started one a moment before, which discovery had not shown when the name
         was checked (ROS 2 lets two nodes share a name; tools then mix them up)."""
-        self.watch(_NameWatch(self, fullname, complain, time.monotonic() + seconds).look)
+        with self._lock:
+            first = not self._named
+            self._named[fullname] = (complain, time.monotonic() + seconds)
+        if first:
+            self.watch(self._look_for_namesakes)
+
+    def _look_for_namesakes(self) -> None:
+        """One read of the graph's node names for every name watched (a session that creates 100 nodes at once
+        asks once a look, not 100 times)."""
+        with self._lock:
+            named = dict(self._named)
+        now, names = time.monotonic(), self.caller().get_node_names_and_namespaces()
+        for fullname, (complain, until) in named.items():
+            namespace, base = fullname.rsplit("/", 1)
+            twice = names.count((base, namespace or "/")) > 1
+            if twice or now > until:
+                with self._lock:
+                    self._named.pop(fullname, None)
+            if twice:
+                complain(f"a second node named {fullname} showed up in the ROS 2 graph (ROS_DOMAIN_ID {domain_id()}) "
+                         "as this one started: two nodes now share the name, and tools mix them up (parameters, "
+                         "ros2 node info); shut this one down and create it under another name")
+        with self._lock:
+            if not self._named:
+                self._watchers = [w for w in self._watchers if w != self._look_for_namesakes]
 
     def use_sim_time(self, on: bool) -> None:
         """Run every node of the session on /clock (``on``: its timers and its now()), or on the system clock."""
@@ -349,6 +375,8 @@ class ProcessNode:
             nodes = [self._hosts[name] for name in fullnames if name in self._hosts]
             # nor does the graph watch look for their endpoints any more (it would hold the graph meanwhile)
             self._watchers = [w for w in self._watchers if getattr(w.__self__, "_node", None) not in nodes]
+            for name in fullnames:
+                self._named.pop(name, None)
         for node in nodes:
             self._executor.remove_node(node)
 
@@ -834,26 +862,6 @@ class ServiceServer:
 #: topic of its own that keeps no order with the result's service, may still be on its way, and an rclpy client
 #: drops feedback that comes after the result. The session's action relay and an exported one both wait it.
 RESULT_SETTLE = 0.02
-
-
-class _NameWatch:
-    """Looks, for a while after a node started, for a second node of its name in the graph (see
-    :meth:`ProcessNode.watch_name`); ended by the node's shutdown as the relays' watches are (``_node``)."""
-
-    def __init__(self, process: ProcessNode, fullname: str, complain: Complain, until: float) -> None:
-        self._process, self.fullname, self._complain, self._until = process, fullname, complain, until
-        self._node = process.host(fullname)
-        namespace, base = fullname.rsplit("/", 1)
-        self._key = (base, namespace or "/")
-
-    def look(self) -> None:
-        if self._process.caller().get_node_names_and_namespaces().count(self._key) > 1:
-            self._process.unwatch(self.look)
-            self._complain(f"a second node named {self.fullname} showed up in the ROS 2 graph (ROS_DOMAIN_ID "
-                           f"{domain_id()}) as this one started: two nodes now share the name, and tools mix them up "
-                           "(parameters, ros2 node info); shut this one down and create it under another name")
-        elif time.monotonic() > self._until:
-            self._process.unwatch(self.look)
 
 
 class ServiceRelay:

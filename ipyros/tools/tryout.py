@@ -32,7 +32,7 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterator, Optional
+from typing import Any, Callable, Iterator, Optional, Sequence
 
 from ..core import msgpath, msgtypes, plan as planning, streams
 from ..core.errors import IpyrosError, NotDeclaredError
@@ -82,6 +82,12 @@ class Outcome:
             return False
         return all(a.topic == b.topic and a.problem == b.problem and a.message == b.message
                    for a, b in zip(self.writes, other.writes))
+
+
+def silent_sides(pairs: Sequence[Any]) -> list[str]:
+    """Of "live" and "candidate", the sides that did nothing (printed, wrote and raised nothing) on every one of
+    ``pairs`` (rows of a try, differences of a bag trial): said once, not as a column of empty cells."""
+    return [side for side in ("live", "candidate") if pairs and not any(getattr(p, side).lines() for p in pairs)]
 
 
 @dataclass(frozen=True)
@@ -177,8 +183,8 @@ class BagTrial:
         for diff in self.first:  # a side that did nothing is an empty cell, said once in the title
             rows.append((f"at {diff.at:.3f} s: {one_line(diff.message, 40)}", "\n".join(diff.live.lines()),
                          "\n".join(diff.candidate.lines())))
-        silent = [name for name, side in ((self.live_name, "live"), (self.candidate_name, "candidate"))
-                  if self.first and not any(getattr(diff, side).lines() for diff in self.first)]
+        names = {"live": self.live_name, "candidate": self.candidate_name}
+        silent = [names[side] for side in silent_sides(self.first)]
         quiet = f"; {' and '.join(silent)} did nothing on the first differences shown" if silent else ""
         others = f" (and {self.others} of its other subscriptions, through their live handlers)" if self.others else ""
         title = (f"{self.candidate_name} against {self.live_name} on {self.total} messages of {self.topic} from "
@@ -387,4 +393,5 @@ def _name(fn: Any) -> str:
     return getattr(fn, "__name__", type(fn).__name__)
 
 
-__all__ = ["BagTrial", "Difference", "try_bag", "try_candidate", "TrialReport", "TrialRow", "Outcome", "Write"]
+__all__ = ["BagTrial", "Difference", "try_bag", "try_candidate", "TrialReport", "TrialRow", "Outcome", "Write",
+           "silent_sides"]
