@@ -36,8 +36,8 @@ from typing import Any, Callable, Optional
 from .errors import DeclarationError, cut
 from .msgbuild import field_types, nested_class
 
-__all__ = ["DEFAULT_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE", "Acting", "Gate", "GuardFigures", "Path",
-           "Verdict", "check_rules", "check_stop", "finite_checker", "parse_path"]
+__all__ = ["DEFAULT_GRACE", "DEFAULT_LEASE", "DEFAULT_MACHINE_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE",
+           "Acting", "Gate", "GuardFigures", "Path", "Verdict", "check_rules", "check_stop", "finite_checker", "parse_path"]
 
 #: The type of a guard's e-stop topic: ``True`` holds the stop message.
 ESTOP_TYPE = "std_msgs/Bool"
@@ -47,6 +47,10 @@ DEFAULT_GRACE = 3.0
 MOST_GRACE = 10.0
 #: How often the stop message is sent again while it holds (Hz), unless the guard says.
 DEFAULT_REPEAT = 10.0
+#: A guard placed on a machine: how long its keeper waits to hear the session before it holds the stop message (s),
+#: and how long before it ends the guard (s).
+DEFAULT_LEASE = 0.5
+DEFAULT_MACHINE_GRACE = 30.0
 #: An episode of a guard's acting ends when this long (s) has passed with nothing for it to do: each kind
 #: of acting (clamped, dropped, not finite, e-stopped) is said once an episode, however the kinds alternate.
 EPISODE_QUIET = 1.0

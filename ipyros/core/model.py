@@ -78,7 +78,9 @@ class GuardModel:
     ``on_limit`` says what a value outside does (``"clamp"`` or ``"drop"``); after ``timeout`` seconds of
     silence the ``stop`` message is sent (its fields; None: the type's zero message), again at ``repeat`` Hz,
     and held ``grace`` seconds after the session ends; ``estop_topic`` (a ``std_msgs/Bool``) trips it too.
-    Plain data: a guard in a model file runs without ``trust``.
+    ``machine`` places it on another machine's keeper (see :mod:`ipyros.processes.keeper`), which holds the stop
+    message when the session is not heard for ``lease`` seconds and ends the guard after ``machine_grace`` (None:
+    never). Plain data: a guard in a model file runs without ``trust``.
     """
 
     name: str
@@ -92,6 +94,9 @@ class GuardModel:
     repeat: float = 10.0
     grace: float = 3.0
     estop_topic: Optional[str] = None
+    machine: Optional[str] = None
+    lease: float = 0.5
+    machine_grace: Optional[float] = 30.0
 
 
 @dataclass

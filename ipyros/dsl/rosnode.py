@@ -215,7 +215,9 @@ class rosNode:  # noqa: N801 - the paper's name
     # -- safety: guards on its outputs ---------------------------------------------------
     def guard(self, topic: str, *, limits: Optional[dict] = None, timeout: Optional[float] = None,
               stop: Any = None, on_limit: str = "clamp", rate: Optional[dict] = None,
-              estop_topic: Optional[str] = None, grace: float = 3.0, repeat: float = 10.0) -> "rosNode":
+              estop_topic: Optional[str] = None, grace: float = 3.0, repeat: float = 10.0,
+              machine: Optional[str] = None, lease: Optional[float] = None,
+              machine_grace: Optional[float] = 30.0) -> "rosNode":
         """Guard the output ``topic``: every message that leaves the node there passes the guard first, whatever
         sent it (a handler, ``write``, ``%pub``, the relay of the basenode's output).
 
@@ -226,9 +228,13 @@ class rosNode:  # noqa: N801 - the paper's name
         message; default: the type's zero message) at ``repeat`` Hz until a command passes, even when the
         session is frozen or killed; when the session ends it holds the stop for ``grace`` s (at most 10).
         ``estop_topic`` (``std_msgs/Bool``) trips the e-stop from anywhere. Declared again, the rules change
-        live. Not certified functional safety: the robot's hardware e-stop stays the last line.
+        live. ``machine="robot1"`` places the guard on the robot, in its keeper (``python -m ipyros.machine``):
+        the node's messages go there to be checked, and the robot holds the stop message when it has not heard
+        this session for ``lease`` s (0.5), a lost link too; it ends the guard after ``machine_grace`` s (30).
+        Not certified functional safety: the robot's hardware e-stop stays the last line.
         """
-        declaring.guard(self._engine, topic, limits, rate, on_limit, timeout, stop, repeat, grace, estop_topic)
+        declaring.guard(self._engine, topic, limits, rate, on_limit, timeout, stop, repeat, grace, estop_topic,
+                        machine, lease, machine_grace)
         return self
 
     def estop(self) -> list[str]:

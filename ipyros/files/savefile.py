@@ -29,7 +29,7 @@ from typing import Any, Iterable, Optional, Sequence
 from ..core import plan as planning
 from ..core.code import WRITER, Bindings, container_of, handler_slots, handler_source
 from ..core.errors import IpyrosError, warn_user
-from ..core.guard import DEFAULT_GRACE, DEFAULT_REPEAT
+from ..core.guard import DEFAULT_GRACE, DEFAULT_LEASE, DEFAULT_MACHINE_GRACE, DEFAULT_REPEAT
 from ..core.model import GuardModel, NodeModel
 from .atomic import write_atomic
 from .kept import KeptNode
@@ -221,8 +221,12 @@ def guard_line(var: str, guard: GuardModel) -> str:
     options = {"limits": {p: tuple(b) for p, b in guard.limits.items()} or None, "rate": guard.rate or None,
                "on_limit": guard.on_limit if guard.on_limit != "clamp" else None, "timeout": guard.timeout,
                "stop": guard.stop, "repeat": guard.repeat if guard.repeat != DEFAULT_REPEAT else None,
-               "grace": guard.grace if guard.grace != DEFAULT_GRACE else None, "estop_topic": guard.estop_topic}
+               "grace": guard.grace if guard.grace != DEFAULT_GRACE else None, "estop_topic": guard.estop_topic,
+               "machine": guard.machine,
+               "lease": guard.lease if guard.machine and guard.lease != DEFAULT_LEASE else None}
     text = "".join(f", {key}={value!r}" for key, value in options.items() if value is not None)
+    if guard.machine is not None and guard.machine_grace != DEFAULT_MACHINE_GRACE:
+        text += f", machine_grace={guard.machine_grace!r}"
     return f"{var}.guard({guard.name!r}{text})"
 
 

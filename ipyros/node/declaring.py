@@ -20,12 +20,14 @@ from typing import Any, Callable, Optional, Protocol
 
 from ..core import msgtypes, plan as planning, qos as qos_mod
 from ..core.errors import DeclarationError, HandlerError, MessageTypeError, NotDeclaredError, TopicTypeConflict, cut
-from ..core.guard import DEFAULT_GRACE, DEFAULT_REPEAT, ESTOP_TYPE, check_rules, check_stop
+from ..core.guard import (DEFAULT_GRACE, DEFAULT_LEASE, DEFAULT_MACHINE_GRACE, DEFAULT_REPEAT, ESTOP_TYPE, check_rules,
+                          check_stop)
 from ..core.model import ActionModel, GuardModel, NodeModel, Role, ServiceModel, TimerModel, TopicModel
 from ..core.msgbuild import as_data, build_message
 from ..core.remapping import check_reuse
 from ..core.slots import call_arity
 from ..core.versions import name_of
+from ..processes.keeper import MachineError, Token, check_machine_name, token_path
 
 
 
@@ -222,9 +224,10 @@ def timer(engine: NodeEngine, period: Any, handler: Callable[..., Any], name: Op
 
 def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, on_limit: str = "clamp",
           timeout: Any = None, stop: Any = None, repeat: Any = DEFAULT_REPEAT, grace: Any = DEFAULT_GRACE,
-          estop_topic: Optional[str] = None) -> str:
+          estop_topic: Optional[str] = None, machine: Optional[str] = None, lease: Any = None,
+          machine_grace: Any = DEFAULT_MACHINE_GRACE) -> str:
     """A safety guard on the output ``topic`` (see :mod:`ipyros.core.guard`); declared again, its rules change live
-    (nothing reopens: no message is lost or sent unguarded)."""
+    (nothing reopens: no message is lost or sent unguarded). ``machine``: kept by that machine's keeper."""
     where = f"{engine.name}.guard({topic!r})"
     model = engine.model()
     resolved = engine.resolve(topic)
@@ -249,8 +252,15 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
     if taken is not None:
         raise TopicTypeConflict(f"{where}: estop_topic {estop} carries {taken.type} on {engine.name}, not "
                                 f"{ESTOP_TYPE}: an e-stop topic is a {ESTOP_TYPE} of its own; give it another name")
+    lease, machine_grace = _placement(where, machine, lease, machine_grace)
+    before = model.guard(output.resolved)
+    if before is not None and before.machine != machine:
+        raise DeclarationError(f"{where}: the guard of {output.resolved} is kept by "
+                               f"{before.machine and 'machine ' + before.machine or 'this session'}; it moves only "
+                               f"when removed first: {engine.name}.remove(guard={output.resolved!r}), then declared")
     entry = GuardModel(topic, output.resolved, output.type, {p: list(b) for p, b in limits_.items()}, rates, on_limit,
-                       float(timeout) if timeout is not None else None, stop, float(repeat), float(grace), estop)
+                       float(timeout) if timeout is not None else None, stop, float(repeat), float(grace), estop,
+                       machine, lease, machine_grace)
 
     def edit(model: NodeModel) -> None:
         model.guards = [g for g in model.guards if g.resolved != output.resolved] + [entry]
@@ -259,10 +269,38 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
     said = [f"limits {', '.join(f'{p} {b[0]:g}..{b[1]:g}' for p, b in limits_.items())}" if limits_ else "",
             f"rate {', '.join(f'{p} {m:g}/s' for p, m in rates.items())}" if rates else "",
             f"stop after {timeout:g} s of silence" if timeout is not None else "", on_limit if limits_ else "",
-            f"e-stop topic {estop}" if estop else ""]
+            f"e-stop topic {estop}" if estop else "",
+            f"kept by machine {machine} (lease {lease:g} s)" if machine else ""]
     text = f"guard {output.resolved}: " + ("; ".join(s for s in said if s) or "NaN and infinities stopped")
     engine.record(text)
     return text
+
+
+def _placement(where: str, machine: Any, lease: Any, grace: Any) -> tuple[float, Optional[float]]:
+    """A guard's placement on a machine checked (its name, the token this session signs with, its lease); each
+    refusal one line. Returns the lease and the grace as numbers."""
+    if machine is None:
+        if lease is not None or grace != DEFAULT_MACHINE_GRACE:
+            raise DeclarationError(f"{where}: lease= and machine_grace= are for a guard kept by another machine: "
+                                   "give machine='robot1' too, or leave them out")
+        return DEFAULT_LEASE, DEFAULT_MACHINE_GRACE
+    try:
+        check_machine_name(machine)
+        Token.read(token_path(machine), machine)  # said now, not when the node starts
+    except MachineError as error:
+        raise DeclarationError(f"{where}: {error}") from None
+    lease = DEFAULT_LEASE if lease is None else lease
+    if not _positive(lease) or lease > 10:
+        raise DeclarationError(f"{where}: lease={cut(lease)}: give the seconds the robot waits to hear this session "
+                               "before it holds the stop message, more than 0 and at most 10 (e.g. 0.5)")
+    if grace is not None and (not _positive(grace) or grace < lease):
+        raise DeclarationError(f"{where}: machine_grace={cut(grace)}: give the seconds after which the robot ends a "
+                               f"guard whose session is silent, at least the lease ({lease:g}), or None to keep it")
+    return float(lease), None if grace is None else float(grace)
+
+
+def _positive(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < float("inf")
 
 
 def _refuse_unguarding(engine: NodeEngine, resolved: str, what: str) -> None:

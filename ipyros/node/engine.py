@@ -452,7 +452,7 @@ class NodeEngine:
         def guard(spec: Any) -> Any:
             declared, output = model.guard(spec.topic), guard_of(model.outputs(), spec.topic)
             assert declared is not None and output is not None  # the plan lists a guard only on an output
-            return self.guards.open(declared, output)
+            return self.guards.open(declared, output, self.fullname)
 
         at = Opening(self.session.backend, self.fullname, self.name, self.complain, self.session.notify, slot,
                      self.guards.gate, guard)

@@ -53,6 +53,7 @@ class Shared:
     5       the monotonic time (ns) of its last trip (the sentinel writes)
     6       1 once it publishes on the topic (the sentinel writes)
     7       how many subscribers of the topic its publisher reaches (the sentinel writes)
+    8       held for a lost lease, 0 or 1 (a keeper writes: the session placing the guard is not heard)
     ======  =============================================================================
     """
 
@@ -87,10 +88,11 @@ class Shared:
     tripped_at = property(lambda self: self._words[5], lambda self, t: self._words.__setitem__(5, t))
     ready = property(lambda self: bool(self._words[6]), lambda self, on: self._words.__setitem__(6, int(on)))
     reach = property(lambda self: self._words[7], lambda self, n: self._words.__setitem__(7, n))
+    held = property(lambda self: bool(self._words[8]), lambda self, on: self._words.__setitem__(8, int(bool(on))))
 
     @property
     def estopped(self) -> bool:
-        return self.estop_session or self.estop_topic
+        return self.estop_session or self.estop_topic or self.held
 
     def close(self) -> None:
         self._words.release()

@@ -1,4 +1,4 @@
-"""A running node's guard when its process is lost (:mod:`ipyros.node.guards`), pure: the session fails closed, and
+"""A running node's guard when its process is lost (:mod:`ipyros.node.liveguard`), pure: the session fails closed, and
 says once when it cannot even send the stop message (nothing else passes, but nothing stops the robot either)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 from unit_msgs.msg import Twist
 
 from ipyros.core.model import GuardModel, TopicModel
-from ipyros.node.guards import LiveGuard
+from ipyros.node.liveguard import LiveGuard
 
 
 class LostSentinel:

@@ -1,0 +1,48 @@
+"""The keeper of a robot's machine: ``python -m ipyros.machine --name robot1``.
+
+Run it on the robot's own computer, beside its ROS (a ROS 1 master there, or a ROS 2 domain the laptop shares): a
+session on a laptop then places guards on it (``nd.guard(topic, ..., machine="robot1")``), which the robot keeps
+even when the link to the laptop is lost. It needs ROS and ipyros's ROS-free parts, not IPython. See
+:mod:`ipyros.processes.keeper` for what it does and how a session talks to it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import sys
+from pathlib import Path
+from typing import Optional
+
+__all__ = ["main"]
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m ipyros.machine",
+                                     description="Keep what ipyros sessions place on this machine (guards).")
+    parser.add_argument("--name", required=True, help="this machine's name, as sessions place on it (e.g. robot1)")
+    parser.add_argument("--token-file", type=Path, default=None,
+                        help="the token's file (default ~/.ros/ipyros/machines/NAME.token, made at the first start)")
+    return parser
+
+
+def main(argv: Optional[list[str]] = None) -> int:
+    args = _parser().parse_args(argv)
+    from ..processes.keeper import MachineError, check_machine_name
+
+    try:
+        check_machine_name(args.name)
+    except MachineError as error:
+        print(f"ipyros machine: {error}", file=sys.stderr)
+        return 2
+    wanted = os.environ.get("IPYROS_ROS") or os.environ.get("ROS_VERSION") or ""
+    if not wanted:
+        wanted = "1" if importlib.util.find_spec("rospy") is not None else "2"
+    if wanted != "1":
+        print("ipyros machine: a keeper runs on ROS 1 for now (ROS 2's is not written yet): run it where rospy "
+              "is, with ROS_MASTER_URI set", file=sys.stderr)
+        return 2
+    from ..ros1.machine import main as run
+
+    return run(args.name, args.token_file)

@@ -1,0 +1,205 @@
+"""One guard of a running node, kept by the session: its gate in front of the output, the page it shares with its
+sentinel process, the sentinel, and what the prompt is told (see :mod:`ipyros.core.guard` and
+:mod:`ipyros.processes.sentinel`). A guard placed on another machine is :mod:`ipyros.node.placed`'s.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+from ..core import msgtypes
+from ..core.guard import Gate, GuardState, Verdict, check_stop
+from ..core.model import GuardModel, TopicModel
+from ..core.msgbuild import build_message
+from ..core.names import tool_name
+from ..processes.basenode import log_dir
+from ..processes.sentinel import ESTOPPED, PASSING, STATES, STOPPED, Sentinel, Shared
+
+__all__ = ["LiveGuard", "limits_of"]
+
+#: How long a guard's process may take to publish on its topic (s): a rospy or rclpy start, on a loaded machine.
+SENTINEL_START = 30.0
+
+_count = iter(range(1, 1 << 30))
+
+
+class LiveGuard:
+    """One guard of a running node: what its output's endpoint passes every message through (:meth:`check`)."""
+
+    def __init__(self, model: GuardModel, output: TopicModel, backend: Any, say: Callable[[str], None],
+                 send: Callable[[str, Any], bool] = lambda topic, msg: False) -> None:
+        self.topic, self.type = model.resolved, model.type
+        self.cls = msgtypes.resolve_message(model.type)[1]
+        self._backend, self._say, self._output, self._send = backend, say, output, send
+        self.shared = Shared.create()
+        self.model = model
+        self._stop_message = self._make_stop(model)
+        self.gate = self._gate(model)
+        self.sentinel: Optional[Sentinel] = None
+        self._noticed, self._by_topic = self.shared.state, False
+        self._commands_at = -1  # commands the gate had passed when the state last changed (none yet: -1)
+        #: Why its process is gone, if it ended on its own: the guard then fails closed (see :meth:`tend`).
+        self.lost: Optional[str] = None
+        self._closing = False
+        self._stopped_at = 0.0  # when the session last sent the stop message for a lost process (monotonic)
+        self._unsent: Optional[str] = None  # why the session's last stop message could not be sent, if it could not
+
+    # -- rules ------------------------------------------------------------------------------------
+    def _make_stop(self, model: GuardModel) -> Any:
+        stop = build_message(self.cls, model.stop) if model.stop is not None else self.cls()
+        # checked when declared; again here, so that no way into the model sends one the gate would not pass
+        check_stop(self.cls, stop, limits_of(model), f"guard {self.topic}", given=model.stop is not None)
+        return stop
+
+    def _gate(self, model: GuardModel) -> Gate:
+        return Gate(self.topic, self.cls, limits_of(model), dict(model.rate),
+                    model.on_limit, self.stop_message, self.holding, self.shared.passed, self._say)
+
+    def holding(self) -> bool:
+        """Whether the stop message goes in place of every message: e-stopped, or its process lost."""
+        return self.shared.estopped or self.lost is not None
+
+    def stop_message(self) -> Any:
+        """A fresh stop message (a gate may be handed it to send)."""
+        return copy.deepcopy(self._stop_message)
+
+    def update(self, model: GuardModel) -> None:
+        """The guard declared again: its new rules from the next message on (its figures kept)."""
+        figures, commands = self.gate.figures, self.gate.commands
+        self._stop_message = self._make_stop(model)
+        self.gate = self._gate(model)
+        self.gate.figures, self.gate.commands = figures, commands
+        self.model = model
+        self._tell({"settings": self._settings()})
+
+    def _tell(self, message: dict[str, Any]) -> None:
+        if self.sentinel is not None:
+            try:
+                self.sentinel.tell(message)
+            except OSError:  # its process is gone: the watch finds it and says so (see tend())
+                pass
+
+    def check(self, msg: Any) -> Verdict:
+        return self.gate.check(msg)
+
+    # -- its process ------------------------------------------------------------------------------
+    def _settings(self) -> dict[str, Any]:
+        model = self.model
+        return {"timeout": model.timeout, "repeat": model.repeat, "grace": model.grace,
+                "stop": self._backend.serialize(self._stop_message).hex()}
+
+    def start(self) -> None:
+        """Start its sentinel, and wait until it publishes on the topic; a one-line error if it cannot."""
+        from ..core.errors import BaseNodeError
+
+        name = f"{tool_name('guard')}_{next(_count)}"
+        settings = {**self._settings(), "node": name, "topic": self.topic, "type": self.type,
+                    "latch": bool(self._output.latch), "qos": self._output.qos, "estop_topic": self.model.estop_topic}
+        env = dict(os.environ)
+        package_root = str(Path(__file__).resolve().parents[2])  # ipyros importable as it is here
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+        log = log_dir() / f"{name}.log"
+        self.sentinel = Sentinel(self._backend.sentinel_command(), settings, self.shared, log, env)
+        problem = self.sentinel.ready(SENTINEL_START)
+        if problem is not None:
+            self.sentinel = None
+            raise BaseNodeError(f"the guard of {self.topic} could not start its process ({problem}); "
+                                f"{'the stop message holds' if self.lost else 'nothing of the node runs'}: see {log}")
+
+    def estop(self, on: bool) -> None:
+        """Hold the stop message (``on``) or let commands pass again; the sentinel is woken to act at once. A
+        release starts its process again if it was lost (a one-line error if it cannot: the stop message holds)."""
+        self.shared.estop_session = on
+        if not on and self.lost is not None:
+            self._restart()
+        self._tell({"wake": True})
+
+    def _restart(self) -> None:
+        if self.sentinel is not None:
+            self.sentinel.end(hold=False)  # gone already: its pipe closed, its exit status read
+            self.sentinel = None
+        self.shared.ready, self.shared.state = False, PASSING
+        self.start()
+        self.lost, self._unsent = None, None
+        self._noticed = PASSING
+
+    def tend(self, now: float) -> list[str]:
+        """Fail closed when its process ended on its own (killed, crashed): one line the first time; then, for as
+        long as the session runs, every message is replaced by the stop message and the session itself sends it
+        at the guard's rate (stop on silence no longer holds if the session freezes) until released. A stop
+        message the session cannot send is said too, once until it can again: nothing else passes meanwhile,
+        but the robot gets no stop message from the session either."""
+        sentinel, said = self.sentinel, list[str]()
+        if self.lost is None:
+            if sentinel is None or self._closing or sentinel.running:
+                return said
+            code = sentinel.returncode
+            self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
+            said.append(f"guard {self.topic}: its process ended ({self.lost}; its log: {sentinel.log_path}): the stop "
+                        f"message goes in place of every message until released (%estop --release starts it again)")
+        if now - self._stopped_at >= 1.0 / self.model.repeat:
+            self._stopped_at = now
+            problem = self._send_stop()
+            if problem is not None and self._unsent is None:
+                said.append(f"guard {self.topic}: the session cannot send the stop message ({problem}): nothing else "
+                            f"passes, but no stop message reaches the robot from here; stop it with its own e-stop")
+            elif problem is None and self._unsent is not None:
+                said.append(f"guard {self.topic}: the session sends the stop message again")
+            self._unsent = problem
+        return said
+
+    def _send_stop(self) -> Optional[str]:
+        """The stop message sent by the session on the guarded output; why not, if it could not be."""
+        try:
+            sent = self._send(self.topic, self.stop_message())
+        except Exception as error:  # noqa: BLE001 - said by tend(), once; the next look sends it again
+            return str(error).splitlines()[0] if str(error) else type(error).__name__
+        return None if sent else "the node has no output open on it"
+
+    def close(self, hold: bool) -> None:
+        """End the guard: its sentinel holds the stop message for its grace first (``hold``: the node stops), or
+        quits at once (the guard was removed; the output goes on unguarded)."""
+        self._closing = True
+        if self.sentinel is not None:
+            self.sentinel.end(hold=hold, wait=not hold)
+            self.sentinel = None
+
+    # -- what it shows ------------------------------------------------------------------------------
+    def state(self) -> GuardState:
+        shared = self.shared
+        state = STATES.get(shared.state, "passing") if self.sentinel is not None else "not running"
+        if self.lost is not None:
+            state = f"{STATES[ESTOPPED]} (its process ended: {self.lost})"
+        elif shared.estopped:
+            state = STATES[ESTOPPED] + (" (by its e-stop topic)" if shared.estop_topic else "")
+        elif state == STATES[PASSING] and self.gate.replacing:  # messages go out, but each as the stop message
+            state = f"stopping: {self.gate.replacing}"
+        return GuardState(self.topic, state, self.gate.figures, shared.stops_sent, shared.reach)
+
+    def news(self) -> Optional[str]:
+        """One line when the sentinel's state changed since the last look: a trip on silence, an e-stop by its
+        topic, commands passing again after either (an e-stop from the session was said by who asked for it)."""
+        state, by_topic = self.shared.state, self.shared.estop_topic
+        if state == ESTOPPED and not by_topic and not self._by_topic:
+            self._noticed = PASSING  # the session's own e-stop: its release is said by who asked for it too
+            return None
+        if state == self._noticed:
+            return None
+        if state == PASSING and self.gate.commands == self._commands_at:  # stop messages in place of each one
+            return None  # went out, but no command has passed yet
+        before, self._noticed, self._by_topic = self._noticed, state, by_topic
+        self._commands_at = self.gate.commands
+        if state == STOPPED:
+            return (f"guard {self.topic}: nothing passed for {self.model.timeout:g} s: its process sends the stop "
+                    f"message ({self.model.repeat:g} Hz) until a command passes")
+        if state == ESTOPPED:
+            return f"guard {self.topic}: e-stopped by {self.model.estop_topic}: the stop message holds until released"
+        return f"guard {self.topic}: commands pass again" if before in (STOPPED, ESTOPPED) else None
+
+
+def limits_of(model: GuardModel) -> dict[str, tuple[float, float]]:
+    """A guard model's limits as the gate takes them (the model keeps lists: plain data)."""
+    return {path: (bounds[0], bounds[1]) for path, bounds in model.limits.items()}

@@ -1,0 +1,501 @@
+"""The keeper: the one process of ipyros on a robot's own machine, which runs there what a session places on it.
+
+A session on a laptop reaches the robot over Wi-Fi; the link is what fails most. So a guard that
+must hold when the link is lost runs on the robot (``nd.guard(topic, ..., machine="robot1")``):
+the session's writes go to the keeper, whose gate checks them and publishes them on the robot,
+and whose stop process (:mod:`ipyros.processes.sentinel`, started on the robot) sends the stop
+message on silence, on an e-stop, and for as long as the session is not heard (its *lease*).
+
+Everything the keeper and a session say to each other goes over ROS, under one namespace of the
+keeper's own (:func:`namespace`), as ``std_msgs/String`` texts:
+
+====================================  =============================================================
+topic (under ``/ipyros/machines/NAME``)  what
+====================================  =============================================================
+``info`` (latched)                    the keeper: its name, ROS, host, its start
+                                      (``epoch``), the guards placed on it
+``request``                           a session's request, signed with the machine's token
+``reply``                             the keeper's answer, addressed to the request's sender and
+                                      counter
+``guards/ID/in``                      the session's messages for guard ``ID`` (the guarded type)
+``guards/ID/beat``                    the session's heartbeat for that guard, signed
+``guards/ID/state`` (latched)         what the guard does, as the session's ``%status`` shows it
+====================================  =============================================================
+
+A request is ``{"body": TEXT, "sig": HMAC}``: the HMAC-SHA256, under the token, of the body's exact
+text, which names the keeper's ``epoch`` (a request for an earlier start of the keeper is refused),
+its sender and a counter that only grows (a request replayed is refused). The token is a file made
+at the keeper's first start (mode 0600); a session reads it from the same place (:func:`token_path`),
+copied there by the user as an SSH key is. Nothing sent runs as code: a request names settings and
+numbers, never a path, a shell line or source text.
+
+This module is ROS-free; what subscribes and publishes is :class:`KeeperRos`, one small adapter a ROS
+(``ipyros.ros1.machine``).
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import hmac
+import json
+import os
+import re
+import secrets
+import socket
+import stat
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Optional, Protocol
+
+from ..core import msgtypes
+from ..core.errors import DeclarationError, IpyrosError
+from ..core.guard import Gate, check_rules, check_stop
+from .basenode import log_dir
+from .sentinel import Sentinel, Shared
+
+__all__ = ["Keeper", "KeeperRos", "KeptGuard", "Lease", "MachineError", "Outlet", "Refused", "Token", "Verifier",
+           "beat_text", "check_machine_name", "namespace", "token_path"]
+
+#: A machine's name: a ROS name's word (it is part of the keeper's topics' names).
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+
+#: How long a placed guard's stop process may take to start on the robot (s).
+GUARD_START = 30.0
+
+#: How often the keeper looks at its leases (s): the stop follows a lost lease within this.
+LOOK = 0.01
+
+#: How often a guard's state is sent to its session when nothing changed (s): the session hears that the link holds.
+REPORT = 0.2
+
+
+class MachineError(IpyrosError):
+    """A machine or its keeper cannot be used as asked (no token, no keeper of that name, a request refused)."""
+
+
+class Refused(Exception):
+    """The keeper refuses a request: the one line says why."""
+
+
+def check_machine_name(name: Any) -> str:
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise MachineError(f"machine name {name!r}: give a word of letters, digits and _ (e.g. robot1): it names the "
+                           "keeper's topics")
+    return name
+
+
+def namespace(name: str) -> str:
+    """Where a keeper's topics are."""
+    return f"/ipyros/machines/{name}"
+
+
+def token_path(name: str) -> Path:
+    """Where the token of machine ``name`` is kept, on the robot and on the laptop alike."""
+    home = os.environ.get("ROS_HOME") or str(Path.home() / ".ros")
+    return Path(home) / "ipyros" / "machines" / f"{name}.token"
+
+
+class Token:
+    """A machine's secret: what signs a session's requests and heartbeats."""
+
+    def __init__(self, secret: bytes) -> None:
+        self._secret = secret
+
+    @classmethod
+    def made_or_read(cls, path: Path) -> "Token":
+        """The keeper's: read, or made at its first start (a fresh secret, in a file only its owner reads)."""
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        except FileExistsError:
+            return cls.read(path, path.stem)
+        with os.fdopen(fd, "w") as out:
+            out.write(secrets.token_hex(32) + "\n")
+        return cls.read(path, path.stem)
+
+    @classmethod
+    def read(cls, path: Path, machine: str) -> "Token":
+        """A session's: the file copied from the robot; a one-line error when it is missing or others can read it."""
+        try:
+            mode = path.stat().st_mode
+            text = path.read_text().strip()
+        except FileNotFoundError:
+            raise MachineError(f"no token for machine {machine} at {path}: copy it there from the robot's "
+                               f"{path.name} (its keeper made it at its first start), mode 0600") from None
+        except OSError as error:
+            raise MachineError(f"the token of machine {machine} at {path} cannot be read ({error.strerror})") from None
+        if mode & (stat.S_IRWXG | stat.S_IRWXO):
+            raise MachineError(f"the token of machine {machine} at {path} can be read by others (mode "
+                               f"{stat.S_IMODE(mode):04o}): chmod 600 {path}")
+        if not re.fullmatch(r"[0-9a-f]{32,}", text):
+            raise MachineError(f"{path} is not a machine's token (a line of hex digits): copy it again from the robot")
+        return cls(bytes.fromhex(text))
+
+    def sign(self, text: str) -> str:
+        return hmac.new(self._secret, text.encode(), hashlib.sha256).hexdigest()
+
+    def signed(self, body: dict[str, Any]) -> str:
+        """A request as it is sent: its body's text and that text's signature."""
+        text = json.dumps(body, sort_keys=True, separators=(",", ":"))
+        return json.dumps({"body": text, "sig": self.sign(text)})
+
+
+def beat_text(token: Token, epoch: str, sender: str, n: int) -> str:
+    """A heartbeat: its sender, its counter, their signature (a beat recorded and played again keeps no lease)."""
+    return f"{sender} {n} {token.sign(f'beat:{epoch}:{sender}:{n}')[:32]}"
+
+
+class Verifier:
+    """The keeper's check of what it hears: signed with its token, for this start of it, never heard before."""
+
+    def __init__(self, token: Token, epoch: str) -> None:
+        self._token, self.epoch = token, epoch
+        self._last: dict[str, int] = {}  # by sender: the highest counter heard
+        self._lock = threading.Lock()
+
+    def open(self, text: str) -> dict[str, Any]:
+        """The request's body, once its signature, start and counter hold; :class:`Refused` says why not."""
+        try:
+            outer = json.loads(text)
+            body_text, sig = outer["body"], outer.get("sig")
+            body = json.loads(body_text)
+        except (ValueError, KeyError, TypeError):
+            raise Refused("not a request of ipyros (a JSON body and its signature)") from None
+        if not isinstance(body, dict):
+            raise Refused("not a request of ipyros (its body is not a JSON object)")
+        if not isinstance(sig, str) or not sig:
+            raise Refused("unsigned request: a session signs with the machine's token")
+        if not hmac.compare_digest(sig, self._token.sign(body_text)):
+            raise Refused("bad signature: the sender does not hold this machine's token (copy the robot's token)")
+        if body.get("epoch") != self.epoch:
+            raise Refused("signed for another start of this keeper (a request replayed?): ask again")
+        self._count(str(body.get("from")), body.get("n"))
+        return body
+
+    def beat(self, text: str) -> Optional[str]:
+        """The sender of a valid heartbeat, or None (unsigned, forged, replayed)."""
+        try:
+            sender, n_text, sig = text.split(" ")
+            n = int(n_text)
+        except ValueError:
+            return None
+        if not hmac.compare_digest(sig, self._token.sign(f"beat:{self.epoch}:{sender}:{n}")[:32]):
+            return None
+        try:
+            self._count("beat " + sender, n)
+        except Refused:
+            return None
+        return sender
+
+    def _count(self, sender: str, n: Any) -> None:
+        if not isinstance(n, int):
+            raise Refused("request without its counter")
+        with self._lock:
+            last = self._last.get(sender, -1)
+            if n <= last:
+                raise Refused(f"replayed request (counter {n}, already at {last})")
+            self._last[sender] = n
+
+
+@dataclass
+class Lease:
+    """How long the keeper waits for a session's heartbeat before it stops what that session placed (``length``),
+    and before it ends it (``grace``; None: never), on the keeper's steady clock (s)."""
+
+    length: float = 0.5
+    grace: Optional[float] = 30.0
+    last: float = field(default_factory=time.monotonic)
+    held: bool = False  # the lease ran out: the stop message holds until the session is heard again
+
+    def heard(self, now: float) -> Optional[float]:
+        """A heartbeat came at ``now``; when it ends a hold, how long the session was silent."""
+        silent = now - self.last if self.held else None
+        self.last, self.held = now, False
+        return silent
+
+    def look(self, now: float) -> str:
+        """"ok"; "lost" the first look past its length (the stop message from now on); "gone" past the grace."""
+        silent = now - self.last
+        if self.grace is not None and silent > self.grace:
+            return "gone"
+        if silent > self.length and not self.held:
+            self.held = True
+            return "lost"
+        return "ok"
+
+
+class Outlet(Protocol):
+    """A publisher the adapter made."""
+
+    def write(self, msg: Any) -> None: ...
+    def count(self) -> int: ...  # the subscribers it reaches
+    def close(self) -> None: ...
+
+
+class Closing(Protocol):
+    def close(self) -> None: ...
+
+
+class KeeperRos(Protocol):
+    """What the keeper asks of its ROS (one adapter a ROS)."""
+
+    name: str  # "ROS 1", "ROS 2"
+
+    def address(self) -> str: ...  # where sessions find it (its master, its domain)
+    def publisher(self, topic: str, type_name: str, latch: bool) -> Outlet: ...
+    def subscribe(self, topic: str, type_name: str, callback: Callable[[Any], None]) -> Closing: ...
+    def text(self, data: str) -> Any: ...  # a std_msgs/String
+    def deserialize(self, cls: type, data: bytes) -> Any: ...
+    def sentinel_command(self) -> list[str]: ...
+
+
+class KeptGuard:
+    """A guard placed on this machine by a session: its gate in front of the robot's topic, its stop process, its
+    lease."""
+
+    def __init__(self, keeper: "Keeper", owner: str, gid: str, spec: dict[str, Any]) -> None:
+        ros, ns = keeper.ros, keeper.ns
+        self.owner, self.id, self._log = owner, gid, keeper.log
+        self.topic, self.type = str(spec["topic"]), str(spec["type"])
+        where = f"guard {self.topic}"
+        try:
+            cls = msgtypes.resolve_message(self.type)[1]
+        except IpyrosError as error:
+            raise Refused(f"{where}: {self.type} is not installed on this machine ({error})") from None
+        try:
+            limits, rates = check_rules(cls, spec.get("limits") or {}, spec.get("rate") or {}, spec.get("on_limit", "clamp"),
+                                        spec.get("timeout"), spec.get("grace", 3.0), spec.get("repeat", 10.0), where)
+            self._stop = ros.deserialize(cls, bytes.fromhex(str(spec["stop"])))
+            check_stop(cls, self._stop, limits, where, given=True)
+        except (DeclarationError, ValueError) as error:
+            raise Refused(str(error)) from None
+        self.lease = Lease(float(spec.get("lease", 0.5)), spec.get("grace_lease", 30.0), keeper.clock())
+        self.shared = Shared.create()
+        self.gate = Gate(self.topic, cls, limits, rates, str(spec.get("on_limit", "clamp")), self.stop_message,
+                         lambda: self.shared.estopped, self.shared.passed, lambda text: self._log(f"{where}: {text}"))
+        self._out = ros.publisher(self.topic, self.type, bool(spec.get("latch")))
+        settings = {"node": f"ipyros_machine_{keeper.name}_guard_{gid}", "topic": self.topic, "type": self.type,
+                    "latch": bool(spec.get("latch")), "estop_topic": spec.get("estop_topic"),
+                    "timeout": spec.get("timeout"), "repeat": float(spec.get("repeat", 10.0)),
+                    "grace": float(spec.get("grace", 3.0)), "stop": str(spec["stop"])}
+        log = log_dir() / f"machine_{keeper.name}_guard_{gid}.log"
+        env = dict(os.environ)
+        package_root = str(Path(__file__).resolve().parents[2])  # ipyros importable as it is here
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+        self.sentinel: Optional[Sentinel] = Sentinel(ros.sentinel_command(), settings, self.shared, log, env)
+        problem = self.sentinel.ready(GUARD_START)
+        if problem is not None:
+            self.sentinel = None
+            self._out.close()
+            self.shared.close()
+            raise Refused(f"{where}: its stop process could not start on this machine ({problem}; see {log})")
+        self._state = ros.publisher(f"{ns}/guards/{gid}/state", "std_msgs/String", True)
+        self._text = ros.text
+        self._reported: tuple = ()
+        self._subs = [ros.subscribe(f"{ns}/guards/{gid}/in", self.type, self.command),
+                      ros.subscribe(f"{ns}/guards/{gid}/beat", "std_msgs/String", keeper.beat)]
+
+    def stop_message(self) -> Any:
+        return copy.deepcopy(self._stop)
+
+    def command(self, msg: Any) -> None:
+        """A message from the session: through the gate, onto the robot's topic."""
+        try:
+            send = self.gate.check(msg).send
+            if send is not None:
+                self._out.write(send)
+        except Exception as error:  # noqa: BLE001 - a bad message never ends the keeper
+            self._log(f"guard {self.topic}: a message from the session could not be sent ({error})")
+
+    def hold(self, on: bool) -> None:
+        """The lease ran out (``on``) or the session is heard again: the stop message holds, or commands pass."""
+        self.shared.held = on
+        self._wake()
+
+    def estop(self, on: bool) -> None:
+        self.shared.estop_session = on
+        self._wake()
+
+    def _wake(self) -> None:
+        if self.sentinel is not None:
+            try:
+                self.sentinel.tell({"wake": True})
+            except OSError:
+                pass
+
+    def state(self) -> dict[str, Any]:
+        shared, figures = self.shared, self.gate.figures
+        alive = self.sentinel is not None and self.sentinel.running
+        return {"id": self.id, "topic": self.topic, "state": shared.state, "held": bool(shared.held),
+                "estop_session": shared.estop_session, "estop_topic": shared.estop_topic, "alive": alive,
+                "stops": shared.stops_sent, "reach": shared.reach, "commands": self.gate.commands,
+                "figures": [figures.passed, figures.clamped, figures.dropped, figures.replaced, figures.last_trip]}
+
+    def report(self, now: float, every: float = REPORT) -> None:
+        """Its state to the session: at once when it changed, else every ``every`` s."""
+        state = self.state()
+        key = tuple((k, str(v)) for k, v in state.items() if k != "figures")
+        if key != self._reported or now - getattr(self, "_reported_at", -1e9) >= every:
+            self._reported, self._reported_at = key, now
+            self._state.write(self._text(json.dumps({**state, "at": now})))
+
+    def close(self, hold: bool) -> None:
+        """End it: its stop process holds the stop message for its grace first (``hold``), or quits at once."""
+        for sub in self._subs:
+            sub.close()
+        if self.sentinel is not None:
+            self.sentinel.end(hold=hold, wait=False)
+            self.sentinel = None
+        self._out.close()
+        self._state.close()
+
+
+class Keeper:
+    """The keeper's work, whatever its ROS: requests checked and done, leases watched, the state reported."""
+
+    def __init__(self, name: str, token: Token, ros: KeeperRos, log: Callable[[str], None],
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.name, self.ros, self.log, self.clock = check_machine_name(name), ros, log, clock
+        self.ns = namespace(name)
+        self.epoch = secrets.token_hex(8)
+        self._verifier = Verifier(token, self.epoch)
+        self.guards: dict[str, KeptGuard] = {}
+        self._lock = threading.RLock()
+        self._ended = threading.Event()
+        self._info = ros.publisher(f"{self.ns}/info", "std_msgs/String", True)
+        self._reply = ros.publisher(f"{self.ns}/reply", "std_msgs/String", False)
+        self._request_sub = ros.subscribe(f"{self.ns}/request", "std_msgs/String", self.request)
+        self._publish_info()
+
+    def ready_line(self) -> str:
+        return (f"ipyros machine {self.name} ready on {self.ros.name} at {self.ros.address()} (host "
+                f"{socket.gethostname()}, pid {os.getpid()}): it keeps the guards sessions place on it")
+
+    def _publish_info(self) -> None:
+        with self._lock:
+            guards = [{"id": g.id, "topic": g.topic, "owner": g.owner} for g in self.guards.values()]
+        info = {"name": self.name, "ros": self.ros.name, "host": socket.gethostname(), "pid": os.getpid(),
+                "address": self.ros.address(), "epoch": self.epoch, "guards": guards}
+        self._info.write(self.ros.text(json.dumps(info)))
+
+    # -- requests ---------------------------------------------------------------------------------
+    def request(self, msg: Any) -> None:
+        text = msg.data
+        try:
+            addressed = json.loads(json.loads(text)["body"])  # who to answer, before it is checked
+            sender, n = str(addressed.get("from")), addressed.get("n")
+        except (ValueError, KeyError, TypeError, AttributeError):
+            sender, n = "?", None
+        try:
+            body = self._verifier.open(text)
+            op = body.get("op")
+            act = {"place": self._place, "estop": self._estop, "remove": self._remove}.get(str(op))
+            if act is None:
+                raise Refused(f"unknown request {op!r}")
+            answer = act(body)
+        except Refused as why:
+            self.log(f"refused a request of {sender}: {why}")
+            self._answer(sender, n, {"ok": False, "error": str(why)})
+            return
+        except Exception as error:  # noqa: BLE001 - a request never ends the keeper
+            self.log(f"a request of {sender} failed: {error!r}")
+            self._answer(sender, n, {"ok": False, "error": f"the keeper failed: {error}"})
+            return
+        self._answer(sender, n, {"ok": True, **answer})
+
+    def _answer(self, sender: str, n: Any, fields: dict[str, Any]) -> None:
+        self._reply.write(self.ros.text(json.dumps({"to": sender, "n": n, **fields})))
+
+    def _place(self, body: dict[str, Any]) -> dict[str, Any]:
+        gid = str(body.get("id", ""))
+        if not re.fullmatch(r"[a-z0-9]{6,32}", gid):
+            raise Refused(f"guard id {gid!r}: give 6 to 32 lowercase letters and digits")
+        with self._lock:
+            old = self.guards.get(gid)
+            if old is not None and old.owner != body["from"]:
+                raise Refused(f"guard {gid} belongs to another session")
+        if old is not None:  # placed again (new rules): the new one first, then the old one quits
+            old.close(hold=False)
+        guard = KeptGuard(self, str(body["from"]), gid, dict(body.get("guard") or {}))
+        with self._lock:
+            self.guards[gid] = guard
+        self.log(f"placed guard {guard.topic} for {guard.owner} (lease {guard.lease.length:g} s, grace "
+                 f"{guard.lease.grace} s)")
+        self._publish_info()
+        guard.report(self.clock(), every=0.0)
+        return {"id": gid}
+
+    def _guard_of(self, body: dict[str, Any]) -> KeptGuard:
+        with self._lock:
+            guard = self.guards.get(str(body.get("id")))
+        if guard is None or guard.owner != body["from"]:
+            raise Refused(f"no guard {body.get('id')} of this session here")
+        return guard
+
+    def _estop(self, body: dict[str, Any]) -> dict[str, Any]:
+        guard = self._guard_of(body)
+        guard.estop(bool(body.get("on")))
+        self.log(f"guard {guard.topic}: {'e-stopped' if body.get('on') else 'released'} by {guard.owner}")
+        return {}
+
+    def _remove(self, body: dict[str, Any]) -> dict[str, Any]:
+        guard = self._guard_of(body)
+        with self._lock:
+            self.guards.pop(guard.id, None)
+        guard.close(hold=bool(body.get("hold")))
+        self.log(f"guard {guard.topic} of {guard.owner} removed" + (" (its stop message holds for its grace)"
+                                                                      if body.get("hold") else ""))
+        self._publish_info()
+        return {}
+
+    def beat(self, msg: Any) -> None:
+        sender = self._verifier.beat(msg.data)
+        if sender is None:
+            return
+        now = self.clock()
+        with self._lock:
+            guards = [g for g in self.guards.values() if g.owner == sender]
+        for guard in guards:
+            silent = guard.lease.heard(now)
+            if silent is not None:
+                guard.hold(False)
+                self.log(f"guard {guard.topic}: {sender} heard again after {silent:.2f} s: commands pass again")
+
+    # -- the watch --------------------------------------------------------------------------------
+    def look(self) -> None:
+        """One look at the leases (the stop message when one ran out; the guard ended past its grace) and reports."""
+        now = self.clock()
+        with self._lock:
+            guards = list(self.guards.values())
+        for guard in guards:
+            seen = guard.lease.look(now)
+            if seen == "lost":
+                guard.hold(True)
+                self.log(f"guard {guard.topic}: nothing heard from {guard.owner} for {guard.lease.length:g} s: the "
+                         f"stop message holds until it is heard again")
+            elif seen == "gone":
+                with self._lock:
+                    self.guards.pop(guard.id, None)
+                guard.close(hold=True)
+                self.log(f"guard {guard.topic}: {guard.owner} silent past its grace ({guard.lease.grace:g} s): "
+                         f"the guard ends, its stop message held for its own grace")
+                self._publish_info()
+                continue
+            guard.report(now)
+
+    def run(self) -> None:
+        """Watch until :meth:`end`."""
+        while not self._ended.wait(LOOK):
+            self.look()
+
+    def end(self) -> None:
+        """The keeper stops: every guard holds its stop message for its grace (its process outlives the keeper)."""
+        self._ended.set()
+        self._request_sub.close()
+        with self._lock:
+            guards, self.guards = list(self.guards.values()), {}
+        for guard in guards:
+            guard.close(hold=True)

@@ -1,0 +1,110 @@
+"""The keeper on ROS 1 (see :mod:`ipyros.processes.keeper`): a rospy node of its own on the robot's machine.
+
+    python -m ipyros.machine --name robot1 [--token-file FILE]
+"""
+
+from __future__ import annotations
+
+import io
+import signal
+import sys
+import threading
+import time
+from typing import Any, Callable
+
+from ..core import msgtypes
+from ..processes.keeper import Keeper, Token, token_path
+
+__all__ = ["RospyKeeper", "main"]
+
+
+class _Outlet:
+    def __init__(self, publisher: Any) -> None:
+        self._pub = publisher
+
+    def write(self, msg: Any) -> None:
+        self._pub.publish(msg)
+
+    def count(self) -> int:
+        return self._pub.get_num_connections()
+
+    def close(self) -> None:
+        self._pub.unregister()
+
+
+class _Subscription:
+    def __init__(self, subscriber: Any) -> None:
+        self._sub = subscriber
+
+    def close(self) -> None:
+        self._sub.unregister()
+
+
+class RospyKeeper:
+    """What the keeper asks of ROS 1, with rospy."""
+
+    name = "ROS 1"
+
+    def address(self) -> str:
+        import rosgraph
+
+        return f"master {rosgraph.get_master_uri()}"
+
+    def publisher(self, topic: str, type_name: str, latch: bool) -> _Outlet:
+        import rospy
+
+        # queue_size: sent by rospy's own thread, so that a subscriber that stalls never holds the keeper up
+        return _Outlet(rospy.Publisher(topic, msgtypes.resolve_message(type_name)[1], queue_size=10, latch=latch,
+                                       tcp_nodelay=True))
+
+    def subscribe(self, topic: str, type_name: str, callback: Callable[[Any], None]) -> _Subscription:
+        import rospy
+
+        return _Subscription(rospy.Subscriber(topic, msgtypes.resolve_message(type_name)[1], callback,
+                                              queue_size=10, tcp_nodelay=True))
+
+    def text(self, data: str) -> Any:
+        from std_msgs.msg import String
+
+        return String(data=data)
+
+    def deserialize(self, cls: type, data: bytes) -> Any:
+        msg = cls()
+        msg.deserialize(data)
+        return msg
+
+    @staticmethod
+    def serialize(msg: Any) -> bytes:
+        buffer = io.BytesIO()
+        msg.serialize(buffer)
+        return buffer.getvalue()
+
+    def sentinel_command(self) -> list[str]:
+        return [sys.executable, "-m", "ipyros.ros1.sentinel"]
+
+
+def main(name: str, token_file: Any) -> int:
+    import rospy
+
+    token = Token.made_or_read(token_file or token_path(name))
+    rospy.init_node(f"ipyros_machine_{name}", disable_signals=True)
+
+    def log(text: str) -> None:
+        print(f"{time.strftime('%H:%M:%S')} {text}", flush=True)
+
+    keeper = Keeper(name, token, RospyKeeper(), log)
+    ended = threading.Event()
+
+    def end(*_: Any) -> None:
+        ended.set()
+        keeper.end()
+
+    signal.signal(signal.SIGTERM, end)
+    signal.signal(signal.SIGINT, end)
+    print(keeper.ready_line(), flush=True)
+    try:
+        keeper.run()
+    finally:
+        keeper.end()
+        rospy.signal_shutdown("the keeper ends")
+    return 0

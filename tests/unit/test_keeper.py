@@ -1,0 +1,92 @@
+"""The keeper's checks, pure (:mod:`ipyros.processes.keeper`): the token, signed requests and heartbeats, the lease."""
+
+from __future__ import annotations
+
+import json
+import stat
+
+import pytest
+
+from ipyros.processes.keeper import Lease, MachineError, Refused, Token, Verifier, beat_text, check_machine_name
+
+
+def test_the_token_is_made_once_for_its_owner_only_and_read_back(tmp_path):
+    path = tmp_path / "machines" / "robot1.token"
+    made = Token.made_or_read(path)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    again = Token.made_or_read(path)
+    assert made.sign("x") == again.sign("x") == Token.read(path, "robot1").sign("x")
+
+
+def test_a_missing_or_open_token_is_one_line_saying_what_to_do(tmp_path):
+    path = tmp_path / "robot1.token"
+    with pytest.raises(MachineError, match=r"no token for machine robot1 at .*robot1.token: copy it there"):
+        Token.read(path, "robot1")
+    Token.made_or_read(path)
+    path.chmod(0o644)
+    with pytest.raises(MachineError, match=r"can be read by others \(mode 0644\): chmod 600"):
+        Token.read(path, "robot1")
+    path.write_text("not hex\n")
+    path.chmod(0o600)
+    with pytest.raises(MachineError, match="is not a machine's token"):
+        Token.read(path, "robot1")
+
+
+def test_machine_names_are_words():
+    assert check_machine_name("robot_1") == "robot_1"
+    for bad in ("", "1robot", "robot/1", "a b", None):
+        with pytest.raises(MachineError, match="give a word"):
+            check_machine_name(bad)
+
+
+def _request(token: Token, epoch: str = "e1", n: int = 1, sender: str = "s1") -> str:
+    return token.signed({"epoch": epoch, "from": sender, "n": n, "op": "estop"})
+
+
+def test_a_request_must_be_signed_for_this_start_and_never_heard_before(tmp_path):
+    token = Token.made_or_read(tmp_path / "a.token")
+    other = Token.made_or_read(tmp_path / "b.token")
+    verifier = Verifier(token, "e1")
+    assert verifier.open(_request(token, n=5))["op"] == "estop"
+    with pytest.raises(Refused, match=r"replayed request \(counter 5, already at 5\)"):
+        verifier.open(_request(token, n=5))
+    with pytest.raises(Refused, match="replayed"):
+        verifier.open(_request(token, n=4))
+    assert verifier.open(_request(token, n=6))["n"] == 6
+    assert verifier.open(_request(token, n=1, sender="s2"))["from"] == "s2", "each sender counts on its own"
+    with pytest.raises(Refused, match="bad signature"):
+        verifier.open(_request(other, n=7))
+    with pytest.raises(Refused, match="another start of this keeper"):
+        verifier.open(_request(token, epoch="e0", n=8))
+    body = json.dumps({"epoch": "e1", "from": "s1", "n": 9, "op": "estop"})
+    with pytest.raises(Refused, match="unsigned request"):
+        verifier.open(json.dumps({"body": body}))
+    tampered = json.loads(_request(token, n=10))
+    tampered["body"] = tampered["body"].replace('"estop"', '"remove"')
+    with pytest.raises(Refused, match="bad signature"):
+        verifier.open(json.dumps(tampered))
+    with pytest.raises(Refused, match="not a request of ipyros"):
+        verifier.open("rm -rf /")
+
+
+def test_a_heartbeat_keeps_the_lease_only_signed_and_fresh(tmp_path):
+    token = Token.made_or_read(tmp_path / "a.token")
+    verifier = Verifier(token, "e1")
+    assert verifier.beat(beat_text(token, "e1", "s1", 1)) == "s1"
+    assert verifier.beat(beat_text(token, "e1", "s1", 1)) is None, "replayed"
+    assert verifier.beat(beat_text(token, "e0", "s1", 2)) is None, "for another start"
+    assert verifier.beat(beat_text(Token.made_or_read(tmp_path / "b.token"), "e1", "s1", 3)) is None, "forged"
+    assert verifier.beat("s1 4") is None and verifier.beat("") is None
+    assert verifier.beat(beat_text(token, "e1", "s1", 5)) == "s1"
+
+
+def test_the_lease_holds_the_stop_once_lost_releases_when_heard_and_ends_past_its_grace():
+    lease = Lease(length=0.5, grace=5.0, last=100.0)
+    assert lease.look(100.4) == "ok"
+    assert lease.look(100.6) == "lost" and lease.held
+    assert lease.look(100.7) == "ok", "said once"
+    assert lease.heard(101.0) == pytest.approx(1.0) and not lease.held
+    assert lease.heard(101.1) is None
+    assert lease.look(106.2) == "gone"
+    kept = Lease(length=0.5, grace=None, last=0.0)
+    assert kept.look(1e6) == "lost" and kept.look(2e6) == "ok", "grace None: never ended"
