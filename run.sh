@@ -169,6 +169,9 @@ case "$cmd" in
   demo)     exec "$venv/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   ipython)  exec "$venv/bin/ipython" --ext ipyros "$@" ;;
   notebook) notebook "$@" ;;
+  machine)  # the keeper of the robot's machine: bash run.sh machine robot1 (its ROS_MASTER_URI: the robot's master)
+            [[ $# -ge 1 ]] || { echo "usage: bash run.sh machine NAME [--token-file FILE]" >&2; exit 2; }
+            exec "$venv/bin/python" -m ipyros.machine --name "$@" ;;
   test)     # every layer, each reported; with arguments, pytest gets them in the ROS 1 venv only
             cd "$here"
             if (($# > 0)); then ros1_setup && exec "$venv/bin/python" -m pytest "$@"; fi
@@ -200,6 +203,6 @@ case "$cmd" in
             ros2_venv && "$venv2/bin/python" -m bench "$@" || status=$?
             "$venv/bin/python" -m bench.figures || status=$?
             exit "$status" ;;
-  *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|test|unit|docs|test-ros1|test-ros2|bench] [args...]" >&2
+  *) echo "usage: bash run.sh [demo|ipython|ros2|notebook|machine|test|unit|docs|test-ros1|test-ros2|bench] [args...]" >&2
      exit 2 ;;
 esac

@@ -75,6 +75,17 @@ def test_a_placed_guard_clamps_on_the_machine_and_status_says_where_it_runs(make
     (state,) = engine_of(nd).status().guards
     assert state.state == "passing (on testbot)" and state.figures.clamped >= 5
     assert "on testbot" in str(engine_of(nd).status())
+    # %estop reaches the robot: the stop message holds there until released
+    nd.estop()
+    stopped_at = time.monotonic()
+    wait_for(lambda: any(x == 0.0 and t > stopped_at for x, t in twists(motors)), timeout=20, what="the e-stop")
+    wait_for(lambda: engine_of(nd).status().guards[0].state == "e-stopped (on testbot)", timeout=10,
+             what="the keeper's report of it")
+    nd.release()
+    released_at = time.monotonic()
+    fast.linear.x = 0.2
+    wait_for(lambda: nd.write("/placed1/cmd_vel", fast) or any(x == 0.2 and t > released_at for x, t in twists(motors)),
+             timeout=20, interval=0.1, what="commands after the release")
     assert any("placed guard /placed1/cmd_vel" in line for line in machine.lines)
 
 
