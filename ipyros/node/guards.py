@@ -119,9 +119,16 @@ class NodeGuards:
                 live.update(model)
 
     def estop(self, on: bool) -> list[str]:
-        """E-stop every guard of the node (or release them); the topics."""
+        """E-stop every guard of the node (or release them); the topics. One that cannot be reached (a guard on a
+        machine) never keeps the others from it: each is asked, then the first failure is raised."""
+        failed: list[Exception] = []
         for guard in self.live.values():
-            guard.estop(on)
+            try:
+                guard.estop(on)
+            except Exception as error:  # noqa: BLE001 - raised below, once every guard was asked
+                failed.append(error)
+        if failed:
+            raise failed[0]
         return list(self.live)
 
     def states(self) -> tuple[GuardState, ...]:

@@ -295,6 +295,7 @@ class KeptGuard:
         self._state = ros.publisher(f"{ns}/guards/{gid}/state", "std_msgs/String", True)
         self._text = ros.text
         self._reported: tuple = ()
+        self._reported_at = -float("inf")
         self._subs = [ros.subscribe(f"{ns}/guards/{gid}/in", self.type, self.command),
                       ros.subscribe(f"{ns}/guards/{gid}/beat", "std_msgs/String", keeper.beat)]
 
@@ -338,7 +339,7 @@ class KeptGuard:
         """Its state to the session: at once when it changed, else every ``every`` s."""
         state = self.state()
         key = tuple((k, str(v)) for k, v in state.items() if k != "figures")
-        if key != self._reported or now - getattr(self, "_reported_at", -1e9) >= every:
+        if key != self._reported or now - self._reported_at >= every:
             self._reported, self._reported_at = key, now
             self._state.write(self._text(json.dumps({**state, "at": now})))
 
@@ -417,11 +418,13 @@ class Keeper:
             old = self.guards.get(gid)
             if old is not None and old.owner != body["from"]:
                 raise Refused(f"guard {gid} belongs to another session")
-        if old is not None:  # placed again (new rules): the new one first, then the old one quits
-            old.close(hold=False)
+        # Placed again (new rules): the new one first; the old one keeps the robot until it stands (a refusal
+        # leaves it as it was), then quits.
         guard = KeptGuard(self, str(body["from"]), gid, dict(body.get("guard") or {}))
         with self._lock:
             self.guards[gid] = guard
+        if old is not None:
+            old.close(hold=False)
         self.log(f"placed guard {guard.topic} for {guard.owner} (lease {guard.lease.length:g} s, grace "
                  f"{guard.lease.grace} s)")
         self._publish_info()
@@ -484,12 +487,19 @@ class Keeper:
                          f"the guard ends, its stop message held for its own grace")
                 self._publish_info()
                 continue
-            guard.report(now)
+            try:
+                guard.report(now)
+            except Exception as error:  # noqa: BLE001 - a report lost never keeps the other leases from their look
+                self.log(f"guard {guard.topic}: its state could not be reported ({error!r})")
 
     def run(self) -> None:
-        """Watch until :meth:`end`."""
+        """Watch until :meth:`end`. A look that fails is logged and the next one comes: the leases are never left
+        unwatched."""
         while not self._ended.wait(LOOK):
-            self.look()
+            try:
+                self.look()
+            except Exception as error:  # noqa: BLE001 - see the docstring
+                self.log(f"a look at the leases failed ({error!r}); looking again")
 
     def end(self) -> None:
         """The keeper stops: every guard holds its stop message for its grace (its process outlives the keeper)."""
