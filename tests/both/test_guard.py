@@ -24,6 +24,9 @@ LIMITS = {"linear.x": (-0.5, 0.5), "angular.z": (-1.0, 1.0)}
 #: A stop on silence long enough that a loaded machine's stall of a 20 Hz stream is not silence (the bench measures
 #: how soon the stop comes: bench/guard.py).
 SILENCE = 0.6
+#: What a loaded machine may add to a stop's delivery (CI's 2 cores once took 0.9 s on ROS 2): a test asserts that
+#: the silence brought the stop, not the session's end; how soon it comes is the bench's (bench/guard.py).
+LATE = 2.0
 
 
 def twists(listener) -> list[tuple[float, float, float, float]]:
@@ -80,7 +83,7 @@ def test_the_basenode_stopped_the_stop_message_comes_within_the_timeout_and_comm
         last_command = max(t for x, *_, t in twists(robot) if x == 0.3)
         first_stop = min(stops(robot, frozen_at))
         around = [(x, round(t - frozen_at, 3)) for x, *_, t in twists(robot) if abs(t - frozen_at) < 1.0]
-        assert first_stop - last_command <= SILENCE + 0.5, around  # the timeout, and what delivery takes
+        assert first_stop - last_command <= SILENCE + LATE, around  # the timeout, and what delivery takes
         wait_for(lambda: len(stops(robot, frozen_at)) >= 3, what="the stop message again, at its rate")
     finally:
         os.kill(nd.base.pid, signal.SIGCONT)
@@ -358,7 +361,7 @@ def test_the_session_frozen_then_killed_the_guards_own_process_stops_the_robot(g
     os.killpg(session.pid, signal.SIGSTOP)  # what Ctrl-Z does to the foreground job
     wait_for(lambda: stops(robot, frozen), timeout=10, what="the stop message while the session is frozen")
     last = max(t for x, *_, t in twists(robot) if x == 0.25)
-    assert min(stops(robot, frozen)) - last <= 0.3 + 0.5
+    assert min(stops(robot, frozen)) - last <= 0.3 + LATE
     os.killpg(session.pid, signal.SIGCONT)
     thawed = time.monotonic()
     wait_for(lambda: any(x == 0.25 and t > thawed for x, *_, t in twists(robot)), what="commands after the thaw")
