@@ -130,7 +130,8 @@ def test_a_lost_link_stops_the_robot_within_the_lease_and_commands_pass_once_it_
         first = wait_for(lambda: next((t for x, t in twists(motors) if x == 0.0 and t > cut_at), None), timeout=10,
                          what="the stop message at the motors after the cut")
         assert first - cut_at < 0.5 + 2.0, first - cut_at  # lease 0.5 s, and what a loaded machine adds; p99: the bench
-        wait_for(lambda: any("nothing heard from" in line for line in keeper.lines), timeout=10, what="the keeper's word")
+        wait_for(lambda: any("nothing heard from" in line for line in keeper.lines), timeout=10,
+                 what="the keeper's word")
         time.sleep(1.0)  # the link stays down: the robot holds the stop message
         assert all(x == 0.0 for x, t in twists(motors) if t > first)
 
