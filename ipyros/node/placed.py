@@ -127,8 +127,8 @@ class PlacedGuard(LiveGuard):
                 self._answered.wait(0.05)
             epoch = self._epoch
         if epoch is None:
-            raise MachineError(f"no keeper of machine {self.machine} answers on this ROS graph within {FIND:g} s: start "
-                               f"it on the robot (python -m ipyros.machine --name {self.machine}) with the same "
+            raise MachineError(f"no keeper of machine {self.machine} answers on this ROS graph within {FIND:g} s: "
+                               f"start it on the robot (python -m ipyros.machine --name {self.machine}) with the same "
                                "ROS_MASTER_URI")
         while time.monotonic() < deadline:
             n = self._next()
@@ -198,7 +198,15 @@ class PlacedGuard(LiveGuard):
         self._ask("estop", timeout=5.0, on=on)
 
     def tend(self, now: float) -> list[str]:
-        """Say when the keeper's reports stop (the link lost, the keeper gone) and when they come again."""
+        """Say when the keeper's reports stop (the link lost, the keeper gone) and when they come again, and when
+        the guard's stop process ended on the machine (the keeper then holds the stop message until released)."""
+        lost = self._report.get("lost")
+        if lost != self.lost:
+            self.lost = lost
+            if lost:
+                return [f"guard {self.topic}: its stop process ended on machine {self.machine} ({lost}): the robot "
+                        f"gets the stop message in place of every command until released (%estop --release starts "
+                        f"it again)"]
         silent = now - self._heard_at
         if not self._silent_said and silent > max(self.model.lease, 0.5):
             self._silent_said = True
@@ -220,7 +228,9 @@ class PlacedGuard(LiveGuard):
             state = STATES[ESTOPPED] + (" (by its e-stop topic)" if report.get("estop_topic") else "")
         else:
             state = STATES.get(report.get("state", PASSING), "passing")
-        if not report.get("alive"):
+        if report.get("lost"):
+            state = f"{STATES[ESTOPPED]} (its stop process ended: {report['lost']})"
+        elif not report.get("alive"):
             state = "its stop process ended on the machine"
         # What the session's own gate did (the same rules: the keeper's gate then passes what it sends), and the
         # stop messages the keeper put in place of commands (e-stopped, or the session not heard).

@@ -266,7 +266,8 @@ class KeptGuard:
         except IpyrosError as error:
             raise Refused(f"{where}: {self.type} is not installed on this machine ({error})") from None
         try:
-            limits, rates = check_rules(cls, spec.get("limits") or {}, spec.get("rate") or {}, spec.get("on_limit", "clamp"),
+            limits, rates = check_rules(cls, spec.get("limits") or {}, spec.get("rate") or {},
+                                        spec.get("on_limit", "clamp"),
                                         spec.get("timeout"), spec.get("grace", 3.0), spec.get("repeat", 10.0), where)
             self._stop = ros.deserialize(cls, bytes.fromhex(str(spec["stop"])))
             check_stop(cls, self._stop, limits, where, given=True)
@@ -274,24 +275,26 @@ class KeptGuard:
             raise Refused(str(error)) from None
         self.lease = Lease(float(spec.get("lease", 0.5)), spec.get("grace_lease", 30.0), keeper.clock())
         self.shared = Shared.create()
+        #: Why its stop process is gone, if it ended on its own: the guard then fails closed (see :meth:`tend`).
+        self.lost: Optional[str] = None
+        self._stopped_at = -float("inf")  # when the keeper last sent the stop message for a lost process
+        self.repeat = float(spec.get("repeat", 10.0))
         self.gate = Gate(self.topic, cls, limits, rates, str(spec.get("on_limit", "clamp")), self.stop_message,
-                         lambda: self.shared.estopped, self.shared.passed, lambda text: self._log(f"{where}: {text}"))
+                         self.holding, self.shared.passed, lambda text: self._log(f"{where}: {text}"))
         self._out = ros.publisher(self.topic, self.type, bool(spec.get("latch")))
-        settings = {"node": f"ipyros_machine_{keeper.name}_guard_{gid}", "topic": self.topic, "type": self.type,
-                    "latch": bool(spec.get("latch")), "estop_topic": spec.get("estop_topic"),
-                    "timeout": spec.get("timeout"), "repeat": float(spec.get("repeat", 10.0)),
-                    "grace": float(spec.get("grace", 3.0)), "stop": str(spec["stop"])}
-        log = log_dir() / f"machine_{keeper.name}_guard_{gid}.log"
-        env = dict(os.environ)
-        package_root = str(Path(__file__).resolve().parents[2])  # ipyros importable as it is here
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
-        self.sentinel: Optional[Sentinel] = Sentinel(ros.sentinel_command(), settings, self.shared, log, env)
-        problem = self.sentinel.ready(GUARD_START)
-        if problem is not None:
-            self.sentinel = None
+        self._settings = {"node": f"ipyros_machine_{keeper.name}_guard_{gid}", "topic": self.topic,
+                          "type": self.type, "latch": bool(spec.get("latch")), "estop_topic": spec.get("estop_topic"),
+                          "timeout": spec.get("timeout"), "repeat": self.repeat,
+                          "grace": float(spec.get("grace", 3.0)), "stop": str(spec["stop"])}
+        self.log_path = log_dir() / f"machine_{keeper.name}_guard_{gid}.log"
+        self._command = ros.sentinel_command()
+        self.sentinel: Optional[Sentinel] = None
+        try:
+            self._start_sentinel()
+        except Refused:
             self._out.close()
             self.shared.close()
-            raise Refused(f"{where}: its stop process could not start on this machine ({problem}; see {log})")
+            raise
         self._state = ros.publisher(f"{ns}/guards/{gid}/state", "std_msgs/String", True)
         self._text = ros.text
         self._reported: tuple = ()
@@ -299,8 +302,25 @@ class KeptGuard:
         self._subs = [ros.subscribe(f"{ns}/guards/{gid}/in", self.type, self.command),
                       ros.subscribe(f"{ns}/guards/{gid}/beat", "std_msgs/String", keeper.beat)]
 
+    def _start_sentinel(self) -> None:
+        env = dict(os.environ)
+        package_root = str(Path(__file__).resolve().parents[2])  # ipyros importable as it is here
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+        self.shared.ready = False
+        sentinel = Sentinel(self._command, self._settings, self.shared, self.log_path, env)
+        problem = sentinel.ready(GUARD_START)
+        if problem is not None:
+            raise Refused(f"guard {self.topic}: its stop process could not start on this machine ({problem}; see "
+                          f"{self.log_path})")
+        self.sentinel = sentinel
+
     def stop_message(self) -> Any:
         return copy.deepcopy(self._stop)
+
+    def holding(self) -> bool:
+        """Whether the stop message goes in place of every command: e-stopped, the session not heard, or its stop
+        process lost."""
+        return self.shared.estopped or self.lost is not None
 
     def command(self, msg: Any) -> None:
         """A message from the session: through the gate, onto the robot's topic."""
@@ -317,8 +337,35 @@ class KeptGuard:
         self._wake()
 
     def estop(self, on: bool) -> None:
+        """E-stop (``on``) or release; a release starts its stop process again if it was lost (refused in one line
+        if it cannot: the stop message holds)."""
         self.shared.estop_session = on
+        if not on and self.lost is not None:
+            if self.sentinel is not None:
+                self.sentinel.end(hold=False)  # gone already: its pipe closed, its exit status read
+                self.sentinel = None
+            self._start_sentinel()
+            self.lost = None
         self._wake()
+
+    def tend(self, now: float) -> Optional[str]:
+        """Fail closed when its stop process ended on its own (killed, crashed): one line the first time; then
+        every command is replaced by the stop message, and the keeper itself sends it at the guard's rate (the stop
+        on silence and on a lost lease no longer has a process of its own) until the session releases it."""
+        said = None
+        if self.lost is None:
+            sentinel = self.sentinel
+            if sentinel is None or sentinel.running:
+                return None
+            code = sentinel.returncode
+            self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
+            said = (f"guard {self.topic}: its stop process ended ({self.lost}; its log: {self.log_path}): the keeper "
+                    "sends the stop message in place of every command until the session releases it")
+        if now - self._stopped_at >= 1.0 / self.repeat:
+            self._stopped_at = now
+            self._out.write(self.stop_message())
+            self.shared.stops_sent += 1
+        return said
 
     def _wake(self) -> None:
         if self.sentinel is not None:
@@ -330,7 +377,7 @@ class KeptGuard:
     def state(self) -> dict[str, Any]:
         shared, figures = self.shared, self.gate.figures
         alive = self.sentinel is not None and self.sentinel.running
-        return {"id": self.id, "topic": self.topic, "state": shared.state, "held": bool(shared.held),
+        return {"id": self.id, "topic": self.topic, "state": shared.state, "held": bool(shared.held), "lost": self.lost,
                 "estop_session": shared.estop_session, "estop_topic": shared.estop_topic, "alive": alive,
                 "stops": shared.stops_sent, "reach": shared.reach, "commands": self.gate.commands,
                 "figures": [figures.passed, figures.clamped, figures.dropped, figures.replaced, figures.last_trip]}
@@ -487,6 +534,12 @@ class Keeper:
                          f"the guard ends, its stop message held for its own grace")
                 self._publish_info()
                 continue
+            try:
+                said = guard.tend(now)
+                if said:
+                    self.log(said)
+            except Exception as error:  # noqa: BLE001 - the next look sends it again
+                self.log(f"guard {guard.topic}: the keeper could not send the stop message ({error!r})")
             try:
                 guard.report(now)
             except Exception as error:  # noqa: BLE001 - a report lost never keeps the other leases from their look

@@ -89,6 +89,48 @@ def test_a_placed_guard_clamps_on_the_machine_and_status_says_where_it_runs(make
     assert any("placed guard /placed1/cmd_vel" in line for line in machine.lines)
 
 
+def test_the_guards_stop_process_killed_on_the_machine_the_keeper_sends_the_stop_until_released(make_node, peer,
+                                                                                                  keeper, notices):
+    """Fail closed on the robot: its stop process SIGKILLed, the keeper puts the stop message in place of every
+    command and sends it at the guard's rate; the session says so once and %status shows it; a release starts the
+    process again and commands pass."""
+    machine = keeper()
+    motors = peer("listen_twist.py", "/placed4/cmd_vel", "--name=motors4")
+    motors.wait_line("ready")
+    nd = make_node("placed4")
+    nd.new.publish("/placed4/cmd_vel", msgType=Twist)
+    nd.guard("/placed4/cmd_vel", limits=LIMITS, machine="testbot", repeat=20.0)
+    nd.create()
+    command = Twist()
+    command.linear.x = 0.3
+    wait_for(lambda: nd.write("/placed4/cmd_vel", command) or any(x == 0.3 for x, _ in twists(motors)), timeout=20,
+             interval=0.05, what="commands at the motors")
+    (stop_process,) = descendants(machine.proc.pid)
+    os.kill(stop_process, signal.SIGKILL)
+    killed_at = time.monotonic()
+    wait_for(lambda: any("its stop process ended (killed by signal 9" in line for line in machine.lines),
+             timeout=10, what="the keeper's word")
+    wait_for(lambda: any("its stop process ended on machine testbot (killed by signal 9)" in n for n in notices),
+             timeout=10, what="the session's word")
+    said_at = time.monotonic()
+    for _ in range(20):  # the session goes on writing commands: none passes, the stop message comes at 20 Hz
+        nd.write("/placed4/cmd_vel", command)
+        time.sleep(0.05)
+    after = [(x, t) for x, t in twists(motors) if t > said_at]
+    assert after and all(x == 0.0 for x, _ in after), after[:5]
+    assert len(after) >= 10, "the stop message at the guard's rate, from the keeper"
+    (state,) = engine_of(nd).status().guards
+    assert state.state == "e-stopped (its stop process ended: killed by signal 9) (on testbot)", state.state
+    assert not any(x == 0.3 and t > killed_at + 0.5 for x, t in twists(motors))
+    nd.release()
+    released_at = time.monotonic()
+    wait_for(lambda: nd.write("/placed4/cmd_vel", command) or any(x == 0.3 and t > released_at
+                                                                   for x, t in twists(motors)),
+             timeout=30, interval=0.05, what="commands after the release")
+    assert len(descendants(machine.proc.pid)) == 1, "its stop process started again"
+    wait_for(lambda: engine_of(nd).status().guards[0].state == "passing (on testbot)", timeout=10, what="passing")
+
+
 SESSION = """
 import sys, time
 from ipyros import rosNode
