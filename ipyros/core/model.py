@@ -125,6 +125,10 @@ class BaseModel:
     launch_node: Optional[str] = None
     launch_args: dict[str, str] = field(default_factory=dict)
     bag: Optional[dict[str, Any]] = None
+    #: The machine whose keeper runs it (``.machine("robot1")``), and how long that keeper waits to hear the
+    #: session before it stops it (s; None: it is left running).
+    machine: Optional[str] = None
+    machine_grace: Optional[float] = 30.0
 
     def describe(self) -> str:
         """The basenode in a few words, as a person names it: ``ipyros_demo/move_base``, ``bag /data/run1.bag``,

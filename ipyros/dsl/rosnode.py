@@ -23,12 +23,13 @@ from typing import Any, Callable, Optional
 from ..core import names
 from ..core.actions import SentGoal
 from ..core.errors import DeclarationError, NotDeclaredError, cut
+from ..core.guard import DEFAULT_MACHINE_GRACE
 from ..core.model import NodeModel
 from ..core.records import History, NodeStatus, Versions
 from ..node import declaring
 from ..node.engine import NodeEngine
 from ..node.session import Session, current
-from ..node.wrapping import discover, set_bag, set_base, set_launch_base
+from ..node.wrapping import discover, set_bag, set_base, set_launch_base, set_machine
 from . import keeping
 from .declarations import UNSET, NodeParams, TopicHandler
 
@@ -118,6 +119,16 @@ class rosNode:  # noqa: N801 - the paper's name
     def basePackage(self, package: str) -> "rosNode":  # noqa: N802 - the paper's name
         """The package of the basenode, found as rosrun (ROS 2: ros2 run) finds it."""
         set_base(self._engine, package=package)
+        return self
+
+    def machine(self, name: Optional[str], grace: Optional[float] = DEFAULT_MACHINE_GRACE) -> "rosNode":
+        """Run the basenode on the robot's machine ``name``, whose keeper starts it there (``python -m ipyros.machine
+        --name NAME --allow PKG`` runs on the robot; its token is copied here, see the guide's "A robot on another
+        machine"). It runs beside the robot's drivers, with the remaps, parameters and arguments declared here; the
+        keeper stops it when this session is not heard for ``grace`` seconds (None: it is left running), and when
+        the keeper itself ends. ``machine(None)`` brings it back to this machine.
+        """
+        set_machine(self._engine, name, grace)
         return self
 
     def baseLaunch(self, launch: str, node: str, args: Optional[dict[str, Any]] = None,

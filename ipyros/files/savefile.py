@@ -256,7 +256,11 @@ def _base_lines(var: str, model: NodeModel) -> list[str]:
                "params": base.params or None, "args": base.args or None, "env": base.env or None}
     text = "".join(f", {k}={v!r}" for k, v in options.items() if v)
     lines = [f"{var}.baseNode({base.executable!r}{text})"] if base.executable else []
-    return lines + ([f"{var}.basePackage({base.package!r})"] if base.package else [])
+    lines += [f"{var}.basePackage({base.package!r})"] if base.package else []
+    if base.machine:
+        grace = "" if base.machine_grace == DEFAULT_MACHINE_GRACE else f", grace={base.machine_grace!r}"
+        lines.append(f"{var}.machine({base.machine!r}{grace})")
+    return lines
 
 
 def _declared_name(model: NodeModel, slot: str) -> str:

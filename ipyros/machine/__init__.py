@@ -20,8 +20,12 @@ __all__ = ["main"]
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m ipyros.machine",
-                                     description="Keep what ipyros sessions place on this machine (guards).")
+                                     description="Keep what ipyros sessions place on this machine: guards, and "
+                                                 "basenodes of the packages it allows.")
     parser.add_argument("--name", required=True, help="this machine's name, as sessions place on it (e.g. robot1)")
+    parser.add_argument("--allow", action="append", default=[], metavar="PACKAGE",
+                        help="a package whose executables sessions may start here as basenodes (again for more); "
+                             "none by default")
     parser.add_argument("--token-file", type=Path, default=None,
                         help="the token's file (default ~/.ros/ipyros/machines/NAME.token, made at the first start)")
     return parser
@@ -29,11 +33,16 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Optional[list[str]] = None) -> int:
     args = _parser().parse_args(argv)
-    from ..processes.keeper import MachineError, check_machine_name
+    from ..processes.keeper import check_machine_name
+
+    from ..core.errors import IpyrosError
+    from ..core.names import check_package_name
 
     try:
         check_machine_name(args.name)
-    except MachineError as error:
+        for package in args.allow:
+            check_package_name(package)
+    except IpyrosError as error:
         print(f"ipyros machine: {error}", file=sys.stderr)
         return 2
     wanted = os.environ.get("IPYROS_ROS") or os.environ.get("ROS_VERSION") or ""
@@ -45,4 +54,4 @@ def main(argv: Optional[list[str]] = None) -> int:
         return 2
     from ..ros1.machine import main as run
 
-    return run(args.name, args.token_file)
+    return run(args.name, args.token_file, frozenset(args.allow))

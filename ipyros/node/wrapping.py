@@ -26,9 +26,12 @@ from ..core.model import BaseModel, NodeModel
 from ..core.plan import RelaySpec, internal_name
 from ..core.records import Interface
 from ..core.remapping import base_fullname, base_namespace, base_node_name, basenode_remaps, check_wrapping, reresolve
+from ..core.guard import DEFAULT_MACHINE_GRACE
 from ..processes.basenode import exit_reason
+from ..processes.keeper import MachineError, Token, check_machine_name, token_path
 from ..processes.playback import player_args
 from . import declaring
+from .placedbase import PlacedBase, placed_problem
 
 
 class NodeEngine(Protocol):
@@ -96,6 +99,39 @@ def set_base(node: "NodeEngine", **fields: Any) -> None:
         reresolve(model)
 
     node.apply(edit, "base " + ", ".join(f"{k}={cut(v)}" for k, v in fields.items()))
+
+
+def set_machine(node: "NodeEngine", machine: Optional[str], grace: Optional[float] = DEFAULT_MACHINE_GRACE) -> None:
+    """Place the basenode on the machine whose keeper is ``machine`` (None: back on this one); past ``grace`` s
+    without a word from this session, that keeper stops it (None: it is left running)."""
+    where = f"{node.name}.machine({machine!r})"
+    if node.created:
+        raise DeclarationError(f"{node.name} is already running; place its basenode before create()")
+    if machine is not None:
+        if node.session.backend.name != "ROS 1":
+            raise DeclarationError(f"{where}: a basenode on another machine needs its keeper, which runs on ROS 1 "
+                                   f"for now; on {node.session.backend.name} it runs here (leave .machine() out)")
+        try:
+            check_machine_name(machine)
+            Token.read(token_path(machine), machine)  # said now, not when the node starts
+        except MachineError as error:
+            raise DeclarationError(f"{where}: {error}") from None
+    if grace is not None and (not isinstance(grace, (int, float)) or isinstance(grace, bool) or
+                              not 0 < grace < float("inf")):
+        raise DeclarationError(f"{where}: grace={cut(grace)}: give the seconds after which its keeper stops it when "
+                               "this session is silent (e.g. 30), or None to keep it running")
+    base_now = node.model().base
+    problem = placed_problem(base_now) if machine is not None and base_now is not None and \
+        (base_now.executable or base_now.launch or base_now.bag) else None
+    if problem is not None:
+        raise DeclarationError(f"{where}: {problem}")
+
+    def edit(model: NodeModel) -> None:
+        base = model.base or BaseModel()
+        base.machine, base.machine_grace = machine, grace if machine is not None else DEFAULT_MACHINE_GRACE
+        model.base = base
+
+    node.apply(edit, f"base machine={machine}" + (f", grace={grace}" if machine is not None else ""))
 
 
 def _own_name(node: "NodeEngine", fields: dict[str, Any]) -> Optional[str]:
@@ -260,14 +296,22 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
         if starting.is_set():
             return
         tail = "\n    ".join(last_lines[-8:])
-        session.notify(f"ipyros: basenode {base_fullname(model)} of {node.called} {exit_reason(returncode)}; "
+        on = f" on {base.machine}" if base.machine else ""
+        session.notify(f"ipyros: basenode {base_fullname(model)} of {node.called}{on} {exit_reason(returncode)}; "
                        f"restart it with {node.called}.base.restart()\n    {tail}")
 
-    process = backend.basenode(base, on_exit=died)
-    real = backend.note_link(base, process)
-    if real is not None:
-        session.notify(f"ipyros: {base.package}/{base.executable} is a link to {real}, outside the package; "
-                       "that is what runs (as rosrun would run it)")
+    process: Any
+    if base.machine is not None:  # its machine's keeper runs it
+        problem = placed_problem(base)
+        if problem is not None:
+            raise BaseNodeError(f"{node.called}.machine({base.machine!r}): {problem}; or leave .machine() out")
+        process = PlacedBase(base, backend, node.fullname, session.notify, on_exit=died)
+    else:
+        process = backend.basenode(base, on_exit=died)
+        real = backend.note_link(base, process)
+        if real is not None:
+            session.notify(f"ipyros: {base.package}/{base.executable} is a link to {real}, outside the package; "
+                           "that is what runs (as rosrun would run it)")
     handle: Any = process
     if from_launch:
         launch = model.base.launch

@@ -20,7 +20,14 @@ topic (under ``/ipyros/machines/NAME``)  what
 ``guards/ID/in``                      the session's messages for guard ``ID`` (the guarded type)
 ``guards/ID/beat``                    the session's heartbeat for that guard, signed
 ``guards/ID/state`` (latched)         what the guard does, as the session's ``%status`` shows it
+``bases/ID/beat``                     the session's heartbeat for basenode ``ID``, signed
+``bases/ID/state`` (latched)          the basenode's process: running, its pid, how it ended
 ====================================  =============================================================
+
+A basenode placed on the machine (``baseNode(EXE).basePackage(PKG).machine("robot1")``) runs as the
+keeper's child, found as rosrun finds it, and only from a package the keeper was started to allow
+(``--allow PKG``): by its package and executable names, never a path, never a shell. It ends with
+the keeper, and when its session is not heard for its grace.
 
 A request is ``{"body": TEXT, "sig": HMAC}``: the HMAC-SHA256, under the token, of the body's exact
 text, which names the keeper's ``epoch`` (a request for an earlier start of the keeper is refused),
@@ -50,13 +57,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Optional, Protocol
 
-from ..core import msgtypes
+from ..core import msgtypes, names
 from ..core.errors import DeclarationError, IpyrosError
 from ..core.guard import Gate, check_rules, check_stop
-from .basenode import log_dir
+from ..core.model import BaseModel
+from .basenode import BaseProcess, exit_reason, log_dir
 from .sentinel import Sentinel, Shared
 
-__all__ = ["Keeper", "KeeperRos", "KeptGuard", "Lease", "MachineError", "Outlet", "Refused", "Token", "Verifier",
+__all__ = ["Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "MachineError", "Outlet", "Refused", "Token", "Verifier",
            "beat_text", "check_machine_name", "namespace", "token_path"]
 
 #: A machine's name: a ROS name's word (it is part of the keeper's topics' names).
@@ -250,6 +258,27 @@ class KeeperRos(Protocol):
     def text(self, data: str) -> Any: ...  # a std_msgs/String
     def deserialize(self, cls: type, data: bytes) -> Any: ...
     def sentinel_command(self) -> list[str]: ...
+    def basenode_command(self, base: BaseModel) -> list[str]: ...  # found as rosrun / the ament index finds it
+    def has_package(self, package: str) -> bool: ...
+
+
+class Reporter:
+    """What the keeper tells a session of one thing it keeps, on a latched topic: at once when it changed, else
+    every ``REPORT`` s (the session hears that the link holds)."""
+
+    def __init__(self, ros: KeeperRos, topic: str) -> None:
+        self._out, self._text = ros.publisher(topic, "std_msgs/String", True), ros.text
+        self._reported: tuple = ()
+        self._reported_at = -float("inf")
+
+    def report(self, state: dict[str, Any], now: float, every: float = REPORT, steady: tuple[str, ...] = ()) -> None:
+        key = tuple((k, str(v)) for k, v in state.items() if k not in steady)
+        if key != self._reported or now - self._reported_at >= every:
+            self._reported, self._reported_at = key, now
+            self._out.write(self._text(json.dumps({**state, "at": now})))
+
+    def close(self) -> None:
+        self._out.close()
 
 
 class KeptGuard:
@@ -295,10 +324,7 @@ class KeptGuard:
             self._out.close()
             self.shared.close()
             raise
-        self._state = ros.publisher(f"{ns}/guards/{gid}/state", "std_msgs/String", True)
-        self._text = ros.text
-        self._reported: tuple = ()
-        self._reported_at = -float("inf")
+        self._reporter = Reporter(ros, f"{ns}/guards/{gid}/state")
         self._subs = [ros.subscribe(f"{ns}/guards/{gid}/in", self.type, self.command),
                       ros.subscribe(f"{ns}/guards/{gid}/beat", "std_msgs/String", keeper.beat)]
 
@@ -383,12 +409,7 @@ class KeptGuard:
                 "figures": [figures.passed, figures.clamped, figures.dropped, figures.replaced, figures.last_trip]}
 
     def report(self, now: float, every: float = REPORT) -> None:
-        """Its state to the session: at once when it changed, else every ``every`` s."""
-        state = self.state()
-        key = tuple((k, str(v)) for k, v in state.items() if k != "figures")
-        if key != self._reported or now - self._reported_at >= every:
-            self._reported, self._reported_at = key, now
-            self._state.write(self._text(json.dumps({**state, "at": now})))
+        self._reporter.report(self.state(), now, every, steady=("figures",))
 
     def close(self, hold: bool) -> None:
         """End it: its stop process holds the stop message for its grace first (``hold``), or quits at once."""
@@ -398,19 +419,104 @@ class KeptGuard:
             self.sentinel.end(hold=hold, wait=False)
             self.sentinel = None
         self._out.close()
-        self._state.close()
+        self._reporter.close()
+
+
+#: An executable as a placed basenode's request may name it: a name in its package, never a path or a shell line.
+_EXECUTABLE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+-]{0,127}$")
+
+#: The most arguments, and the longest, a placed basenode's request may give it.
+_MOST_ARGS, _LONGEST_ARG = 64, 4096
+
+
+class KeptBase:
+    """A basenode placed on this machine by a session: its process, the keeper's child (it ends with the keeper),
+    and its session's lease (past its grace, the keeper stops it; grace None: it is left running)."""
+
+    def __init__(self, keeper: "Keeper", owner: str, bid: str, spec: dict[str, Any]) -> None:
+        self.owner, self.id, self._log = owner, bid, keeper.log
+        base = _base_of(spec, keeper.allowed)
+        self.what = base.describe()
+        try:
+            argv = keeper.ros.basenode_command(base)
+        except IpyrosError as error:
+            raise Refused(str(error)) from None
+        grace = spec.get("grace", 30.0)
+        if grace is not None and (not isinstance(grace, (int, float)) or isinstance(grace, bool) or grace <= 0):
+            raise Refused(f"basenode {self.what}: grace={grace!r}: give the seconds (> 0), or None to keep it")
+        self.lease = Lease(float("inf"), grace, keeper.clock())
+        self.process = BaseProcess(argv, node_name=base.node_name, on_exit=self._exited,
+                                   log_path=log_dir() / f"machine_{keeper.name}_base_{bid}.log")
+        try:
+            self.process.start()
+        except IpyrosError as error:
+            raise Refused(f"basenode {self.what}: {error}") from None
+        self._reporter = Reporter(keeper.ros, f"{keeper.ns}/bases/{bid}/state")
+        self._beats = keeper.ros.subscribe(f"{keeper.ns}/bases/{bid}/beat", "std_msgs/String", keeper.beat)
+
+    def _exited(self, process: Any, returncode: int, last_lines: list[str]) -> None:
+        self._log(f"basenode {self.what} of {self.owner} {exit_reason(returncode)}")
+
+    def state(self) -> dict[str, Any]:
+        process = self.process
+        ended = process.returncode is not None and not process.running
+        return {"id": self.id, "base": self.what, "running": process.running, "pid": process.pid,
+                "returncode": process.returncode, "tail": process.tail(8) if ended else []}
+
+    def report(self, now: float, every: float = REPORT) -> None:
+        self._reporter.report(self.state(), now, every)
+
+    def close(self) -> None:
+        self._beats.close()
+        self.process.stop()
+        self._reporter.close()
+
+
+def _base_of(spec: dict[str, Any], allowed: frozenset[str]) -> BaseModel:
+    """The basenode a request names, checked: an allowed package's executable by name, and ROS names, arguments and
+    parameters of the right shape; :class:`Refused` in one line otherwise. Nothing of it is a path or a shell."""
+    package, executable = spec.get("package"), spec.get("executable")
+    if not isinstance(package, str) or package not in allowed:
+        allows = ", ".join(sorted(allowed)) or "nothing"
+        raise Refused(f"package {package!r:.60} is not allowed on this machine (its keeper allows {allows}): start "
+                      f"the keeper with --allow {package if isinstance(package, str) else 'PACKAGE'}")
+    if not isinstance(executable, str) or not _EXECUTABLE.match(executable):
+        raise Refused(f"executable {executable!r:.60}: give its name in package {package}, never a path or a "
+                      "shell line")
+    args, remaps, params = spec.get("args") or [], spec.get("remaps") or {}, spec.get("params") or {}
+    if not isinstance(args, list) or len(args) > _MOST_ARGS or \
+            not all(isinstance(a, str) and len(a) <= _LONGEST_ARG for a in args):
+        raise Refused(f"basenode {package}/{executable}: args must be a list of at most {_MOST_ARGS} strings")
+    if not isinstance(remaps, dict) or not isinstance(params, dict):
+        raise Refused(f"basenode {package}/{executable}: remaps and params must be objects")
+    try:
+        for source, target in remaps.items():
+            names.check_remap(source, target)
+            if source.startswith("__"):
+                raise Refused(f"basenode {package}/{executable}: remap {source}:= is the keeper's to set")
+        for key in params:
+            names.check_param_key(key, f"basenode {package}/{executable}")
+        node_name = names.check_node_name(spec.get("node_name") or executable.split(".")[0])
+        given = spec.get("namespace")
+        namespace = names.check_namespace(given) if given and given != "/" else None  # as rosrun: none given
+    except IpyrosError as error:
+        raise Refused(str(error)) from None
+    return BaseModel(executable=executable, package=package, node_name=node_name, namespace=namespace,
+                     remaps=dict(remaps), params=dict(params), args=list(args))
 
 
 class Keeper:
     """The keeper's work, whatever its ROS: requests checked and done, leases watched, the state reported."""
 
     def __init__(self, name: str, token: Token, ros: KeeperRos, log: Callable[[str], None],
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, allowed: frozenset[str] = frozenset()) -> None:
         self.name, self.ros, self.log, self.clock = check_machine_name(name), ros, log, clock
+        self.allowed = allowed
         self.ns = namespace(name)
         self.epoch = secrets.token_hex(8)
         self._verifier = Verifier(token, self.epoch)
         self.guards: dict[str, KeptGuard] = {}
+        self.bases: dict[str, KeptBase] = {}
         self._lock = threading.RLock()
         self._ended = threading.Event()
         self._info = ros.publisher(f"{self.ns}/info", "std_msgs/String", True)
@@ -419,14 +525,19 @@ class Keeper:
         self._publish_info()
 
     def ready_line(self) -> str:
+        allows = f"the basenodes of {', '.join(sorted(self.allowed))}" if self.allowed else \
+            "no basenodes (--allow PACKAGE)"
         return (f"ipyros machine {self.name} ready on {self.ros.name} at {self.ros.address()} (host "
-                f"{socket.gethostname()}, pid {os.getpid()}): it keeps the guards sessions place on it")
+                f"{socket.gethostname()}, pid {os.getpid()}): it keeps the guards sessions place on it, and "
+                f"{allows}")
 
     def _publish_info(self) -> None:
         with self._lock:
             guards = [{"id": g.id, "topic": g.topic, "owner": g.owner} for g in self.guards.values()]
+            bases = [{"id": b.id, "base": b.what, "owner": b.owner} for b in self.bases.values()]
         info = {"name": self.name, "ros": self.ros.name, "host": socket.gethostname(), "pid": os.getpid(),
-                "address": self.ros.address(), "epoch": self.epoch, "guards": guards}
+                "address": self.ros.address(), "epoch": self.epoch, "allows": sorted(self.allowed),
+                "guards": guards, "bases": bases}
         self._info.write(self.ros.text(json.dumps(info)))
 
     # -- requests ---------------------------------------------------------------------------------
@@ -440,7 +551,9 @@ class Keeper:
         try:
             body = self._verifier.open(text)
             op = body.get("op")
-            act = {"place": self._place, "estop": self._estop, "remove": self._remove}.get(str(op))
+            act = {"place": self._place, "estop": self._estop, "remove": self._remove, "start_base": self._start_base,
+                   "stop_base": self._stop_base, "restart_base": self._restart_base,
+                   "tail_base": self._tail_base}.get(str(op))
             if act is None:
                 raise Refused(f"unknown request {op!r}")
             answer = act(body)
@@ -458,9 +571,7 @@ class Keeper:
         self._reply.write(self.ros.text(json.dumps({"to": sender, "n": n, **fields})))
 
     def _place(self, body: dict[str, Any]) -> dict[str, Any]:
-        gid = str(body.get("id", ""))
-        if not re.fullmatch(r"[a-z0-9]{6,32}", gid):
-            raise Refused(f"guard id {gid!r}: give 6 to 32 lowercase letters and digits")
+        gid = _checked_id(body, "guard")
         with self._lock:
             old = self.guards.get(gid)
             if old is not None and old.owner != body["from"]:
@@ -501,6 +612,51 @@ class Keeper:
         self._publish_info()
         return {}
 
+    # -- basenodes ---------------------------------------------------------------------------------
+    def _start_base(self, body: dict[str, Any]) -> dict[str, Any]:
+        bid = _checked_id(body, "basenode")
+        with self._lock:
+            if bid in self.bases:
+                raise Refused(f"basenode {bid} runs already")
+        base = KeptBase(self, str(body["from"]), bid, dict(body.get("base") or {}))
+        with self._lock:
+            self.bases[bid] = base
+        self.log(f"started basenode {base.what} for {base.owner} (pid {base.process.pid}, grace "
+                 f"{base.lease.grace} s)")
+        self._publish_info()
+        base.report(self.clock(), every=0.0)
+        return {"id": bid, "pid": base.process.pid}
+
+    def _base_of(self, body: dict[str, Any]) -> KeptBase:
+        with self._lock:
+            base = self.bases.get(str(body.get("id")))
+        if base is None or base.owner != body["from"]:
+            raise Refused(f"no basenode {body.get('id')} of this session here")
+        return base
+
+    def _stop_base(self, body: dict[str, Any]) -> dict[str, Any]:
+        base = self._base_of(body)
+        with self._lock:
+            self.bases.pop(base.id, None)
+        base.close()
+        self.log(f"stopped basenode {base.what} of {base.owner}")
+        self._publish_info()
+        return {"returncode": base.process.returncode}
+
+    def _restart_base(self, body: dict[str, Any]) -> dict[str, Any]:
+        base = self._base_of(body)
+        try:
+            base.process.restart()
+        except IpyrosError as error:
+            raise Refused(f"basenode {base.what}: {error}") from None
+        self.log(f"restarted basenode {base.what} for {base.owner} (pid {base.process.pid})")
+        base.report(self.clock(), every=0.0)
+        return {"pid": base.process.pid}
+
+    def _tail_base(self, body: dict[str, Any]) -> dict[str, Any]:
+        n = body.get("lines", 20)
+        return {"lines": self._base_of(body).process.tail(n if isinstance(n, int) and 0 < n <= 1000 else 20)}
+
     def beat(self, msg: Any) -> None:
         sender = self._verifier.beat(msg.data)
         if sender is None:
@@ -508,6 +664,9 @@ class Keeper:
         now = self.clock()
         with self._lock:
             guards = [g for g in self.guards.values() if g.owner == sender]
+            for base in self.bases.values():
+                if base.owner == sender:
+                    base.lease.heard(now)
         for guard in guards:
             silent = guard.lease.heard(now)
             if silent is not None:
@@ -545,20 +704,49 @@ class Keeper:
             except Exception as error:  # noqa: BLE001 - a report lost never keeps the other leases from their look
                 self.log(f"guard {guard.topic}: its state could not be reported ({error!r})")
 
+    def _look_at_bases(self, now: float) -> None:
+        with self._lock:
+            bases = list(self.bases.values())
+        for base in bases:
+            if base.lease.look(now) == "gone":
+                with self._lock:
+                    self.bases.pop(base.id, None)
+                base.close()
+                self.log(f"basenode {base.what}: {base.owner} silent past its grace ({base.lease.grace:g} s): "
+                         "stopped")
+                self._publish_info()
+                continue
+            try:
+                base.report(now)
+            except Exception as error:  # noqa: BLE001 - as a guard's
+                self.log(f"basenode {base.what}: its state could not be reported ({error!r})")
+
     def run(self) -> None:
         """Watch until :meth:`end`. A look that fails is logged and the next one comes: the leases are never left
         unwatched."""
         while not self._ended.wait(LOOK):
             try:
                 self.look()
+                self._look_at_bases(self.clock())
             except Exception as error:  # noqa: BLE001 - see the docstring
                 self.log(f"a look at the leases failed ({error!r}); looking again")
 
     def end(self) -> None:
-        """The keeper stops: every guard holds its stop message for its grace (its process outlives the keeper)."""
+        """The keeper stops: every guard holds its stop message for its grace (its process outlives the keeper), every
+        basenode placed on it is stopped (one killed with the keeper gets SIGTERM from the kernel: no orphans)."""
         self._ended.set()
         self._request_sub.close()
         with self._lock:
             guards, self.guards = list(self.guards.values()), {}
+            bases, self.bases = list(self.bases.values()), {}
         for guard in guards:
             guard.close(hold=True)
+        for base in bases:
+            base.close()
+
+
+def _checked_id(body: dict[str, Any], what: str) -> str:
+    found = str(body.get("id", ""))
+    if not re.fullmatch(r"[a-z0-9]{6,32}", found):
+        raise Refused(f"{what} id {found!r:.40}: give 6 to 32 lowercase letters and digits")
+    return found

@@ -1,6 +1,6 @@
 """The keeper on ROS 1 (see :mod:`ipyros.processes.keeper`): a rospy node of its own on the robot's machine.
 
-    python -m ipyros.machine --name robot1 [--token-file FILE]
+    python -m ipyros.machine --name robot1 [--allow PACKAGE ...] [--token-file FILE]
 """
 
 from __future__ import annotations
@@ -82,17 +82,33 @@ class RospyKeeper:
     def sentinel_command(self) -> list[str]:
         return [sys.executable, "-m", "ipyros.ros1.sentinel"]
 
+    def basenode_command(self, base: Any) -> list[str]:
+        from . import nodes
 
-def main(name: str, token_file: Any) -> int:
+        return nodes.command(base)
+
+    def has_package(self, package: str) -> bool:
+        from . import nodes
+
+        return package in nodes.list_packages()
+
+
+def main(name: str, token_file: Any, allowed: frozenset[str] = frozenset()) -> int:
     import rospy
 
+    ros = RospyKeeper()
+    missing = sorted(p for p in allowed if not ros.has_package(p))
+    if missing:
+        print(f"ipyros machine: --allow {' '.join(missing)}: no such package on this machine's ROS_PACKAGE_PATH; "
+              "give the packages whose nodes sessions may start here", file=sys.stderr)
+        return 2
     token = Token.made_or_read(token_file or token_path(name))
     rospy.init_node(f"ipyros_machine_{name}", disable_signals=True)
 
     def log(text: str) -> None:
         print(f"{time.strftime('%H:%M:%S')} {text}", flush=True)
 
-    keeper = Keeper(name, token, RospyKeeper(), log)
+    keeper = Keeper(name, token, ros, log, allowed=allowed)
     ended = threading.Event()
 
     def end(*_: Any) -> None:

@@ -14,7 +14,7 @@ import pytest
 from geometry_msgs.msg import Twist
 from helpers import descendants, pid_alive
 from peer import Peer
-from std_msgs.msg import String
+from std_msgs.msg import Int32, String
 from support import wait_for
 
 from ipyros.core import errors
@@ -35,8 +35,8 @@ def keeper(session):
     """A keeper named ``testbot`` on the run's master; after the test, ended, and its guards' processes gone."""
     started = []
 
-    def start(name: str = "testbot") -> Peer:
-        proc = Peer("keeper.py", "--name", name)
+    def start(name: str = "testbot", *allow: str) -> Peer:
+        proc = Peer("keeper.py", "--name", name, *(f"--allow={package}" for package in allow))
         started.append(proc)
         proc.wait_line(f"ipyros machine {name} ready on ROS 1", timeout=60)
         return proc
@@ -219,7 +219,7 @@ def test_a_guard_placed_wrong_is_one_line(make_node, tmp_path, monkeypatch):
     nd.guard("/placed_wrong/cmd_vel", machine="quiet")
     with pytest.raises(errors.DeclarationError, match="moves only when removed first"):
         nd.guard("/placed_wrong/cmd_vel")
-    monkeypatch.setattr("ipyros.node.placed.FIND", 1.0)
+    monkeypatch.setattr("ipyros.node.keeperlink.FIND", 1.0)
     with pytest.raises(errors.IpyrosError, match="no keeper of machine quiet answers on this ROS graph"):
         nd.create()
     assert not engine_of(nd).created
@@ -233,3 +233,116 @@ def _latched(topic: str):
         return rospy.wait_for_message(topic, String, timeout=2.0).data
     except rospy.ROSException:
         return None
+
+
+def test_a_basenode_placed_on_the_machine_runs_there_wrapped_and_crashes_are_told(make_node, keeper, notices):
+    """The keeper starts an allowed package's executable with the session's remaps and arguments; the wrapping node
+    relays it; nd.base is its handle there (pid, tail, restart); a crash there is told with its last lines; the
+    node's shutdown stops it there."""
+    machine = keeper("testbot", "ipyros_test_nodes")
+    assert "the basenodes of ipyros_test_nodes" in machine.lines[-1]
+    nd = make_node("placedbase1")
+    nd.baseNode("echo_node", args=["--prefix", "robot> "]).basePackage("ipyros_test_nodes").machine("testbot")
+    nd.reuse.subscribe("in", type=String).publish("out", type=String)
+    nd.create()
+    pid = nd.base.pid
+    assert pid in descendants(machine.proc.pid), "it runs as the keeper's child"
+    wait_for(lambda: any("echo_node ready" in line for line in nd.base.tail()), timeout=20, what="its log there")
+    assert any("started basenode ipyros_test_nodes/echo_node" in line for line in machine.lines)
+    out: list[str] = []
+    make_node("placedbase1_listener").new.subscribe("/out", handler=lambda m: out.append(m.data), msgType=String) \
+        .create()
+    feeder = make_node("placedbase1_feeder").new.publish("/in", msgType=String).create()
+    wait_for(lambda: feeder.write("/in", String("hi")) or "robot> hi" in out, timeout=20, interval=0.2,
+             what="a message through the placed basenode, relayed")
+    crasher = make_node("placedbase1_crash").new.publish("/crash", msgType=Int32).create()
+    wait_for(lambda: crasher.write("/crash", Int32(5)) or not nd.base.running, timeout=20,
+             interval=0.2, what="the crash on the machine")
+    wait_for(lambda: any("exited with code 5" in n for n in notices), timeout=10, what="the crash told")
+    told = next(n for n in notices if "exited with code 5" in n)
+    assert "basenode /echo_node of placedbase1 on testbot exited" in told and "last words on stderr" in told, told
+    nd.base.restart()
+    wait_for(lambda: nd.base.running and nd.base.pid not in (None, pid), timeout=20, what="it runs again")
+    again = nd.base.pid
+    nd.shutdown()
+    wait_for(lambda: not pid_alive(again), timeout=20, what="the node's shutdown to stop it there")
+    assert any("stopped basenode ipyros_test_nodes/echo_node" in line for line in machine.lines)
+
+
+def test_a_placed_basenode_outside_what_the_keeper_allows_is_refused_in_one_line(make_node, keeper, tmp_path):
+    machine = keeper("testbot", "ipyros_test_nodes")
+    nd = make_node("placedbase2")
+    nd.baseNode("relay").basePackage("topic_tools").machine("testbot")
+    with pytest.raises(errors.BaseNodeError, match=r"machine testbot refused: package 'topic_tools' is not allowed on "
+                                                   r"this machine \(its keeper allows ipyros_test_nodes\): start the "
+                                                   r"keeper with --allow topic_tools"):
+        nd.create()
+    assert not engine_of(nd).created
+    assert any("refused a request" in line and "topic_tools" in line for line in machine.lines)
+    path = make_node("placedbase3")
+    path.baseNode(str(tmp_path / "evil.sh"))
+    with pytest.raises(errors.DeclarationError, match=r"the keeper starts a package's executable by its name"):
+        path.machine("testbot")
+    later = make_node("placedbase4").machine("testbot")  # placed first, its basenode declared after
+    later.baseNode(str(tmp_path / "evil.sh"))
+    with pytest.raises(errors.BaseNodeError, match=r"the keeper starts a package's executable by its name"):
+        later.create()
+    with pytest.raises(errors.DeclarationError, match="grace=-1: give the seconds"):
+        nd.machine("testbot", grace=-1)
+    with pytest.raises(errors.DeclarationError, match="no token for machine elsewhere"):
+        nd.machine("elsewhere")
+    assert not descendants(machine.proc.pid), "nothing started on the machine"
+    # the placement is kept: a saved node places its basenode and its guard again, and its model file says where
+    kept = make_node("placedbase7")
+    kept.baseNode("echo_node").basePackage("ipyros_test_nodes").machine("testbot", grace=5.0)
+    kept.reuse.publish("out", type=String)
+    kept.guard("out", machine="testbot", lease=0.3)
+    text = kept.save(tmp_path / "kept.py").read_text()
+    assert "placedbase7.machine('testbot', grace=5.0)" in text and "machine='testbot', lease=0.3" in text, text
+    model = kept.save(tmp_path / "kept.yaml").read_text()
+    assert "machine: testbot" in model and "machine_grace: 5.0" in model, model
+
+
+BASE_SESSION = """
+import time
+from ipyros import rosNode
+from std_msgs.msg import String
+nd = rosNode("placedbase5")
+nd.baseNode("echo_node").basePackage("ipyros_test_nodes").machine("testbot", grace=2.0)
+nd.reuse.subscribe("in", type=String).publish("out", type=String)
+nd.create()
+print("created", nd.base.pid, flush=True)
+while True:
+    time.sleep(1)
+"""
+
+
+def test_a_placed_basenode_ends_after_its_sessions_grace_and_with_its_keeper(make_node, keeper, notices, tmp_path):
+    """No orphans on the robot: the session SIGKILLed, the keeper stops its basenode once the grace is over; the
+    keeper killed, its basenode ends with it and the session says so."""
+    machine = keeper("testbot", "ipyros_test_nodes")
+    script = tmp_path / "session.py"
+    script.write_text(BASE_SESSION)
+    laptop = Peer(str(script))
+    try:
+        pid = int(laptop.wait_line("created", timeout=60).split()[1])
+        assert pid in descendants(machine.proc.pid)
+        os.kill(laptop.proc.pid, signal.SIGKILL)
+        killed_at = time.monotonic()
+        time.sleep(1.0)
+        assert pid_alive(pid), "kept for its grace (2 s)"
+        wait_for(lambda: not pid_alive(pid), timeout=20, what="the keeper to stop it after the grace")
+        assert time.monotonic() - killed_at >= 2.0
+        wait_for(lambda: any("silent past its grace (2 s): stopped" in line for line in machine.lines), timeout=10,
+                 what="the keeper's word")
+    finally:
+        laptop.stop()
+    nd = make_node("placedbase6")
+    nd.baseNode("echo_node").basePackage("ipyros_test_nodes").machine("testbot")
+    nd.reuse.subscribe("in", type=String).publish("out", type=String)
+    nd.create()
+    pid = nd.base.pid
+    machine.proc.kill()
+    wait_for(lambda: not pid_alive(pid), timeout=20, what="its basenode to end with the keeper")
+    wait_for(lambda: any("no word from machine testbot" in n for n in notices), timeout=20, what="the session's word")
+

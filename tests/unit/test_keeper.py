@@ -90,3 +90,36 @@ def test_the_lease_holds_the_stop_once_lost_releases_when_heard_and_ends_past_it
     assert lease.look(106.2) == "gone"
     kept = Lease(length=0.5, grace=None, last=0.0)
     assert kept.look(1e6) == "lost" and kept.look(2e6) == "ok", "grace None: never ended"
+
+
+@pytest.mark.parametrize("spec, why", [
+    ({"package": "other", "executable": "talker"}, "package 'other' is not allowed on this machine (its keeper allows "
+                                                   "demo): start the keeper with --allow other"),
+    ({"executable": "talker"}, "package None is not allowed"),
+    ({"package": "demo", "executable": "/bin/sh"}, "executable '/bin/sh': give its name in package demo, never a path"),
+    ({"package": "demo", "executable": "../../bin/sh"}, "never a path or a shell line"),
+    ({"package": "demo", "executable": "talker; rm -rf ~"}, "never a path or a shell line"),
+    ({"package": "demo", "executable": "talker", "args": "--rate 5"}, "args must be a list of at most 64 strings"),
+    ({"package": "demo", "executable": "talker", "args": [5]}, "args must be a list"),
+    ({"package": "demo", "executable": "talker", "remaps": {"__log": "/etc/passwd"}}, "is the keeper's to set"),
+    ({"package": "demo", "executable": "talker", "remaps": {"in": "a b"}}, "invalid remap"),
+    ({"package": "demo", "executable": "talker", "params": {"$(eval)": 1}}, "invalid parameter name"),
+    ({"package": "demo", "executable": "talker", "node_name": "a/b"}, "invalid node name"),
+])
+def test_a_placed_basenode_is_an_allowed_packages_executable_by_name_and_nothing_else(spec, why):
+    from ipyros.processes.keeper import _base_of
+
+    with pytest.raises(Refused) as refused:
+        _base_of(spec, frozenset({"demo"}))
+    assert why in str(refused.value) and "\n" not in str(refused.value)
+
+
+def test_a_placed_basenode_keeps_its_remaps_params_and_args_as_given():
+    from ipyros.processes.keeper import _base_of
+
+    base = _base_of({"package": "demo", "executable": "talker", "node_name": "talker", "namespace": "/robot1",
+                     "remaps": {"in": "/robot1/base/in"}, "params": {"rate": 5}, "args": ["--fast"]},
+                    frozenset({"demo"}))
+    assert (base.package, base.executable, base.node_name, base.namespace) == ("demo", "talker", "talker", "/robot1/")
+    assert base.remaps == {"in": "/robot1/base/in"} and base.params == {"rate": 5} and base.args == ["--fast"]
+    assert _base_of({"package": "demo", "executable": "talker"}, frozenset({"demo"})).namespace is None
