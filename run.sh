@@ -33,6 +33,7 @@ ros1_setup() {
     catkin g++ cmake libroscpp-dev libtopic-tools-dev libstd-msgs-dev libgeometry-msgs-dev libstd-srvs-dev
     libsensor-msgs-dev  # the relay bench's path (h) relays images too
     chromium  # the notebooks checked in a real browser (tests/ros1/test_browser.py, playwright drives it)
+    nftables iproute2  # a lossy link to a robot in its own network namespace (tests/ros1/test_machine_link.py)
   )
 
   local missing=() p stamp
@@ -169,8 +170,8 @@ case "$cmd" in
   demo)     exec "$venv/bin/ipython" --ext ipyros --InteractiveShellApp.exec_lines='["%demo"]' "$@" ;;
   ipython)  exec "$venv/bin/ipython" --ext ipyros "$@" ;;
   notebook) notebook "$@" ;;
-  machine)  # the keeper of the robot's machine: bash run.sh machine robot1 (its ROS_MASTER_URI: the robot's master)
-            [[ $# -ge 1 ]] || { echo "usage: bash run.sh machine NAME [--token-file FILE]" >&2; exit 2; }
+  machine)  # the keeper of the robot's machine: bash run.sh machine robot1 --allow PKG (its ROS_MASTER_URI: the robot's master)
+            [[ $# -ge 1 ]] || { echo "usage: bash run.sh machine NAME [--allow PACKAGE ...] [--token-file FILE]" >&2; exit 2; }
             exec "$venv/bin/python" -m ipyros.machine --name "$@" ;;
   test)     # every layer, each reported; with arguments, pytest gets them in the ROS 1 venv only
             cd "$here"
