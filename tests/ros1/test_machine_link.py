@@ -62,6 +62,11 @@ class Proc:
                     continue
 
 
+def _net(pid: object) -> str:
+    """The network namespace a process is in (``net:[4026532177]``)."""
+    return os.readlink(f"/proc/{pid}/ns/net")
+
+
 def _ip(*args: str) -> None:
     subprocess.run(["ip", *args], check=True, capture_output=True, timeout=30)
 
@@ -98,11 +103,31 @@ def twists(listener: Proc) -> list[tuple[float, float]]:
             if line.startswith("twist ")]
 
 
+WRAP = """
+import time
+from ipyros import rosNode
+from std_msgs.msg import String
+nd = rosNode("laptop_wrap")
+nd.baseNode("echo_node", args=["--prefix", "robot> "]).basePackage("ipyros_test_nodes").machine("linkbot")
+nd.reuse.subscribe("in", type=String).publish("out", type=String)
+nd.create()
+heard = []
+ear = rosNode("laptop_ear").new.subscribe("/out", handler=lambda m: print("heard", m.data, flush=True),
+                                          msgType=String).create()
+mouth = rosNode("laptop_mouth").new.publish("/in", msgType=String).create()
+print("created", nd.base.pid, flush=True)
+while True:
+    mouth.write("/in", String(data="hello"))
+    time.sleep(0.2)
+"""
+
+
 class Placed:
     """What runs on each side: the robot's keeper and motors, the laptop's session driving them at 20 Hz."""
 
-    def __init__(self, ns: str, here: str, there: str, keeper: Proc, motors: Proc, session: Proc) -> None:
-        self.ns, self.here, self.there = ns, here, there
+    def __init__(self, ns: str, here: str, there: str, keeper: Proc, motors: Proc, session: Proc,
+                 session_env: dict[str, str]) -> None:
+        self.ns, self.here, self.there, self.session_env = ns, here, there, session_env
         self.keeper, self.motors, self.session = keeper, motors, session
 
 
@@ -116,7 +141,8 @@ def placed(link, tmp_path):
     started: list[Proc] = []
     try:
         started.append(Proc([*in_ns, "rosmaster", "--core", "-p", str(port), "-w", "3"], on_robot))
-        keeper = Proc([*in_ns, sys.executable, str(KEEPER), "--name", "linkbot"], on_robot)
+        keeper = Proc([*in_ns, sys.executable, str(KEEPER), "--name", "linkbot", "--allow", "ipyros_test_nodes"],
+                      on_robot)
         started.append(keeper)
         keeper.wait_line("ipyros machine linkbot ready on ROS 1")
         motors = Proc([*in_ns, sys.executable, str(LISTEN), "/link/cmd_vel", "--name=motors"], on_robot)
@@ -129,13 +155,13 @@ def placed(link, tmp_path):
         token.chmod(0o600)
         script = tmp_path / "laptop.py"
         script.write_text(SESSION)
-        session = Proc([sys.executable, str(script)],
-                       {"ROS_MASTER_URI": master, "ROS_IP": laptop_ip, "ROS_HOME": str(tmp_path / "laptop")})
+        on_laptop = {"ROS_MASTER_URI": master, "ROS_IP": laptop_ip, "ROS_HOME": str(tmp_path / "laptop")}
+        session = Proc([sys.executable, str(script)], on_laptop)
         started.append(session)
         session.wait_line("created")
         wait_for(lambda: sum(x == 0.3 for x, _ in twists(motors)) >= 10, timeout=30, what="commands at the motors")
-        assert Path(f"/proc/{keeper.proc.pid}/ns/net").resolve() != Path("/proc/self/ns/net").resolve()
-        yield Placed(ns, here, there, keeper, motors, session)
+        assert _net(keeper.proc.pid) != _net("self"), "the keeper runs in the robot's namespace"
+        yield Placed(ns, here, there, keeper, motors, session, on_laptop)
     finally:
         for proc in reversed(started):
             proc.stop()
@@ -195,3 +221,19 @@ def test_a_lossy_link_makes_no_false_stop(placed):
     assert not any("nothing heard from" in line for line in placed.keeper.lines)
     dropped = [int(n) for n in re.findall(r"counter packets (\d+)", counters)]
     assert len(dropped) == 2 and min(dropped) > 0, f"packets dropped each way: {counters}"
+
+
+def test_a_basenode_placed_from_the_laptop_runs_in_the_robots_namespace_and_is_relayed_to_the_laptop(placed,
+                                                                                                       tmp_path):
+    script = tmp_path / "wrap.py"
+    script.write_text(WRAP)
+    laptop = Proc([sys.executable, str(script)], {k: v for k, v in placed.session_env.items()})
+    try:
+        pid = int(laptop.wait_line("created").split()[1])
+        assert _net(pid) == _net(placed.keeper.proc.pid) != _net("self"), "it runs in the robot's namespace"
+        laptop.wait_line("heard robot> hello")  # the laptop's message, through the robot's node, back
+    finally:
+        laptop.stop()
+    wait_for(lambda: not Path(f"/proc/{pid}").exists() or "Z" in Path(f"/proc/{pid}/stat").read_text().split()[2],
+             timeout=20, what="the session's end to stop it on the robot")
+
