@@ -15,7 +15,8 @@ from typing import Any, Iterator, Optional, Union
 
 from .tables import Cell, Column, TextTable
 
-__all__ = ["BagInfo", "BagTopic", "History", "Interface", "NodeStatus", "Rows", "StatusRow", "Versions", "short_repr"]
+__all__ = ["BagInfo", "BagTopic", "History", "Interface", "Machine", "Machines", "NodeStatus", "Rows", "StatusRow",
+           "Versions", "short_repr"]
 
 
 class Rows:
@@ -277,3 +278,47 @@ class Interface:
 
 #: The topics of a ROS 1 action under its name (actionlib's).
 _ROS1_PARTS = ("goal", "cancel", "status", "feedback", "result")
+
+
+@dataclass(frozen=True)
+class Machine:
+    """A keeper the session sees (``python -m ipyros.machine`` on a robot's computer): its name, where it runs, what
+    it allows to start (package: executables), what sessions placed on it, the link's round trip (median of a few
+    pings, ms; None when it did not answer), and whether this session holds its token (it can place on it)."""
+
+    name: str
+    host: str = ""
+    ros: str = ""
+    address: str = ""
+    pid: int = 0
+    allows: dict[str, list[str]] = field(default_factory=dict)
+    guards: tuple[str, ...] = ()
+    bases: tuple[str, ...] = ()
+    rtt_ms: Optional[float] = None
+    token: bool = False
+    heard: bool = True  # its info was read (a keeper whose topics linger after it died is not)
+
+
+@dataclass(frozen=True, repr=False)
+class Machines(Rows):
+    """The keepers on the graph (:class:`Machine`), as ``%machines`` shows them."""
+
+    rows: tuple[Machine, ...]
+
+    def table(self) -> TextTable:
+        columns = (Column("machine"), Column("host"), Column("ROS"), Column("allows", fold=True),
+                   Column("guards", fold=True), Column("basenodes", fold=True), Column("round trip ms", True),
+                   Column("token here"))
+        rows: list[tuple[Union[str, Cell], ...]] = []
+        for m in self.rows:
+            if not m.heard:
+                rows.append((m.name, Cell("no answer: its keeper ended?", "red"), "", "", "", "", "", ""))
+                continue
+            allows = ", ".join(m.allows) or "guards only"
+            rtt: Union[str, Cell] = f"{m.rtt_ms:.1f}" if m.rtt_ms is not None else Cell("no answer", "red")
+            token: Union[str, Cell] = "yes" if m.token else Cell("no: copy it to place on it", "yellow")
+            rows.append((m.name, m.host, m.ros, allows, ", ".join(m.guards), ", ".join(m.bases), rtt, token))
+        title = f"{len(self.rows)} machine{'s' if len(self.rows) != 1 else ''}" if self.rows else \
+            "no machine's keeper on this ROS graph (start one on the robot: python -m ipyros.machine --name robot1)"
+        return TextTable(title, columns, tuple(rows))
+

@@ -25,7 +25,7 @@ from typing import Any, Callable, Mapping, Optional
 from IPython.core import magic_arguments
 
 __all__ = ["ACTION", "ACTION_TYPE", "DEMO_ROBOT", "DSL_NODE", "EXECUTABLE", "FIELD", "FUNCTION", "GOAL_TEMPLATE",
-           "MSG_PATH", "MSG_TEMPLATE", "MSG_TYPE", "NODE", "OWN_TOPIC", "PACKAGE", "REQUEST_TEMPLATE", "SERVICE", "SRV_TYPE",
+           "MACHINE", "MSG_PATH", "MSG_TEMPLATE", "MSG_TYPE", "NODE", "OWN_TOPIC", "PACKAGE", "REQUEST_TEMPLATE", "SERVICE", "SRV_TYPE",
            "TIMER", "TOPIC", "TRANSITION", "Grammar", "Word", "argument", "grammar_of"]
 
 # What an argument is, i.e. where its completions come from.
@@ -43,6 +43,7 @@ TIMER = "timer"              # the node's timer names
 PACKAGE = "package"
 EXECUTABLE = "executable"    # executables of the package named by the argument before
 DEMO_ROBOT = "demo robot"    # the robots %demo starts
+MACHINE = "machine"          # the machines' keepers on the graph, and the machines whose token is here
 MSG_TEMPLATE = "template"    # a message of the type before it, every field at its default
 REQUEST_TEMPLATE = "request template"  # the request of the service type before it, at its defaults
 ACTION = "action"            # live actions

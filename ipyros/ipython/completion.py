@@ -46,6 +46,7 @@ from ..core.msgbuild import template
 from ..core.names import default_namespace
 from ..node.session import current
 from ..tools.graph import GraphCache
+from ..tools.machines import machine_names
 from ..tools.robot import ROBOTS
 from .arguments import (
     ACTION,
@@ -53,6 +54,7 @@ from .arguments import (
     DEMO_ROBOT,
     DSL_NODE,
     EXECUTABLE,
+    MACHINE,
     FIELD,
     FUNCTION,
     GOAL_TEMPLATE,
@@ -199,6 +201,9 @@ CALLS: dict[str, CallSpec] = {
                         needs_node=True),
     "baseNode": CallSpec((EXECUTABLE,), {"executable": EXECUTABLE}),
     "basePackage": CallSpec((PACKAGE,), {"package": PACKAGE}),
+    "machine": CallSpec((MACHINE,), {"name": MACHINE}, needs_node=True),
+    "guard": CallSpec((OWN_TOPIC,), {"topic": OWN_TOPIC, "machine": MACHINE, "estop_topic": TOPIC}, "publish",
+                      needs_node=True),
     "Subscriber": CallSpec((TOPIC,)),
     "Publisher": CallSpec((TOPIC,)),
     "wait_for_message": CallSpec((TOPIC,)),
@@ -478,6 +483,8 @@ class Answerer:
             return [(p, kind) for p in names_with_prefix(self.catalog.packages(), frag)]
         if kind == DEMO_ROBOT:
             return [(n, kind) for n in ROBOTS if n.startswith(frag)]
+        if kind == MACHINE:
+            return [(n, kind) for n in machine_names(snap.topics) if n.startswith(frag)]
         if kind == EXECUTABLE and want.package:
             return [(e, kind) for e in names_with_prefix(self.catalog.executables(want.package), frag)]
         return []

@@ -44,6 +44,7 @@ from .magics import (
     ActionMagics,
     DemoMagics,
     IntrospectMagics,
+    MachineMagics,
     NodeMagics,
     PlotMagics,
     RateMagics,
@@ -78,7 +79,8 @@ class Extension:
         self.record_magics = RecordMagics(shell, self)
         self.magics = [self.settings, TopicMagics(shell, self), RateMagics(shell, self), IntrospectMagics(shell, self),
                        self.node_magics, WrapMagics(shell, self), self.plot_magics, self.record_magics,
-                       DemoMagics(shell, self), ActionMagics(shell, self), SafetyMagics(shell, self)]
+                       DemoMagics(shell, self), ActionMagics(shell, self), SafetyMagics(shell, self),
+                       MachineMagics(shell, self)]
         self._completion: Optional[completion.Installed] = None
         self._freezer: Optional[collector.Freezer] = None  # takes what the session loaded out of full collections
         self._log_handler = StderrLogHandler()

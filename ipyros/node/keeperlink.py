@@ -18,7 +18,7 @@ from typing import Any, Callable, Optional
 from ..core import msgtypes
 from ..core.qos import PROFILES
 from ..core.slots import HandlerSlot
-from ..processes.keeper import MachineError, Token, beat_text, namespace, token_path
+from ..processes.keeper import MachineError, Token, beat_text, beat_topics, namespace, token_path
 
 __all__ = ["ANSWER", "FIND", "KeeperLink"]
 
@@ -73,7 +73,7 @@ class KeeperLink:
         self.subscription("reply", f"{ns}/reply", string, self._reply)
         self.subscription("state", f"{self.topics}/state", string, report, latched=True)
         self._request = self.publication(f"{ns}/request", string)
-        self._beat = self.publication(f"{self.topics}/beat", string)
+        self._beats = [self.publication(topic, string) for topic in beat_topics(self.topics)]
 
     def subscription(self, label: str, topic: str, cls: type, handler: Callable[[Any], None],
                      latched: bool = False) -> Any:
@@ -163,10 +163,12 @@ class KeeperLink:
                 epoch = self._epoch
                 if epoch is None:
                     continue
-                try:
-                    self._beat.write(self._string(data=beat_text(self._token, epoch, self._sender, self._next())))
-                except Exception:  # noqa: BLE001 - the link or the node ending: the reports' silence says it
-                    continue
+                beat = self._string(data=beat_text(self._token, epoch, self._sender, self._next()))
+                for line in self._beats:  # the same beat on each (see BEAT_LINES)
+                    try:
+                        line.write(beat)
+                    except Exception:  # noqa: BLE001 - the link or the node ending: the reports' silence says it
+                        continue
 
         threading.Thread(target=beats, name=f"ipyros-lease-{self.id}", daemon=True).start()
 

@@ -18,9 +18,10 @@ topic (under ``/ipyros/machines/NAME``)  what
 ``reply``                             the keeper's answer, addressed to the request's sender and
                                       counter
 ``guards/ID/in``                      the session's messages for guard ``ID`` (the guarded type)
-``guards/ID/beat``                    the session's heartbeat for that guard, signed
+``guards/ID/beat``, ``beat2``, ...    the session's heartbeat for that guard, signed (the same beats on
+                                      :data:`BEAT_LINES` topics: see there)
 ``guards/ID/state`` (latched)         what the guard does, as the session's ``%status`` shows it
-``bases/ID/beat``                     the session's heartbeat for basenode ``ID``, signed
+``bases/ID/beat``, ...                the session's heartbeat for basenode ``ID``, signed
 ``bases/ID/state`` (latched)          the basenode's process: running, its pid, how it ended
 ====================================  =============================================================
 
@@ -64,8 +65,8 @@ from ..core.model import BaseModel
 from .basenode import BaseProcess, exit_reason, log_dir
 from .sentinel import Sentinel, Shared
 
-__all__ = ["Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "MachineError", "Outlet", "Refused", "Token", "Verifier",
-           "beat_text", "check_machine_name", "namespace", "token_path"]
+__all__ = ["BEAT_LINES", "Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "MachineError", "Outlet", "Refused",
+           "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "namespace", "token_path"]
 
 #: A machine's name: a ROS name's word (it is part of the keeper's topics' names).
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -78,6 +79,17 @@ LOOK = 0.01
 
 #: How often a guard's state is sent to its session when nothing changed (s): the session hears that the link holds.
 REPORT = 0.2
+
+#: On how many topics the session sends each heartbeat. On ROS 1 each topic is a TCP connection of its own: a lossy
+#: link (Wi-Fi) that loses a beat's packet and then its retransmissions stalls one connection for longer than a
+#: lease of 0.5 s about once a minute at 10 % loss (measured: a false stop); the same beat on three connections
+#: keeps the lease unless all three stall at once. The keeper takes the first copy of each (the rest are replays).
+BEAT_LINES = 3
+
+
+def beat_topics(topics: str) -> list[str]:
+    """The heartbeat's topics under a placed thing's ``topics``: ``beat``, ``beat2``, ``beat3``."""
+    return [f"{topics}/beat"] + [f"{topics}/beat{k}" for k in range(2, BEAT_LINES + 1)]
 
 
 class MachineError(IpyrosError):
@@ -260,6 +272,7 @@ class KeeperRos(Protocol):
     def sentinel_command(self) -> list[str]: ...
     def basenode_command(self, base: BaseModel) -> list[str]: ...  # found as rosrun / the ament index finds it
     def has_package(self, package: str) -> bool: ...
+    def executables(self, package: str) -> list[str]: ...
 
 
 class Reporter:
@@ -326,7 +339,8 @@ class KeptGuard:
             raise
         self._reporter = Reporter(ros, f"{ns}/guards/{gid}/state")
         self._subs = [ros.subscribe(f"{ns}/guards/{gid}/in", self.type, self.command),
-                      ros.subscribe(f"{ns}/guards/{gid}/beat", "std_msgs/String", keeper.beat)]
+                      *(ros.subscribe(topic, "std_msgs/String", keeper.beat)
+                        for topic in beat_topics(f"{ns}/guards/{gid}"))]
 
     def _start_sentinel(self) -> None:
         env = dict(os.environ)
@@ -452,7 +466,8 @@ class KeptBase:
         except IpyrosError as error:
             raise Refused(f"basenode {self.what}: {error}") from None
         self._reporter = Reporter(keeper.ros, f"{keeper.ns}/bases/{bid}/state")
-        self._beats = keeper.ros.subscribe(f"{keeper.ns}/bases/{bid}/beat", "std_msgs/String", keeper.beat)
+        self._beats = [keeper.ros.subscribe(topic, "std_msgs/String", keeper.beat)
+                       for topic in beat_topics(f"{keeper.ns}/bases/{bid}")]
 
     def _exited(self, process: Any, returncode: int, last_lines: list[str]) -> None:
         self._log(f"basenode {self.what} of {self.owner} {exit_reason(returncode)}")
@@ -467,7 +482,8 @@ class KeptBase:
         self._reporter.report(self.state(), now, every)
 
     def close(self) -> None:
-        self._beats.close()
+        for sub in self._beats:
+            sub.close()
         self.process.stop()
         self._reporter.close()
 
@@ -512,6 +528,7 @@ class Keeper:
                  clock: Callable[[], float] = time.monotonic, allowed: frozenset[str] = frozenset()) -> None:
         self.name, self.ros, self.log, self.clock = check_machine_name(name), ros, log, clock
         self.allowed = allowed
+        self._allows = {package: sorted(ros.executables(package)) for package in sorted(allowed)}  # sessions' TAB
         self.ns = namespace(name)
         self.epoch = secrets.token_hex(8)
         self._verifier = Verifier(token, self.epoch)
@@ -536,13 +553,15 @@ class Keeper:
             guards = [{"id": g.id, "topic": g.topic, "owner": g.owner} for g in self.guards.values()]
             bases = [{"id": b.id, "base": b.what, "owner": b.owner} for b in self.bases.values()]
         info = {"name": self.name, "ros": self.ros.name, "host": socket.gethostname(), "pid": os.getpid(),
-                "address": self.ros.address(), "epoch": self.epoch, "allows": sorted(self.allowed),
+                "address": self.ros.address(), "epoch": self.epoch, "allows": self._allows,
                 "guards": guards, "bases": bases}
         self._info.write(self.ros.text(json.dumps(info)))
 
     # -- requests ---------------------------------------------------------------------------------
     def request(self, msg: Any) -> None:
         text = msg.data
+        if self._pinged(text):
+            return
         try:
             addressed = json.loads(json.loads(text)["body"])  # who to answer, before it is checked
             sender, n = str(addressed.get("from")), addressed.get("n")
@@ -566,6 +585,19 @@ class Keeper:
             self._answer(sender, n, {"ok": False, "error": f"the keeper failed: {error}"})
             return
         self._answer(sender, n, {"ok": True, **answer})
+
+    def _pinged(self, text: str) -> bool:
+        """A ping (``{"ping": {"from": S, "n": N}}``, unsigned: anyone on the graph may see the keeper and time the
+        link to it) is answered at once with a pong, and does nothing else."""
+        if not text.startswith('{"ping"'):
+            return False
+        try:
+            ping = json.loads(text)["ping"]
+            sender, n = str(ping["from"])[:40], int(ping["n"])
+        except (ValueError, KeyError, TypeError):
+            return True
+        self._answer(sender, n, {"pong": True})
+        return True
 
     def _answer(self, sender: str, n: Any, fields: dict[str, Any]) -> None:
         self._reply.write(self.ros.text(json.dumps({"to": sender, "n": n, **fields})))

@@ -87,6 +87,11 @@ class RospyKeeper:
 
         return nodes.command(base)
 
+    def executables(self, package: str) -> list[str]:
+        from . import nodes
+
+        return nodes.list_executables(package)
+
     def has_package(self, package: str) -> bool:
         from . import nodes
 

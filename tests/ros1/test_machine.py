@@ -346,3 +346,26 @@ def test_a_placed_basenode_ends_after_its_sessions_grace_and_with_its_keeper(mak
     wait_for(lambda: not pid_alive(pid), timeout=20, what="its basenode to end with the keeper")
     wait_for(lambda: any("no word from machine testbot" in n for n in notices), timeout=20, what="the session's word")
 
+
+
+def test_machines_lists_the_keepers_with_what_they_allow_and_keep_and_tab_completes_their_names(ip, keeper):
+    from IPython.core.completer import provisionalcompleter
+    from shell import ok
+
+    keeper("testbot", "ipyros_test_nodes")
+    ok(ip, "from ipyros import rosNode\nfrom geometry_msgs.msg import Twist\nnd = rosNode('listed')\n"
+           "nd.new.publish('/listed/cmd_vel', msgType=Twist)\n"
+           "nd.guard('/listed/cmd_vel', limits={'linear.x': (-0.5, 0.5)}, machine='testbot')\nnd.create()")
+    machines = ok(ip, "%machines").result
+    (testbot,) = [m for m in machines if m.name == "testbot"]
+    assert testbot.allows == {"ipyros_test_nodes": ["echo_node"]} and testbot.token and testbot.ros == "ROS 1"
+    assert testbot.guards == ("/listed/cmd_vel",) and testbot.rtt_ms is not None and 0 < testbot.rtt_ms < 1000
+    text = str(machines)
+    assert "testbot" in text and "ipyros_test_nodes" in text and "/listed/cmd_vel" in text, text
+
+    def offered(text: str) -> list[str]:
+        with provisionalcompleter():
+            return [c.text for c in ip.Completer.completions(text, len(text)) if c.text]
+
+    wait_for(lambda: "testbot" in offered('nd.machine("test'), timeout=20, what="the machine's name offered")
+    assert "testbot" in offered("nd.guard('/listed/cmd_vel', machine='te")

@@ -123,3 +123,20 @@ def test_a_placed_basenode_keeps_its_remaps_params_and_args_as_given():
     assert (base.package, base.executable, base.node_name, base.namespace) == ("demo", "talker", "talker", "/robot1/")
     assert base.remaps == {"in": "/robot1/base/in"} and base.params == {"rate": 5} and base.args == ["--fast"]
     assert _base_of({"package": "demo", "executable": "talker"}, frozenset({"demo"})).namespace is None
+
+
+def test_the_keepers_are_read_from_the_graphs_topics_and_shown_one_a_row():
+    from ipyros.core.records import Machine, Machines
+    from ipyros.tools.machines import keepers_in
+
+    topics = ["/ipyros/machines/robot1/info", "/ipyros/machines/robot1/request", "/ipyros/machines/arm_2/info",
+              "/ipyros/machines/bad name/info", "/ipyros/machines/robot1/guards/abc123/state", "/info"]
+    assert keepers_in(topics) == ["arm_2", "robot1"]
+    table = Machines((Machine("robot1", "nuc", "ROS 1", allows={"drivers": ["base"]}, guards=("/cmd_vel",),
+                              rtt_ms=3.25, token=True),
+                      Machine("arm_2", heard=False), Machine("cart", "pi", "ROS 1", rtt_ms=None))).table()
+    assert table.title == "3 machines"
+    assert table.rows[0][:7] == ("robot1", "nuc", "ROS 1", "drivers", "/cmd_vel", "", "3.2")
+    assert "no answer" in str(table.rows[1][1]) and str(table.rows[2][6]) == "no answer"
+    assert str(table.rows[2][7]).startswith("no: copy it") and str(table.rows[2][3]) == "guards only"
+    assert "python -m ipyros.machine" in Machines(()).table().title

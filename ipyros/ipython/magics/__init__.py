@@ -11,7 +11,8 @@
 * :class:`DemoMagics` (``demo.py``): ``%demo``, the demo robot;
 * :class:`PlotMagics` (``plot.py``): ``%plot``, topic fields drawn live;
 * :class:`RecordMagics` (``record.py``): ``%record``, topics written to a bag;
-* :class:`SafetyMagics` (``safety.py``): ``%estop``, the session's guards held at their stop message.
+* :class:`SafetyMagics` (``safety.py``): ``%estop``, the session's guards held at their stop message;
+* :class:`MachineMagics` (``machines.py``): ``%machines``, the robots' keepers the session sees.
 
 :mod:`ipyros.ipython.extension` creates and registers them; ``%magic?`` shows each one's help.
 """
@@ -20,6 +21,7 @@ from .actions import ActionMagics
 from .config import RosMagics
 from .demo import DemoMagics
 from .graph import TopicMagics
+from .machines import MachineMagics
 from .introspect import IntrospectMagics
 from .nodes import NodeMagics
 from .plot import PlotMagics
@@ -29,4 +31,4 @@ from .safety import SafetyMagics
 from .wrap import WrapMagics
 
 __all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics",
-           "RateMagics", "IntrospectMagics", "ActionMagics", "SafetyMagics"]
+           "RateMagics", "IntrospectMagics", "ActionMagics", "SafetyMagics", "MachineMagics"]
