@@ -29,6 +29,7 @@ from ..core.records import History, NodeStatus, StatusRow, Versions
 from ..core.remapping import base_fullname, basenode_remaps, check_wrapping, resolve_for
 from ..core.slots import HandlerSlot, OutputScope, SendFigures
 from ..core.versions import HandlerVersion
+from ..processes.basenode import BaseHandle
 from . import declaring
 from .endpoints import Opening, describe, open_endpoint, output_of
 from .guards import NodeGuards, guard_of
@@ -58,7 +59,7 @@ class NodeEngine:
         self.explicit_namespace = explicit_namespace
         self.created = False
         #: The running basenode (a process, or a launch file's rest and node), for wrapping nodes.
-        self.base: Any = None
+        self.base: Optional[BaseHandle] = None  # its basenode, here or on a machine
         self._model = model
         self._handlers: dict[str, Callable[..., Any]] = {}  # slot key → the user's function
         self._takes_argument: dict[str, bool] = {}  # slot key → call the handler with the message/event?
@@ -221,7 +222,8 @@ class NodeEngine:
         """Start the basenode again when what it must be remapped to changed (a ``reuse`` declared or removed on
         the running node): a process's remaps are fixed at its start, so this is the only way; it is said."""
         parts = self.session.backend.action_parts
-        if old.base is None or new.base is None or (basenode_remaps(old, parts), base_fullname(old)) == (
+        if self.base is None or old.base is None or new.base is None or (
+                basenode_remaps(old, parts), base_fullname(old)) == (
                 basenode_remaps(new, parts), base_fullname(new)):
             return
         self.session.notify(f"ipyros: restarting basenode {base_fullname(new)} of {self.called} so that it uses "

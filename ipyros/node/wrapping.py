@@ -27,7 +27,7 @@ from ..core.plan import RelaySpec, internal_name
 from ..core.records import Interface
 from ..core.remapping import base_fullname, base_namespace, base_node_name, basenode_remaps, check_wrapping, reresolve
 from ..core.guard import DEFAULT_MACHINE_GRACE
-from ..processes.basenode import exit_reason
+from ..processes.basenode import BaseHandle, exit_reason
 from ..processes.keeper import MachineError, Token, check_machine_name, token_path
 from ..processes.playback import player_args
 from . import declaring
@@ -47,7 +47,7 @@ class NodeEngine(Protocol):
     @property
     def explicit_namespace(self) -> bool: ...
     session: Any
-    base: Any
+    base: Optional[BaseHandle]
 
     def model(self) -> NodeModel: ...
     def apply(self, edit: Callable[[NodeModel], None], change: str) -> None: ...
@@ -300,7 +300,7 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
         session.notify(f"ipyros: basenode {base_fullname(model)} of {node.called}{on} {exit_reason(returncode)}; "
                        f"restart it with {node.called}.base.restart()\n    {tail}")
 
-    process: Any
+    process: BaseHandle
     if base.machine is not None:  # its machine's keeper runs it
         problem = placed_problem(base)
         if problem is not None:

@@ -30,7 +30,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Callable, Mapping, Optional, Sequence
+from typing import Any, Callable, Mapping, Optional, Protocol, Sequence
 
 import yaml
 
@@ -39,7 +39,7 @@ from ..core.model import BaseModel
 from ..core.nodecode import entry_point_of, node_name_in
 from .process import spawn, stop_process
 
-__all__ = ["BaseProcess", "OnExit", "child_env", "exit_reason", "is_executable_file", "log_dir", "own_node_name",
+__all__ = ["BaseHandle", "BaseProcess", "OnExit", "child_env", "exit_reason", "is_executable_file", "log_dir", "own_node_name",
            "param_value", "plain", "python_command", "refuse_path_with_package", "script_command", "stop_all",
            "stop_together", "temp_log"]
 
@@ -239,6 +239,25 @@ def exit_reason(returncode: Optional[int]) -> str:
         except ValueError:
             return f"killed by signal {-returncode}"
     return f"exited with code {returncode}"
+
+
+class BaseHandle(Protocol):
+    """A wrapped node's basenode, wherever it runs: a process of this machine (:class:`BaseProcess`), one a robot's
+    keeper runs (:class:`ipyros.node.placedbase.PlacedBase`), or a launch file's node with the rest of its file.
+    What ``nd.base`` is: its node's shutdown stops it, ``restart()`` starts it again with the same command line."""
+
+    node_name: Optional[str]
+
+    @property
+    def pid(self) -> Optional[int]: ...  # on the machine it runs on
+    @property
+    def running(self) -> bool: ...
+    @property
+    def returncode(self) -> Optional[int]: ...
+    def start(self) -> Any: ...
+    def stop(self, timeout: float = 5.0) -> Optional[int]: ...
+    def restart(self, timeout: float = 5.0) -> Any: ...
+    def tail(self, n: int = 20) -> list[str]: ...
 
 
 class _Run:
