@@ -2,7 +2,7 @@
 
 Run it on the robot's own computer, beside its ROS (a ROS 1 master there, or a ROS 2 domain the laptop shares): a
 session on a laptop then places guards on it (``nd.guard(topic, ..., machine="robot1")``), which the robot keeps
-even when the link to the laptop is lost. It needs ROS and ipyros's ROS-free parts, not IPython. See
+even when the link to the laptop is lost, and basenodes of the packages it allows (``.machine("robot1")``). It needs ROS and ipyros's ROS-free parts, not IPython. See
 :mod:`ipyros.processes.keeper` for what it does and how a session talks to it.
 """
 
@@ -33,10 +33,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Optional[list[str]] = None) -> int:
     args = _parser().parse_args(argv)
-    from ..processes.keeper import check_machine_name
-
     from ..core.errors import IpyrosError
     from ..core.names import check_package_name
+    from ..processes.keeper import check_machine_name
 
     try:
         check_machine_name(args.name)
@@ -48,10 +47,8 @@ def main(argv: Optional[list[str]] = None) -> int:
     wanted = os.environ.get("IPYROS_ROS") or os.environ.get("ROS_VERSION") or ""
     if not wanted:
         wanted = "1" if importlib.util.find_spec("rospy") is not None else "2"
-    if wanted != "1":
-        print("ipyros machine: a keeper runs on ROS 1 for now (ROS 2's is not written yet): run it where rospy "
-              "is, with ROS_MASTER_URI set", file=sys.stderr)
-        return 2
-    from ..ros1.machine import main as run
-
+    if wanted == "1":
+        from ..ros1.machine import main as run
+    else:
+        from ..ros2.machine import main as run  # type: ignore[assignment]
     return run(args.name, args.token_file, frozenset(args.allow))

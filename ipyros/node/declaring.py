@@ -252,10 +252,6 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
     if taken is not None:
         raise TopicTypeConflict(f"{where}: estop_topic {estop} carries {taken.type} on {engine.name}, not "
                                 f"{ESTOP_TYPE}: an e-stop topic is a {ESTOP_TYPE} of its own; give it another name")
-    if machine is not None and engine.session.backend.name != "ROS 1":
-        raise DeclarationError(f"{where}: machine={machine!r}: a guard kept by another machine needs its keeper, which "
-                               f"runs on ROS 1 for now; on {engine.session.backend.name} the guard runs here (leave "
-                               "machine= out)")
     lease, machine_grace = _placement(where, machine, lease, machine_grace)
     before = model.guard(output.resolved)
     if before is not None and before.machine != machine:

@@ -40,7 +40,7 @@ class KeeperLink:
         self.machine, self.kind, self.label = machine, kind, label
         self._token = Token.read(token_path(machine), machine)
         self._backend, self._host, self._say = backend, host, say
-        self.id = secrets.token_hex(6)
+        self.id = f"p{secrets.token_hex(6)}"  # a ROS 2 name's token starts with a letter
         self.ns = namespace(machine)
         self.topics = f"{self.ns}/{kind}/{self.id}"  # this thing's own topics: beat, state (a guard's in)
         self._sender = f"s{secrets.token_hex(6)}"

@@ -108,9 +108,6 @@ def set_machine(node: "NodeEngine", machine: Optional[str], grace: Optional[floa
     if node.created:
         raise DeclarationError(f"{node.name} is already running; place its basenode before create()")
     if machine is not None:
-        if node.session.backend.name != "ROS 1":
-            raise DeclarationError(f"{where}: a basenode on another machine needs its keeper, which runs on ROS 1 "
-                                   f"for now; on {node.session.backend.name} it runs here (leave .machine() out)")
         try:
             check_machine_name(machine)
             Token.read(token_path(machine), machine)  # said now, not when the node starts

@@ -52,6 +52,7 @@ import re
 import secrets
 import socket
 import stat
+import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -65,7 +66,7 @@ from ..core.model import BaseModel
 from .basenode import BaseProcess, exit_reason, log_dir
 from .sentinel import Sentinel, Shared
 
-__all__ = ["BEAT_LINES", "Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "MachineError", "Outlet", "Refused",
+__all__ = ["BEAT_LINES", "Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "Lookup", "MachineError", "Outlet", "Refused",
            "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "namespace", "token_path"]
 
 #: A machine's name: a ROS name's word (it is part of the keeper's topics' names).
@@ -273,6 +274,27 @@ class KeeperRos(Protocol):
     def basenode_command(self, base: BaseModel) -> list[str]: ...  # found as rosrun / the ament index finds it
     def has_package(self, package: str) -> bool: ...
     def executables(self, package: str) -> list[str]: ...
+
+
+class Lookup:
+    """What a keeper's ROS adapter starts, as that ROS finds it: ``nodes`` is its module that finds a package's
+    executables (rosrun's way, the ament index's) and makes a basenode's command line; ``sentinel`` the module a
+    guard's stop process runs."""
+
+    nodes: Any
+    sentinel: str
+
+    def sentinel_command(self) -> list[str]:
+        return [sys.executable, "-m", self.sentinel]
+
+    def basenode_command(self, base: BaseModel) -> list[str]:
+        return list(self.nodes.command(base))
+
+    def executables(self, package: str) -> list[str]:
+        return list(self.nodes.list_executables(package))
+
+    def has_package(self, package: str) -> bool:
+        return package in self.nodes.list_packages()
 
 
 class Reporter:
@@ -766,6 +788,8 @@ class Keeper:
     def end(self) -> None:
         """The keeper stops: every guard holds its stop message for its grace (its process outlives the keeper), every
         basenode placed on it is stopped (one killed with the keeper gets SIGTERM from the kernel: no orphans)."""
+        if self._ended.is_set():
+            return
         self._ended.set()
         self._request_sub.close()
         with self._lock:

@@ -13,7 +13,8 @@ import time
 from typing import Any, Callable
 
 from ..core import msgtypes
-from ..processes.keeper import Keeper, Token, token_path
+from ..processes.keeper import Keeper, Lookup, Token, token_path
+from . import nodes
 
 __all__ = ["RospyKeeper", "main"]
 
@@ -40,8 +41,11 @@ class _Subscription:
         self._sub.unregister()
 
 
-class RospyKeeper:
+class RospyKeeper(Lookup):
     """What the keeper asks of ROS 1, with rospy."""
+
+    nodes = nodes  # basenodes found as rosrun finds them
+    sentinel = "ipyros.ros1.sentinel"
 
     name = "ROS 1"
 
@@ -78,24 +82,6 @@ class RospyKeeper:
         buffer = io.BytesIO()
         msg.serialize(buffer)
         return buffer.getvalue()
-
-    def sentinel_command(self) -> list[str]:
-        return [sys.executable, "-m", "ipyros.ros1.sentinel"]
-
-    def basenode_command(self, base: Any) -> list[str]:
-        from . import nodes
-
-        return nodes.command(base)
-
-    def executables(self, package: str) -> list[str]:
-        from . import nodes
-
-        return nodes.list_executables(package)
-
-    def has_package(self, package: str) -> bool:
-        from . import nodes
-
-        return package in nodes.list_packages()
 
 
 def main(name: str, token_file: Any, allowed: frozenset[str] = frozenset()) -> int:

@@ -130,14 +130,3 @@ def test_bad_input_is_the_same_line_as_on_ros1(make_node):
     with pytest.raises(errors.BaseNodeError, match=r"launch file 'robot.launch' not found \(relative to "):
         make_node("bad_launch").baseLaunch("robot.launch", "planner")
     assert nd.model().topics == [] and nd.model().timers == []
-
-
-def test_a_guard_placed_on_a_machine_is_refused_in_one_line_until_ros2_has_a_keeper(make_node):
-    from geometry_msgs.msg import Twist
-
-    nd = make_node("placed_ros2")
-    nd.new.publish("/placed_ros2/cmd_vel", msgType=Twist)
-    with pytest.raises(errors.DeclarationError, match=r"machine='robot1': a guard kept by another machine needs its "
-                                                      r"keeper, which runs on ROS 1 for now"):
-        nd.guard("/placed_ros2/cmd_vel", machine="robot1")
-    assert not engine_of(nd).model().guards

@@ -1,0 +1,128 @@
+"""The keeper on ROS 2 (see :mod:`ipyros.processes.keeper`): an rclpy node of its own on the robot's machine.
+
+    python -m ipyros.machine --name robot1 [--allow PACKAGE ...] [--token-file FILE]
+
+Its callbacks run on a multi-threaded executor, each subscription in a group of its own: a request that
+starts a guard's stop process (seconds) never holds up the heartbeats that keep the other leases.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+from typing import Any, Callable
+
+from ..core import msgtypes
+from ..core.qos import Qos
+from ..processes.keeper import Keeper, Lookup, Token, token_path
+from . import nodes
+
+__all__ = ["RclpyKeeper", "main"]
+
+
+class _Outlet:
+    def __init__(self, node: Any, publisher: Any) -> None:
+        self._node, self._pub = node, publisher
+
+    def write(self, msg: Any) -> None:
+        self._pub.publish(msg)
+
+    def count(self) -> int:
+        return self._pub.get_subscription_count()
+
+    def close(self) -> None:
+        self._node.destroy_publisher(self._pub)
+
+
+class _Subscription:
+    def __init__(self, node: Any, subscription: Any) -> None:
+        self._node, self._sub = node, subscription
+
+    def close(self) -> None:
+        self._node.destroy_subscription(self._sub)
+
+
+class RclpyKeeper(Lookup):
+    """What the keeper asks of ROS 2, with rclpy, on ``node``."""
+
+    nodes = nodes  # basenodes found as ros2 run (the ament index) finds them
+    sentinel = "ipyros.ros2.sentinel"
+
+    name = "ROS 2"
+
+    def __init__(self, node: Any) -> None:
+        self._node = node
+
+    def address(self) -> str:
+        return f"domain {os.environ.get('ROS_DOMAIN_ID') or 0}"
+
+    def publisher(self, topic: str, type_name: str, latch: bool) -> _Outlet:
+        from .runtime import profile_of
+
+        cls = msgtypes.resolve_message(type_name)[1]
+        qos = profile_of(Qos(durability="transient_local") if latch else Qos(depth=10))  # latched: the last one
+        return _Outlet(self._node, self._node.create_publisher(cls, topic, qos))
+
+    def subscribe(self, topic: str, type_name: str, callback: Callable[[Any], None]) -> _Subscription:
+        from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+
+        from .runtime import profile_of
+
+        cls = msgtypes.resolve_message(type_name)[1]
+        return _Subscription(self._node, self._node.create_subscription(
+            cls, topic, callback, profile_of(Qos(depth=10)), callback_group=MutuallyExclusiveCallbackGroup()))
+
+    def text(self, data: str) -> Any:
+        from std_msgs.msg import String
+
+        return String(data=data)
+
+    def deserialize(self, cls: type, data: bytes) -> Any:
+        from rclpy.serialization import deserialize_message
+
+        return deserialize_message(data, cls)
+
+
+def main(name: str, token_file: Any, allowed: frozenset[str] = frozenset()) -> int:
+    import rclpy
+    from rclpy.executors import MultiThreadedExecutor
+    from rclpy.node import Node
+
+    rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    node = Node(f"ipyros_machine_{name}", start_parameter_services=False)
+    ros = RclpyKeeper(node)
+    missing = sorted(p for p in allowed if not ros.has_package(p))
+    if missing:
+        print(f"ipyros machine: --allow {' '.join(missing)}: no such package in this machine's ament index; give "
+              "the packages whose nodes sessions may start here", file=sys.stderr)
+        node.destroy_node()
+        rclpy.try_shutdown()
+        return 2
+    token = Token.made_or_read(token_file or token_path(name))
+
+    def log(text: str) -> None:
+        print(f"{time.strftime('%H:%M:%S')} {text}", flush=True)
+
+    executor = MultiThreadedExecutor(num_threads=4)
+    executor.add_node(node)
+    spinner = threading.Thread(target=executor.spin, name="ipyros-machine-spin", daemon=True)
+    spinner.start()
+    keeper = Keeper(name, token, ros, log, allowed=allowed)
+
+    def end(*_: Any) -> None:
+        keeper.end()
+
+    signal.signal(signal.SIGTERM, end)
+    signal.signal(signal.SIGINT, end)
+    print(keeper.ready_line(), flush=True)
+    try:
+        keeper.run()
+    finally:
+        keeper.end()
+        executor.shutdown(timeout_sec=2.0)
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

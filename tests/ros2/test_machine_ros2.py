@@ -1,0 +1,137 @@
+"""A guard and a basenode placed on a machine's keeper (``python -m ipyros.machine``) on ROS 2, with real processes:
+the keeper an rclpy node of its own in the session's domain, a plain subscriber standing for the motors."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from geometry_msgs.msg import Twist
+from helpers import descendants, pid_alive
+from peer import Peer
+from std_msgs.msg import String
+from support import wait_for
+
+from ipyros.dsl import engine_of
+
+KEEPER = Path(__file__).resolve().parents[1] / "ros1" / "peers" / "keeper.py"  # python -m ipyros.machine, either ROS
+ECHO_NODE = Path(__file__).resolve().parent / "peers" / "echo_node.py"
+LIMITS = {"linear.x": (-0.5, 0.5)}
+
+
+def twists(listener) -> list[tuple[float, float]]:
+    return [(float(line.split()[1]), float(line.split()[4])) for line in list(listener.lines)
+            if line.startswith("twist ")]
+
+
+@pytest.fixture
+def keeper():
+    started = []
+
+    def start(*allow: str) -> Peer:
+        proc = Peer(str(KEEPER), "--name", "testbot2", *(f"--allow={package}" for package in allow))
+        started.append(proc)
+        proc.wait_line("ipyros machine testbot2 ready on ROS 2", timeout=60)
+        return proc
+
+    yield start
+    for proc in started:
+        left = descendants(proc.proc.pid)
+        proc.stop()
+        wait_for(lambda: not any(pid_alive(pid) for pid in left), timeout=30, what="the keeper's children to end")
+
+
+def test_a_guard_placed_on_a_ros2_keeper_clamps_there_and_the_estop_reaches_it(make_node, peer, keeper):
+    machine = keeper()
+    motors = peer("listen_twist.py", "/placed21/cmd_vel", "--name=motors21")
+    motors.wait_line("ready")
+    nd = make_node("placed21")
+    nd.new.publish("/placed21/cmd_vel", msgType=Twist)
+    nd.guard("/placed21/cmd_vel", limits=LIMITS, machine="testbot2")
+    nd.create()
+    fast = Twist()
+    fast.linear.x = 2.0
+    wait_for(lambda: nd.write("/placed21/cmd_vel", fast) or len(twists(motors)) >= 5, timeout=30, interval=0.05,
+             what="commands at the motors")
+    assert {x for x, _ in twists(motors)} == {0.5}, "clamped on the way"
+    wait_for(lambda: engine_of(nd).status().guards[0].state == "passing (on testbot2)", timeout=10, what="its state")
+    nd.estop()
+    stopped_at = time.monotonic()
+    wait_for(lambda: any(x == 0.0 and t > stopped_at for x, t in twists(motors)), timeout=20, what="the e-stop")
+    nd.release()
+    released_at = time.monotonic()
+    fast.linear.x = 0.2
+    wait_for(lambda: nd.write("/placed21/cmd_vel", fast) or any(x == 0.2 and t > released_at
+                                                                 for x, t in twists(motors)),
+             timeout=20, interval=0.1, what="commands after the release")
+    assert any("placed guard /placed21/cmd_vel" in line for line in machine.lines)
+
+
+SESSION = """
+import time
+from ipyros import rosNode
+from geometry_msgs.msg import Twist
+nd = rosNode("placed22")
+nd.new.publish("/placed22/cmd_vel", msgType=Twist)
+nd.guard("/placed22/cmd_vel", limits={"linear.x": (-0.5, 0.5)}, machine="testbot2", lease=0.5, machine_grace=2.0,
+         grace=0.5)
+nd.create()
+print("created", flush=True)
+m = Twist()
+m.linear.x = 0.3
+while True:
+    nd.write("/placed22/cmd_vel", m)
+    time.sleep(0.05)
+"""
+
+
+def test_a_killed_ros2_session_stops_the_robot_within_its_lease(peer, keeper, tmp_path):
+    machine = keeper()
+    motors = peer("listen_twist.py", "/placed22/cmd_vel", "--name=motors22")
+    motors.wait_line("ready")
+    script = tmp_path / "session.py"
+    script.write_text(SESSION)
+    laptop = Peer(str(script))
+    try:
+        laptop.wait_line("created", timeout=60)
+        wait_for(lambda: sum(x == 0.3 for x, _ in twists(motors)) >= 10, timeout=30, what="commands at the motors")
+        killed_at = time.monotonic()
+        os.kill(laptop.proc.pid, signal.SIGKILL)
+        first = wait_for(lambda: next((t for x, t in twists(motors) if x == 0.0 and t > killed_at), None),
+                         timeout=10, what="the stop message at the motors")
+        assert first - killed_at < 0.5 + 2.0, first - killed_at  # the lease, and what a loaded machine adds
+        wait_for(lambda: any("silent past its grace" in line for line in machine.lines), timeout=20,
+                 what="the keeper to end the guard after its grace")
+    finally:
+        laptop.stop()
+
+
+def test_a_basenode_placed_on_a_ros2_keeper_runs_there_and_is_relayed(make_node, keeper, tmp_path, monkeypatch):
+    prefix = tmp_path / "install"  # a package in an ament index of its own, as colcon installs one
+    (prefix / "share" / "ament_index" / "resource_index" / "packages").mkdir(parents=True)
+    (prefix / "share" / "ament_index" / "resource_index" / "packages" / "echo_pkg").touch()
+    (prefix / "lib" / "echo_pkg").mkdir(parents=True)
+    node = prefix / "lib" / "echo_pkg" / "echo_node"
+    node.write_text(f"#!{sys.executable}\n" + ECHO_NODE.read_text())
+    node.chmod(0o755)
+    monkeypatch.setenv("AMENT_PREFIX_PATH", os.pathsep.join([str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
+    machine = keeper("echo_pkg")
+    assert "the basenodes of echo_pkg" in machine.lines[-1]
+    w = make_node("placed23")
+    w.baseNode("echo_node", namespace="robot23").basePackage("echo_pkg").machine("testbot2")
+    w.reuse.subscribe("in", type=String).publish("out", type=String)
+    w.create()
+    pid = w.base.pid
+    assert pid in descendants(machine.proc.pid), "it runs as the keeper's child"
+    out: list[str] = []
+    make_node("placed23_ear").new.subscribe("/robot23/out", handler=lambda m: out.append(m.data),
+                                            msgType=String).create()
+    mouth = make_node("placed23_mouth").new.publish("/robot23/in", msgType=String).create()
+    wait_for(lambda: mouth.write("/robot23/in", String(data="hi")) or out, timeout=30, interval=0.2,
+             what="a message through the placed basenode, relayed")
+    w.shutdown()
+    wait_for(lambda: not pid_alive(pid), timeout=20, what="the node's shutdown to stop it there")
