@@ -19,7 +19,7 @@ from ..core.guard import GuardState, Verdict
 from ..core.model import GuardModel, TopicModel
 from ..processes.keeper import MachineError
 from ..processes.sentinel import ESTOPPED, PASSING, STATES
-from .keeperlink import KeeperLink
+from .keeperlink import FIND, KeeperLink
 from .liveguard import LiveGuard
 
 __all__ = ["PlacedGuard"]
@@ -59,6 +59,11 @@ class PlacedGuard(LiveGuard):
         try:
             link.beat(min(0.1, self.model.lease / 5))
             link.ask("place", again=True, guard=self._spec())
+            # The keeper lets no command pass until it hears this session's heartbeat (a new subscription takes a
+            # moment to be found): create() returns once it does, or after FIND s, and then tend() says why not.
+            until = time.monotonic() + FIND
+            while not link.report.get("heard") and time.monotonic() < until:
+                time.sleep(0.02)
         except BaseException:
             link.close()
             raise

@@ -66,8 +66,8 @@ from ..core.model import BaseModel
 from .basenode import BaseProcess, exit_reason, log_dir
 from .sentinel import Sentinel, Shared
 
-__all__ = ["BEAT_LINES", "Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "Lookup", "MachineError", "Outlet", "Refused",
-           "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "namespace", "token_path"]
+__all__ = ["BEAT_LINES", "Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "Lookup", "MachineError", "Outlet",
+           "Refused", "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "namespace", "token_path"]
 
 #: A machine's name: a ROS name's word (it is part of the keeper's topics' names).
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -229,12 +229,16 @@ class Lease:
     length: float = 0.5
     grace: Optional[float] = 30.0
     last: float = field(default_factory=time.monotonic)
-    held: bool = False  # the lease ran out: the stop message holds until the session is heard again
+    #: Commands wait for the session to be heard: from the start until its first heartbeat (which may take a moment
+    #: to find its way: a new subscription on ROS 2; :attr:`first`), and after the lease ran out (the stop message
+    #: holds then).
+    held: bool = True
+    first: bool = True  # not heard yet
 
     def heard(self, now: float) -> Optional[float]:
         """A heartbeat came at ``now``; when it ends a hold, how long the session was silent."""
         silent = now - self.last if self.held else None
-        self.last, self.held = now, False
+        self.last, self.held, self.first = now, False, False
         return silent
 
     def look(self, now: float) -> str:
@@ -380,9 +384,9 @@ class KeptGuard:
         return copy.deepcopy(self._stop)
 
     def holding(self) -> bool:
-        """Whether the stop message goes in place of every command: e-stopped, the session not heard, or its stop
-        process lost."""
-        return self.shared.estopped or self.lost is not None
+        """Whether the stop message goes in place of every command: e-stopped, the session not heard (since its lease
+        ran out, or not yet: its first heartbeat may come after its first command), or its stop process lost."""
+        return self.shared.estopped or self.lost is not None or self.lease.first
 
     def command(self, msg: Any) -> None:
         """A message from the session: through the gate, onto the robot's topic."""
@@ -411,22 +415,24 @@ class KeptGuard:
         self._wake()
 
     def tend(self, now: float) -> Optional[str]:
-        """Fail closed when its stop process ended on its own (killed, crashed): one line the first time; then
-        every command is replaced by the stop message, and the keeper itself sends it at the guard's rate (the stop
-        on silence and on a lost lease no longer has a process of its own) until the session releases it."""
+        """While the stop message holds (the session not heard, e-stopped, its stop process lost), the keeper sends
+        it too, at the guard's rate, on the publisher the robot already hears commands from (a stop process just
+        started may not have been found by the robot's subscribers yet: on ROS 2 that takes a moment). When the stop
+        process ended on its own (killed, crashed): one line the first time, and every command is replaced by the
+        stop message until the session releases it."""
         said = None
         if self.lost is None:
             sentinel = self.sentinel
-            if sentinel is None or sentinel.running:
-                return None
-            code = sentinel.returncode
-            self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
-            said = (f"guard {self.topic}: its stop process ended ({self.lost}; its log: {self.log_path}): the keeper "
-                    "sends the stop message in place of every command until the session releases it")
-        if now - self._stopped_at >= 1.0 / self.repeat:
+            if sentinel is not None and not sentinel.running:
+                code = sentinel.returncode
+                self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
+                said = (f"guard {self.topic}: its stop process ended ({self.lost}; its log: {self.log_path}): the "
+                        "keeper sends the stop message in place of every command until the session releases it")
+        if (self.shared.estopped or self.lost is not None) and now - self._stopped_at >= 1.0 / self.repeat:
             self._stopped_at = now
             self._out.write(self.stop_message())
-            self.shared.stops_sent += 1
+            if self.lost is not None:  # a stop process counts its own
+                self.shared.stops_sent += 1
         return said
 
     def _wake(self) -> None:
@@ -440,6 +446,7 @@ class KeptGuard:
         shared, figures = self.shared, self.gate.figures
         alive = self.sentinel is not None and self.sentinel.running
         return {"id": self.id, "topic": self.topic, "state": shared.state, "held": bool(shared.held), "lost": self.lost,
+                "heard": not self.lease.first,
                 "estop_session": shared.estop_session, "estop_topic": shared.estop_topic, "alive": alive,
                 "stops": shared.stops_sent, "reach": shared.reach, "commands": self.gate.commands,
                 "figures": [figures.passed, figures.clamped, figures.dropped, figures.replaced, figures.last_trip]}
@@ -722,10 +729,13 @@ class Keeper:
                 if base.owner == sender:
                     base.lease.heard(now)
         for guard in guards:
+            first = guard.lease.first
             silent = guard.lease.heard(now)
             if silent is not None:
                 guard.hold(False)
-                self.log(f"guard {guard.topic}: {sender} heard again after {silent:.2f} s: commands pass again")
+                heard = f"first after {silent:.2f} s: commands pass" if first else \
+                    f"again after {silent:.2f} s: commands pass again"
+                self.log(f"guard {guard.topic}: {sender} heard {heard}")
 
     # -- the watch --------------------------------------------------------------------------------
     def look(self) -> None:

@@ -82,13 +82,17 @@ def test_a_heartbeat_keeps_the_lease_only_signed_and_fresh(tmp_path):
 
 def test_the_lease_holds_the_stop_once_lost_releases_when_heard_and_ends_past_its_grace():
     lease = Lease(length=0.5, grace=5.0, last=100.0)
-    assert lease.look(100.4) == "ok"
-    assert lease.look(100.6) == "lost" and lease.held
-    assert lease.look(100.7) == "ok", "said once"
-    assert lease.heard(101.0) == pytest.approx(1.0) and not lease.held
-    assert lease.heard(101.1) is None
-    assert lease.look(106.2) == "gone"
+    assert lease.held and lease.first, "held until its session is first heard"
+    assert lease.look(100.6) == "ok", "not lost: not heard yet"
+    assert lease.heard(100.2) == pytest.approx(0.2) and not lease.held and not lease.first
+    assert lease.look(100.6) == "ok"
+    assert lease.look(100.8) == "lost" and lease.held
+    assert lease.look(100.9) == "ok", "said once"
+    assert lease.heard(101.2) == pytest.approx(1.0) and not lease.held
+    assert lease.heard(101.3) is None
+    assert lease.look(106.4) == "gone"
     kept = Lease(length=0.5, grace=None, last=0.0)
+    kept.heard(0.0)
     assert kept.look(1e6) == "lost" and kept.look(2e6) == "ok", "grace None: never ended"
 
 
