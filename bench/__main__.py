@@ -3,8 +3,8 @@
 ROS 1 (a venv that sees rospy): the relay bench against topic_tools, where a handler's time goes,
 the guard (stop on silence, hostile commands), a robot on another machine (link cuts, a lossy link),
 %try over a bag, completion, scale; ROS 2 (rclpy): the relay bench, the guard, %try over a bag,
-completion and scale on rclpy. Each bench starts what it needs (a rosmaster on a free port, or a DDS
-domain of its own), prints a table, saves it under bench/results/, keeps its figures for
+a robot on another machine, completion and scale on rclpy. Each bench starts what it needs (a
+rosmaster on a free port, or a DDS domain of its own), prints a table, saves it under bench/results/, keeps its figures for
 ``python -m bench.figures`` and stops everything it started. The exit code is non-zero if a
 target was missed.
 """
@@ -20,8 +20,8 @@ def main(argv: list[str] | None = None) -> int:
     from bench import completion, guard, scale, try_bag
 
     if importlib.util.find_spec("rospy") is None:
-        from bench import relay_ros2 as relay
-        benches = (relay, guard, try_bag, completion, scale)
+        from bench import machine_link, relay_ros2 as relay
+        benches = (relay, guard, machine_link, try_bag, completion, scale)
     else:
         from bench import handler_cost, machine_link, relay
         benches = (relay, handler_cost, guard, machine_link, try_bag, completion, scale)

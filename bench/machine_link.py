@@ -3,7 +3,7 @@
     python -m bench.machine_link            # 50 link cuts, 60 s at 10 % loss (about 4 minutes)
     python -m bench.machine_link --quick    # 10 cuts, 20 s of loss
 
-ROS 1, as root (network namespaces; ``tests/ros1/test_machine_link.py`` runs the same setup): the bench
+Either ROS, as root (network namespaces; ``tests/both/test_machine_link.py`` runs the same setup): the bench
 makes a robot's namespace joined to this one by a veth pair (addresses from the benchmarking range
 198.18.0.0/15), and runs there a rosmaster, a keeper (``python -m ipyros.machine``) and a plain
 subscriber standing for the motors; here, a session whose node drives ``/link/cmd_vel`` at 20 Hz through
@@ -22,6 +22,7 @@ this kernel has no netem) while the session drives: stop messages at the motors,
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
 import re
 import signal
@@ -52,7 +53,7 @@ import time
 from ipyros import rosNode
 from geometry_msgs.msg import Twist
 nd = rosNode("laptop")
-nd.new.publish("{TOPIC}", msgType=Twist)
+nd.new.publish("{TOPIC}", msgType=Twist, qos="best_effort")  # ROS 2: commands are not held up behind a lost one
 nd.guard("{TOPIC}", limits={{"linear.x": (-0.5, 0.5)}}, machine="linkbot", lease={LEASE}, grace=0.5)
 nd.create()
 print("created", flush=True)
@@ -65,18 +66,28 @@ while True:
 
 
 class Proc:
-    """A process (``ip netns exec`` becomes it), its lines read as it prints them."""
+    """A process (``ip netns exec`` becomes it) with the environment ``env`` (the whole of it), its lines read as it
+    prints them."""
 
     def __init__(self, argv: list[str], env: dict[str, str]) -> None:
         self.proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                     text=True, env={**os.environ, **env, "PYTHONUNBUFFERED": "1"})
+                                     text=True, env={**env, "PYTHONUNBUFFERED": "1"})
         self.lines: list[str] = []
         threading.Thread(target=lambda: self.lines.extend(line.rstrip("\n") for line in self.proc.stdout),
                          daemon=True).start()
 
     def wait_line(self, text: str, timeout: float = 60.0) -> str:
-        return wait_until(lambda: next((line for line in self.lines if text in line), None), timeout,
-                          f"{text!r} (got {self.lines[-3:]})", 0.05)
+        """The first line holding ``text``; a :class:`BenchError` with its last lines if it ends or takes too long."""
+        def found() -> Optional[str]:
+            line = next((line for line in list(self.lines) if text in line), None)
+            if line is None and self.proc.poll() is not None:
+                raise BenchError(f"it ended ({self.proc.returncode}) before {text!r}")
+            return line
+
+        try:
+            return wait_until(found, timeout, repr(text), 0.05)
+        except BenchError as error:
+            raise BenchError(f"{error}; it printed: {' | '.join(self.lines[-5:]) or 'nothing'}") from None
 
     def stop(self) -> None:
         for ask, wait in ((signal.SIGINT, 10.0), (signal.SIGKILL, 10.0)):
@@ -147,24 +158,38 @@ class Placed:
     on_laptop: dict[str, str]
 
 
+def ros_name() -> str:
+    """The ROS of this venv: ROS 1 where rospy is, else ROS 2."""
+    return "ROS 1" if importlib.util.find_spec("rospy") is not None else "ROS 2"
+
+
 @contextmanager
 def placed(link: Link, workdir: Path, allow: tuple[str, ...] = ()) -> Iterator[Placed]:
-    """The master, the keeper (allowing ``allow``) and the motors in the robot's namespace, the token copied to the
-    laptop as an SSH key is, and the session driving the motors; all stopped afterwards."""
-    port = free_port()
-    master = f"http://{link.robot}:{port}/"
+    """The keeper (allowing ``allow``) and the motors in the robot's namespace (ROS 1: its master too; ROS 2: a
+    domain of its own, discovered across the link: SUBNET), the token copied to the laptop as an SSH key is, and the
+    session driving the motors; all stopped afterwards."""
     keep = {k: v for k, v in os.environ.items() if not k.startswith("ROS_") or k == "ROS_PACKAGE_PATH"}
     keep["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p)
-    on_robot = {**keep, "ROS_MASTER_URI": master, "ROS_IP": link.robot, "ROS_HOME": str(workdir / "robot")}
-    on_laptop = {**keep, "ROS_MASTER_URI": master, "ROS_IP": link.laptop, "ROS_HOME": str(workdir / "laptop")}
     in_ns = ["ip", "netns", "exec", link.ns]
     started: list[Proc] = []
-    try:
+    if ros_name() == "ROS 1":
+        port = free_port()
+        master = f"http://{link.robot}:{port}/"
+        on_robot = {**keep, "ROS_MASTER_URI": master, "ROS_IP": link.robot}
+        on_laptop = {**keep, "ROS_MASTER_URI": master, "ROS_IP": link.laptop}
         started.append(Proc([*in_ns, "rosmaster", "--core", "-p", str(port), "-w", "3"], on_robot))
+    else:  # a domain of its own, found across the veth: each process's Fast DDS profile its own (not the loopback
+        # one a test session made), as on two machines
+        keep = {k: v for k, v in keep.items() if not k.startswith(("FASTDDS_", "FASTRTPS_", "IPYROS_", "RMW_"))}
+        domain = {**keep, "IPYROS_ROS": "2", "ROS_DOMAIN_ID": str(150 + os.getpid() % 80),
+                  "ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}
+        on_robot, on_laptop = dict(domain), dict(domain)
+    on_robot["ROS_HOME"], on_laptop["ROS_HOME"] = str(workdir / "robot"), str(workdir / "laptop")
+    try:
         keeper = Proc([*in_ns, sys.executable, "-m", "ipyros.machine", "--name", "linkbot",
                        *(f"--allow={package}" for package in allow)], on_robot)
         started.append(keeper)
-        keeper.wait_line("ipyros machine linkbot ready on ROS 1")
+        keeper.wait_line(f"ipyros machine linkbot ready on {ros_name()}")
         motors = Proc([*in_ns, sys.executable, str(LISTEN), TOPIC, "--name=motors"], on_robot)
         started.append(motors)
         motors.wait_line("ready")
@@ -231,24 +256,26 @@ def run(count: int, loss_seconds: float, workdir: Path) -> tuple[list[float], tu
     with robot_link() as link, placed(link, workdir) as both:
         cuts(link, both.motors, 2)  # warm-up: the first reconnection
         delays = cuts(link, both.motors, count)
-        print(f"  ROS 1 link cut to stop: p50 {statistics.median(delays):.1f} ms, p99 "
+        print(f"  {ros_name()} link cut to stop: p50 {statistics.median(delays):.1f} ms, p99 "
               f"{percentile(delays, 0.99):.1f} ms (lease {LEASE * 1000:.0f} ms)", flush=True)
         with lossy(link):
             start = time.monotonic()
             time.sleep(loss_seconds)
             during = [x for x, t in twists(both.motors) if start < t]
         loss = sum(1 for x in during if x == 0.3), sum(1 for x in during if x == 0.0)
-        print(f"  ROS 1 10 % loss for {loss_seconds:g} s: {loss[0]} commands, {loss[1]} stop messages", flush=True)
+        print(f"  {ros_name()} 10 % loss for {loss_seconds:g} s: {loss[0]} commands, {loss[1]} stop messages",
+              flush=True)
         return delays, loss
 
 
 def figures(delays: list[float], loss: tuple[int, int], seconds: float) -> list[Figure]:
     most = LEASE * 1000 + MARGIN_MS
-    return [Figure("ROS 1", f"machine: link cut to the stop message at the motors, p50 of {len(delays)}",
+    ros = ros_name()
+    return [Figure(ros, f"machine: link cut to the stop message at the motors, p50 of {len(delays)}",
                    statistics.median(delays), "ms"),
-            Figure("ROS 1", f"machine: link cut to the stop message at the motors, p99 of {len(delays)}",
+            Figure(ros, f"machine: link cut to the stop message at the motors, p99 of {len(delays)}",
                    percentile(delays, 0.99), "ms", most=most, note=f"lease {LEASE * 1000:.0f} ms + {MARGIN_MS:.0f} ms"),
-            Figure("ROS 1", f"machine: false stops in {seconds:g} s at 10 % loss each way, 20 Hz commands",
+            Figure(ros, f"machine: false stops in {seconds:g} s at 10 % loss each way, 20 Hz commands",
                    loss[1], "msgs", most=0, note=f"{loss[0]} commands passed")]
 
 
@@ -275,13 +302,14 @@ def main(argv: Optional[list[str]] = None) -> int:
             print("machine bench interrupted", file=sys.stderr)
             return 130
     checks = figures(delays, loss, seconds)
-    text = (f"Machine: {machine('ROS 1')}; {count} link cuts across a veth pair, lease {LEASE * 1000:.0f} ms; "
+    text = (f"Machine: {machine(ros_name())}; {count} link cuts across a veth pair, lease {LEASE * 1000:.0f} ms; "
             f"{seconds:g} s at 10 % loss.\n\n{table(checks)}\n\n" + "\n".join(target_lines(checks))
             + f"\n\nWhole run: {time.monotonic() - began:.0f} s.\n")
-    keep("ros1_machine_link", checks)
+    tag = ros_name().lower().replace(" ", "")
+    keep(f"{tag}_machine_link", checks)
     print(text)
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "machine_link_ros1.md").write_text(text)
+    (RESULTS / f"machine_link_{tag}.md").write_text(text)
     return int(any(f.passed is False for f in checks))
 
 

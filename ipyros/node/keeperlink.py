@@ -73,7 +73,7 @@ class KeeperLink:
         self.subscription("reply", f"{ns}/reply", string, self._reply)
         self.subscription("state", f"{self.topics}/state", string, report, latched=True)
         self._request = self.publication(f"{ns}/request", string)
-        self._beats = [self.publication(topic, string) for topic in beat_topics(self.topics)]
+        self._beats = [self.publication(topic, string, lossy=True) for topic in beat_topics(self.topics)]
 
     def subscription(self, label: str, topic: str, cls: type, handler: Callable[[Any], None],
                      latched: bool = False) -> Any:
@@ -84,8 +84,10 @@ class KeeperLink:
         self._endpoints.append(endpoint)
         return endpoint
 
-    def publication(self, topic: str, cls: type) -> Any:
-        endpoint = self._backend.publication(self._host, topic, cls, PROFILES["default"], _quiet)
+    def publication(self, topic: str, cls: type, lossy: bool = False) -> Any:
+        """``lossy``: best effort on ROS 2 (a heartbeat's: a newer one makes a lost one moot)."""
+        endpoint = self._backend.publication(self._host, topic, cls, PROFILES["best_effort" if lossy else "default"],
+                                             _quiet)
         self._endpoints.append(endpoint)
         return endpoint
 

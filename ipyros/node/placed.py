@@ -17,6 +17,7 @@ from typing import Any, Callable
 
 from ..core.guard import GuardState, Verdict
 from ..core.model import GuardModel, TopicModel
+from ..core.qos import from_model
 from ..processes.keeper import MachineError
 from ..processes.sentinel import ESTOPPED, PASSING, STATES
 from .keeperlink import FIND, KeeperLink
@@ -38,6 +39,11 @@ class PlacedGuard(LiveGuard):
         self.id = self._link.id
         self._silent_said = False
 
+    def _lossy(self) -> bool:
+        """Whether the output is best effort: then so is the link carrying its commands to the keeper (ROS 2: a lost
+        command is not repaired, and holds none back behind it)."""
+        return from_model(self._output.qos).reliability == "best_effort"
+
     def _report(self, report: dict[str, Any]) -> None:
         shared = self.shared
         shared.state, shared.stops_sent, shared.reach = report["state"], report["stops"], report["reach"]
@@ -49,13 +55,13 @@ class PlacedGuard(LiveGuard):
                 "on_limit": model.on_limit, "timeout": model.timeout, "repeat": model.repeat, "grace": model.grace,
                 "estop_topic": model.estop_topic, "latch": bool(self._output.latch),
                 "stop": self._backend.serialize(self._stop_message).hex(), "lease": model.lease,
-                "grace_lease": model.machine_grace}
+                "grace_lease": model.machine_grace, "lossy": self._lossy()}
 
     # -- what a LiveGuard does, here done by the keeper ------------------------------------------------
     def start(self) -> None:
         link = self._link
         link.open(self._report)
-        self._in = link.publication(f"{link.topics}/in", self.cls)
+        self._in = link.publication(f"{link.topics}/in", self.cls, lossy=self._lossy())
         try:
             link.beat(min(0.1, self.model.lease / 5))
             link.ask("place", again=True, guard=self._spec())

@@ -61,7 +61,8 @@ class RospyKeeper(Lookup):
         return _Outlet(rospy.Publisher(topic, msgtypes.resolve_message(type_name)[1], queue_size=10, latch=latch,
                                        tcp_nodelay=True))
 
-    def subscribe(self, topic: str, type_name: str, callback: Callable[[Any], None]) -> _Subscription:
+    def subscribe(self, topic: str, type_name: str, callback: Callable[[Any], None],
+                  lossy: bool = False) -> _Subscription:  # TCPROS only: lossy or not
         import rospy
 
         return _Subscription(rospy.Subscriber(topic, msgtypes.resolve_message(type_name)[1], callback,

@@ -66,14 +66,16 @@ class RclpyKeeper(Lookup):
         qos = profile_of(Qos(durability="transient_local") if latch else Qos(depth=10))  # latched: the last one
         return _Outlet(self._node, self._node.create_publisher(cls, topic, qos))
 
-    def subscribe(self, topic: str, type_name: str, callback: Callable[[Any], None]) -> _Subscription:
+    def subscribe(self, topic: str, type_name: str, callback: Callable[[Any], None],
+                  lossy: bool = False) -> _Subscription:
         from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 
         from .runtime import profile_of
 
         cls = msgtypes.resolve_message(type_name)[1]
         return _Subscription(self._node, self._node.create_subscription(
-            cls, topic, callback, profile_of(Qos(depth=10)), callback_group=MutuallyExclusiveCallbackGroup()))
+            cls, topic, callback, profile_of(Qos(depth=10, reliability="best_effort" if lossy else "reliable")),
+            callback_group=MutuallyExclusiveCallbackGroup()))
 
     def text(self, data: str) -> Any:
         from std_msgs.msg import String
