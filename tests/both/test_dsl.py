@@ -287,7 +287,7 @@ def test_the_dsl_is_all_a_node_shows(make_node):
         "name", "fullname", "created", "ros_name", "base", "basenode_name", "model", "handler", "resolve",
         "new", "reuse", "params", "baseNode", "basePackage", "baseLaunch", "baseBag", "discover", "create",
         "shutdown", "timer", "remove", "write", "send_goal", "save", "load", "export", "status", "history",
-        "versions", "revert", "restore_versions", "running", "on_param", "guard", "estop", "release", "now"}
+        "versions", "revert", "restore_versions", "running", "on_param", "guard", "estop", "release", "now", "machine"}
 
 
 def test_declaring_a_subscription_again_reads_as_a_handler_swap(make_node):
