@@ -50,6 +50,7 @@ import json
 import os
 import re
 import secrets
+import signal
 import socket
 import stat
 import sys
@@ -67,7 +68,8 @@ from .basenode import BaseProcess, exit_reason, log_dir
 from .sentinel import Sentinel, Shared
 
 __all__ = ["BEAT_LINES", "Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "Lookup", "MachineError", "Outlet",
-           "Refused", "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "namespace", "token_path"]
+           "Refused", "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "log_line", "namespace",
+           "serve", "token_path", "unknown_packages"]
 
 #: A machine's name: a ROS name's word (it is part of the keeper's topics' names).
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -493,6 +495,7 @@ class KeptBase:
         if grace is not None and (not isinstance(grace, (int, float)) or isinstance(grace, bool) or grace <= 0):
             raise Refused(f"basenode {self.what}: grace={grace!r}: give the seconds (> 0), or None to keep it")
         self.lease = Lease(float("inf"), grace, keeper.clock())
+        self._last_lines: list[str] = []
         self.process = BaseProcess(argv, node_name=base.node_name, on_exit=self._exited,
                                    log_path=log_dir() / f"machine_{keeper.name}_base_{bid}.log")
         try:
@@ -504,13 +507,14 @@ class KeptBase:
                        for topic in beat_topics(f"{keeper.ns}/bases/{bid}")]
 
     def _exited(self, process: Any, returncode: int, last_lines: list[str]) -> None:
+        self._last_lines = last_lines[-8:]  # told in each report from now on: the log read once, not every 0.2 s
         self._log(f"basenode {self.what} of {self.owner} {exit_reason(returncode)}")
 
     def state(self) -> dict[str, Any]:
         process = self.process
-        ended = process.returncode is not None and not process.running
-        return {"id": self.id, "base": self.what, "running": process.running, "pid": process.pid,
-                "returncode": process.returncode, "tail": process.tail(8) if ended else []}
+        running = process.running
+        return {"id": self.id, "base": self.what, "running": running, "pid": process.pid,
+                "returncode": process.returncode, "tail": [] if running else self._last_lines}
 
     def report(self, now: float, every: float = REPORT) -> None:
         self._reporter.report(self.state(), now, every)
@@ -814,6 +818,30 @@ class Keeper:
             guard.close(hold=True)
         for base in bases:
             base.close()
+
+
+def log_line(text: str) -> None:
+    """The keeper's log: a line on its standard output, with the time."""
+    print(f"{time.strftime('%H:%M:%S')} {text}", flush=True)
+
+
+def unknown_packages(ros: KeeperRos, allowed: frozenset[str], where: str) -> Optional[str]:
+    """The one line for ``--allow`` packages this machine does not have (``where``: where its ROS looks), if any."""
+    missing = sorted(p for p in allowed if not ros.has_package(p))
+    return (f"ipyros machine: --allow {' '.join(missing)}: no such package in {where}; give the packages whose "
+            "nodes sessions may start here") if missing else None
+
+
+def serve(keeper: Keeper) -> None:
+    """Run ``keeper`` in this process until SIGTERM or Ctrl-C: its ready line, then its watch; ended on the way out
+    whatever ends it."""
+    signal.signal(signal.SIGTERM, lambda *_: keeper.end())
+    signal.signal(signal.SIGINT, lambda *_: keeper.end())
+    print(keeper.ready_line(), flush=True)
+    try:
+        keeper.run()
+    finally:
+        keeper.end()
 
 
 def _checked_id(body: dict[str, Any], what: str) -> str:

@@ -6,14 +6,11 @@
 from __future__ import annotations
 
 import io
-import signal
 import sys
-import threading
-import time
 from typing import Any, Callable
 
 from ..core import msgtypes
-from ..processes.keeper import Keeper, Lookup, Token, token_path
+from ..processes.keeper import Keeper, Lookup, Token, log_line, serve, token_path, unknown_packages
 from . import nodes
 
 __all__ = ["RospyKeeper", "main"]
@@ -89,30 +86,14 @@ def main(name: str, token_file: Any, allowed: frozenset[str] = frozenset()) -> i
     import rospy
 
     ros = RospyKeeper()
-    missing = sorted(p for p in allowed if not ros.has_package(p))
-    if missing:
-        print(f"ipyros machine: --allow {' '.join(missing)}: no such package on this machine's ROS_PACKAGE_PATH; "
-              "give the packages whose nodes sessions may start here", file=sys.stderr)
+    unknown = unknown_packages(ros, allowed, "this machine's ROS_PACKAGE_PATH")
+    if unknown:
+        print(unknown, file=sys.stderr)
         return 2
     token = Token.made_or_read(token_file or token_path(name))
     rospy.init_node(f"ipyros_machine_{name}", disable_signals=True)
-
-    def log(text: str) -> None:
-        print(f"{time.strftime('%H:%M:%S')} {text}", flush=True)
-
-    keeper = Keeper(name, token, ros, log, allowed=allowed)
-    ended = threading.Event()
-
-    def end(*_: Any) -> None:
-        ended.set()
-        keeper.end()
-
-    signal.signal(signal.SIGTERM, end)
-    signal.signal(signal.SIGINT, end)
-    print(keeper.ready_line(), flush=True)
     try:
-        keeper.run()
+        serve(Keeper(name, token, ros, log_line, allowed=allowed))
     finally:
-        keeper.end()
         rospy.signal_shutdown("the keeper ends")
     return 0

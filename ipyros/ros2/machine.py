@@ -9,15 +9,13 @@ starts a guard's stop process (seconds) never holds up the heartbeats that keep 
 from __future__ import annotations
 
 import os
-import signal
 import sys
 import threading
-import time
 from typing import Any, Callable
 
 from ..core import msgtypes
 from ..core.qos import Qos
-from ..processes.keeper import Keeper, Lookup, Token, token_path
+from ..processes.keeper import Keeper, Lookup, Token, log_line, serve, token_path, unknown_packages
 from . import nodes
 
 __all__ = ["RclpyKeeper", "main"]
@@ -96,34 +94,19 @@ def main(name: str, token_file: Any, allowed: frozenset[str] = frozenset()) -> i
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     node = Node(f"ipyros_machine_{name}", start_parameter_services=False)
     ros = RclpyKeeper(node)
-    missing = sorted(p for p in allowed if not ros.has_package(p))
-    if missing:
-        print(f"ipyros machine: --allow {' '.join(missing)}: no such package in this machine's ament index; give "
-              "the packages whose nodes sessions may start here", file=sys.stderr)
+    unknown = unknown_packages(ros, allowed, "this machine's ament index")
+    if unknown:
+        print(unknown, file=sys.stderr)
         node.destroy_node()
         rclpy.try_shutdown()
         return 2
     token = Token.made_or_read(token_file or token_path(name))
-
-    def log(text: str) -> None:
-        print(f"{time.strftime('%H:%M:%S')} {text}", flush=True)
-
     executor = MultiThreadedExecutor(num_threads=4)
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, name="ipyros-machine-spin", daemon=True)
-    spinner.start()
-    keeper = Keeper(name, token, ros, log, allowed=allowed)
-
-    def end(*_: Any) -> None:
-        keeper.end()
-
-    signal.signal(signal.SIGTERM, end)
-    signal.signal(signal.SIGINT, end)
-    print(keeper.ready_line(), flush=True)
+    threading.Thread(target=executor.spin, name="ipyros-machine-spin", daemon=True).start()
     try:
-        keeper.run()
+        serve(Keeper(name, token, ros, log_line, allowed=allowed))
     finally:
-        keeper.end()
         executor.shutdown(timeout_sec=2.0)
         node.destroy_node()
         rclpy.try_shutdown()
