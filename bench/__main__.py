@@ -1,7 +1,8 @@
 """Run every benchmark of the ROS this venv has, in one go: ``python -m bench [--quick]``.
 
 ROS 1 (a venv that sees rospy): the relay bench against topic_tools, where a handler's time goes,
-the guard (stop on silence, hostile commands), a robot on another machine (link cuts, a lossy link),
+the guard (stop on silence, hostile commands), a robot on another machine (link cuts, a lossy link, a relay
+placed on it beside the session's),
 %try over a bag, completion, scale; ROS 2 (rclpy): the relay bench, the guard, %try over a bag,
 a robot on another machine, completion and scale on rclpy. Each bench starts what it needs (a
 rosmaster on a free port, or a DDS domain of its own), prints a table, saves it under bench/results/, keeps its figures for
@@ -23,8 +24,8 @@ def main(argv: list[str] | None = None) -> int:
         from bench import machine_link, relay_ros2 as relay
         benches = (relay, guard, machine_link, try_bag, completion, scale)
     else:
-        from bench import handler_cost, machine_link, relay
-        benches = (relay, handler_cost, guard, machine_link, try_bag, completion, scale)
+        from bench import handler_cost, machine_link, machine_relay, relay
+        benches = (relay, handler_cost, guard, machine_link, machine_relay, try_bag, completion, scale)
 
     status = 0
     for bench in benches:

@@ -156,6 +156,7 @@ class Placed:
     motors: Proc
     session: Proc
     on_laptop: dict[str, str]
+    on_robot: dict[str, str]
 
 
 def ros_name() -> str:
@@ -170,6 +171,8 @@ def placed(link: Link, workdir: Path, allow: tuple[str, ...] = ()) -> Iterator[P
     session driving the motors; all stopped afterwards."""
     keep = {k: v for k, v in os.environ.items() if not k.startswith("ROS_") or k == "ROS_PACKAGE_PATH"}
     keep["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p)
+    # the bench's stand-in basenode's package (ipyros_bench/idle), found on the robot as rosrun finds it
+    keep["ROS_PACKAGE_PATH"] = os.pathsep.join(p for p in (str(HERE / "nodes"), keep.get("ROS_PACKAGE_PATH")) if p)
     in_ns = ["ip", "netns", "exec", link.ns]
     started: list[Proc] = []
     if ros_name() == "ROS 1":
@@ -203,7 +206,7 @@ def placed(link: Link, workdir: Path, allow: tuple[str, ...] = ()) -> Iterator[P
         started.append(session)
         session.wait_line("created")
         wait_until(lambda: sum(x == 0.3 for x, _ in twists(motors)) >= 10, 30, "commands at the motors", 0.05)
-        yield Placed(link, keeper, motors, session, on_laptop)
+        yield Placed(link, keeper, motors, session, on_laptop, on_robot)
     finally:
         for proc in reversed(started):
             proc.stop()

@@ -1,6 +1,7 @@
 """Paths (c) and (d) of the relay bench through ipyros itself: a DSL node in a process of its own.
 
     ipyros_node.py reuse|guarded|handler IN OUT KIND
+    ipyros_node.py placed IN OUT KIND MACHINE
 
 ``reuse``: a wrapping node declared as issue 3's session declares one::
 
@@ -25,6 +26,9 @@ a wrapped driver's output: the relay reads, checks and writes every message.
     nd.new.subscribe(topic=IN, handler=handler, msgType=cls).publish(topic=OUT, msgType=cls)
     nd.create()
 
+``placed``: the wrapping node of ``reuse`` with its basenode placed on MACHINE's keeper
+(``.machine(MACHINE)``): the keeper there runs the basenode and the relay (bench/machine_relay.py).
+
 Says ``ready TOPIC`` once running: TOPIC is where the bench's publisher must publish.
 """
 
@@ -46,9 +50,11 @@ from ipyros.dsl import rosNode  # noqa: E402
 from ipyros.core.plan import internal_name  # noqa: E402
 
 
-def wrapping_node(target: str, cls: type, guarded: bool = False) -> tuple[rosNode, str]:
+def wrapping_node(target: str, cls: type, guarded: bool = False, machine: str | None = None) -> tuple[rosNode, str]:
     node = rosNode("bench_wrap")
     node.baseNode("idle").basePackage("ipyros_bench")
+    if machine is not None:  # placed on that machine's keeper: the basenode and its relay run there
+        node.machine(machine)
     node.reuse.publish(topic=target, type=cls)
     if guarded:
         node.guard(target, limits=GUARD_LIMITS, grace=0.2)
@@ -72,8 +78,9 @@ def handler_node(source: str, target: str, cls: type, kind: str) -> tuple[rosNod
 def main() -> None:
     mode, source, target, kind = sys.argv[1:5]
     cls = wire.message_class(kind)
-    if mode in ("reuse", "guarded"):
-        node, publish_on = wrapping_node(target, cls, guarded=mode == "guarded")
+    if mode in ("reuse", "guarded", "placed"):
+        node, publish_on = wrapping_node(target, cls, guarded=mode == "guarded",
+                                         machine=sys.argv[5] if mode == "placed" else None)
     else:
         node, publish_on = handler_node(source, target, cls, kind)
     nodeio.say("ready", publish_on)

@@ -12,6 +12,8 @@ declared                        runs
 reuse.publish(T)                relay internal(T) → T (bytes, not deserialised)
 reuse.publish(T) + new.subscribe(T, h)   h gets B's messages; W publishes T, on which ``write(T)`` sends
 reuse.subscribe(T)              relay T → internal(T)
+baseNode(...).machine(M)        the topic relays run on machine M's keeper, beside B (a relay onto a
+                                topic guarded here, or on another machine, runs here, behind the gate)
 reuse.subscribe(T) + new.subscribe(T, h) h gets T's messages; ``write(T)`` feeds B
 new.publish(X) / new.subscribe(X, h)     plain publisher / subscriber on X
 reuse.service(S)                W serves S by calling B's internal(S)
@@ -57,6 +59,9 @@ class RelaySpec:
     source: str
     target: str
     type: str
+    #: The machine whose keeper runs it (a basenode placed there: its topics cross the link once, or not at all);
+    #: None: this session runs it.
+    machine: Optional[str] = None
 
 
 @dataclass(frozen=True)
@@ -144,6 +149,13 @@ def plan(model: NodeModel) -> dict[Spec, None]:
     reused_out = {t.resolved for t in model.topics if t.role == "reuse" and t.direction == "publish"}
     reused_in = {t.resolved for t in model.topics if t.role == "reuse" and t.direction == "subscribe"}
     intercepted = {t.resolved for t in model.topics if t.role == "new" and t.direction == "subscribe"}
+    placed = model.base.machine if model.base is not None else None
+
+    def run_at(target: str) -> Optional[str]:
+        """Where the relay onto ``target`` runs: beside its placed basenode, unless a guard of this session's
+        stands on ``target`` (its gate is where the relay's messages must pass: the relay runs here)."""
+        guard = model.guard(target)
+        return placed if guard is None or guard.machine == placed else None
 
     for t in model.topics:
         if t.role == "new" and t.direction == "publish":
@@ -155,14 +167,14 @@ def plan(model: NodeModel) -> dict[Spec, None]:
                 specs[PublishSpec(internal_name(model, t.resolved), t.type)] = None
         elif t.direction == "publish":  # reuse: B's output out to the world, unless intercepted
             if t.resolved not in intercepted:
-                specs[RelaySpec(internal_name(model, t.resolved), t.resolved, t.type)] = None
+                specs[RelaySpec(internal_name(model, t.resolved), t.resolved, t.type, run_at(t.resolved))] = None
             elif model.topic(t.resolved, "publish", "new") is None:
                 # W takes T over: its handler writes what reaches T (write(T), as in the paper); T is
                 # latched if B's output is, unless the declaration says how T is published
                 follows = None if t.latch or t.qos else internal_name(model, t.resolved)
                 specs[PublishSpec(t.resolved, t.type, t.latch, qos_of(t.qos), follows)] = None
         elif t.resolved not in intercepted:  # reuse subscribe: the world into B
-            specs[RelaySpec(t.resolved, internal_name(model, t.resolved), t.type)] = None
+            specs[RelaySpec(t.resolved, internal_name(model, t.resolved), t.type, placed)] = None
 
     for timer in model.timers:
         specs[TimerSpec(timer.name, timer.period, timer.oneshot, timer_slot(timer.name))] = None

@@ -112,7 +112,7 @@ def as_dsl_nodes(snap: GraphSnapshot, session: Any) -> GraphSnapshot:
                 ends = [(spec.topic, "publish")]
             elif isinstance(spec, planning.SubscribeSpec):
                 ends = [(spec.topic, "subscribe")]
-            elif isinstance(spec, planning.RelaySpec):
+            elif isinstance(spec, planning.RelaySpec) and spec.machine is None:  # a placed one runs on its machine
                 ends = [(spec.source, "subscribe"), (spec.target, "publish")]
             else:  # timers and services: no topic
                 ends = []

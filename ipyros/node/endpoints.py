@@ -30,6 +30,7 @@ class Opening:
     slot: Callable[[Any], HandlerSlot]  # the handler slot that serves a spec (made on first use)
     gate: Callable[[str], Any] = lambda topic: None  # the guard an output of a topic passes its messages through
     guard: Callable[[Any], Any] = lambda spec: None  # a guard opened (its process started)
+    placed: Callable[[Any], Any] = lambda spec: None  # a relay a machine's keeper runs (its RelaySpec names it)
 
 
 def _publication(at: Opening, spec: planning.PublishSpec) -> Any:
@@ -39,6 +40,9 @@ def _publication(at: Opening, spec: planning.PublishSpec) -> Any:
 
 
 def _relay(at: Opening, spec: planning.RelaySpec) -> Any:
+    if spec.machine is not None:  # beside its basenode, on that machine (see ipyros.node.placedrelay)
+        return at.placed(spec)
+
     def wrong_type(got: str) -> None:
         at.notify(f"ipyros: {spec.source} carries {got}, but {at.node} relays it as {spec.type}; messages are "
                   f"dropped: declare type={got!r}")

@@ -34,6 +34,7 @@ from . import declaring
 from .endpoints import Opening, describe, open_endpoint, output_of
 from .guards import NodeGuards, guard_of
 from .params import NodeParameters
+from .placedrelay import PlacedRelay, PlacedRelays
 from .session import Session
 from .targets import HandlerTarget, find_target, handler_slots, relayed_target
 from .versions import HandlerVersions, parse_versions
@@ -60,6 +61,7 @@ class NodeEngine:
         self.created = False
         #: The running basenode (a process, or a launch file's rest and node), for wrapping nodes.
         self.base: Optional[BaseHandle] = None  # its basenode, here or on a machine
+        self._placed_relays: Optional[PlacedRelays] = None  # its relays that run beside a basenode placed on a machine
         self._model = model
         self._handlers: dict[str, Callable[..., Any]] = {}  # slot key → the user's function
         self._takes_argument: dict[str, bool] = {}  # slot key → call the handler with the message/event?
@@ -440,7 +442,7 @@ class NodeEngine:
               takes_arg: Optional[dict[str, bool]] = None) -> None:
         handlers = self._handlers if handlers is None else handlers
         takes_arg = self._takes_argument if takes_arg is None else takes_arg
-        learn_relayed_types(self, [s for s in specs if isinstance(s, planning.RelaySpec)])
+        learn_relayed_types(self, [s for s in specs if isinstance(s, planning.RelaySpec) and s.machine is None])
 
         def slot(spec: Any) -> HandlerSlot:
             found = self._slots.get(spec.slot)
@@ -456,8 +458,17 @@ class NodeEngine:
             assert declared is not None and output is not None  # the plan lists a guard only on an output
             return self.guards.open(declared, output, self.fullname)
 
+        def placed(spec: planning.RelaySpec) -> PlacedRelay:
+            relays = self._placed_relays
+            if relays is None or relays.machine != spec.machine:
+                assert model.base is not None and spec.machine is not None  # the plan places a basenode's relays
+                relays = self._placed_relays = PlacedRelays(self.session.backend, self.fullname, spec.machine,
+                                                            model.base.machine_grace,
+                                                            lambda text: self.session.notify(f"ipyros: {text}"))
+            return relays.open(spec)
+
         at = Opening(self.session.backend, self.fullname, self.name, self.complain, self.session.notify, slot,
-                     self.guards.gate, guard)
+                     self.guards.gate, guard, placed)
         for spec in specs:
             self._live[spec] = open_endpoint(at, spec)
 

@@ -61,10 +61,11 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Protocol
 
 from ..core import msgtypes, names
-from ..core.errors import DeclarationError, IpyrosError
+from ..core.errors import DeclarationError, IpyrosError, first_line
 from ..core.guard import Gate, check_rules, check_stop
 from ..core.model import BaseModel
 from .basenode import BaseProcess, exit_reason, log_dir
+from .relayhost import RelayHost, Relaying
 from .sentinel import Sentinel, Shared
 
 __all__ = ["BEAT_LINES", "Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "Lookup", "MachineError", "Outlet",
@@ -285,6 +286,10 @@ class KeeperRos(Protocol):
     def basenode_command(self, base: BaseModel) -> list[str]: ...  # found as rosrun / the ament index finds it
     def has_package(self, package: str) -> bool: ...
     def executables(self, package: str) -> list[str]: ...
+    # a relay of a placed basenode's topic; ``gate``: the guard's on ``target`` it passes from its first message
+    def relay(self, source: str, target: str, type_name: str, gate: Any,
+              complain: Callable[[str], None]) -> Relaying: ...
+    def relay_host_command(self, name: str) -> list[str]: ...  # a relay host whose ROS node is ``name``
 
 
 class Lookup:
@@ -294,9 +299,13 @@ class Lookup:
 
     nodes: Any
     sentinel: str
+    relay_host: str
 
     def sentinel_command(self) -> list[str]:
         return [sys.executable, "-m", self.sentinel]
+
+    def relay_host_command(self, name: str) -> list[str]:
+        return [sys.executable, "-m", self.relay_host, name]
 
     def basenode_command(self, base: BaseModel) -> list[str]:
         return list(self.nodes.command(base))
@@ -316,6 +325,10 @@ class Reporter:
         self._out, self._text = ros.publisher(topic, "std_msgs/String", True), ros.text
         self._reported: tuple = ()
         self._reported_at = -float("inf")
+
+    def due(self, now: float, every: float = REPORT) -> bool:
+        """Whether a report of what changes only in figures is due (the others: :meth:`report` tells at once)."""
+        return now - self._reported_at >= every
 
     def report(self, state: dict[str, Any], now: float, every: float = REPORT, steady: tuple[str, ...] = ()) -> None:
         key = tuple((k, str(v)) for k, v in state.items() if k not in steady)
@@ -376,11 +389,8 @@ class KeptGuard:
                         for topic in beat_topics(f"{ns}/guards/{gid}"))]
 
     def _start_sentinel(self) -> None:
-        env = dict(os.environ)
-        package_root = str(Path(__file__).resolve().parents[2])  # ipyros importable as it is here
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
         self.shared.ready = False
-        sentinel = Sentinel(self._command, self._settings, self.shared, self.log_path, env)
+        sentinel = Sentinel(self._command, self._settings, self.shared, self.log_path, _child_env())
         problem = sentinel.ready(GUARD_START)
         if problem is not None:
             raise Refused(f"guard {self.topic}: its stop process could not start on this machine ({problem}; see "
@@ -399,10 +409,15 @@ class KeptGuard:
         """A message from the session: through the gate, onto the robot's topic."""
         try:
             send = self.gate.check(msg).send
-            if send is not None:
+        except Exception as error:  # noqa: BLE001 - a bad message never ends the keeper; when in doubt, stop
+            self._log(f"guard {self.topic}: a message from the session could not be checked ({error}): the stop "
+                      "message goes in its place")
+            send = self.stop_message()
+        if send is not None:
+            try:
                 self._out.write(send)
-        except Exception as error:  # noqa: BLE001 - a bad message never ends the keeper
-            self._log(f"guard {self.topic}: a message from the session could not be sent ({error})")
+            except Exception as error:  # noqa: BLE001 - as above: the next command or the stop process follows
+                self._log(f"guard {self.topic}: a command could not be sent ({error})")
 
     def hold(self, on: bool) -> None:
         """The lease ran out (``on``) or the session is heard again: the stop message holds, or commands pass."""
@@ -471,6 +486,162 @@ class KeptGuard:
         self._out.close()
         self._reporter.close()
 
+
+@dataclass
+class KeptRelay:
+    id: str
+    what: str  # "relay SOURCE -> TARGET"
+    type: str
+    source: str
+    target: str
+    relay: Optional[Relaying] = None  # in the keeper, through a guard's gate; None: in the relays' own process
+
+
+class KeptRelays:
+    """The topic relays of one session's placed wrapping node (one link for them all): run on this machine, beside
+    its basenode, so that its topics cross the link once (to a handler in the session) or not at all. They run in a
+    process of their own (:mod:`ipyros.processes.relayhost`: the leases' watch shares nothing with a camera's
+    images), except a relay onto a topic a guard stands on here: that one runs in the keeper, through the guard's
+    gate (see :meth:`Keeper.gate_relays`). They end when the session asks, or when it is silent past the grace
+    (None: they are left running, as its basenode is)."""
+
+    def __init__(self, keeper: "Keeper", owner: str, lid: str, grace: Any) -> None:
+        if grace is not None and (not isinstance(grace, (int, float)) or isinstance(grace, bool) or grace <= 0):
+            raise Refused(f"relays: grace={grace!r}: give the seconds (> 0), or None to keep them")
+        self.owner, self.id, self._keeper = owner, lid, keeper
+        self.lease = Lease(float("inf"), grace, keeper.clock())
+        self.relays: dict[str, KeptRelay] = {}
+        self._host: Optional[RelayHost] = None
+        self._reporter = Reporter(keeper.ros, f"{keeper.ns}/relays/{lid}/state")
+        self._beats = [keeper.ros.subscribe(topic, "std_msgs/String", keeper.beat, lossy=True)
+                       for topic in beat_topics(f"{keeper.ns}/relays/{lid}")]
+
+    def _hosted(self) -> RelayHost:
+        """Its relay host, started at its first relay."""
+        if self._host is None or self._host.ended is not None:
+            keeper = self._keeper
+            name = f"ipyros_machine_{keeper.name}_relays_{self.id}"
+            try:
+                self._host = RelayHost(keeper.ros.relay_host_command(name), log_dir() / f"{name}.log",
+                                       lambda text: keeper.log(f"relays of {self.owner}: {text}"), _child_env())
+            except IpyrosError as error:
+                raise Refused(str(error)) from None
+            keeper.log(f"relays of {self.owner}: their process runs (pid {self._host.pid})")
+        return self._host
+
+    def add(self, rid: str, spec: dict[str, Any], gate: Any) -> str:
+        """Open relay ``rid`` (``source``, ``target``, ``type``), its first message through ``gate``; what it is."""
+        if rid in self.relays:
+            raise Refused(f"relay {rid} runs already")
+        source, target, type_name = (str(spec.get(key)) for key in ("source", "target", "type"))
+        for end in (source, target):
+            if not end.startswith("/") or not names.is_legal_name(end):
+                raise Refused(f"relay: topic {end!r:.80}: give a global ROS name")
+        if not _TYPE.match(type_name):
+            raise Refused(f"relay: type {type_name!r:.80}: give a message type, package/Type")
+        kept = KeptRelay(rid, f"relay {source} -> {target}", type_name, source, target)
+        self._open(kept, gate)
+        self.relays[rid] = kept
+        return kept.what
+
+    def _open(self, kept: KeptRelay, gate: Any) -> None:
+        try:
+            if gate is None:
+                self._hosted().ask("add", rid=kept.id, source=kept.source, target=kept.target, type=kept.type)
+                kept.relay = None
+            else:
+                keeper = self._keeper
+                kept.relay = keeper.ros.relay(kept.source, kept.target, kept.type, gate,
+                                              lambda text: keeper.log(f"{kept.what} of {self.owner}: {text}"))
+        except Exception as error:  # noqa: BLE001 - the ROS adapter's or the host's complaint, made one line
+            raise Refused(f"{kept.what}: {first_line(error)}") from None
+
+    def _close_one(self, kept: KeptRelay) -> None:
+        if kept.relay is not None:
+            kept.relay.close()
+        elif self._host is not None and self._host.ended is None:
+            try:
+                self._host.ask("remove", rid=kept.id)
+            except IpyrosError as error:
+                self._keeper.log(f"{kept.what} of {self.owner}: {error}")
+
+    def remove(self, rid: str) -> Optional[KeptRelay]:
+        kept = self.relays.pop(rid, None)
+        if kept is not None:
+            self._close_one(kept)
+        return kept
+
+    def set_gate(self, topic: str, gate: Any) -> None:
+        """The guard on ``topic`` here changed: each relay onto it passes its gate from now on (moved into the keeper,
+        closed first: nothing passes unchecked meanwhile), or none (moved back to the relays' process)."""
+        for kept in list(self.relays.values()):
+            if kept.target != topic:
+                continue
+            if kept.relay is not None and gate is not None:
+                kept.relay.gate = gate
+                continue
+            if (kept.relay is None) == (gate is None):
+                continue
+            self._close_one(kept)
+            try:
+                self._open(kept, gate)
+            except Refused as why:
+                self.relays.pop(kept.id, None)
+                self._keeper.log(f"{kept.what} of {self.owner} ended: {why}")
+
+    def send(self, rid: str, data: bytes) -> None:
+        """A message of the session's (serialized) onto relay ``rid``'s target, through its gate if it has one."""
+        kept = self.relays.get(rid)
+        if kept is None:
+            raise Refused(f"no relay {rid} of this session here")
+        try:
+            if kept.relay is not None:
+                kept.relay.send(self._keeper.ros.deserialize(msgtypes.resolve_message(kept.type)[1], data))
+            else:
+                self._hosted().ask("send", rid=rid, data=data.hex())
+        except (IpyrosError, ValueError) as error:
+            raise Refused(f"{kept.what}: the message could not be sent as {kept.type} ({first_line(error)})") from None
+
+    def state(self) -> dict[str, Any]:
+        hosted = self._host.figures if self._host is not None else {}
+        relays = {}
+        for rid, kept in list(self.relays.items()):
+            if kept.relay is not None:
+                f = kept.relay.figures()
+                relays[rid] = [f.messages, f.connections, f.dropped]
+            else:
+                relays[rid] = hosted.get(rid, [0, 0, 0])
+        ended = self._host.ended if self._host is not None else None
+        return {"id": self.id, "relays": relays, "ended": ended}
+
+    def report(self, now: float, every: float = REPORT) -> None:
+        if self._reporter.due(now, every):  # only figures change: no look at them between reports
+            self._reporter.report(self.state(), now, every)
+
+    def close(self) -> None:
+        for sub in self._beats:
+            sub.close()
+        for kept in self.relays.values():
+            if kept.relay is not None:
+                kept.relay.close()
+        self.relays = {}
+        if self._host is not None:
+            self._host.close()  # its relays end with it
+            self._host = None
+        self._reporter.close()
+
+
+def _child_env() -> dict[str, str]:
+    """The environment of a process the keeper starts from this package (a stop process, a relay host): ipyros
+    importable as it is here."""
+    env = dict(os.environ)
+    package_root = str(Path(__file__).resolve().parents[2])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+    return env
+
+
+#: A message type as a relay's request may name it.
+_TYPE = re.compile(r"^[A-Za-z][A-Za-z0-9_]*/(msg/)?[A-Za-z][A-Za-z0-9_]*$")
 
 #: An executable as a placed basenode's request may name it: a name in its package, never a path or a shell line.
 _EXECUTABLE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+-]{0,127}$")
@@ -572,6 +743,7 @@ class Keeper:
         self._verifier = Verifier(token, self.epoch)
         self.guards: dict[str, KeptGuard] = {}
         self.bases: dict[str, KeptBase] = {}
+        self.relays: dict[str, KeptRelays] = {}
         self._lock = threading.RLock()
         self._ended = threading.Event()
         self._info = ros.publisher(f"{self.ns}/info", "std_msgs/String", True)
@@ -610,7 +782,8 @@ class Keeper:
             op = body.get("op")
             act = {"place": self._place, "estop": self._estop, "remove": self._remove, "start_base": self._start_base,
                    "stop_base": self._stop_base, "restart_base": self._restart_base,
-                   "tail_base": self._tail_base}.get(str(op))
+                   "tail_base": self._tail_base, "relay": self._relay, "unrelay": self._unrelay,
+                   "relay_send": self._relay_send}.get(str(op))
             if act is None:
                 raise Refused(f"unknown request {op!r}")
             answer = act(body)
@@ -651,6 +824,7 @@ class Keeper:
         guard = KeptGuard(self, str(body["from"]), gid, dict(body.get("guard") or {}))
         with self._lock:
             self.guards[gid] = guard
+        self.gate_relays(guard.topic)
         if old is not None:
             old.close(hold=False)
         self.log(f"placed guard {guard.topic} for {guard.owner} (lease {guard.lease.length:g} s, grace "
@@ -676,6 +850,7 @@ class Keeper:
         guard = self._guard_of(body)
         with self._lock:
             self.guards.pop(guard.id, None)
+        self.gate_relays(guard.topic)
         guard.close(hold=bool(body.get("hold")))
         self.log(f"guard {guard.topic} of {guard.owner} removed" + (" (its stop message holds for its grace)"
                                                                       if body.get("hold") else ""))
@@ -727,6 +902,90 @@ class Keeper:
         n = body.get("lines", 20)
         return {"lines": self._base_of(body).process.tail(n if isinstance(n, int) and 0 < n <= 1000 else 20)}
 
+    # -- relays ---------------------------------------------------------------------------------------
+    def guard_on(self, topic: str) -> Optional[KeptGuard]:
+        """The guard that stands on ``topic`` here, if one does (what a relay onto it must pass)."""
+        with self._lock:
+            return next((g for g in self.guards.values() if g.topic == topic), None)
+
+    def gate_relays(self, topic: str) -> None:
+        """Hand each relay onto ``topic`` the gate of the guard that stands on it now (or none): a guard placed,
+        placed again with new rules, or removed by its session."""
+        guard = self.guard_on(topic)
+        with self._lock:
+            groups = list(self.relays.values())
+        for group in groups:
+            group.set_gate(topic, guard.gate if guard is not None else None)
+
+    def _unguarded(self, topic: str) -> None:
+        """A guard ended past its session's grace: what its relays sent through it would reach the robot unchecked
+        from now on; they end instead (the safe way: nothing on the topic but what others send)."""
+        with self._lock:
+            if self.guard_on(topic) is not None:
+                return
+            groups = list(self.relays.values())
+        for group in groups:
+            for kept in list(group.relays.values()):
+                if kept.target == topic:
+                    group.remove(kept.id)
+                    self.log(f"{kept.what} of {group.owner} ended with its guard")
+
+    def _relay(self, body: dict[str, Any]) -> dict[str, Any]:
+        lid, rid = _checked_id(body, "relays"), _checked_id({"id": body.get("rid")}, "relay")
+        with self._lock:
+            group = self.relays.get(lid)
+            if group is not None and group.owner != body["from"]:
+                raise Refused(f"relays {lid} belong to another session")
+        if group is None:
+            group = KeptRelays(self, str(body["from"]), lid, body.get("grace", 30.0))
+            with self._lock:
+                self.relays[lid] = group
+        spec = dict(body.get("relay") or {})
+        guard = self.guard_on(str(spec.get("target")))  # its gate from the relay's first message on
+        try:
+            what = group.add(rid, spec, guard.gate if guard is not None else None)
+        except Refused:
+            if not group.relays:
+                with self._lock:
+                    self.relays.pop(lid, None)
+                group.close()
+            raise
+        if self.guard_on(str(spec.get("target"))) is not guard:  # one placed or removed meanwhile (its grace)
+            self.gate_relays(str(spec.get("target")))
+        self.log(f"{what} for {group.owner}" + (" (through its guard)" if guard is not None else ""))
+        group.report(self.clock(), every=0.0)
+        return {"rid": rid}
+
+    def _relays_of(self, body: dict[str, Any]) -> KeptRelays:
+        with self._lock:
+            group = self.relays.get(str(body.get("id")))
+        if group is None or group.owner != body["from"]:
+            raise Refused(f"no relays {body.get('id')} of this session here")
+        return group
+
+    def _unrelay(self, body: dict[str, Any]) -> dict[str, Any]:
+        group = self._relays_of(body)
+        found = group.remove(str(body.get("rid")))
+        if not group.relays:
+            with self._lock:
+                self.relays.pop(group.id, None)
+        if found is not None:
+            self.log(f"{found.what} of {group.owner} removed")
+        if not group.relays:
+            group.close()
+        else:
+            group.report(self.clock(), every=0.0)
+        return {}
+
+    def _relay_send(self, body: dict[str, Any]) -> dict[str, Any]:
+        """A message of the session's onto a relayed topic (``%pub``, an e-stop's stop message): through its gate."""
+        try:
+            data = bytes.fromhex(str(body.get("data")))
+        except ValueError:
+            raise Refused("relay_send: data must be the message's serialized bytes, in hex") from None
+        self._relays_of(body).send(str(body.get("rid")), data)
+        return {}
+
     def beat(self, msg: Any) -> None:
         sender = self._verifier.beat(msg.data)
         if sender is None:
@@ -737,6 +996,9 @@ class Keeper:
             for base in self.bases.values():
                 if base.owner == sender:
                     base.lease.heard(now)
+            for group in self.relays.values():
+                if group.owner == sender:
+                    group.lease.heard(now)
         for guard in guards:
             first = guard.lease.first
             silent = guard.lease.heard(now)
@@ -761,6 +1023,7 @@ class Keeper:
             elif seen == "gone":
                 with self._lock:
                     self.guards.pop(guard.id, None)
+                self._unguarded(guard.topic)
                 guard.close(hold=True)
                 self.log(f"guard {guard.topic}: {guard.owner} silent past its grace ({guard.lease.grace:g} s): "
                          f"the guard ends, its stop message held for its own grace")
@@ -794,6 +1057,21 @@ class Keeper:
             except Exception as error:  # noqa: BLE001 - as a guard's
                 self.log(f"basenode {base.what}: its state could not be reported ({error!r})")
 
+    def _look_at_relays(self, now: float) -> None:
+        with self._lock:
+            groups = list(self.relays.values())
+        for group in groups:
+            if group.lease.look(now) == "gone":
+                with self._lock:
+                    self.relays.pop(group.id, None)
+                group.close()
+                self.log(f"relays of {group.owner}: silent past its grace ({group.lease.grace:g} s): ended")
+                continue
+            try:
+                group.report(now)
+            except Exception as error:  # noqa: BLE001 - as a guard's
+                self.log(f"relays of {group.owner}: their state could not be reported ({error!r})")
+
     def run(self) -> None:
         """Watch until :meth:`end`. A look that fails is logged and the next one comes: the leases are never left
         unwatched."""
@@ -801,6 +1079,7 @@ class Keeper:
             try:
                 self.look()
                 self._look_at_bases(self.clock())
+                self._look_at_relays(self.clock())
             except Exception as error:  # noqa: BLE001 - see the docstring
                 self.log(f"a look at the leases failed ({error!r}); looking again")
 
@@ -814,6 +1093,9 @@ class Keeper:
         with self._lock:
             guards, self.guards = list(self.guards.values()), {}
             bases, self.bases = list(self.bases.values()), {}
+            groups, self.relays = list(self.relays.values()), {}
+        for group in groups:  # first: nothing relayed onto a guarded topic once its guard holds the stop message
+            group.close()
         for guard in guards:
             guard.close(hold=True)
         for base in bases:

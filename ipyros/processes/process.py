@@ -82,17 +82,19 @@ _launcher = _Launcher()
 
 
 def spawn(argv: Sequence[str], *, env: Optional[dict] = None, log: Optional[int] = None,
-          cwd: Optional[str] = None, stdin_pipe: bool = False) -> subprocess.Popen:
+          cwd: Optional[str] = None, stdin_pipe: bool = False, stdout_pipe: bool = False) -> subprocess.Popen:
     """Start ``argv`` in its own process group, dying with this process.
 
     The fork happens on the launcher thread, whichever thread calls. ``log`` is a file descriptor for stdout and
     stderr together (default: discarded). ``stdin_pipe``: its stdin is a pipe this process writes lines to (a bag
-    player's controls); otherwise it reads nothing.
+    player's controls); otherwise it reads nothing. ``stdout_pipe``: its stdout is a pipe this process reads (a
+    relay host's answers), and only its stderr goes to ``log``.
     """
     parent = os.getpid()
     out = subprocess.DEVNULL if log is None else log
     common: dict[str, Any] = dict(env=env, cwd=cwd, stdin=subprocess.PIPE if stdin_pipe else subprocess.DEVNULL,
-                                  stdout=out, stderr=subprocess.STDOUT, close_fds=True)
+                                  stdout=subprocess.PIPE if stdout_pipe else out,
+                                  stderr=out if stdout_pipe else subprocess.STDOUT, close_fds=True)
     if _SETPRIV:
         _check_executable(argv[0], (env or os.environ).get("PATH"))  # setpriv would only exit 126/127
         command = [_SETPRIV, "--pdeathsig", "TERM", "--", *argv]

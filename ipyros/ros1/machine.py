@@ -11,6 +11,7 @@ from typing import Any, Callable
 
 from ..core import msgtypes
 from ..processes.keeper import Keeper, Lookup, Token, log_line, serve, token_path, unknown_packages
+from ..processes.relayhost import wrong_type_line
 from . import nodes
 
 __all__ = ["RospyKeeper", "main"]
@@ -43,6 +44,7 @@ class RospyKeeper(Lookup):
 
     nodes = nodes  # basenodes found as rosrun finds them
     sentinel = "ipyros.ros1.sentinel"
+    relay_host = "ipyros.ros1.relayhost"
 
     name = "ROS 1"
 
@@ -64,6 +66,21 @@ class RospyKeeper(Lookup):
 
         return _Subscription(rospy.Subscriber(topic, msgtypes.resolve_message(type_name)[1], callback,
                                               queue_size=10, tcp_nodelay=True))
+
+    def relay(self, source: str, target: str, type_name: str, gate: Any, complain: Callable[[str], None]) -> Any:
+        from ..core.errors import MessageTypeError
+        from . import runtime
+
+        def wrong_type(got: str) -> None:
+            complain(wrong_type_line(source, type_name, got))
+
+        try:
+            cls = msgtypes.resolve_message(type_name)[1]
+        except MessageTypeError:
+            if gate is not None:  # a guard reads the values it checks: the guard's own refusal said so already
+                raise
+            return runtime.RawRelay(source, target, type_name, wrong_type, complain)  # TCPROS carries any type
+        return runtime.Relay(source, target, cls, wrong_type, complain, gate)
 
     def text(self, data: str) -> Any:
         from std_msgs.msg import String

@@ -16,6 +16,7 @@ from typing import Any, Callable
 from ..core import msgtypes
 from ..core.qos import Qos
 from ..processes.keeper import Keeper, Lookup, Token, log_line, serve, token_path, unknown_packages
+from ..processes.relayhost import wrong_type_line
 from . import nodes
 
 __all__ = ["RclpyKeeper", "main"]
@@ -51,8 +52,31 @@ class RclpyKeeper(Lookup):
 
     name = "ROS 2"
 
-    def __init__(self, node: Any) -> None:
+    relay_host = "ipyros.ros2.relayhost"
+
+    def __init__(self, node: Any, relays_name: str = "") -> None:
         self._node = node
+        self._relays_name = relays_name or f"{node.get_name()}_relays"
+        self._relaying: Any = None  # the relays' own rclpy context and node (see relay)
+
+    def relay(self, source: str, target: str, type_name: str, gate: Any, complain: Callable[[str], None]) -> Any:
+        """The runtime's relay (bytes on, QoS taken from the basenode's publishers), on a node of its own in an
+        rclpy context of its own: a camera's traffic never shares a participant with the leases' heartbeats."""
+        from .runtime import ProcessNode, Relay
+
+        cls = msgtypes.resolve_message(type_name)[1]  # rclpy needs the type's Python package, even for bytes
+        if self._relaying is None:
+            process = ProcessNode()
+            process.start(self._relays_name)
+            self._relaying = process, process.host(f"/{self._relays_name}", parameters=False)
+        process, node = self._relaying
+        return Relay(process, node, source, target, cls, lambda got: complain(wrong_type_line(source, type_name, got)),
+                     complain, gate=gate)
+
+    def close(self) -> None:
+        if self._relaying is not None:
+            self._relaying[0].shutdown("the keeper ends")
+            self._relaying = None
 
     def address(self) -> str:
         return f"domain {os.environ.get('ROS_DOMAIN_ID') or 0}"
@@ -107,6 +131,7 @@ def main(name: str, token_file: Any, allowed: frozenset[str] = frozenset()) -> i
     try:
         serve(Keeper(name, token, ros, log_line, allowed=allowed))
     finally:
+        ros.close()
         executor.shutdown(timeout_sec=2.0)
         node.destroy_node()
         rclpy.try_shutdown()

@@ -269,6 +269,71 @@ def test_a_basenode_placed_on_the_machine_runs_there_wrapped_and_crashes_are_tol
     assert any("stopped basenode ipyros_test_nodes/echo_node" in line for line in machine.lines)
 
 
+def test_a_placed_basenodes_relays_run_on_its_machine_through_a_guard_there_and_a_handler_takes_one_over(
+        make_node, peer, keeper, session):
+    """The relays of a basenode placed on the robot run there, beside it (its topics never cross to the session),
+    a relay onto a guarded topic passes the gate the keeper keeps there (clamped; %estop holds it at the stop
+    message); a handler declared on the running node takes a topic over: the keeper's relay goes, the session's
+    handler gets the basenode's messages (across the link once) and its writes pass the guard on the robot."""
+    machine = keeper("testbot", "topic_tools")
+    motors = peer("listen_twist.py", "/pr_cmd_vel", "--name=motors5")
+    motors.wait_line("ready")
+    nd = make_node("placedrelay")
+    nd.baseNode("relay", args=["pr_in", "pr_cmd_vel"]).basePackage("topic_tools").machine("testbot")
+    nd.reuse.subscribe("/pr_in", type=Twist).publish("/pr_cmd_vel", type=Twist)
+    nd.guard("/pr_cmd_vel", limits=LIMITS, machine="testbot")
+    nd.create()
+    internal_out = "/placedrelay/base/pr_cmd_vel"
+    assert any(f"relay {internal_out} -> /pr_cmd_vel for " in line and "(through its guard)" in line
+               for line in machine.lines), machine.lines[-5:]
+    assert any("relay /pr_in -> /placedrelay/base/pr_in for " in line for line in machine.lines)
+    feeder = make_node("placedrelay_feeder").new.publish("/pr_in", msgType=Twist).create()
+    fast = Twist()
+    fast.linear.x = 2.0
+    wait_for(lambda: feeder.write("/pr_in", fast) or len(twists(motors)) >= 5, timeout=30, interval=0.05,
+             what="commands through the basenode on the machine, relayed there")
+    assert {x for x, _ in twists(motors)} == {0.5}, "clamped by the guard on the machine"
+    # the guarded relay runs in the keeper, behind the gate; the other in the relays' own process there
+    graph = session.backend.graph_snapshot()
+    assert set(graph.subscribers.get(internal_out, ())) == {"/ipyros_machine_testbot"}, graph.subscribers
+    (host,) = [n for n in graph.subscribers.get("/pr_in", ()) if n.startswith("/ipyros_machine_testbot_relays_")]
+    said = next(line for line in machine.lines if "their process runs (pid " in line)
+    host_pid = int(said.split("(pid ")[1].rstrip(")"))
+    assert host_pid in descendants(machine.proc.pid)
+    rows = lambda: {r.name: r for r in engine_of(nd).status().rows}  # noqa: E731
+    wait_for(lambda: rows()["/pr_cmd_vel"].calls > 0, timeout=10, what="the keeper's count in %status")
+    assert rows()["/pr_cmd_vel"].kind == "relay on testbot"
+    # %estop: the stop message holds on the robot, also for what its relay sends
+    nd.estop()
+    stopped_at = time.monotonic()
+    wait_for(lambda: feeder.write("/pr_in", fast) or sum(t > stopped_at + 0.3 for _, t in twists(motors)) >= 5,
+             timeout=20, interval=0.05, what="commands after the e-stop")
+    assert {x for x, t in twists(motors) if t > stopped_at + 0.3} == {0.0}
+    nd.release()
+    # A handler takes the relayed output over on the running node: it gets what the basenode sends and writes
+    seen: list[float] = []
+
+    def slower(msg):
+        seen.append(msg.linear.x)
+        msg.linear.x = 0.25
+        nd.write("/pr_cmd_vel", msg)
+
+    nd.new.subscribe("/pr_cmd_vel", handler=slower, msgType=Twist)
+    wait_for(lambda: any(f"relay {internal_out} -> /pr_cmd_vel of " in line and "removed" in line
+                         for line in machine.lines),
+             timeout=10, what="the keeper's relay to go")
+    taken_at = time.monotonic()
+    wait_for(lambda: feeder.write("/pr_in", fast) or any(x == 0.25 and t > taken_at for x, t in twists(motors)),
+             timeout=30, interval=0.05, what="the handler's writes at the motors")
+    assert 2.0 in seen, "the handler got the basenode's own message"
+    assert {x for x, t in twists(motors) if t > taken_at + 0.5} <= {0.25}
+    nd.shutdown()
+    wait_for(lambda: any("relay /pr_in -> /placedrelay/base/pr_in of " in line and "removed" in line
+                         for line in machine.lines),
+             timeout=10, what="the last relay to go with the node")
+    wait_for(lambda: not pid_alive(host_pid), timeout=20, what="the relays' process to end with them")
+
+
 def test_a_placed_basenode_outside_what_the_keeper_allows_is_refused_in_one_line(make_node, keeper, tmp_path):
     machine = keeper("testbot", "ipyros_test_nodes")
     nd = make_node("placedbase2")

@@ -133,5 +133,12 @@ def test_a_basenode_placed_on_a_ros2_keeper_runs_there_and_is_relayed(make_node,
     mouth = make_node("placed23_mouth").new.publish("/robot23/in", msgType=String).create()
     wait_for(lambda: mouth.write("/robot23/in", String(data="hi")) or out, timeout=30, interval=0.2,
              what="a message through the placed basenode, relayed")
+    # relayed on the machine, beside it, by the keeper (its relays' own node): not by this session
+    assert any(" -> /robot23/out for " in line for line in machine.lines), machine.lines[-6:]
+    relayed = wait_for(lambda: engine_of(w).status().rows and
+                       {r.name: r for r in engine_of(w).status().rows}["/robot23/out"], timeout=10, what="its row")
+    assert relayed.kind == "relay on testbot2"
+    wait_for(lambda: {r.name: r for r in engine_of(w).status().rows}["/robot23/out"].calls > 0, timeout=10,
+             what="the keeper's count of what it relayed")
     w.shutdown()
     wait_for(lambda: not pid_alive(pid), timeout=20, what="the node's shutdown to stop it there")

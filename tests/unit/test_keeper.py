@@ -144,3 +144,22 @@ def test_the_keepers_are_read_from_the_graphs_topics_and_shown_one_a_row():
     assert "no answer" in str(table.rows[1][1]) and str(table.rows[2][6]) == "no answer"
     assert str(table.rows[2][7]).startswith("no: copy it") and str(table.rows[2][3]) == "guards only"
     assert "python -m ipyros.machine" in Machines(()).table().title
+
+
+def test_a_command_the_keepers_gate_cannot_check_goes_out_as_the_stop_message():
+    """Fail closed on the robot: a message the gate fails on (a value its check cannot read) is replaced by the
+    stop message, never dropped (the robot would keep the last command) and never sent unchecked."""
+    from types import SimpleNamespace
+
+    from ipyros.processes.keeper import KeptGuard
+
+    def fails(msg):
+        raise ValueError("a value the check cannot read")
+
+    sent: list = []
+    guard = KeptGuard.__new__(KeptGuard)  # its gate and publisher only: no stop process, no ROS
+    guard.topic, guard._log, guard._stop = "/cmd_vel", lambda text: None, {"linear": 0.0}
+    guard.gate = SimpleNamespace(check=fails)
+    guard._out = SimpleNamespace(write=sent.append)
+    guard.command({"linear": 9.0})
+    assert sent == [{"linear": 0.0}]

@@ -42,6 +42,22 @@ def test_reuse_subscribe_relays_the_world_in():
     assert plan == [RelaySpec("/scan", "/w/base/scan", TWIST)]
 
 
+def test_a_placed_basenodes_relays_run_on_its_machine_unless_a_guard_elsewhere_must_see_them():
+    from ipyros.core.model import GuardModel
+
+    model = wrapper(topic("/cmd_vel", "publish", "reuse"), topic("/scan", "subscribe", "reuse"))
+    assert model.base is not None
+    model.base.machine = "robot1"
+    assert list(planning.plan(model)) == [RelaySpec("/w/base/cmd_vel", "/cmd_vel", TWIST, "robot1"),
+                                          RelaySpec("/scan", "/w/base/scan", TWIST, "robot1")]
+    model.guards.append(GuardModel("/cmd_vel", "/cmd_vel", TWIST, machine="robot1"))
+    assert RelaySpec("/w/base/cmd_vel", "/cmd_vel", TWIST, "robot1") in planning.plan(model), "its guard is there too"
+    for elsewhere in (None, "robot2"):  # a gate of the session's, or another machine's: the relay runs here
+        model.guards[0].machine = elsewhere
+        assert RelaySpec("/w/base/cmd_vel", "/cmd_vel", TWIST) in planning.plan(model)
+        assert RelaySpec("/scan", "/w/base/scan", TWIST, "robot1") in planning.plan(model)
+
+
 def test_intercepting_an_output_hands_the_basenodes_messages_to_the_handler_and_takes_the_public_name():
     plan = list(planning.plan(wrapper(topic("/cmd_vel", "publish", "reuse"),
                                       topic("/cmd_vel", "subscribe", "new", "h"))))

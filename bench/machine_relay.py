@@ -1,0 +1,166 @@
+"""The robot as another machine: a relay placed on the robot beside the same relay in the session.
+
+    python -m bench.machine_relay            # 3 s paced and a flat-out burst a kind, each way (about 2 minutes)
+    python -m bench.machine_relay --quick    # shorter streams
+
+ROS 1, as root (network namespaces: the setup of bench/machine_link.py, a robot's namespace joined to this
+one by a veth pair). A wrapping node of the laptop's session wraps the bench's stand-in basenode
+(``ipyros_bench/idle``) and relays its output; the bench's publisher publishes on the basenode's internal
+name in its place, and the bench's subscriber reads the public name, both on the robot, as a driver and
+the robot's own consumer of its topic would (bench/nodes/bench_pub.py, bench_sub.py: the relay bench's).
+
+- **session**: the basenode on the laptop (``baseNode("idle")``), the relay in the session: each message
+  crosses the link to the laptop and back.
+- **placed**: ``.machine("linkbot")``: the keeper on the robot runs the basenode and the relay beside it
+  (ipyros/node/placedrelay.py): nothing crosses the link.
+
+Figures per kind (TwistStamped, 1 MiB Image): one-way latency p50/p99 of a paced stream (the publisher's
+wall clock in the message, the subscriber's at arrival: one machine, one clock) and flat-out messages/s,
+the placed relay's beside the session's as its anchor. Target (issue 48): the placed relay does not lose
+(p50 and p99 at most the session's, flat out at least the session's).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import tempfile
+import time
+import xmlrpc.client
+from pathlib import Path
+from typing import Optional
+
+from bench.figures import Figure, keep, machine, table, target_lines
+from bench.machine_link import Placed, placed, robot_link, ros_name
+from bench.relay import (NODES, BenchError, Child, Load, Phases, Run, percentile, stop_cleanly_on_sigterm,
+                         summarize, wait_drained, wait_until)
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+def topic_out(kind: str) -> str:
+    """The public name, a kind's own (the master keeps a topic's type once it was used)."""
+    return f"/bench/out_{kind}"
+ROUTES = {"session": "relay in the session (the basenode on the laptop)",
+          "placed": "relay placed on the robot (.machine: beside the basenode)"}
+
+
+def loads(seconds: float, flat_twist: int, flat_image: int) -> list[Load]:
+    return [Load("twist", "TwistStamped (small)", 1000.0, int(1000 * seconds), flat_twist),
+            Load("image", "Image 1 MiB", 50.0, int(50 * seconds), flat_image)]
+
+
+def _state(master: str) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
+    _, _, (pubs, subs, _) = xmlrpc.client.ServerProxy(master).getSystemState("/bench")
+    return dict(pubs), dict(subs)
+
+
+def _connected(master: str, relay: str, topic: str) -> bool:
+    """Whether node ``relay``'s publisher of ``topic`` has a subscriber connected."""
+    uri = xmlrpc.client.ServerProxy(master).lookupNode("/bench", relay)[2]
+    return any(row[2] == "o" and row[4] == topic for row in xmlrpc.client.ServerProxy(uri).getBusInfo("/b")[2])
+
+
+def run_once(both: Placed, route: str, load: Load, workdir: Path) -> Run:
+    report = workdir / "record.json"
+    in_ns = ["ip", "netns", "exec", both.link.ns]
+    master = both.on_robot["ROS_MASTER_URI"]
+    procs: list[Child] = []
+    seen = Phases()
+    out = topic_out(load.kind)
+
+    def start(name: str, argv: list[str], env: dict[str, str]) -> Child:
+        procs.append(Child(name, argv, {**env, "PYTHONDONTWRITEBYTECODE": "1"}, workdir))
+        return procs[-1]
+
+    try:
+        sub = start("sub", [*in_ns, sys.executable, str(NODES / "bench_sub.py"), out, load.kind, str(report)],
+                    both.on_robot)
+        mode = ["placed", "/bench/in", out, load.kind, "linkbot"] if route == "placed" else \
+            ["reuse", "/bench/in", out, load.kind]
+        relay = start("wrap", [sys.executable, str(NODES / "ipyros_node.py"), *mode], both.on_laptop)
+        source = relay.expect("ready", 90)
+        sub.expect("ready", 30)
+        wait_until(lambda: _state(master)[1].get(out), 30, "the subscriber to register")
+        names = wait_until(lambda: _state(master)[1].get(source), 30, f"the relay to subscribe to {source}")
+        wait_until(lambda: _connected(master, names[0], out), 30, "the subscriber to connect to the relay")
+        pub = start("pub", [*in_ns, sys.executable, str(NODES / "bench_pub.py"), source, load.kind,
+                            str(load.rate_hz), str(load.rate_count), str(load.flat_count)], both.on_robot)
+        pub.expect("rate-done", load.rate_count / load.rate_hz * 3 + 60)
+        seen.rate_received = wait_drained(sub, load.rate_count, quiet=1.0, timeout=30)
+        pub.send("go")
+        seen.flat_start_ns = int(pub.expect("flat-done", 300).split()[1])
+        wait_drained(sub, load.rate_count + load.flat_count, quiet=1.5, timeout=120)
+        sub.ask("report", 60)
+        record = json.loads(report.read_text())
+    finally:
+        for proc in reversed(procs):
+            proc.stop()
+    return summarize(record, load, seen)
+
+
+def run(load_list: list[Load], workdir: Path) -> dict[tuple[str, str], Run]:
+    runs: dict[tuple[str, str], Run] = {}
+    with robot_link() as link, placed(link, workdir, allow=("ipyros_bench",)) as both:
+        for load in load_list:
+            for route in ROUTES:
+                found = runs[(load.kind, route)] = run_once(both, route, load, workdir)
+                print(f"  {load.label}, {route}: p50 {statistics.median(found.latency_ms):.2f} ms, p99 "
+                      f"{percentile(found.latency_ms, 0.99):.2f} ms, flat out {found.flat_per_s:.0f} msg/s "
+                      f"({found.flat_received}/{found.flat_sent})", flush=True)
+    return runs
+
+
+def figures(runs: dict[tuple[str, str], Run], load_list: list[Load]) -> list[Figure]:
+    found = []
+    anchor = "the same relay in the session"
+    for load in load_list:
+        here, there = runs[(load.kind, "session")], runs[(load.kind, "placed")]
+        for label, q in (("p50", 0.5), ("p99", 0.99)):
+            found.append(Figure("ROS 1", f"machine relay: {load.label} one-way latency {label}, placed on the robot",
+                                percentile(there.latency_ms, q), "ms", anchor, percentile(here.latency_ms, q),
+                                most=1.0))
+        found.append(Figure("ROS 1", f"machine relay: {load.label} flat out, placed on the robot", there.flat_per_s,
+                            "msg/s", anchor, here.flat_per_s, least=1.0,
+                            note=f"{there.flat_received}/{there.flat_sent} and {here.flat_received}/{here.flat_sent} "
+                                 "received"))
+    return found
+
+
+def main(argv: Optional[list[str]] = None) -> int:
+    stop_cleanly_on_sigterm()
+    parser = argparse.ArgumentParser(prog="python -m bench.machine_relay", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="1 s paced streams, smaller bursts")
+    args, _ = parser.parse_known_args(argv)
+    if ros_name() != "ROS 1":
+        print("bench.machine_relay: ROS 1 only for now (its publisher and subscriber are rospy's): skipped")
+        return 0
+    if os.geteuid() != 0:
+        print("bench.machine_relay: needs root (network namespaces): skipped")
+        return 0
+    load_list = loads(1.0, 5000, 50) if args.quick else loads(3.0, 20000, 100)
+    began = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix="ipyros-bench-mrelay-") as tmp:
+        try:
+            runs = run(load_list, Path(tmp))
+        except BenchError as error:
+            print(f"bench: {error}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            print("machine relay bench interrupted", file=sys.stderr)
+            return 130
+    checks = figures(runs, load_list)
+    text = (f"Machine: {machine('ROS 1')}; the robot in a network namespace of its own, across a veth pair; "
+            f"publisher and subscriber on the robot, the session on the laptop.\n\n{table(checks)}\n\n"
+            + "\n".join(target_lines(checks)) + f"\n\nWhole run: {time.monotonic() - began:.0f} s.\n")
+    keep("ros1_machine_relay", checks)
+    print(text)
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "machine_relay_ros1.md").write_text(text)
+    return int(any(f.passed is False for f in checks))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
