@@ -89,7 +89,7 @@ REPORT = 0.2
 #: lease of 0.5 s about once a minute at 10 % loss (measured: a false stop); the same beat on three connections
 #: keeps the lease unless all three stall at once. The keeper takes the first copy of each (the rest are replays).
 #: On ROS 2 the beats go best effort: a reliable one lost held the later ones back until repaired (a false stop in
-#: 20 s at 10 % loss, measured).
+#: 20 s at 10 % loss, measured), and the keeper hears them in a participant of their own (``ros2/machine``).
 BEAT_LINES = 3
 
 

@@ -58,6 +58,7 @@ class RclpyKeeper(Lookup):
         self._node = node
         self._relays_name = relays_name or f"{node.get_name()}_relays"
         self._relaying: Any = None  # the relays' own rclpy context and node (see relay)
+        self._beating: Any = None  # the heartbeats' (see _beat_node)
 
     def relay(self, source: str, target: str, type_name: str, gate: Any, complain: Callable[[str], None]) -> Any:
         """The runtime's relay (bytes on, QoS taken from the basenode's publishers), on a node of its own in an
@@ -74,9 +75,10 @@ class RclpyKeeper(Lookup):
                      complain, gate=gate)
 
     def close(self) -> None:
-        if self._relaying is not None:
-            self._relaying[0].shutdown("the keeper ends")
-            self._relaying = None
+        for held in (self._relaying, self._beating):
+            if held is not None:
+                held[0].shutdown("the keeper ends")
+        self._relaying = self._beating = None
 
     def address(self) -> str:
         return f"domain {os.environ.get('ROS_DOMAIN_ID') or 0}"
@@ -95,9 +97,22 @@ class RclpyKeeper(Lookup):
         from .runtime import profile_of
 
         cls = msgtypes.resolve_message(type_name)[1]
-        return _Subscription(self._node, self._node.create_subscription(
+        node = self._beat_node() if lossy else self._node
+        return _Subscription(node, node.create_subscription(
             cls, topic, callback, profile_of(Qos(depth=10, reliability="best_effort" if lossy else "reliable")),
             callback_group=MutuallyExclusiveCallbackGroup()))
+
+    def _beat_node(self) -> Any:
+        """The node the heartbeats are heard on: in a participant of its own (its own rclpy context and executor),
+        so that no reliable stream's repairs on a lossy link hold a heartbeat up on its way in."""
+        if self._beating is None:
+            from .runtime import ProcessNode
+
+            process = ProcessNode()
+            name = f"{self._node.get_name()}_beats"
+            process.start(name)
+            self._beating = process, process.host(f"/{name}", parameters=False)
+        return self._beating[1]
 
     def text(self, data: str) -> Any:
         from std_msgs.msg import String

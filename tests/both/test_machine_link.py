@@ -89,9 +89,6 @@ def test_a_lossy_link_makes_no_false_stop(robot):
     and then, never so late that the robot stops."""
     if shutil.which("nft") is None:
         pytest.skip("nftables is not installed (bash run.sh installs it)")
-    if ros_name() == "ROS 2":  # see docs/machines.md: measured, not yet mended
-        pytest.skip("ROS 2 at 10 % loss: the keeper goes a second without a heartbeat every few seconds after about "
-                    "half a minute (false stops); not yet understood")
     with lossy(robot.link) as dropped:
         start = time.monotonic()
         time.sleep(LOSSY_FOR)
