@@ -46,7 +46,8 @@ from ..core.msgbuild import template
 from ..core.names import default_namespace
 from ..node.session import current
 from ..tools.graph import GraphCache
-from ..tools.machines import machine_names
+from ..tools import machines
+from ..tools.machines import keepers_in, machine_names
 from ..tools.robot import ROBOTS
 from .arguments import (
     ACTION,
@@ -97,10 +98,14 @@ class Catalog:
     action_types: Callable[[], Sequence[str]] = field(default=msgtypes.known_action_types)
     goal_templates: Callable[[str], str] = field(default=lambda action_type: template(
         msgtypes.action_messages(msgtypes.resolve_action(action_type)[1])[0]))
+    #: What the keepers of other machines allow ({package: [executables]}): asked only when one is on the graph,
+    #: kept for :data:`MACHINES_FOR` s.
+    machine_packages: Callable[[], Mapping[str, Sequence[str]]] = field(default=lambda: {})
 
     def __post_init__(self) -> None:
         self._sources = (self.message_types, self.service_types, self.packages, self.executables, self.templates,
                          self.request_templates, self.action_types, self.goal_templates)
+        self._machine_source = self.machine_packages
         self.refresh()
 
     def refresh(self) -> None:
@@ -114,6 +119,7 @@ class Catalog:
         self.request_templates = lru_cache(maxsize=256)(requests)
         self.action_types = _sorted_once(actions)
         self.goal_templates = lru_cache(maxsize=256)(goals)
+        self.machine_packages = _fresh_for(MACHINES_FOR, self._machine_source)
 
     def warm(self) -> None:
         """Run the whole-catalog scans now, so the first TAB does not pay for them."""
@@ -135,6 +141,23 @@ def _sorted_once(source: Callable[[], Sequence[str]]) -> Callable[[], tuple[str,
     return lru_cache(maxsize=1)(lambda: tuple(sorted(source())))
 
 
+#: How long what the keepers allow is kept before TAB asks them again (s).
+MACHINES_FOR = 30.0
+
+
+def _fresh_for(seconds: float, source: Callable[[], Any]) -> Callable[[], Any]:
+    """``source()``, asked again once its last answer is ``seconds`` old."""
+    kept: list[tuple[float, Any]] = []
+
+    def fresh() -> Any:
+        now = time.monotonic()
+        if not kept or now - kept[0][0] > seconds:
+            kept[:] = [(now, source())]
+        return kept[0][1]
+
+    return fresh
+
+
 def default_catalog() -> Catalog:
     """The catalog of this machine: Python message modules on sys.path, and the ROS packages as
     the session's ROS runs them (``rosrun`` on ROS 1, ``ros2 run``'s ament index on ROS 2)."""
@@ -144,6 +167,7 @@ def default_catalog() -> Catalog:
         service_types=msgtypes.known_service_types,
         packages=backend.list_packages,
         executables=backend.list_executables,
+        machine_packages=machines.allowed,
     )
 
 
@@ -480,14 +504,35 @@ class Answerer:
             return [(t, kind) for t in ("configure", "cleanup", "activate", "deactivate", "shutdown")
                     if t.startswith(frag)]
         if kind == PACKAGE:
-            return [(p, kind) for p in names_with_prefix(self.catalog.packages(), frag)]
+            placed = self._placed(snap)  # a keeper's packages need not be here
+            return [(p, kind if p not in placed or p in self.catalog.packages() else "package on a machine")
+                    for p in names_with_prefix(sorted({*self.catalog.packages(), *placed}), frag)]
         if kind == DEMO_ROBOT:
             return [(n, kind) for n in ROBOTS if n.startswith(frag)]
         if kind == MACHINE:
             return [(n, kind) for n in machine_names(snap.topics) if n.startswith(frag)]
         if kind == EXECUTABLE and want.package:
-            return [(e, kind) for e in names_with_prefix(self.catalog.executables(want.package), frag)]
+            here = self._executables_here(want.package)
+            there = self._placed(snap).get(want.package, ())
+            return [(e, kind if e in here else "executable on a machine")
+                    for e in names_with_prefix(sorted({*here, *there}), frag)]
         return []
+
+    def _placed(self, snap: GraphSnapshot) -> Mapping[str, Sequence[str]]:
+        """What the keepers on the graph allow (asked only when one is there)."""
+        if not keepers_in(snap.topics):
+            return {}
+        try:
+            return self.catalog.machine_packages()
+        except Exception:  # a keeper that does not answer: nothing more to offer
+            log.debug("asking the keepers what they allow failed", exc_info=True)
+            return {}
+
+    def _executables_here(self, package: str) -> Sequence[str]:
+        try:
+            return self.catalog.executables(package)
+        except Exception:  # a package this machine does not have (a keeper's): none here
+            return ()
 
     @staticmethod
     def _carried(topic: str, snap: GraphSnapshot) -> Any:

@@ -23,7 +23,7 @@ from ..dsl import engine_of, rosNode
 from ..node.session import current
 from ..processes.keeper import namespace, token_path
 
-__all__ = ["keepers_in", "look", "machine_names"]
+__all__ = ["allowed", "keepers_in", "look", "machine_names"]
 
 _INFO = re.compile(r"^/ipyros/machines/([A-Za-z][A-Za-z0-9_]*)/info$")
 
@@ -43,8 +43,19 @@ def machine_names(topics: Iterable[str]) -> list[str]:
     return sorted(set(keepers_in(topics)) | set(held))
 
 
-def look(timeout: float = 3.0) -> Machines:
-    """The keepers on the graph now: each one's info, and the median round trip of :data:`PINGS` pings."""
+def allowed(timeout: float = 1.0) -> dict[str, list[str]]:
+    """The packages the keepers on the graph allow, with their executables (what TAB offers for ``basePackage("``
+    and ``baseNode("``: a placed basenode's package need not be installed on the laptop)."""
+    found: dict[str, set[str]] = {}
+    for machine in look(timeout, pings=0).rows:
+        for package, executables in machine.allows.items():
+            found.setdefault(package, set()).update(executables)
+    return {package: sorted(executables) for package, executables in found.items()}
+
+
+def look(timeout: float = 3.0, pings: int = PINGS) -> Machines:
+    """The keepers on the graph now: each one's info, and the median round trip of ``pings`` pings (none: no round
+    trip shown)."""
     names = keepers_in(current().backend.graph_snapshot().topics)
     if not names:
         return Machines(())
@@ -87,14 +98,15 @@ def look(timeout: float = 3.0) -> Machines:
         deadline = time.monotonic() + timeout
         with heard:
             heard.wait_for(lambda: len(infos) == len(names), max(deadline - time.monotonic(), 0))
-        rtts = {name: _ping(node, name, me, pongs, heard, deadline) for name in names if name in infos}
+        rtts = {name: _ping(node, name, me, pongs, heard, deadline, pings) for name in names
+                if name in infos and pings}
     finally:
         node.shutdown()
     return Machines(tuple(_machine(name, infos.get(name), rtts.get(name)) for name in names))
 
 
 def _ping(node: Any, name: str, me: str, pongs: dict[tuple[str, int], float], heard: threading.Condition,
-          deadline: float) -> Optional[float]:
+          deadline: float, pings: int) -> Optional[float]:
     """The median round trip of the pings that came back (ms), None when none did."""
     from std_msgs.msg import String
 
@@ -103,7 +115,7 @@ def _ping(node: Any, name: str, me: str, pongs: dict[tuple[str, int], float], he
     while writer.connections() < 1 and time.monotonic() < deadline:  # the keeper has not found us yet
         time.sleep(0.02)
     times = []
-    for n in range(PINGS):
+    for n in range(pings):
         sent = time.monotonic()
         node.write(topic, String(data=json.dumps({"ping": {"from": me, "n": n}})))
         with heard:

@@ -434,3 +434,33 @@ def test_machines_lists_the_keepers_with_what_they_allow_and_keep_and_tab_comple
 
     wait_for(lambda: "testbot" in offered('nd.machine("test'), timeout=20, what="the machine's name offered")
     assert "testbot" in offered("nd.guard('/listed/cmd_vel', machine='te")
+
+
+def test_tab_offers_the_packages_and_executables_a_keeper_allows_though_not_installed_here(ip, keeper, tmp_path,
+                                                                                          monkeypatch):
+    """A placed basenode's package lives on the robot: TAB offers what the keepers on the graph allow."""
+    from IPython.core.completer import provisionalcompleter
+    from shell import ok
+
+    package = tmp_path / "robot_only_pkg"
+    package.mkdir()
+    (package / "package.xml").write_text('<?xml version="1.0"?><package format="2"><name>robot_only_pkg</name>'
+                                         '<version>0.0.1</version><description>on the robot</description>'
+                                         '<maintainer email="a@b.c">a</maintainer><license>MIT</license></package>')
+    drive = package / "drive_node"
+    drive.write_text("#!/bin/sh\nexec sleep 600\n")
+    drive.chmod(0o755)
+    here = os.environ.get("ROS_PACKAGE_PATH", "")
+    monkeypatch.setenv("ROS_PACKAGE_PATH", os.pathsep.join([str(tmp_path), here]))
+    keeper("testbot", "robot_only_pkg")  # the robot's ROS_PACKAGE_PATH has it
+    monkeypatch.setenv("ROS_PACKAGE_PATH", here)  # the laptop's does not
+    ok(ip, "from ipyros import rosNode\ntabbed = rosNode('tabbed')")
+
+    def offered(text: str) -> list[str]:
+        with provisionalcompleter():
+            return [c.text for c in ip.Completer.completions(text, len(text)) if c.text]
+
+    assert "robot_only_pkg" in wait_for(lambda: offered('tabbed.basePackage("robot_o'), timeout=20,
+                                        what="the keeper's package offered")
+    ok(ip, "tabbed.baseNode('drive_node').basePackage('robot_only_pkg')")
+    assert offered('tabbed.baseNode("dri') == ["drive_node"]
