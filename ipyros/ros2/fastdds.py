@@ -142,7 +142,9 @@ def prepare() -> str:
         return _describe(mine)
     given = next((f"{name}={os.environ[name]}" for name in USER_SETTINGS if os.environ.get(name)), None)
     if given is not None:
-        return f"Fast DDS as you configured it ({given})"
+        if os.environ.get("ROS_DISCOVERY_SERVER") and not os.environ.get("ROS_SUPER_CLIENT"):
+            os.environ["ROS_SUPER_CLIENT"] = "TRUE"  # a plain client sees only what it subscribes to: no graph
+        return f"Fast DDS as you configured it ({given}; {discovery_words()})"
     # Static peers are added by rmw for its own ranges only: with them, its LOCALHOST stays as it is.
     variables = environment(loopback_only=local() and not os.environ.get("ROS_STATIC_PEERS"))
     if not variables:
@@ -169,7 +171,23 @@ def size_note(size: float) -> Optional[str]:
 
 def _describe(path: str) -> str:
     where = "UDP on loopback only" if "loopback" in Path(path).name else "UDP on every interface"
-    return f"Fast DDS with ipyros's profile (shared memory up to {SEGMENT >> 20} MiB, {where}; {path})"
+    return (f"Fast DDS with ipyros's profile (shared memory up to {SEGMENT >> 20} MiB, {where}, {discovery_words()}; "
+            f"{path})")
+
+
+def discovery_words() -> str:
+    """How this session finds its peers, in words for the load line: a robot on another machine is found only if
+    discovery reaches it."""
+    server = os.environ.get("ROS_DISCOVERY_SERVER")
+    if server:
+        return f"discovery through the server at {server} (as a super client: the whole graph)"
+    peers = os.environ.get("ROS_STATIC_PEERS")
+    if local():
+        return "discovery on this machine only" + (f", and the static peers {peers}" if peers else "") + \
+            " (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET reaches other machines)"
+    if discovery_range() == "OFF":
+        return "discovery off" + (f" but for the static peers {peers}" if peers else "")
+    return "discovery on the subnet (multicast)" + (f" and the static peers {peers}" if peers else "")
 
 
 def write_profile(loopback_only: bool, folder: Optional[Path] = None) -> Optional[Path]:

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from ros2_fixtures import wait_for
 from sensor_msgs.msg import Image
 
@@ -44,6 +46,7 @@ def test_a_local_session_holds_udp_sockets_on_loopback_only(ros2_session, make_n
     one on the LAN address (see ipyros/ros2/fastdds.py)."""
     make_node("fastdds_local").create()
     assert "ipyros's profile" in ros2_session.backend.transport and "loopback only" in ros2_session.backend.transport
+    assert "discovery on this machine only" in ros2_session.backend.transport, "how a robot would be found: said"
     assert "discovery localhost" in ros2_session.backend.describe()
     assert udp_sockets(os.getpid(), receivers_only=True), "no DDS receivers found"
     sockets = udp_sockets(os.getpid())
@@ -110,7 +113,7 @@ def test_a_users_own_fast_dds_profile_is_left_alone(tmp_path):
             "print(os.environ['FASTDDS_DEFAULT_PROFILES_FILE'])")
     env = {**os.environ, "FASTDDS_DEFAULT_PROFILES_FILE": str(mine)}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60).stdout
-    assert f"Fast DDS as you configured it (FASTDDS_DEFAULT_PROFILES_FILE={mine})" in out and str(mine) in out
+    assert f"Fast DDS as you configured it (FASTDDS_DEFAULT_PROFILES_FILE={mine}; discovery" in out and str(mine) in out
 
 
 def test_a_large_best_effort_topic_is_delivered(make_node, peer):
@@ -162,6 +165,8 @@ def test_a_session_that_sent_goals_deletes_its_participants_when_it_closes():
     once it closed; the segments of others it wrote to (this pytest's) stay mapped in Fast DDS's process-wide cache."""
     program = """
 from pathlib import Path
+
+import pytest
 from ipyros.node import session as sessions
 from ipyros.dsl import rosNode
 others = set(str(p) for p in Path("/dev/shm").iterdir())
@@ -177,3 +182,20 @@ print("mapped:", sorted({line.split()[-1] for line in Path("/proc/self/maps").re
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0 and "mapped:" in done.stdout, done.stderr[-2000:]
     assert "mapped: []" in done.stdout, done.stdout
+
+
+@pytest.mark.parametrize("env, words", [
+    ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}, "discovery on this machine only"),
+    ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}, "discovery on the subnet (multicast)"),
+    ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET", "ROS_STATIC_PEERS": "198.18.0.2"},
+     "discovery on the subnet (multicast) and the static peers 198.18.0.2"),
+    ({"ROS_DISCOVERY_SERVER": "198.18.0.2:11811"}, "discovery through the server at 198.18.0.2:11811"),
+])
+def test_the_load_line_says_how_peers_are_found(monkeypatch, env, words):
+    """A robot on another machine is found only if discovery reaches it: the load line says how it goes."""
+    for name in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY", "ROS_STATIC_PEERS", "ROS_DISCOVERY_SERVER",
+                 fastdds.HELD_RANGE):
+        monkeypatch.delenv(name, raising=False)
+    for name, value in env.items():
+        monkeypatch.setenv(name, value)
+    assert words in fastdds.discovery_words()
