@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import use_ament_echo
 from support import wait_for
 
 from bench.machine_link import Proc, ip, lossy, net, placed, robot_link, ros_name, twists
@@ -24,7 +25,7 @@ from pathlib import Path
 from ipyros import rosNode
 from std_msgs.msg import String
 nd = rosNode("laptop_wrap")
-nd.baseNode("echo_node", args=["--prefix", "robot> "]).basePackage("ipyros_test_nodes").machine("linkbot")
+nd.{base}.machine("linkbot")
 nd.reuse.subscribe("in", type=String).publish("out", type=String)
 nd.create()
 heard = []
@@ -49,10 +50,20 @@ def link():
         pytest.skip(f"no network namespaces here ({error.stderr.decode().strip()})")
 
 
+#: The test's basenode on each ROS: ipyros_test_nodes' (ROS 1), echo_pkg installed for the test (ROS 2).
+BASE = {"ROS 1": 'baseNode("echo_node", args=["--prefix", "robot> "]).basePackage("ipyros_test_nodes")',
+        "ROS 2": 'baseNode("echo_node", params={"prefix": "robot> "}).basePackage("echo_pkg")'}
+
+
 @pytest.fixture
-def robot(link, tmp_path):
-    """The robot's side and the laptop's session driving its motors through a guard placed on it."""
-    allow = ("ipyros_test_nodes",) if ros_name() == "ROS 1" else ()  # the placed basenode's test: ROS 1 here
+def robot(link, tmp_path, monkeypatch):
+    """The robot's side and the laptop's session driving its motors through a guard placed on it; the robot's
+    keeper allows the test's basenode."""
+    if ros_name() == "ROS 1":
+        allow = ("ipyros_test_nodes",)
+    else:
+        use_ament_echo(tmp_path, monkeypatch, sys.executable)
+        allow = ("echo_pkg",)
     with placed(link, tmp_path, allow=allow) as both:
         assert net(both.keeper.proc.pid) != net("self"), "the keeper runs in the robot's namespace"
         yield both
@@ -104,10 +115,8 @@ def test_a_lossy_link_makes_no_false_stop(robot):
 
 def test_a_basenode_placed_from_the_laptop_runs_in_the_robots_namespace_and_is_relayed_to_the_laptop(robot,
                                                                                                        tmp_path):
-    if ros_name() == "ROS 2":
-        pytest.skip("ROS 2's placed basenode is tested in one domain (tests/ros2/test_machine_ros2.py)")
     script = tmp_path / "wrap.py"
-    script.write_text(WRAP)
+    script.write_text(WRAP.format(base=BASE[ros_name()]))
     laptop = Proc([sys.executable, str(script)], robot.on_laptop)
     try:
         pid = int(laptop.wait_line("created").split()[1])

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 from geometry_msgs.msg import Twist
-from helpers import descendants, pid_alive
+from helpers import descendants, pid_alive, use_ament_echo
 from peer import Peer
 from std_msgs.msg import String
 from support import wait_for
@@ -19,7 +19,6 @@ from support import wait_for
 from ipyros.dsl import engine_of
 
 KEEPER = Path(__file__).resolve().parents[1] / "ros1" / "peers" / "keeper.py"  # python -m ipyros.machine, either ROS
-ECHO_NODE = Path(__file__).resolve().parent / "peers" / "echo_node.py"
 LIMITS = {"linear.x": (-0.5, 0.5)}
 
 
@@ -111,14 +110,7 @@ def test_a_killed_ros2_session_stops_the_robot_within_its_lease(peer, keeper, tm
 
 
 def test_a_basenode_placed_on_a_ros2_keeper_runs_there_and_is_relayed(make_node, keeper, tmp_path, monkeypatch):
-    prefix = tmp_path / "install"  # a package in an ament index of its own, as colcon installs one
-    (prefix / "share" / "ament_index" / "resource_index" / "packages").mkdir(parents=True)
-    (prefix / "share" / "ament_index" / "resource_index" / "packages" / "echo_pkg").touch()
-    (prefix / "lib" / "echo_pkg").mkdir(parents=True)
-    node = prefix / "lib" / "echo_pkg" / "echo_node"
-    node.write_text(f"#!{sys.executable}\n" + ECHO_NODE.read_text())
-    node.chmod(0o755)
-    monkeypatch.setenv("AMENT_PREFIX_PATH", os.pathsep.join([str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
+    use_ament_echo(tmp_path, monkeypatch, sys.executable)
     machine = keeper("echo_pkg")
     assert "the basenodes of echo_pkg" in machine.lines[-1]
     w = make_node("placed23")

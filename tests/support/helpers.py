@@ -16,6 +16,25 @@ def use_test_nodes(monkeypatch) -> None:
     monkeypatch.setenv("ROS_PACKAGE_PATH", os.pathsep.join(paths))
 
 
+#: The ROS 2 test echo node ("in" → prefix + data → "out"), installed as a package by :func:`use_ament_echo`.
+ROS2_ECHO = Path(__file__).resolve().parents[1] / "ros2" / "peers" / "echo_node.py"
+
+
+def use_ament_echo(folder: Path, monkeypatch, python: str) -> Path:
+    """Install package ``echo_pkg`` (executable ``echo_node``, run by ``python``) in an ament index of its own under
+    ``folder``, as colcon installs one, and put it on ``AMENT_PREFIX_PATH`` for this test; the prefix."""
+    prefix = folder / "install"
+    index = prefix / "share" / "ament_index" / "resource_index" / "packages"
+    index.mkdir(parents=True)
+    (index / "echo_pkg").touch()
+    (prefix / "lib" / "echo_pkg").mkdir(parents=True)
+    node = prefix / "lib" / "echo_pkg" / "echo_node"
+    node.write_text(f"#!{python}\n" + ROS2_ECHO.read_text())
+    node.chmod(0o755)
+    monkeypatch.setenv("AMENT_PREFIX_PATH", os.pathsep.join([str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
+    return prefix
+
+
 def pid_alive(pid: int) -> bool:
     """Whether ``pid`` names a living process (a zombie waiting to be reaped counts as gone)."""
     try:
