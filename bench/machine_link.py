@@ -165,10 +165,12 @@ def ros_name() -> str:
 
 
 @contextmanager
-def placed(link: Link, workdir: Path, allow: tuple[str, ...] = ()) -> Iterator[Placed]:
+def placed(link: Link, workdir: Path, allow: tuple[str, ...] = (), discovery_port: Optional[int] = None
+           ) -> Iterator[Placed]:
     """The keeper (allowing ``allow``) and the motors in the robot's namespace (ROS 1: its master too; ROS 2: a
-    domain of its own, discovered across the link: SUBNET), the token copied to the laptop as an SSH key is, and the
-    session driving the motors; all stopped afterwards."""
+    domain of its own, discovered across the link: SUBNET, or through the keeper's discovery server on
+    ``discovery_port``), the token copied to the laptop as an SSH key is, and the session driving the motors; all
+    stopped afterwards."""
     keep = {k: v for k, v in os.environ.items() if not k.startswith("ROS_") or k == "ROS_PACKAGE_PATH"}
     keep["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p)
     # the bench's stand-in basenode's package (ipyros_bench/idle), found on the robot as rosrun finds it
@@ -187,10 +189,14 @@ def placed(link: Link, workdir: Path, allow: tuple[str, ...] = ()) -> Iterator[P
         domain = {**keep, "IPYROS_ROS": "2", "ROS_DOMAIN_ID": str(150 + os.getpid() % 80),
                   "ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}
         on_robot, on_laptop = dict(domain), dict(domain)
+        if discovery_port is not None:  # the keeper starts the server; the motors and the laptop are its clients
+            on_robot["ROS_DISCOVERY_SERVER"] = f"127.0.0.1:{discovery_port}"
+            on_laptop["ROS_DISCOVERY_SERVER"] = f"{link.robot}:{discovery_port}"
     on_robot["ROS_HOME"], on_laptop["ROS_HOME"] = str(workdir / "robot"), str(workdir / "laptop")
     try:
         keeper = Proc([*in_ns, sys.executable, "-m", "ipyros.machine", "--name", "linkbot",
-                       *(f"--allow={package}" for package in allow)], on_robot)
+                       *(f"--allow={package}" for package in allow),
+                       *(("--discovery-server", str(discovery_port)) if discovery_port is not None else ())], on_robot)
         started.append(keeper)
         keeper.wait_line(f"ipyros machine linkbot ready on {ros_name()}")
         motors = Proc([*in_ns, sys.executable, str(LISTEN), TOPIC, "--name=motors"], on_robot)
@@ -210,6 +216,31 @@ def placed(link: Link, workdir: Path, allow: tuple[str, ...] = ()) -> Iterator[P
     finally:
         for proc in reversed(started):
             proc.stop()
+
+
+@contextmanager
+def no_multicast(link: Link) -> Iterator[Callable[[], int]]:
+    """No multicast across the link, either way (as many Wi-Fi networks): nftables on the robot's end; what it
+    gives: how many packets it dropped so far."""
+    table_ = "ipyros_no_multicast"
+    rules = f"""table inet {table_} {{
+        chain in {{ type filter hook input priority 0; policy accept;
+                    iifname "{link.there}" ip daddr 224.0.0.0/4 counter drop; }}
+        chain out {{ type filter hook output priority 0; policy accept;
+                     oifname "{link.there}" ip daddr 224.0.0.0/4 counter drop; }}
+    }}"""
+    in_ns = ["ip", "netns", "exec", link.ns, "nft"]
+    subprocess.run([*in_ns, "-f", "-"], input=rules, text=True, check=True, capture_output=True, timeout=30)
+
+    def dropped() -> int:
+        listed = subprocess.run([*in_ns, "list", "table", "inet", table_], text=True, capture_output=True,
+                                timeout=30).stdout
+        return sum(int(n) for n in re.findall(r"counter packets (\d+)", listed))
+
+    try:
+        yield dropped
+    finally:
+        subprocess.run([*in_ns, "delete", "table", "inet", table_], capture_output=True, timeout=30)
 
 
 @contextmanager

@@ -26,6 +26,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--allow", action="append", default=[], metavar="PACKAGE",
                         help="a package whose executables sessions may start here as basenodes (again for more); "
                              "none by default")
+    parser.add_argument("--discovery-server", type=int, default=None, metavar="PORT",
+                        help="ROS 2: run a Fast DDS discovery server here on PORT, for networks where multicast does "
+                             "not carry discovery (sessions set ROS_DISCOVERY_SERVER=THIS_MACHINE:PORT)")
     parser.add_argument("--token-file", type=Path, default=None,
                         help="the token's file (default ~/.ros/ipyros/machines/NAME.token, made at the first start)")
     return parser
@@ -47,8 +50,17 @@ def main(argv: Optional[list[str]] = None) -> int:
     wanted = os.environ.get("IPYROS_ROS") or os.environ.get("ROS_VERSION") or ""
     if not wanted:
         wanted = "1" if importlib.util.find_spec("rospy") is not None else "2"
+    port = args.discovery_server
+    if port is not None and not 0 < port < 65536:
+        print(f"ipyros machine: --discovery-server {port}: give a UDP port (1 to 65535; 11811 is Fast DDS's)",
+              file=sys.stderr)
+        return 2
     if wanted == "1":
-        from ..ros1.machine import main as run
-    else:
-        from ..ros2.machine import main as run  # type: ignore[assignment]
-    return run(args.name, args.token_file, frozenset(args.allow))
+        if port is not None:
+            print("ipyros machine: --discovery-server is ROS 2's; ROS 1 finds nodes through its master: leave it out",
+                  file=sys.stderr)
+            return 2
+        from ..ros1.machine import main as run1
+        return run1(args.name, args.token_file, frozenset(args.allow))
+    from ..ros2.machine import main as run2
+    return run2(args.name, args.token_file, frozenset(args.allow), port)

@@ -128,9 +128,12 @@ class KeeperLink:
                 self._answered.wait(0.05)
             epoch = self._epoch
         if epoch is None:
+            same = ("in the same ROS_DOMAIN_ID, found from here (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET on both; where "
+                    "the network drops multicast, start it with --discovery-server 11811 and set ROS_DISCOVERY_SERVER="
+                    "ROBOT:11811 here)") if getattr(self._backend, "name", "") == "ROS 2" else \
+                "with the same ROS_MASTER_URI"
             raise MachineError(f"no keeper of machine {self.machine} answers on this ROS graph within {FIND:g} s: "
-                               f"start it on the robot (python -m ipyros.machine --name {self.machine}) with the same "
-                               "ROS_MASTER_URI")
+                               f"start it on the robot (python -m ipyros.machine --name {self.machine}) {same}")
         if not again:  # once only: wait until the keeper hears this link's requests
             self._reached(min(deadline, time.monotonic() + FIND))
         while time.monotonic() < deadline:

@@ -69,7 +69,8 @@ from .relayhost import RelayHost, Relaying
 from .sentinel import Sentinel, Shared
 
 __all__ = ["BEAT_LINES", "Keeper", "KeeperRos", "KeptBase", "KeptGuard", "Lease", "Lookup", "MachineError", "Outlet",
-           "Refused", "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "log_line", "namespace",
+           "Refused", "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "child_env", "log_line",
+           "namespace",
            "serve", "token_path", "unknown_packages"]
 
 #: A machine's name: a ROS name's word (it is part of the keeper's topics' names).
@@ -390,7 +391,7 @@ class KeptGuard:
 
     def _start_sentinel(self) -> None:
         self.shared.ready = False
-        sentinel = Sentinel(self._command, self._settings, self.shared, self.log_path, _child_env())
+        sentinel = Sentinel(self._command, self._settings, self.shared, self.log_path, child_env())
         problem = sentinel.ready(GUARD_START)
         if problem is not None:
             raise Refused(f"guard {self.topic}: its stop process could not start on this machine ({problem}; see "
@@ -523,7 +524,7 @@ class KeptRelays:
             name = f"ipyros_machine_{keeper.name}_relays_{self.id}"
             try:
                 self._host = RelayHost(keeper.ros.relay_host_command(name), log_dir() / f"{name}.log",
-                                       lambda text: keeper.log(f"relays of {self.owner}: {text}"), _child_env())
+                                       lambda text: keeper.log(f"relays of {self.owner}: {text}"), child_env())
             except IpyrosError as error:
                 raise Refused(str(error)) from None
             keeper.log(f"relays of {self.owner}: their process runs (pid {self._host.pid})")
@@ -631,7 +632,7 @@ class KeptRelays:
         self._reporter.close()
 
 
-def _child_env() -> dict[str, str]:
+def child_env() -> dict[str, str]:
     """The environment of a process the keeper starts from this package (a stop process, a relay host): ipyros
     importable as it is here."""
     env = dict(os.environ)

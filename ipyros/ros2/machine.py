@@ -11,11 +11,12 @@ from __future__ import annotations
 import os
 import sys
 import threading
-from typing import Any, Callable
+from pathlib import Path
+from typing import Any, Callable, Optional
 
 from ..core import msgtypes
 from ..core.qos import Qos
-from ..processes.keeper import Keeper, Lookup, Token, log_line, serve, token_path, unknown_packages
+from ..processes.keeper import Keeper, Lookup, Token, child_env, log_line, serve, token_path, unknown_packages
 from ..processes.relayhost import wrong_type_line
 from . import nodes
 
@@ -81,7 +82,9 @@ class RclpyKeeper(Lookup):
         self._relaying = self._beating = None
 
     def address(self) -> str:
-        return f"domain {os.environ.get('ROS_DOMAIN_ID') or 0}"
+        server = os.environ.get("ROS_DISCOVERY_SERVER", "")
+        found = f", discovery server on port {server.rsplit(':', 1)[-1]}" if server.startswith("127.0.0.1:") else ""
+        return f"domain {os.environ.get('ROS_DOMAIN_ID') or 0}{found}"
 
     def publisher(self, topic: str, type_name: str, latch: bool) -> _Outlet:
         from .runtime import profile_of
@@ -125,11 +128,50 @@ class RclpyKeeper(Lookup):
         return deserialize_message(data, cls)
 
 
-def main(name: str, token_file: Any, allowed: frozenset[str] = frozenset()) -> int:
+def start_discovery_server(port: int, folder: Path, timeout: float = 30.0) -> Any:
+    """Start a Fast DDS discovery server on ``port`` (:mod:`ipyros.ros2.discoveryserver`: a child that ends with the
+    keeper) and make this process, and what it starts, its clients; the process, or a one-line
+    :class:`~ipyros.core.errors.IpyrosError`. Called before rclpy starts here."""
+    from ..core.errors import IpyrosError
+    from ..processes.process import spawn
+    from .discoveryserver import write_profile
+
+    env = {k: v for k, v in child_env().items() if k not in ("ROS_DISCOVERY_SERVER", "ROS_SUPER_CLIENT")}
+    env["FASTDDS_DEFAULT_PROFILES_FILE"] = str(write_profile(port, folder))
+    log = folder / f"ipyros-discovery-server-{port}.log"
+    fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    try:
+        proc = spawn([sys.executable, "-m", "ipyros.ros2.discoveryserver", str(port)], env=env, log=fd,
+                     stdout_pipe=True)
+    finally:
+        os.close(fd)
+    said: list[bytes] = []
+    reader = threading.Thread(target=lambda: said.append(proc.stdout.readline()), daemon=True)
+    reader.start()
+    reader.join(timeout)
+    if not said or not said[0].startswith(b"ready"):
+        proc.kill()
+        raise IpyrosError(f"the discovery server on port {port} did not start (see {log}): is the port in use? "
+                          "give another with --discovery-server PORT")
+    os.environ["ROS_DISCOVERY_SERVER"] = f"127.0.0.1:{port}"
+    os.environ["ROS_SUPER_CLIENT"] = "TRUE"  # the keeper looks at the graph (a relay's source's QoS)
+    return proc
+
+
+def main(name: str, token_file: Any, allowed: frozenset[str] = frozenset(),
+         discovery_port: Optional[int] = None) -> int:
     import rclpy
     from rclpy.executors import MultiThreadedExecutor
     from rclpy.node import Node
 
+    from ..core.errors import IpyrosError
+
+    if discovery_port is not None:
+        try:
+            start_discovery_server(discovery_port, token_path(name).parent)
+        except IpyrosError as error:
+            print(f"ipyros machine: {error}", file=sys.stderr)
+            return 2
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     node = Node(f"ipyros_machine_{name}", start_parameter_services=False)
     ros = RclpyKeeper(node)

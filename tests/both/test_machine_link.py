@@ -17,7 +17,7 @@ import pytest
 from helpers import use_ament_echo
 from support import wait_for
 
-from bench.machine_link import Proc, ip, lossy, net, placed, robot_link, ros_name, twists
+from bench.machine_link import Proc, ip, lossy, net, no_multicast, placed, robot_link, ros_name, twists
 
 WRAP = """
 import time
@@ -127,3 +127,24 @@ def test_a_basenode_placed_from_the_laptop_runs_in_the_robots_namespace_and_is_r
     wait_for(lambda: not Path(f"/proc/{pid}").exists() or "Z" in Path(f"/proc/{pid}/stat").read_text().split()[2],
              timeout=20, what="the session's end to stop it on the robot")
 
+
+
+def test_ros2_finds_the_robot_through_its_keepers_discovery_server_where_multicast_does_not_cross(link, tmp_path):
+    """Many Wi-Fi networks drop multicast, and ROS 2 discovers by multicast: with none crossing the link, the keeper's
+    discovery server (--discovery-server PORT) is how the laptop finds the robot; the guard placed through it keeps
+    the robot, and a link cut still stops it."""
+    if ros_name() == "ROS 1":
+        pytest.skip("ROS 1 finds the robot through its master")
+    if shutil.which("nft") is None:
+        pytest.skip("nftables is not installed (bash run.sh installs it)")
+    with no_multicast(link), placed(link, tmp_path, discovery_port=11811) as both:
+        assert any("discovery server on port 11811" in line for line in both.keeper.lines), both.keeper.lines[-3:]
+        # the commands reach the motors (placed() waited for them): the laptop found the robot through the server
+        # (a client of a server sends no multicast); a link cut stops the robot
+        cut_at = time.monotonic()
+        ip("link", "set", link.here, "down")
+        try:
+            wait_for(lambda: any(x == 0.0 and t > cut_at for x, t in twists(both.motors)), timeout=20,
+                     what="the stop message after the cut")
+        finally:
+            ip("link", "set", link.here, "up")

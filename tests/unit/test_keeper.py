@@ -163,3 +163,17 @@ def test_a_command_the_keepers_gate_cannot_check_goes_out_as_the_stop_message():
     guard._out = SimpleNamespace(write=sent.append)
     guard.command({"linear": 9.0})
     assert sent == [{"linear": 0.0}]
+
+
+@pytest.mark.parametrize("ros, argv, why", [
+    ("1", ["--discovery-server", "11811"], "--discovery-server is ROS 2's; ROS 1 finds nodes through its master"),
+    ("2", ["--discovery-server", "0"], "--discovery-server 0: give a UDP port"),
+    ("2", ["--discovery-server", "70000"], "give a UDP port (1 to 65535"),
+])
+def test_a_discovery_server_asked_wrong_is_one_line(monkeypatch, capsys, ros, argv, why):
+    from ipyros.machine import main
+
+    monkeypatch.setenv("IPYROS_ROS", ros)
+    assert main(["--name", "robot1", *argv]) == 2
+    err = capsys.readouterr().err
+    assert why in err and err.count("\n") == 1, err
