@@ -1,7 +1,7 @@
 """The robot as another machine: a relay placed on the robot beside the same relay in the session.
 
-    python -m bench.machine_relay            # 3 s paced and a flat-out burst a kind, each way (about 2 minutes)
-    python -m bench.machine_relay --quick    # shorter streams
+    python -m bench.machine_relay            # 3 s paced and a flat-out burst a kind, each way, 3 times (~2 min)
+    python -m bench.machine_relay --quick    # shorter streams, once
 
 ROS 1, as root (network namespaces: the setup of bench/machine_link.py, a robot's namespace joined to this
 one by a veth pair). A wrapping node of the laptop's session wraps the bench's stand-in basenode
@@ -16,7 +16,9 @@ the robot's own consumer of its topic would (bench/nodes/bench_pub.py, bench_sub
 
 Figures per kind (TwistStamped, 1 MiB Image): one-way latency p50/p99 of a paced stream (the publisher's
 wall clock in the message, the subscriber's at arrival: one machine, one clock) and flat-out messages/s,
-the placed relay's beside the session's as its anchor. Target (issue 48): the placed relay does not lose
+the placed relay's beside the session's as its anchor, over three runs each (latency: the messages of
+all three; flat out: their median), the two routes taking turns, each process pinned alike (the relay on
+one core, publisher and subscriber on the other). Target (issue 48): the placed relay does not lose
 (p50 and p99 at most the session's, flat out at least the session's).
 """
 
@@ -63,6 +65,29 @@ def _connected(master: str, relay: str, topic: str) -> bool:
     return any(row[2] == "o" and row[4] == topic for row in xmlrpc.client.ServerProxy(uri).getBusInfo("/b")[2])
 
 
+def _pin(pid: int, cpu: int) -> None:
+    """Every thread of process ``pid`` onto ``cpu`` (2 cores: the relay on one, publisher and subscriber on the
+    other, whichever route; left to the scheduler, where each lands differs run to run by more than the routes
+    differ)."""
+    if (os.cpu_count() or 1) < 2:
+        return
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            os.sched_setaffinity(int(task.name), {cpu})
+        except OSError:  # a thread that just ended
+            continue
+
+
+def _relay_pid(both: Placed, route: str, wrap: Child) -> int:
+    """The process the relay runs in: the session's own, or the relay host the keeper started for it."""
+    if route == "session":
+        return wrap.proc.pid
+    said = [line for line in both.keeper.lines if "their process runs (pid " in line]
+    if not said:
+        raise BenchError("the keeper did not say where the relays run")
+    return int(said[-1].split("(pid ")[1].split(")")[0])
+
+
 def run_once(both: Placed, route: str, load: Load, workdir: Path) -> Run:
     report = workdir / "record.json"
     in_ns = ["ip", "netns", "exec", both.link.ns]
@@ -88,6 +113,9 @@ def run_once(both: Placed, route: str, load: Load, workdir: Path) -> Run:
         wait_until(lambda: _connected(master, names[0], out), 30, "the subscriber to connect to the relay")
         pub = start("pub", [*in_ns, sys.executable, str(NODES / "bench_pub.py"), source, load.kind,
                             str(load.rate_hz), str(load.rate_count), str(load.flat_count)], both.on_robot)
+        _pin(_relay_pid(both, route, relay), 1)
+        _pin(sub.proc.pid, 0)
+        _pin(pub.proc.pid, 0)
         pub.expect("rate-done", load.rate_count / load.rate_hz * 3 + 60)
         seen.rate_received = wait_drained(sub, load.rate_count, quiet=1.0, timeout=30)
         pub.send("go")
@@ -101,31 +129,41 @@ def run_once(both: Placed, route: str, load: Load, workdir: Path) -> Run:
     return summarize(record, load, seen)
 
 
-def run(load_list: list[Load], workdir: Path) -> dict[tuple[str, str], Run]:
-    runs: dict[tuple[str, str], Run] = {}
+def run(load_list: list[Load], workdir: Path, repeats: int) -> dict[tuple[str, str], list[Run]]:
+    """Each (kind, route) ``repeats`` times, the routes taking turns (what the machine does meanwhile falls on
+    both alike)."""
+    runs: dict[tuple[str, str], list[Run]] = {}
     with robot_link() as link, placed(link, workdir, allow=("ipyros_bench",)) as both:
         for load in load_list:
-            for route in ROUTES:
-                found = runs[(load.kind, route)] = run_once(both, route, load, workdir)
-                print(f"  {load.label}, {route}: p50 {statistics.median(found.latency_ms):.2f} ms, p99 "
-                      f"{percentile(found.latency_ms, 0.99):.2f} ms, flat out {found.flat_per_s:.0f} msg/s "
-                      f"({found.flat_received}/{found.flat_sent})", flush=True)
+            for _ in range(repeats):
+                for route in ROUTES:
+                    found = run_once(both, route, load, workdir)
+                    runs.setdefault((load.kind, route), []).append(found)
+                    print(f"  {load.label}, {route}: p50 {statistics.median(found.latency_ms):.3f} ms, p99 "
+                          f"{percentile(found.latency_ms, 0.99):.3f} ms, flat out {found.flat_per_s:.0f} msg/s "
+                          f"({found.flat_received}/{found.flat_sent})", flush=True)
     return runs
 
 
-def figures(runs: dict[tuple[str, str], Run], load_list: list[Load]) -> list[Figure]:
+def figures(runs: dict[tuple[str, str], list[Run]], load_list: list[Load]) -> list[Figure]:
+    """Per kind, the placed relay's medians over its runs beside the session's."""
     found = []
     anchor = "the same relay in the session"
     for load in load_list:
         here, there = runs[(load.kind, "session")], runs[(load.kind, "placed")]
+        n = len(there)
+        pooled_there = [ms for r in there for ms in r.latency_ms]
+        pooled_here = [ms for r in here for ms in r.latency_ms]
         for label, q in (("p50", 0.5), ("p99", 0.99)):
-            found.append(Figure("ROS 1", f"machine relay: {load.label} one-way latency {label}, placed on the robot",
-                                percentile(there.latency_ms, q), "ms", anchor, percentile(here.latency_ms, q),
-                                most=1.0))
-        found.append(Figure("ROS 1", f"machine relay: {load.label} flat out, placed on the robot", there.flat_per_s,
-                            "msg/s", anchor, here.flat_per_s, least=1.0,
-                            note=f"{there.flat_received}/{there.flat_sent} and {here.flat_received}/{here.flat_sent} "
-                                 "received"))
+            found.append(Figure(
+                "ROS 1", f"machine relay: {load.label} one-way latency {label}, placed on the robot ({n} runs)",
+                percentile(pooled_there, q), "ms", anchor, percentile(pooled_here, q), most=1.0))
+        lost = sum(r.flat_sent - r.flat_received for r in there), sum(r.flat_sent - r.flat_received for r in here)
+        found.append(Figure(
+            "ROS 1", f"machine relay: {load.label} flat out, placed on the robot (median of {n})",
+            statistics.median(r.flat_per_s for r in there), "msg/s", anchor,
+            statistics.median(r.flat_per_s for r in here), least=1.0,
+            note=f"lost flat out: {lost[0]} placed, {lost[1]} in the session"))
     return found
 
 
@@ -141,10 +179,11 @@ def main(argv: Optional[list[str]] = None) -> int:
         print("bench.machine_relay: needs root (network namespaces): skipped")
         return 0
     load_list = loads(1.0, 5000, 50) if args.quick else loads(3.0, 20000, 100)
+    repeats = 1 if args.quick else 3
     began = time.monotonic()
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-mrelay-") as tmp:
         try:
-            runs = run(load_list, Path(tmp))
+            runs = run(load_list, Path(tmp), repeats)
         except BenchError as error:
             print(f"bench: {error}", file=sys.stderr)
             return 1
