@@ -16,9 +16,11 @@ the robot's own consumer of its topic would (bench/nodes/bench_pub.py, bench_sub
 
 Figures per kind (TwistStamped, 1 MiB Image): one-way latency p50/p99 of a paced stream (the publisher's
 wall clock in the message, the subscriber's at arrival: one machine, one clock) and flat-out messages/s,
-the placed relay's beside the session's as its anchor, over three runs each (latency: the messages of
-all three; flat out: their median), the two routes taking turns, each process pinned alike (the relay on
-one core, publisher and subscriber on the other). Target (issue 48): the placed relay does not lose
+the placed relay's beside the session's as its anchor, over several runs each (five for small messages,
+three for images; latency: the messages of all of them; flat out: their median), the two routes taking
+turns, each process pinned alike (the relay on one core, publisher and subscriber on the other). The link
+is shaped to 100 Mbit/s each way (tc's token bucket; this kernel has no netem, so no fixed delay is added:
+a small message crosses it at once, a camera's images queue as on Wi-Fi). Target (issue 48): the placed relay does not lose
 (p50 and p99 at most the session's, flat out at least the session's).
 """
 
@@ -28,6 +30,7 @@ import argparse
 import json
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -36,7 +39,7 @@ from pathlib import Path
 from typing import Optional
 
 from bench.figures import Figure, keep, machine, table, target_lines
-from bench.machine_link import Placed, placed, robot_link, ros_name
+from bench.machine_link import Link, Placed, placed, robot_link, ros_name
 from bench.relay import (NODES, BenchError, Child, Load, Phases, Run, percentile, stop_cleanly_on_sigterm,
                          summarize, wait_drained, wait_until)
 
@@ -63,6 +66,18 @@ def _connected(master: str, relay: str, topic: str) -> bool:
     """Whether node ``relay``'s publisher of ``topic`` has a subscriber connected."""
     uri = xmlrpc.client.ServerProxy(master).lookupNode("/bench", relay)[2]
     return any(row[2] == "o" and row[4] == topic for row in xmlrpc.client.ServerProxy(uri).getBusInfo("/b")[2])
+
+
+#: The link's rate each way: Wi-Fi's order in practice (tc's token bucket: this kernel has no netem).
+RATE = "100mbit"
+
+
+def shape(link: Link, rate: str) -> None:
+    """The link shaped to ``rate`` each way (the veth alone is as fast as memory: a relay's crossing would cost
+    nothing, and the comparison would say nothing of a robot on Wi-Fi). Gone with the link."""
+    for prefix, dev in (((), link.here), (("-n", link.ns), link.there)):
+        subprocess.run(["tc", *prefix, "qdisc", "add", "dev", dev, "root", "tbf", "rate", rate, "burst", "256kb",
+                        "latency", "500ms"], check=True, capture_output=True, timeout=30)
 
 
 def _pin(pid: int, cpu: int) -> None:
@@ -134,8 +149,10 @@ def run(load_list: list[Load], workdir: Path, repeats: int) -> dict[tuple[str, s
     both alike)."""
     runs: dict[tuple[str, str], list[Run]] = {}
     with robot_link() as link, placed(link, workdir, allow=("ipyros_bench",)) as both:
+        shape(link, RATE)
         for load in load_list:
-            for _ in range(repeats):
+            for _ in range(repeats + 2 if load.kind == "twist" and repeats > 1 else repeats):  # a small message's
+                # figures are tens of µs: more runs
                 for route in ROUTES:
                     found = run_once(both, route, load, workdir)
                     runs.setdefault((load.kind, route), []).append(found)

@@ -41,8 +41,8 @@ from ..core.slots import call_arity
 from .atomic import write_atomic
 from .kept import KeptNode
 
-__all__ = ["ExportWarning", "Script", "check_package_name", "docstring", "export", "package_xml", "xml_comment",
-           "xml_text"]
+__all__ = ["ExportWarning", "Script", "check_package_name", "docstring", "export", "package_xml", "placed_on",
+           "xml_comment", "xml_text"]
 
 #: How a script starts and stops its basenode: plain Python, the same for rospy and rclpy.
 BASENODE_FUNCTIONS = '''
@@ -439,6 +439,14 @@ def package_xml(model: NodeModel, package: str, description: str, depends: list[
 def xml_comment(*lines: str) -> Any:  # an ET.Element: a comment's, of a tag that is no string
     """A comment of a launch file's top level, one line each (``--`` may not stand in an XML comment)."""
     return ET.Comment(" " + "\n       ".join(lines).replace("--", "- -") + " ")
+
+
+def placed_on(base: Any) -> list[str]:
+    """What a package's launch file says of a basenode the session placed on a machine: where to start it."""
+    if not getattr(base, "machine", None):
+        return []
+    return [f"In the session it ran on machine {base.machine} (its keeper started it there): install and start",
+            "this package on that machine, so that the basenode and the node relaying it run beside the robot."]
 
 
 def xml_text(root: ET.Element) -> str:

@@ -19,7 +19,7 @@ import yaml
 
 from ..core import plan as planning
 from ..core.errors import IpyrosError
-from ..files.export import package_xml, xml_comment, xml_text
+from ..files.export import package_xml, placed_on, xml_comment, xml_text
 from . import cpp_export
 from .nodes import command, list_packages
 
@@ -388,7 +388,7 @@ def _launch_xml(script: Any, package: str) -> str:
         raise IpyrosError(f"{model.name}'s basenode has no package, and roslaunch starts nodes by package: "
                           f"declare it with .basePackage('package') and export again")
     about = [f"The basenode {base.package}/{base.executable}, remapped onto {model.name}'s internal names:",
-             f"it talks to the rest of the graph only through {model.name}, on the names it wraps."]
+             f"it talks to the rest of the graph only through {model.name}, on the names it wraps.", *placed_on(base)]
     if base.launch:
         given = " ".join(f"{name}:={value}" for name, value in base.launch_args.items())
         about += [f"It is {base.launch_node} of {base.launch}" + (f" (with {given})" if given else "") +

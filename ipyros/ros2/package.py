@@ -25,7 +25,7 @@ import yaml
 from ..core import names
 from ..core import plan as planning
 from ..core.errors import IpyrosError
-from ..files.export import package_xml, xml_comment, xml_text
+from ..files.export import package_xml, placed_on, xml_comment, xml_text
 
 __all__ = ["manifest", "package_files"]
 
@@ -149,7 +149,8 @@ def _launch_xml(script: Any, package: str) -> str:
         raise IpyrosError(f"basenode argument {bad!r} holds '$(', which ros2 launch would expand: "
                           "export to a .py script instead, or change the argument")
     root.append(xml_comment(f"The basenode {base.package}/{base.executable}, remapped onto {model.name}'s internal names:",
-                         f"it talks to the rest of the graph only through {model.name}, on the names it wraps."))
+                         f"it talks to the rest of the graph only through {model.name}, on the names it wraps.",
+                         *placed_on(base)))
     extra = {"args": " ".join(base.args)} if base.args else {}
     base_node = _node(root, base.package, base.executable, base.node_name, base.namespace, **extra)
     for name, value in base.env.items():

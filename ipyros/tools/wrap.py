@@ -13,16 +13,19 @@ __all__ = ["wrap"]
 
 def wrap(package: str, executable: str, name: Optional[str] = None, *, node_name: Optional[str] = None,
          namespace: Optional[str] = None, remaps: Optional[dict] = None, params: Optional[dict] = None,
-         args: Optional[list] = None, session: Any = None) -> rosNode:
+         args: Optional[list] = None, machine: Optional[str] = None, session: Any = None) -> rosNode:
     """Wrap ``package``/``executable`` in one call: discover its interface, reuse it all, create.
 
-    The wrapping node is named ``name`` (default ``<executable>_wrapper``).
+    The wrapping node is named ``name`` (default ``<executable>_wrapper``); ``machine`` places the basenode (and
+    its relays) on that machine's keeper.
     """
     options = {k: v for k, v in dict(name=node_name, namespace=namespace, remaps=remaps, params=params,
                                      args=args).items() if v}
     node = rosNode(name or f"{base_node_name(BaseModel(executable=executable))}_wrapper", namespace=namespace,
                    session=session)
     node.baseNode(executable, **options).basePackage(package)
+    if machine is not None:
+        node.machine(machine)
     node.discover()
     node.create()
     return node

@@ -464,3 +464,18 @@ def test_tab_offers_the_packages_and_executables_a_keeper_allows_though_not_inst
                                         what="the keeper's package offered")
     ok(ip, "tabbed.baseNode('drive_node').basePackage('robot_only_pkg')")
     assert offered('tabbed.baseNode("dri') == ["drive_node"]
+
+
+def test_wrap_places_the_basenode_on_a_machine_and_its_export_says_where_to_start_it(ip, keeper, tmp_path):
+    from shell import ok
+
+    machine = keeper("testbot", "ipyros_test_nodes")
+    ok(ip, "%wrap ipyros_test_nodes echo_node --as robo --machine testbot")
+    robo = ip.user_ns["robo"]
+    assert robo.base.pid in descendants(machine.proc.pid), "started by the keeper"
+    assert any(" -> /out for " in line for line in machine.lines), "its relays run there"
+    assert ".machine('testbot')" in robo.code() or '.machine("testbot")' in robo.code()
+    package = robo.export(tmp_path / "robo_pkg")
+    launch = (package / "launch" / "robo.launch").read_text()
+    assert "ran on machine testbot" in launch and "install and start" in launch
+    robo.shutdown()

@@ -1,6 +1,7 @@
 """``%wrap``: wrap a basenode in one line, as ``rosrun`` would start it.
 
     %wrap turtlesim turtlesim_node --as turtle /turtle1/pose:=/t1/pose _background_r:=255
+    %wrap my_robot_nodes planner --machine robot1     # started on robot1 by its keeper, relayed there
 
 launches the basenode with its remaps and private parameters, discovers its interface,
 declares all of it as ``reuse`` on a new wrapping node (see :func:`ipyros.tools.wrap.wrap`),
@@ -23,7 +24,7 @@ from ...core.model import BaseModel
 from ...core.remapping import base_node_name
 from ...dsl import rosNode
 from ...tools.wrap import wrap
-from ..arguments import EXECUTABLE, PACKAGE, TOPIC, argument
+from ..arguments import EXECUTABLE, MACHINE, PACKAGE, TOPIC, argument
 from .common import ExtensionMagics
 
 
@@ -40,6 +41,8 @@ class WrapMagics(ExtensionMagics):
               help="the variable to bind the wrapping node to, also its name (default: from the executable)")
     @argument("--name", help="the basenode's ROS node name (default: its own)")
     @argument("--ns", "--namespace", dest="namespace", help="the basenode's namespace")
+    @argument("--machine", complete=MACHINE, help="the machine whose keeper runs the basenode and its relays "
+              "(see %%machines); default: this one")
     @line_magic
     def wrap(self, line: str) -> None:
         """Wrap PACKAGE's EXECUTABLE: launch it, reuse its whole interface, bind the node to NAME."""
@@ -55,7 +58,7 @@ class WrapMagics(ExtensionMagics):
         default = f"{base_node_name(BaseModel(executable=args.executable))}_wrapper"
         self._refuse_running_variable(args.var or _variable_for(default), "--as" if args.var else "")
         node = wrap(args.package, args.executable, args.var, node_name=args.name, namespace=args.namespace,
-                    remaps=remaps or None, params=params or None, args=extra_args or None)
+                    remaps=remaps or None, params=params or None, args=extra_args or None, machine=args.machine)
         variable = args.var or _variable_for(node.name)
         self.shell.user_ns[variable] = node
         self.ext.printer.show(node, f"bound to [bold]{variable}[/]")
