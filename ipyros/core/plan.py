@@ -12,8 +12,9 @@ declared                        runs
 reuse.publish(T)                relay internal(T) → T (bytes, not deserialised)
 reuse.publish(T) + new.subscribe(T, h)   h gets B's messages; W publishes T, on which ``write(T)`` sends
 reuse.subscribe(T)              relay T → internal(T)
-baseNode(...).machine(M)        the topic relays run on machine M's keeper, beside B (a relay onto a
-                                topic guarded here, or on another machine, runs here, behind the gate)
+baseNode(...).machine(M)        the relays (topics, services, actions) run on machine M's keeper, beside B
+                                (a relay onto a topic guarded here, or on another machine, runs here,
+                                behind the gate)
 reuse.subscribe(T) + new.subscribe(T, h) h gets T's messages; ``write(T)`` feeds B
 new.publish(X) / new.subscribe(X, h)     plain publisher / subscriber on X
 reuse.service(S)                W serves S by calling B's internal(S)
@@ -84,6 +85,7 @@ class ServiceRelaySpec:
     source: str
     target: str
     type: str
+    machine: Optional[str] = None  # as a RelaySpec's
 
 
 @dataclass(frozen=True)
@@ -99,6 +101,7 @@ class ActionRelaySpec:
     source: str
     target: str
     type: str
+    machine: Optional[str] = None  # as a RelaySpec's
 
 
 @dataclass(frozen=True)
@@ -184,7 +187,7 @@ def plan(model: NodeModel) -> dict[Spec, None]:
         if s.role == "new":
             specs[ServiceSpec(s.resolved, s.type, service_slot(s.resolved))] = None
         elif s.resolved not in served:
-            specs[ServiceRelaySpec(internal_name(model, s.resolved), s.resolved, s.type)] = None
+            specs[ServiceRelaySpec(internal_name(model, s.resolved), s.resolved, s.type, placed)] = None
 
     reused = {a.resolved for a in model.actions if a.role == "reuse"}
     handled = {a.resolved for a in model.actions if a.role == "new"}
@@ -193,7 +196,7 @@ def plan(model: NodeModel) -> dict[Spec, None]:
             forward = internal_name(model, a.resolved) if a.resolved in reused else None
             specs[ActionServerSpec(a.resolved, a.type, action_slot(a.resolved), forward)] = None
         elif a.resolved not in handled:
-            specs[ActionRelaySpec(internal_name(model, a.resolved), a.resolved, a.type)] = None
+            specs[ActionRelaySpec(internal_name(model, a.resolved), a.resolved, a.type, placed)] = None
     return specs
 
 

@@ -30,7 +30,7 @@ class Opening:
     slot: Callable[[Any], HandlerSlot]  # the handler slot that serves a spec (made on first use)
     gate: Callable[[str], Any] = lambda topic: None  # the guard an output of a topic passes its messages through
     guard: Callable[[Any], Any] = lambda spec: None  # a guard opened (its process started)
-    placed: Callable[[Any], Any] = lambda spec: None  # a relay a machine's keeper runs (its RelaySpec names it)
+    placed: Callable[[Any], Any] = lambda spec: None  # a relay a machine's keeper runs (its spec names the machine)
 
 
 def _publication(at: Opening, spec: planning.PublishSpec) -> Any:
@@ -57,11 +57,16 @@ def _relay(at: Opening, spec: planning.RelaySpec) -> Any:
 
 
 def _service_relay(at: Opening, spec: planning.ServiceRelaySpec) -> Any:
+    if spec.machine is not None:
+        return at.placed(spec)
     return at.backend.service_relay(at.host, spec.source, spec.target, msgtypes.resolve_service(spec.type)[1],
                                     at.complain)
 
 
 def _action_relay(at: Opening, spec: planning.ActionRelaySpec) -> Any:
+    if spec.machine is not None:
+        return at.placed(spec)
+
     def wrong_part(got: str) -> None:
         at.notify(f"ipyros: a part of action {spec.source} carries {got}, but {at.node} relays it as {spec.type}; "
                   "its messages are dropped: declare the action's own type")

@@ -34,7 +34,7 @@ from . import declaring
 from .endpoints import Opening, describe, open_endpoint, output_of
 from .guards import NodeGuards, guard_of
 from .params import NodeParameters
-from .placedrelay import PlacedRelay, PlacedRelays
+from .placedrelay import PlacedRelay, PlacedRelays, PlacedSpec
 from .session import Session
 from .targets import HandlerTarget, find_target, handler_slots, relayed_target
 from .versions import HandlerVersions, parse_versions
@@ -155,7 +155,8 @@ class NodeEngine:
         """Per topic the node sends on (publications, relays): messages, subscribers, and drops
         for subscribers that could not keep up."""
         with self._lock:
-            return [endpoint.figures() for endpoint in self._live.values() if hasattr(endpoint, "figures")]
+            found = (endpoint.figures() for endpoint in self._live.values() if hasattr(endpoint, "figures"))
+            return [figures for figures in found if figures is not None]  # None: a placed service's relay
 
     def slot_versions(self, slot: str) -> tuple[list[HandlerVersion], Optional[int]]:
         """Every function slot ``slot`` was given, oldest first, and the number of the one serving now."""
@@ -458,7 +459,7 @@ class NodeEngine:
             assert declared is not None and output is not None  # the plan lists a guard only on an output
             return self.guards.open(declared, output, self.fullname)
 
-        def placed(spec: planning.RelaySpec) -> PlacedRelay:
+        def placed(spec: PlacedSpec) -> PlacedRelay:
             relays = self._placed_relays
             if relays is None or relays.machine != spec.machine:
                 assert model.base is not None and spec.machine is not None  # the plan places a basenode's relays

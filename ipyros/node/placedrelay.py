@@ -1,4 +1,4 @@
-"""The topic relays of a basenode placed on another machine, run there by its keeper.
+"""The relays of a basenode placed on another machine (its topics, services and actions), run there by its keeper.
 
 A wrapped node's relays carry its basenode's topics to and from their public names (see
 :mod:`ipyros.core.plan`). When the basenode runs on the robot (``.machine("robot1")``), relays in
@@ -19,14 +19,18 @@ from __future__ import annotations
 
 import secrets
 import threading
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Optional, Union
 
 from ..core import plan as planning
 from ..core.slots import SendFigures
 from ..processes.keeper import MachineError
 from .keeperlink import KeeperLink
 
-__all__ = ["PlacedRelay", "PlacedRelays"]
+__all__ = ["PlacedRelay", "PlacedRelays", "PlacedSpec"]
+
+#: What a relay the keeper runs is: a topic's, a service's (its calls passed on), an action's (all its parts).
+PlacedSpec = Union[planning.RelaySpec, planning.ServiceRelaySpec, planning.ActionRelaySpec]
+_KINDS = {planning.RelaySpec: "topic", planning.ServiceRelaySpec: "service", planning.ActionRelaySpec: "action"}
 
 #: How often the relays' heartbeat goes (s): it only keeps them past their grace (no stop message hangs on it).
 BEAT = 1.0
@@ -45,7 +49,7 @@ class PlacedRelays:
         self._open: dict[str, "PlacedRelay"] = {}
         self._ended_said = False
 
-    def open(self, spec: planning.RelaySpec) -> "PlacedRelay":
+    def open(self, spec: PlacedSpec) -> "PlacedRelay":
         """Ask the keeper to run ``spec``'s relay; a one-line :class:`MachineError` if it refuses or is not there."""
         with self._lock:
             if self._link is None:
@@ -62,7 +66,8 @@ class PlacedRelays:
         rid = secrets.token_hex(6)
         try:
             link.ask("relay", timeout=10.0, rid=rid, grace=self.grace,
-                     relay={"source": spec.source, "target": spec.target, "type": spec.type})
+                     relay={"kind": _KINDS[type(spec)], "source": spec.source, "target": spec.target,
+                            "type": spec.type})
         except BaseException:
             self._closed_if_unused()
             raise
@@ -103,7 +108,7 @@ class PlacedRelay:
     """One relay the keeper runs: the endpoint of the node's plan (closed, shown in ``%status``, and what ``%pub``
     and an e-stop send on its target through)."""
 
-    def __init__(self, relays: PlacedRelays, link: KeeperLink, rid: str, spec: planning.RelaySpec) -> None:
+    def __init__(self, relays: PlacedRelays, link: KeeperLink, rid: str, spec: PlacedSpec) -> None:
         self.id, self.spec, self.link, self._relays = rid, spec, link, relays
 
     def send(self, msg: Any) -> None:
@@ -111,7 +116,9 @@ class PlacedRelay:
         data = self._relays._backend.serialize(msg).hex()
         self.link.ask("relay_send", timeout=5.0, rid=self.id, data=data)
 
-    def figures(self) -> SendFigures:
+    def figures(self) -> Optional[SendFigures]:
+        if not isinstance(self.spec, planning.RelaySpec):
+            return None  # a service's or an action's relay: no topic it sends on
         messages, connections, dropped = (self.link.report.get("relays") or {}).get(self.id) or (0, 0, 0)
         return SendFigures(self.spec.target, f"relay on {self._relays.machine}", messages, connections, 0, dropped)
 

@@ -492,6 +492,7 @@ class KeptGuard:
 class KeptRelay:
     id: str
     what: str  # "relay SOURCE -> TARGET"
+    kind: str  # "topic", "service", "action"
     type: str
     source: str
     target: str
@@ -534,21 +535,25 @@ class KeptRelays:
         """Open relay ``rid`` (``source``, ``target``, ``type``), its first message through ``gate``; what it is."""
         if rid in self.relays:
             raise Refused(f"relay {rid} runs already")
-        source, target, type_name = (str(spec.get(key)) for key in ("source", "target", "type"))
+        kind, source, target, type_name = (str(spec.get(key, "topic")) for key in ("kind", "source", "target", "type"))
+        if kind not in ("topic", "service", "action"):
+            raise Refused(f"relay: kind {kind!r:.40}: give topic, service or action")
         for end in (source, target):
             if not end.startswith("/") or not names.is_legal_name(end):
-                raise Refused(f"relay: topic {end!r:.80}: give a global ROS name")
+                raise Refused(f"relay: {kind} {end!r:.80}: give a global ROS name")
         if not _TYPE.match(type_name):
-            raise Refused(f"relay: type {type_name!r:.80}: give a message type, package/Type")
-        kept = KeptRelay(rid, f"relay {source} -> {target}", type_name, source, target)
+            raise Refused(f"relay: type {type_name!r:.80}: give a {kind}'s type, package/Type")
+        what = f"relay {source} -> {target}" if kind == "topic" else f"{kind} relay {source} -> {target}"
+        kept = KeptRelay(rid, what, kind, type_name, source, target)
         self._open(kept, gate)
         self.relays[rid] = kept
         return kept.what
 
     def _open(self, kept: KeptRelay, gate: Any) -> None:
         try:
-            if gate is None:
-                self._hosted().ask("add", rid=kept.id, source=kept.source, target=kept.target, type=kept.type)
+            if gate is None or kept.kind != "topic":  # a guard stands on topics only
+                self._hosted().ask("add", rid=kept.id, kind=kept.kind, source=kept.source, target=kept.target,
+                                   type=kept.type)
                 kept.relay = None
             else:
                 keeper = self._keeper
@@ -576,7 +581,7 @@ class KeptRelays:
         """The guard on ``topic`` here changed: each relay onto it passes its gate from now on (moved into the keeper,
         closed first: nothing passes unchecked meanwhile), or none (moved back to the relays' process)."""
         for kept in list(self.relays.values()):
-            if kept.target != topic:
+            if kept.target != topic or kept.kind != "topic":
                 continue
             if kept.relay is not None and gate is not None:
                 kept.relay.gate = gate
@@ -593,8 +598,8 @@ class KeptRelays:
     def send(self, rid: str, data: bytes) -> None:
         """A message of the session's (serialized) onto relay ``rid``'s target, through its gate if it has one."""
         kept = self.relays.get(rid)
-        if kept is None:
-            raise Refused(f"no relay {rid} of this session here")
+        if kept is None or kept.kind != "topic":
+            raise Refused(f"no topic relay {rid} of this session here")
         try:
             if kept.relay is not None:
                 kept.relay.send(self._keeper.ros.deserialize(msgtypes.resolve_message(kept.type)[1], data))
@@ -641,8 +646,8 @@ def child_env() -> dict[str, str]:
     return env
 
 
-#: A message type as a relay's request may name it.
-_TYPE = re.compile(r"^[A-Za-z][A-Za-z0-9_]*/(msg/)?[A-Za-z][A-Za-z0-9_]*$")
+#: A message, service or action type as a relay's request may name it.
+_TYPE = re.compile(r"^[A-Za-z][A-Za-z0-9_]*/((msg|srv|action)/)?[A-Za-z][A-Za-z0-9_]*$")
 
 #: An executable as a placed basenode's request may name it: a name in its package, never a path or a shell line.
 _EXECUTABLE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+-]{0,127}$")
@@ -668,6 +673,9 @@ class KeptBase:
             raise Refused(f"basenode {self.what}: grace={grace!r}: give the seconds (> 0), or None to keep it")
         self.lease = Lease(float("inf"), grace, keeper.clock())
         self._last_lines: list[str] = []
+        #: Its exit nobody asked for was read (its last lines with it): reported as ended from then on, not at the
+        #: moment the process is gone (its exit watch may be reading its log still: the report would lack them).
+        self.ended = False
         self.process = BaseProcess(argv, node_name=base.node_name, on_exit=self._exited,
                                    log_path=log_dir() / f"machine_{keeper.name}_base_{bid}.log")
         try:
@@ -680,11 +688,12 @@ class KeptBase:
 
     def _exited(self, process: Any, returncode: int, last_lines: list[str]) -> None:
         self._last_lines = last_lines[-8:]  # told in each report from now on: the log read once, not every 0.2 s
+        self.ended = True
         self._log(f"basenode {self.what} of {self.owner} {exit_reason(returncode)}")
 
     def state(self) -> dict[str, Any]:
         process = self.process
-        running = process.running
+        running = not self.ended
         return {"id": self.id, "base": self.what, "running": running, "pid": process.pid,
                 "returncode": process.returncode, "tail": [] if running else self._last_lines}
 
@@ -893,6 +902,7 @@ class Keeper:
         base = self._base_of(body)
         try:
             base.process.restart()
+            base.ended = False
         except IpyrosError as error:
             raise Refused(f"basenode {base.what}: {error}") from None
         self.log(f"restarted basenode {base.what} for {base.owner} (pid {base.process.pid})")

@@ -10,8 +10,8 @@ which the keeper tells what to open and close over its standard input, one JSON 
 =====================================================  ============================================
 the keeper asks                                        the host answers (``{"n": N, "ok": ...}``)
 =====================================================  ============================================
-``{"n": N, "op": "add", "rid", "source", "target",``   the relay opened, or ``"error"``: one line
-``"type"}``
+``{"n": N, "op": "add", "rid", "kind", "source",``     the relay opened (``kind``: topic, service,
+``"target", "type"}``                                  action), or ``"error"``: one line
 ``{"n": N, "op": "remove", "rid"}``                    it is closed
 ``{"n": N, "op": "send", "rid", "data"}``              a message of the session's (hex, serialized)
                                                        sent on the relay's target
@@ -40,7 +40,7 @@ from typing import Any, Callable, Optional, Protocol
 from ..core.errors import IpyrosError, first_line
 from .process import spawn
 
-__all__ = ["FIGURES", "RelayHost", "Relaying", "serve", "wrong_type_line"]
+__all__ = ["FIGURES", "RelayHost", "Relaying", "opener", "serve", "wrong_type_line"]
 
 #: How often the host tells the keeper what its relays sent (s).
 FIGURES = 0.2
@@ -159,14 +159,26 @@ class RelayHost:
                 continue
 
 
-def serve(make: Callable[[str, str, str, Callable[[str], None]], Relaying],
+def opener(ros: Any) -> Callable[[str, str, str, str, Callable[[str], None]], Any]:
+    """``make`` for :func:`serve` from a ROS adapter's ``relay``, ``service_relay`` and ``action_relay``."""
+    def make(kind: str, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
+        if kind == "service":
+            return ros.service_relay(source, target, type_name, complain)
+        if kind == "action":
+            return ros.action_relay(source, target, type_name, complain)
+        return ros.relay(source, target, type_name, None, complain)
+    return make
+
+
+def serve(make: Callable[[str, str, str, str, Callable[[str], None]], Any],
           message: Callable[[str, bytes], Any]) -> None:
     """Be a relay host (in its own process, its ROS node running): open and close relays as the keeper asks on
-    standard input until it closes it, tell their figures on standard output. ``make(source, target, type,
-    complain)`` opens a relay; ``message(type, data)`` reads a serialized message."""
+    standard input until it closes it, tell their figures on standard output. ``make(kind, source, target, type,
+    complain)`` opens a relay (``kind``: topic, service or action); ``message(type, data)`` reads a serialized
+    message."""
     out_lock = threading.Lock()
     out = sys.stdout
-    relays: dict[str, Relaying] = {}
+    relays: dict[str, Any] = {}
     ended = threading.Event()
 
     def tell(line: dict[str, Any]) -> None:
@@ -178,15 +190,15 @@ def serve(make: Callable[[str, str, str, Callable[[str], None]], Relaying],
         while not ended.wait(FIGURES):
             found = {}
             for rid, relay in list(relays.items()):
-                f = relay.figures()
-                found[rid] = [f.messages, f.connections, f.dropped]
+                f = relay.figures() if hasattr(relay, "figures") else None  # a service's relay has none
+                found[rid] = [f.messages, f.connections, f.dropped] if f is not None else [0, 0, 0]
             tell({"figures": found})
 
     def answer(request: dict[str, Any]) -> dict[str, Any]:
         op, rid = request.get("op"), str(request.get("rid"))
         if op == "add":
-            source, target, type_name = (str(request[k]) for k in ("source", "target", "type"))
-            relays[rid] = make(source, target, type_name, lambda text: tell({"said": text}))
+            kind, source, target, type_name = (str(request.get(k, "topic")) for k in ("kind", "source", "target", "type"))
+            relays[rid] = make(kind, source, target, type_name, lambda text: tell({"said": text}))
             types[rid] = type_name
         elif op == "remove":
             relay = relays.pop(rid, None)

@@ -82,6 +82,17 @@ class RospyKeeper(Lookup):
             return runtime.RawRelay(source, target, type_name, wrong_type, complain)  # TCPROS carries any type
         return runtime.Relay(source, target, cls, wrong_type, complain, gate)
 
+    def service_relay(self, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
+        from . import runtime
+
+        return runtime.ServiceRelay(source, target, msgtypes.resolve_service(type_name)[1])
+
+    def action_relay(self, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
+        from .actions import ActionRelay
+
+        return ActionRelay(source, target, msgtypes.resolve_action(type_name)[1],
+                           lambda got: complain(wrong_type_line(f"a part of {source}", type_name, got)), complain)
+
     def text(self, data: str) -> Any:
         from std_msgs.msg import String
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import sys
 
 from ..core import msgtypes
-from ..processes.relayhost import serve
+from ..processes.relayhost import opener, serve
 from .machine import RospyKeeper
 
 __all__ = ["main"]
@@ -20,8 +20,7 @@ def main(argv: list[str]) -> int:
     rospy.init_node(argv[0], disable_signals=True)
     ros = RospyKeeper()
     try:
-        serve(lambda source, target, type_name, complain: ros.relay(source, target, type_name, None, complain),
-              lambda type_name, data: ros.deserialize(msgtypes.resolve_message(type_name)[1], data))
+        serve(opener(ros), lambda type_name, data: ros.deserialize(msgtypes.resolve_message(type_name)[1], data))
     finally:
         rospy.signal_shutdown("the keeper ends its relays")
     return 0

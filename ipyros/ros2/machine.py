@@ -64,16 +64,34 @@ class RclpyKeeper(Lookup):
     def relay(self, source: str, target: str, type_name: str, gate: Any, complain: Callable[[str], None]) -> Any:
         """The runtime's relay (bytes on, QoS taken from the basenode's publishers), on a node of its own in an
         rclpy context of its own: a camera's traffic never shares a participant with the leases' heartbeats."""
-        from .runtime import ProcessNode, Relay
+        from .runtime import Relay
 
         cls = msgtypes.resolve_message(type_name)[1]  # rclpy needs the type's Python package, even for bytes
+        process, node = self._relays_node()
+        return Relay(process, node, source, target, cls, lambda got: complain(wrong_type_line(source, type_name, got)),
+                     complain, gate=gate)
+
+    def _relays_node(self) -> tuple[Any, Any]:
         if self._relaying is None:
+            from .runtime import ProcessNode
+
             process = ProcessNode()
             process.start(self._relays_name)
             self._relaying = process, process.host(f"/{self._relays_name}", parameters=False)
-        process, node = self._relaying
-        return Relay(process, node, source, target, cls, lambda got: complain(wrong_type_line(source, type_name, got)),
-                     complain, gate=gate)
+        return self._relaying
+
+    def service_relay(self, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
+        from .runtime import ServiceRelay
+
+        process, node = self._relays_node()
+        return ServiceRelay(process, node, source, target, msgtypes.resolve_service(type_name)[1], complain)
+
+    def action_relay(self, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
+        from .actions import ActionRelay
+
+        process, node = self._relays_node()
+        return ActionRelay(process, node, source, target, msgtypes.resolve_action(type_name)[1],
+                           lambda got: complain(wrong_type_line(f"a part of {source}", type_name, got)), complain)
 
     def close(self) -> None:
         for held in (self._relaying, self._beating):

@@ -8,7 +8,7 @@ from __future__ import annotations
 import sys
 
 from ..core import msgtypes
-from ..processes.relayhost import serve
+from ..processes.relayhost import opener, serve
 from .machine import RclpyKeeper
 
 __all__ = ["main"]
@@ -17,8 +17,7 @@ __all__ = ["main"]
 def main(argv: list[str]) -> int:
     ros = RclpyKeeper(None, relays_name=argv[0])
     try:
-        serve(lambda source, target, type_name, complain: ros.relay(source, target, type_name, None, complain),
-              lambda type_name, data: ros.deserialize(msgtypes.resolve_message(type_name)[1], data))
+        serve(opener(ros), lambda type_name, data: ros.deserialize(msgtypes.resolve_message(type_name)[1], data))
     finally:
         ros.close()
     return 0

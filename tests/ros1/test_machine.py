@@ -244,8 +244,18 @@ def test_a_basenode_placed_on_the_machine_runs_there_wrapped_and_crashes_are_tol
     nd = make_node("placedbase1")
     nd.baseNode("echo_node", args=["--prefix", "robot> "]).basePackage("ipyros_test_nodes").machine("testbot")
     nd.reuse.subscribe("in", type=String).publish("out", type=String)
+    nd.reuse.service("~reset", type="std_srvs/Empty")
     nd.create()
     pid = nd.base.pid
+    assert any("service relay /placedbase1/base/echo_node/reset -> /echo_node/reset for " in line
+               for line in machine.lines), "its service relayed on the machine"
+    import rospy
+    from std_srvs.srv import Empty
+
+    rospy.wait_for_service("/echo_node/reset", timeout=20)
+    rospy.ServiceProxy("/echo_node/reset", Empty)()
+    wait_for(lambda: any("reset" == line.strip() for line in nd.base.tail()), timeout=20,
+             what="the basenode on the machine to serve the call, relayed there")
     assert pid in descendants(machine.proc.pid), "it runs as the keeper's child"
     wait_for(lambda: any("echo_node ready" in line for line in nd.base.tail()), timeout=20, what="its log there")
     assert any("started basenode ipyros_test_nodes/echo_node" in line for line in machine.lines)

@@ -109,15 +109,30 @@ def test_a_killed_ros2_session_stops_the_robot_within_its_lease(peer, keeper, tm
         laptop.stop()
 
 
-def test_a_basenode_placed_on_a_ros2_keeper_runs_there_and_is_relayed(make_node, keeper, tmp_path, monkeypatch):
+def _answered(session, name: str, cls: type):
+    try:
+        return session.backend.call(name, cls, cls.Request(data=True), 5.0)
+    except Exception:  # noqa: BLE001 - not found yet: asked again
+        return None
+
+
+def test_a_basenode_placed_on_a_ros2_keeper_runs_there_and_is_relayed(make_node, keeper, tmp_path, monkeypatch,
+                                                                       session):
     use_ament_echo(tmp_path, monkeypatch, sys.executable)
     machine = keeper("echo_pkg")
     assert "the basenodes of echo_pkg" in machine.lines[-1]
     w = make_node("placed23")
     w.baseNode("echo_node", namespace="robot23").basePackage("echo_pkg").machine("testbot2")
     w.reuse.subscribe("in", type=String).publish("out", type=String)
+    w.reuse.service("check", type="std_srvs/SetBool")
     w.create()
     pid = w.base.pid
+    assert any("service relay " in line and " -> /robot23/check for " in line for line in machine.lines)
+    from std_srvs.srv import SetBool
+
+    answer = wait_for(lambda: _answered(session, "/robot23/check", SetBool), timeout=30, interval=0.5,
+                      what="the basenode's service, relayed on the machine")
+    assert answer.success and answer.message.endswith("checked"), answer
     assert pid in descendants(machine.proc.pid), "it runs as the keeper's child"
     out: list[str] = []
     make_node("placed23_ear").new.subscribe("/robot23/out", handler=lambda m: out.append(m.data),

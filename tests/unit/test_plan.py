@@ -50,6 +50,11 @@ def test_a_placed_basenodes_relays_run_on_its_machine_unless_a_guard_elsewhere_m
     model.base.machine = "robot1"
     assert list(planning.plan(model)) == [RelaySpec("/w/base/cmd_vel", "/cmd_vel", TWIST, "robot1"),
                                           RelaySpec("/scan", "/w/base/scan", TWIST, "robot1")]
+    model.services.append(ServiceModel("/reset", "/reset", "std_srvs/Empty", "reuse"))
+    model.actions.append(ActionModel("/spin", "/spin", "test_msgs/Fibonacci", "reuse"))
+    placed = planning.plan(model)
+    assert planning.ServiceRelaySpec("/w/base/reset", "/reset", "std_srvs/Empty", "robot1") in placed
+    assert planning.ActionRelaySpec("/w/base/spin", "/spin", "test_msgs/Fibonacci", "robot1") in placed
     model.guards.append(GuardModel("/cmd_vel", "/cmd_vel", TWIST, machine="robot1"))
     assert RelaySpec("/w/base/cmd_vel", "/cmd_vel", TWIST, "robot1") in planning.plan(model), "its guard is there too"
     for elsewhere in (None, "robot2"):  # a gate of the session's, or another machine's: the relay runs here
