@@ -42,8 +42,9 @@ from .process import spawn
 
 __all__ = ["FIGURES", "RelayHost", "Relaying", "opener", "serve", "wrong_type_line"]
 
-#: How often the host tells the keeper what its relays sent (s).
-FIGURES = 0.2
+#: How often the host tells the keeper what its relays sent (s): seldom enough that the host's other thread
+#: hardly ever holds a relay's message up (``%status`` counts lag by as much).
+FIGURES = 1.0
 #: How long a host may take to start its ROS node (s).
 START = 30.0
 #: How long it may take to answer (s): opening a relay subscribes and advertises.
