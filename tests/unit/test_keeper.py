@@ -111,7 +111,7 @@ def test_the_lease_holds_the_stop_once_lost_releases_when_heard_and_ends_past_it
     ({"package": "demo", "executable": "talker", "node_name": "a/b"}, "invalid node name"),
 ])
 def test_a_placed_basenode_is_an_allowed_packages_executable_by_name_and_nothing_else(spec, why):
-    from ipyros.processes.keeper import _base_of
+    from ipyros.processes.keeper.bases import _base_of
 
     with pytest.raises(Refused) as refused:
         _base_of(spec, frozenset({"demo"}))
@@ -119,7 +119,7 @@ def test_a_placed_basenode_is_an_allowed_packages_executable_by_name_and_nothing
 
 
 def test_a_placed_basenode_keeps_its_remaps_params_and_args_as_given():
-    from ipyros.processes.keeper import _base_of
+    from ipyros.processes.keeper.bases import _base_of
 
     base = _base_of({"package": "demo", "executable": "talker", "node_name": "talker", "namespace": "/robot1",
                      "remaps": {"in": "/robot1/base/in"}, "params": {"rate": 5}, "args": ["--fast"]},

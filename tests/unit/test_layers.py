@@ -100,8 +100,25 @@ def source_of(module: str) -> str:
 
 def defines(source: str, name: str) -> bool:
     """Whether a module's source defines or imports ``name`` at its top level (read, not imported: no ROS here)."""
-    return re.search(rf"^(?:def|class) {name}\b|^{name}\b|^(?:from|import) [^\n]*\b{name}\b|^    {name},$",
-                     source, re.M) is not None
+    found: set[str] = set()
+    for node in ast.parse(source).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            found.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            found.update((alias.asname or alias.name).split(".")[0] for alias in node.names)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            found.update(t.id for t in targets if isinstance(t, ast.Name))
+        elif isinstance(node, ast.If):  # try/except imports and the like: looked into one level
+            found.update(n.name for n in ast.walk(node) if isinstance(n, (ast.FunctionDef, ast.ClassDef)))
+            found.update(a.asname or a.name for n in ast.walk(node) if isinstance(n, (ast.Import, ast.ImportFrom))
+                         for a in n.names)
+        elif isinstance(node, ast.Try):
+            found.update(a.asname or a.name for n in ast.walk(node) if isinstance(n, (ast.Import, ast.ImportFrom))
+                         for a in n.names)
+            found.update(t.id for n in ast.walk(node) if isinstance(n, ast.Assign) for t in n.targets
+                         if isinstance(t, ast.Name))
+    return name in found
 
 
 def test_scripts_outside_the_package_import_what_exists(graph):

@@ -1,0 +1,168 @@
+"""A guard a session placed on this machine: its gate in front of the robot's topic, its stop process on
+the robot's clock, and its session's lease (see :mod:`ipyros.processes.keeper`)."""
+
+from __future__ import annotations
+
+import copy
+
+from typing import Any, Optional
+
+from ...core import msgtypes
+from ...core.errors import DeclarationError, IpyrosError
+from ...core.guard import Gate, check_rules, check_stop
+from ..basenode import log_dir
+from ..sentinel import Sentinel, Shared
+from .lease import Lease, Refused, beat_topics
+from .ros import REPORT, Keeping, Reporter, child_env
+
+__all__ = ["GUARD_START", "KeptGuard"]
+
+#: How long a placed guard's stop process may take to start on the robot (s).
+GUARD_START = 30.0
+
+
+class KeptGuard:
+    """A guard placed on this machine by a session: its gate in front of the robot's topic, its stop process, its
+    lease."""
+
+    def __init__(self, keeper: Keeping, owner: str, gid: str, spec: dict[str, Any]) -> None:
+        ros, ns = keeper.ros, keeper.ns
+        self.owner, self.id, self._log = owner, gid, keeper.log
+        self.topic, self.type = str(spec["topic"]), str(spec["type"])
+        where = f"guard {self.topic}"
+        try:
+            cls = msgtypes.resolve_message(self.type)[1]
+        except IpyrosError as error:
+            raise Refused(f"{where}: {self.type} is not installed on this machine ({error})") from None
+        try:
+            limits, rates = check_rules(cls, spec.get("limits") or {}, spec.get("rate") or {},
+                                        spec.get("on_limit", "clamp"),
+                                        spec.get("timeout"), spec.get("grace", 3.0), spec.get("repeat", 10.0), where)
+            self._stop = ros.deserialize(cls, bytes.fromhex(str(spec["stop"])))
+            check_stop(cls, self._stop, limits, where, given=True)
+        except (DeclarationError, ValueError) as error:
+            raise Refused(str(error)) from None
+        self.lease = Lease(float(spec.get("lease", 0.5)), spec.get("grace_lease", 30.0), keeper.clock())
+        self.shared = Shared.create()
+        #: Why its stop process is gone, if it ended on its own: the guard then fails closed (see :meth:`tend`).
+        self.lost: Optional[str] = None
+        self._stopped_at = -float("inf")  # when the keeper last sent the stop message for a lost process
+        self.repeat = float(spec.get("repeat", 10.0))
+        self.gate = Gate(self.topic, cls, limits, rates, str(spec.get("on_limit", "clamp")), self.stop_message,
+                         self.holding, self.shared.passed, lambda text: self._log(f"{where}: {text}"))
+        self._out = ros.publisher(self.topic, self.type, bool(spec.get("latch")))
+        self._settings = {"node": f"ipyros_machine_{keeper.name}_guard_{gid}", "topic": self.topic,
+                          "type": self.type, "latch": bool(spec.get("latch")), "estop_topic": spec.get("estop_topic"),
+                          "timeout": spec.get("timeout"), "repeat": self.repeat,
+                          "grace": float(spec.get("grace", 3.0)), "stop": str(spec["stop"])}
+        self.log_path = log_dir() / f"machine_{keeper.name}_guard_{gid}.log"
+        self._command = ros.sentinel_command()
+        self.sentinel: Optional[Sentinel] = None
+        try:
+            self._start_sentinel()
+        except Refused:
+            self._out.close()
+            self.shared.close()
+            raise
+        self._reporter = Reporter(ros, f"{ns}/guards/{gid}/state")
+        self._subs = [ros.subscribe(f"{ns}/guards/{gid}/in", self.type, self.command, lossy=bool(spec.get("lossy"))),
+                      *(ros.subscribe(topic, "std_msgs/String", keeper.beat, lossy=True)
+                        for topic in beat_topics(f"{ns}/guards/{gid}"))]
+
+    def _start_sentinel(self) -> None:
+        self.shared.ready = False
+        sentinel = Sentinel(self._command, self._settings, self.shared, self.log_path, child_env())
+        problem = sentinel.ready(GUARD_START)
+        if problem is not None:
+            raise Refused(f"guard {self.topic}: its stop process could not start on this machine ({problem}; see "
+                          f"{self.log_path})")
+        self.sentinel = sentinel
+
+    def stop_message(self) -> Any:
+        return copy.deepcopy(self._stop)
+
+    def holding(self) -> bool:
+        """Whether the stop message goes in place of every command: e-stopped, the session not heard (since its lease
+        ran out, or not yet: its first heartbeat may come after its first command), or its stop process lost."""
+        return self.shared.estopped or self.lost is not None or self.lease.first
+
+    def command(self, msg: Any) -> None:
+        """A message from the session: through the gate, onto the robot's topic."""
+        try:
+            send = self.gate.check(msg).send
+        except Exception as error:  # noqa: BLE001 - a bad message never ends the keeper; when in doubt, stop
+            self._log(f"guard {self.topic}: a message from the session could not be checked ({error}): the stop "
+                      "message goes in its place")
+            send = self.stop_message()
+        if send is not None:
+            try:
+                self._out.write(send)
+            except Exception as error:  # noqa: BLE001 - as above: the next command or the stop process follows
+                self._log(f"guard {self.topic}: a command could not be sent ({error})")
+
+    def hold(self, on: bool) -> None:
+        """The lease ran out (``on``) or the session is heard again: the stop message holds, or commands pass."""
+        self.shared.held = on
+        self._wake()
+
+    def estop(self, on: bool) -> None:
+        """E-stop (``on``) or release; a release starts its stop process again if it was lost (refused in one line
+        if it cannot: the stop message holds)."""
+        self.shared.estop_session = on
+        if not on and self.lost is not None:
+            if self.sentinel is not None:
+                self.sentinel.end(hold=False)  # gone already: its pipe closed, its exit status read
+                self.sentinel = None
+            self._start_sentinel()
+            self.lost = None
+        self._wake()
+
+    def tend(self, now: float) -> Optional[str]:
+        """While the stop message holds (the session not heard, e-stopped, its stop process lost), the keeper sends
+        it too, at the guard's rate, on the publisher the robot already hears commands from (a stop process just
+        started may not have been found by the robot's subscribers yet: on ROS 2 that takes a moment). When the stop
+        process ended on its own (killed, crashed): one line the first time, and every command is replaced by the
+        stop message until the session releases it."""
+        said = None
+        if self.lost is None:
+            sentinel = self.sentinel
+            if sentinel is not None and not sentinel.running:
+                code = sentinel.returncode
+                self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
+                said = (f"guard {self.topic}: its stop process ended ({self.lost}; its log: {self.log_path}): the "
+                        "keeper sends the stop message in place of every command until the session releases it")
+        if (self.shared.estopped or self.lost is not None) and now - self._stopped_at >= 1.0 / self.repeat:
+            self._stopped_at = now
+            self._out.write(self.stop_message())
+            if self.lost is not None:  # a stop process counts its own
+                self.shared.stops_sent += 1
+        return said
+
+    def _wake(self) -> None:
+        if self.sentinel is not None:
+            try:
+                self.sentinel.tell({"wake": True})
+            except OSError:
+                pass
+
+    def state(self) -> dict[str, Any]:
+        shared, figures = self.shared, self.gate.figures
+        alive = self.sentinel is not None and self.sentinel.running
+        return {"id": self.id, "topic": self.topic, "state": shared.state, "held": bool(shared.held), "lost": self.lost,
+                "heard": not self.lease.first,
+                "estop_session": shared.estop_session, "estop_topic": shared.estop_topic, "alive": alive,
+                "stops": shared.stops_sent, "reach": shared.reach, "commands": self.gate.commands,
+                "figures": [figures.passed, figures.clamped, figures.dropped, figures.replaced, figures.last_trip]}
+
+    def report(self, now: float, every: float = REPORT) -> None:
+        self._reporter.report(self.state(), now, every, steady=("figures",))
+
+    def close(self, hold: bool) -> None:
+        """End it: its stop process holds the stop message for its grace first (``hold``), or quits at once."""
+        for sub in self._subs:
+            sub.close()
+        if self.sentinel is not None:
+            self.sentinel.end(hold=hold, wait=False)
+            self.sentinel = None
+        self._out.close()
+        self._reporter.close()
