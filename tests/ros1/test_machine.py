@@ -13,10 +13,12 @@ import time
 import pytest
 from geometry_msgs.msg import Twist
 from helpers import descendants, pid_alive
+from keepers import Keepers
 from peer import Peer
 from std_msgs.msg import Int32, String
 from support import wait_for
 
+from bench.machine_link import twists
 from ipyros.core import errors
 from ipyros.dsl import engine_of
 from ipyros.processes.keeper import Token, token_path
@@ -24,28 +26,12 @@ from ipyros.processes.keeper import Token, token_path
 LIMITS = {"linear.x": (-0.5, 0.5)}
 
 
-def twists(listener) -> list[tuple[float, float]]:
-    """``(linear.x, when)`` of each message the motors heard so far."""
-    return [(float(line.split()[1]), float(line.split()[4])) for line in list(listener.lines)
-            if line.startswith("twist ")]
-
-
 @pytest.fixture
 def keeper(session):
-    """A keeper named ``testbot`` on the run's master; after the test, ended, and its guards' processes gone."""
-    started = []
-
-    def start(name: str = "testbot", *allow: str) -> Peer:
-        proc = Peer("keeper.py", "--name", name, *(f"--allow={package}" for package in allow))
-        started.append(proc)
-        proc.wait_line(f"ipyros machine {name} ready on ROS 1", timeout=60)
-        return proc
-
-    yield start
-    for proc in started:
-        left = descendants(proc.proc.pid)
-        proc.stop()
-        wait_for(lambda: not any(pid_alive(pid) for pid in left), timeout=30, what="the keeper's guards to end")
+    """Start a keeper (default name ``testbot``) on the run's master; after the test, ended with all it started."""
+    keepers = Keepers("ROS 1")
+    yield lambda name="testbot", *allow: keepers.start(name, *allow)
+    keepers.end()
 
 
 def test_a_placed_guard_clamps_on_the_machine_and_status_says_where_it_runs(make_node, peer, keeper):

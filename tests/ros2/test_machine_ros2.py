@@ -7,41 +7,27 @@ import os
 import signal
 import sys
 import time
-from pathlib import Path
 
 import pytest
 from geometry_msgs.msg import Twist
 from helpers import descendants, pid_alive, use_ament_echo
+from keepers import Keepers
 from peer import Peer
 from std_msgs.msg import String
 from support import wait_for
 
+from bench.machine_link import twists
 from ipyros.dsl import engine_of
 
-KEEPER = Path(__file__).resolve().parents[1] / "ros1" / "peers" / "keeper.py"  # python -m ipyros.machine, either ROS
 LIMITS = {"linear.x": (-0.5, 0.5)}
-
-
-def twists(listener) -> list[tuple[float, float]]:
-    return [(float(line.split()[1]), float(line.split()[4])) for line in list(listener.lines)
-            if line.startswith("twist ")]
 
 
 @pytest.fixture
 def keeper():
-    started = []
-
-    def start(*allow: str) -> Peer:
-        proc = Peer(str(KEEPER), "--name", "testbot2", *(f"--allow={package}" for package in allow))
-        started.append(proc)
-        proc.wait_line("ipyros machine testbot2 ready on ROS 2", timeout=60)
-        return proc
-
-    yield start
-    for proc in started:
-        left = descendants(proc.proc.pid)
-        proc.stop()
-        wait_for(lambda: not any(pid_alive(pid) for pid in left), timeout=30, what="the keeper's children to end")
+    """Start the keeper ``testbot2`` (allowing ``allow``); after the test, ended with all it started."""
+    keepers = Keepers("ROS 2")
+    yield lambda *allow: keepers.start("testbot2", *allow)
+    keepers.end()
 
 
 def test_a_guard_placed_on_a_ros2_keeper_clamps_there_and_the_estop_reaches_it(make_node, peer, keeper):
