@@ -81,6 +81,7 @@ class RelayHost:
         self._ready = threading.Event()
         self.figures: dict[str, list[int]] = {}
         self.ended: Optional[str] = None  # why it ended, once it did
+        self._closing = False
         log_path.parent.mkdir(parents=True, exist_ok=True)
         fd = os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
         try:
@@ -116,6 +117,8 @@ class RelayHost:
                 self._ready.set()
         code = self._proc.wait()
         self.ended = f"killed by signal {-code}" if code < 0 else f"exit code {code}"
+        if not self._closing and self._ready.is_set():  # its end nobody asked for: said (the relays' report says it too)
+            self._said(f"their process ended ({self.ended}; its log: {self.log_path}): they relay nothing now")
         self._ready.set()
         with self._lock:
             self._answered.notify_all()
@@ -145,6 +148,7 @@ class RelayHost:
 
     def close(self) -> None:
         """End it: its standard input closed (it closes its relays and quits), then signals if it does not."""
+        self._closing = True
         try:
             if self._proc.stdin is not None:
                 self._proc.stdin.close()

@@ -476,3 +476,18 @@ def test_wrap_places_the_basenode_on_a_machine_and_its_export_says_where_to_star
     launch = (package / "launch" / "robo.launch").read_text()
     assert "ran on machine testbot" in launch and "install and start" in launch
     robo.shutdown()
+
+
+def test_the_relays_process_killed_on_the_machine_is_told_at_the_prompt(make_node, keeper, notices):
+    machine = keeper("testbot", "ipyros_test_nodes")
+    nd = make_node("placedbase7")
+    nd.baseNode("echo_node").basePackage("ipyros_test_nodes").machine("testbot")
+    nd.reuse.subscribe("in", type=String).publish("out", type=String)
+    nd.create()
+    said = next(line for line in machine.lines if "their process runs (pid " in line)
+    host = int(said.split("(pid ")[1].rstrip(")"))
+    os.kill(host, signal.SIGKILL)
+    wait_for(lambda: any("their process ended (killed by signal 9" in line for line in machine.lines), timeout=10,
+             what="the keeper's word")
+    wait_for(lambda: any("the relays of /placedbase7 on machine testbot ended (killed by signal 9)" in n
+                         for n in notices), timeout=10, what="the session's word")

@@ -4,7 +4,6 @@ keeper's child, and stopped when its session is silent past its grace."""
 from __future__ import annotations
 
 import re
-
 from typing import Any
 
 from ...core import names

@@ -4,7 +4,6 @@ the robot's clock, and its session's lease (see :mod:`ipyros.processes.keeper`).
 from __future__ import annotations
 
 import copy
-
 from typing import Any, Optional
 
 from ...core import msgtypes

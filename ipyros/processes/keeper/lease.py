@@ -18,7 +18,6 @@ import secrets
 import stat
 import threading
 import time
-
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Optional

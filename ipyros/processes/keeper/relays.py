@@ -5,7 +5,6 @@ relay's topic."""
 from __future__ import annotations
 
 import re
-
 from dataclasses import dataclass
 from typing import Any, Optional
 
@@ -34,7 +33,7 @@ class KeptRelay:
 
 
 class KeptRelays:
-    """The topic relays of one session's placed wrapping node (one link for them all): run on this machine, beside
+    """The relays of one session's placed wrapping node (one link for them all): run on this machine, beside
     its basenode, so that its topics cross the link once (to a handler in the session) or not at all. They run in a
     process of their own (:mod:`ipyros.processes.relayhost`: the leases' watch shares nothing with a camera's
     images), except a relay onto a topic a guard stands on here: that one runs in the keeper, through the guard's

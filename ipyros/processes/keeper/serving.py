@@ -11,7 +11,6 @@ import signal
 import socket
 import threading
 import time
-
 from typing import Any, Callable, Optional
 
 from ...core.errors import IpyrosError
