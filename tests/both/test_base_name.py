@@ -4,6 +4,7 @@ private topics, parameters and services are where its clients look for them. Its
 from __future__ import annotations
 
 import pytest
+from helpers import one_call
 from support import wait_for
 
 from ipyros.core.errors import DeclarationError
@@ -53,9 +54,8 @@ def set_from_outside(request, session, name: str, value: str) -> None:
     ROS 2 through the node's own parameter service (as ros2 param set)."""
     if session.backend.name == "ROS 1":
         import os
-        import xmlrpc.client
 
-        code, status, _ = xmlrpc.client.ServerProxy(os.environ["ROS_MASTER_URI"]).setParam("/outsider", name, value)
+        code, status, _ = one_call(os.environ["ROS_MASTER_URI"]).setParam("/outsider", name, value)
         assert code == 1, status
         return
     from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue

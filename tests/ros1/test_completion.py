@@ -12,6 +12,7 @@ import warnings
 from typing import Optional
 
 import pytest
+from helpers import one_call
 from IPython.core.completer import CompletionContext, provisionalcompleter
 from IPython.core.interactiveshell import InteractiveShell
 from ros1_fixtures import free_port, master_graph, wait_for
@@ -355,10 +356,8 @@ def test_master_gone_completion_offers_the_last_graph_marked_stale(ip, ros_home)
 
 def _registered(uri: str) -> bool:
     """Register a publisher of /stale/topic with the master at ``uri``; whether it answered."""
-    import xmlrpc.client
-
     try:
-        return xmlrpc.client.ServerProxy(uri).registerPublisher(
+        return one_call(uri).registerPublisher(
             "/stale_node", "/stale/topic", "std_msgs/String", "http://127.0.0.1:9/")[0] == 1
     except OSError:
         return False

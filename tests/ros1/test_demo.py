@@ -11,10 +11,10 @@ import math
 import os
 import subprocess
 import time
-import xmlrpc.client
 
 import numpy as np
 import pytest
+from helpers import one_call
 from geometry_msgs.msg import Pose, PoseStamped, Twist, Vector3
 from IPython.core.error import UsageError
 from ros1_fixtures import ros1_process, wait_for
@@ -178,7 +178,7 @@ def test_the_whole_kobuki_launch_drives_to_a_goal(ros_session, make_node, robot_
 
 def test_one_robot_at_a_time_and_the_same_one_again(ros_session, robot_stopper, ros_master):
     turtle = demo_robot("turtle", max_speed=2.0)
-    master = xmlrpc.client.ServerProxy(ros_master)
+    master = one_call(ros_master)
     assert master.getParam("/t", "/turtle_sim/max_speed")[2] == 2.0  # the launch file's params, set on the master
     assert demo_robot("turtle", max_speed=2.0) is turtle  # the same robot, same arguments: kept running
     pid = turtle.processes["/turtle_sim"].pid
@@ -214,9 +214,9 @@ def test_a_node_name_already_live_elsewhere_is_refused(ros_session, ros_master, 
 
 def node_pid(master_uri: str, name: str):
     """The pid of the live node the master knows as ``name``, or None."""
-    code, _, uri = xmlrpc.client.ServerProxy(master_uri).lookupNode("/t", name)
+    code, _, uri = one_call(master_uri).lookupNode("/t", name)
     try:
-        return xmlrpc.client.ServerProxy(uri).getPid("/t")[2] if code == 1 else None
+        return one_call(uri).getPid("/t")[2] if code == 1 else None
     except OSError:
         return None
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from helpers import use_test_nodes
+from helpers import one_call, use_test_nodes
 from rich.console import Console
 from ros1_fixtures import free_port, ros1_process, wait_for
 
@@ -114,11 +114,10 @@ def test_a_service_whose_server_never_answers_is_listed_without_a_type_and_hangs
     services are listed with their type unknown, after the probe's timeout, instead of discovery hanging."""
     import socket
     import threading
-    import xmlrpc.client
 
     with socket.create_server(("127.0.0.1", 0)) as frozen:  # listens; nobody ever reads or writes
         port = frozen.getsockname()[1]
-        master = xmlrpc.client.ServerProxy(ros_master)
+        master = one_call(ros_master)
         api = f"http://127.0.0.1:{free_port()}/"
         master.registerService("/frozen", "/frozen/reset", f"rosrpc://127.0.0.1:{port}", api)
         try:

@@ -4,9 +4,9 @@ The DSL's behaviour on both ROS is in tests/both/test_dsl.py."""
 
 from __future__ import annotations
 
-import xmlrpc.client
 
 import pytest
+from helpers import one_call
 from geometry_msgs.msg import Twist
 from peer import Peer
 from ros1_fixtures import master_state, wait_for
@@ -27,7 +27,7 @@ def test_private_params_live_on_the_master(make_node, ros_master):
     nd = make_node("dsl_params")
     nd.params["gain"] = 1.5
     nd.create()
-    master = xmlrpc.client.ServerProxy(ros_master)
+    master = one_call(ros_master)
     assert master.getParam("/pytest", "/dsl_params/gain") == [1, "Parameter [/dsl_params/gain]", 1.5]
     nd.params["mode"] = "fast"
     assert master.getParam("/pytest", "/dsl_params/mode")[2] == "fast"

@@ -7,10 +7,10 @@ import signal
 import subprocess
 import sys
 import textwrap
-import xmlrpc.client
 from pathlib import Path
 
 import pytest
+from helpers import one_call
 from ros1_fixtures import master_state, wait_for
 
 SESSION = """
@@ -33,7 +33,7 @@ while True:
 
 
 def registered(uri: str, node: str) -> bool:
-    code, _, _ = xmlrpc.client.ServerProxy(uri).lookupNode("/pytest", node)
+    code, _, _ = one_call(uri).lookupNode("/pytest", node)
     return code == 1
 
 
@@ -120,6 +120,6 @@ def test_exit_after_the_master_died_is_quiet(tmp_path, ros_home):
 
 def _answers(uri: str) -> bool:
     try:
-        return xmlrpc.client.ServerProxy(uri).getPid("/pytest")[0] == 1
+        return one_call(uri).getPid("/pytest")[0] == 1
     except OSError:
         return False

@@ -12,12 +12,11 @@ import os
 import signal
 import subprocess
 import sys
-import xmlrpc.client
 from pathlib import Path
 
 import pytest
 import rosnode
-from helpers import pid_alive
+from helpers import one_call, pid_alive
 from ros1_fixtures import master_state, wait_for
 from std_msgs.msg import Int32, String
 
@@ -46,7 +45,7 @@ def node_names() -> set[str]:
 def node_pid(name: str) -> int:
     """The pid of a running ROS node, asked from the node itself (as ``rosnode info`` does)."""
     uri = rosnode.get_api_uri(rosnode.rosgraph.Master("/pytest"), name, skip_cache=True)
-    return xmlrpc.client.ServerProxy(uri).getPid("/pytest")[2]
+    return one_call(uri).getPid("/pytest")[2]
 
 
 def processes_named(node_name: str, master_uri: str = "") -> list[int]:
@@ -120,7 +119,7 @@ def test_wrapping_a_node_of_a_launch_file(make_node, ros_master):
     nd.baseLaunch(ROBOT, "/robot1/planner")
     nd.reuse.subscribe("in", type=String).publish("out", type=String)
     nd.create()
-    master = xmlrpc.client.ServerProxy(ros_master)
+    master = one_call(ros_master)
     try:
         # The rest of the launch runs as the file says; the planner runs where it was, with its params.
         assert {"/robot1/planner", "/robot1/controller", "/logger"} <= node_names()
@@ -173,7 +172,7 @@ def test_wrapping_the_only_node_and_a_rest_roslaunch_cannot_start(make_node, ros
         nd = make_node("alone_wrap")
         nd.baseLaunch(str(LAUNCH / "alone.launch"), "alone")
         nd.create()
-        master = xmlrpc.client.ServerProxy(ros_master)
+        master = one_call(ros_master)
         assert master.getParam("/pytest", "/alone_mode")[2] == "solo"
         assert master.getParam("/pytest", "/alone/exit_code")[2] == 4
         assert "/alone" in node_names()

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import subprocess
-import xmlrpc.client
 
 import pytest
+from helpers import one_call
 from child import Child, ChildError
 from peer import Peer
 from ros1_fixtures import free_port, master_state, wait_for
@@ -39,7 +39,7 @@ def start_master(port: int) -> subprocess.Popen:
 
 def _answers(uri: str) -> bool:
     try:
-        return xmlrpc.client.ServerProxy(uri).getPid("/t")[0] == 1
+        return one_call(uri).getPid("/t")[0] == 1
     except OSError:
         return False
 
@@ -84,7 +84,7 @@ def test_the_master_goes_away_and_comes_back(own_master):
         assert state["pub"].get("/phoenix/out") == ["/phoenix"]
         assert "/phoenix" in state["sub"].get("/phoenix/in", [])
         assert state["srv"].get("/phoenix/reset") == ["/phoenix"]
-        assert xmlrpc.client.ServerProxy(uri).getParam("/t", "/phoenix/gain") == [1, "Parameter [/phoenix/gain]", 1.5]
+        assert one_call(uri).getParam("/t", "/phoenix/gain") == [1, "Parameter [/phoenix/gain]", 1.5]
         with Peer("publish_rate.py", "/phoenix/in", 50) as peer:  # a new peer finds the session's subscriber
             peer.wait_line("ready")
             wait_for(lambda: int(child.run("print(len(got))")) > 0, timeout=10, what="messages from the new peer")

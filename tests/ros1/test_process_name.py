@@ -5,8 +5,8 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import xmlrpc.client
 
+from helpers import one_call
 from ros1_fixtures import master_state
 
 SESSION = """
@@ -38,10 +38,10 @@ def test_a_helper_started_first_leaves_the_name_to_the_users_node(ros_master, pe
         tool = proc.stdout.readline().split()
         assert tool[:1] == ["TOOL"], proc.stderr.read() if proc.poll() is not None else tool
         assert proc.stdout.readline().strip() == "READY", proc.stderr.read() if proc.poll() is not None else ""
-        master = xmlrpc.client.ServerProxy(ros_master)
+        master = one_call(ros_master)
         code, _, api = master.lookupNode("/pytest", "/first_user_node")
         assert code == 1, "the user's node is on the master under its own name"
-        assert xmlrpc.client.ServerProxy(api).getName("/pytest")[2] == "/first_user_node"
+        assert one_call(api).getName("/pytest")[2] == "/first_user_node"
         assert master.lookupNode("/pytest", "/" + tool[1])[0] != 1, "the helper's name is gone from the master"
         state = master_state(ros_master)
         assert state["pub"]["/named/out"] == ["/first_user_node"]

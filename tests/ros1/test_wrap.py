@@ -27,8 +27,9 @@ def listen(make_node, name, topic, type_):
 def test_the_papers_kobuki_session_as_typed(ros_session, make_node, ros_master):
     global speed
     # move_base's private params may be left on the parameter server by other tests: its default speed is 1.0.
-    import xmlrpc.client
-    master = xmlrpc.client.ServerProxy(ros_master)
+    from helpers import one_call
+
+    master = one_call(ros_master)
     if master.hasParam("/pytest", "/move_base")[2]:
         master.deleteParam("/pytest", "/move_base")
     # The world around the basenode: a robot pose, a goal, and someone listening to the robot's base.

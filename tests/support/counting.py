@@ -107,16 +107,15 @@ class CountingRos1(Counting):
 
 def _sends_to_us(topic: str) -> bool:
     """Whether every ROS 1 publisher of ``topic`` has a connection open to this process's node."""
-    from xmlrpc.client import ServerProxy
-
     import rosgraph
     import rospy
+    from helpers import one_call
 
     me = rospy.get_caller_id()
     master = rosgraph.Master(me)
     publishers = next((nodes for name, nodes in master.getSystemState()[0] if name == topic), [])
     for node in publishers:
-        code, _, connections = ServerProxy(master.lookupNode(node)).getBusInfo(me)
+        code, _, connections = one_call(master.lookupNode(node)).getBusInfo(me)
         if code != 1 or not any(c[1] == me and c[2] == "o" and c[4] == topic for c in connections):
             return False
     return bool(publishers)

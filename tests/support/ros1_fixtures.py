@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import os
 import subprocess
-import xmlrpc.client
 from pathlib import Path
 
 import pytest
 
 TESTS = Path(__file__).resolve().parents[1]
 
-from helpers import free_port  # noqa: E402,F401 - the tests import it from here too
+from helpers import free_port, one_call  # noqa: E402,F401 - the tests import free_port from here too
 from peer import Peer as SharedPeer  # noqa: E402
 from support import SESSION_PIDS, node_maker, wait_for  # noqa: E402,F401 - the tests import wait_for from here
 
@@ -64,7 +63,7 @@ class Peer(SharedPeer):
 
 def _master_answers(uri: str) -> bool:
     try:
-        code, _, _ = xmlrpc.client.ServerProxy(uri).getPid("/pytest")
+        code, _, _ = one_call(uri).getPid("/pytest")
         return code == 1
     except OSError:
         return False
@@ -149,7 +148,7 @@ def notices(ros_session):
 
 def master_state(uri: str) -> dict:
     """{'pub': {topic: [nodes]}, 'sub': {...}, 'srv': {...}} straight from the master."""
-    code, _, (pubs, subs, srvs) = xmlrpc.client.ServerProxy(uri).getSystemState("/pytest")
+    code, _, (pubs, subs, srvs) = one_call(uri).getSystemState("/pytest")
     return {"pub": dict(pubs), "sub": dict(subs), "srv": dict(srvs)}
 
 
