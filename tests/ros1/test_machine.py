@@ -72,7 +72,7 @@ def test_a_placed_guard_clamps_on_the_machine_and_status_says_where_it_runs(make
     fast.linear.x = 0.2
     wait_for(lambda: nd.write("/placed1/cmd_vel", fast) or any(x == 0.2 and t > released_at for x, t in twists(motors)),
              timeout=20, interval=0.1, what="commands after the release")
-    assert any("placed guard /placed1/cmd_vel" in line for line in machine.lines)
+    machine.wait_line("placed guard /placed1/cmd_vel", timeout=10)
 
 
 def test_the_guards_stop_process_killed_on_the_machine_the_keeper_sends_the_stop_until_released(make_node, peer,
@@ -233,8 +233,7 @@ def test_a_basenode_placed_on_the_machine_runs_there_wrapped_and_crashes_are_tol
     nd.reuse.service("~reset", type="std_srvs/Empty")
     nd.create()
     pid = nd.base.pid
-    assert any("service relay /placedbase1/base/echo_node/reset -> /echo_node/reset for " in line
-               for line in machine.lines), "its service relayed on the machine"
+    machine.wait_line("service relay /placedbase1/base/echo_node/reset -> /echo_node/reset for ", timeout=10)
     import rospy
     from std_srvs.srv import Empty
 
@@ -244,7 +243,7 @@ def test_a_basenode_placed_on_the_machine_runs_there_wrapped_and_crashes_are_tol
              what="the basenode on the machine to serve the call, relayed there")
     assert pid in descendants(machine.proc.pid), "it runs as the keeper's child"
     wait_for(lambda: any("echo_node ready" in line for line in nd.base.tail()), timeout=20, what="its log there")
-    assert any("started basenode ipyros_test_nodes/echo_node" in line for line in machine.lines)
+    machine.wait_line("started basenode ipyros_test_nodes/echo_node", timeout=10)
     out: list[str] = []
     make_node("placedbase1_listener").new.subscribe("/out", handler=lambda m: out.append(m.data), msgType=String) \
         .create()
@@ -262,7 +261,7 @@ def test_a_basenode_placed_on_the_machine_runs_there_wrapped_and_crashes_are_tol
     again = nd.base.pid
     nd.shutdown()
     wait_for(lambda: not pid_alive(again), timeout=20, what="the node's shutdown to stop it there")
-    assert any("stopped basenode ipyros_test_nodes/echo_node" in line for line in machine.lines)
+    machine.wait_line("stopped basenode ipyros_test_nodes/echo_node", timeout=10)
 
 
 def test_a_placed_basenodes_relays_run_on_its_machine_through_a_guard_there_and_a_handler_takes_one_over(
@@ -280,9 +279,8 @@ def test_a_placed_basenodes_relays_run_on_its_machine_through_a_guard_there_and_
     nd.guard("/pr_cmd_vel", limits=LIMITS, machine="testbot")
     nd.create()
     internal_out = "/placedrelay/base/pr_cmd_vel"
-    assert any(f"relay {internal_out} -> /pr_cmd_vel for " in line and "(through its guard)" in line
-               for line in machine.lines), machine.lines[-5:]
-    assert any("relay /pr_in -> /placedrelay/base/pr_in for " in line for line in machine.lines)
+    assert "(through its guard)" in machine.wait_line(f"relay {internal_out} -> /pr_cmd_vel for ", timeout=10)
+    machine.wait_line("relay /pr_in -> /placedrelay/base/pr_in for ", timeout=10)
     feeder = make_node("placedrelay_feeder").new.publish("/pr_in", msgType=Twist).create()
     fast = Twist()
     fast.linear.x = 2.0
@@ -293,7 +291,7 @@ def test_a_placed_basenodes_relays_run_on_its_machine_through_a_guard_there_and_
     graph = session.backend.graph_snapshot()
     assert set(graph.subscribers.get(internal_out, ())) == {"/ipyros_machine_testbot"}, graph.subscribers
     (host,) = [n for n in graph.subscribers.get("/pr_in", ()) if n.startswith("/ipyros_machine_testbot_relays_")]
-    said = next(line for line in machine.lines if "their process runs (pid " in line)
+    said = machine.wait_line("their process runs (pid ", timeout=10)
     host_pid = int(said.split("(pid ")[1].rstrip(")"))
     assert host_pid in descendants(machine.proc.pid)
     rows = lambda: {r.name: r for r in engine_of(nd).status().rows}  # noqa: E731
@@ -339,7 +337,8 @@ def test_a_placed_basenode_outside_what_the_keeper_allows_is_refused_in_one_line
                                                    r"keeper with --allow topic_tools"):
         nd.create()
     assert not engine_of(nd).created
-    assert any("refused a request" in line and "topic_tools" in line for line in machine.lines)
+    wait_for(lambda: any("refused a request" in line and "topic_tools" in line for line in machine.lines), timeout=10,
+             what="the keeper's log of the refusal")
     path = make_node("placedbase3")
     path.baseNode(str(tmp_path / "evil.sh"))
     with pytest.raises(errors.DeclarationError, match=r"the keeper starts a package's executable by its name"):
@@ -469,7 +468,7 @@ def test_wrap_places_the_basenode_on_a_machine_and_its_export_says_where_to_star
     ok(ip, "%wrap ipyros_test_nodes echo_node --as robo --machine testbot")
     robo = ip.user_ns["robo"]
     assert robo.base.pid in descendants(machine.proc.pid), "started by the keeper"
-    assert any(" -> /out for " in line for line in machine.lines), "its relays run there"
+    machine.wait_line(" -> /out for ", timeout=10)  # its relays run there
     saved = robo.save(tmp_path / "robo_saved.py").read_text()
     assert ".machine('testbot'" in saved or '.machine("testbot"' in saved, saved
     package = robo.export(tmp_path / "robo_pkg")
@@ -484,7 +483,7 @@ def test_the_relays_process_killed_on_the_machine_is_told_at_the_prompt(make_nod
     nd.baseNode("echo_node").basePackage("ipyros_test_nodes").machine("testbot")
     nd.reuse.subscribe("in", type=String).publish("out", type=String)
     nd.create()
-    said = next(line for line in machine.lines if "their process runs (pid " in line)
+    said = machine.wait_line("their process runs (pid ", timeout=10)
     host = int(said.split("(pid ")[1].rstrip(")"))
     os.kill(host, signal.SIGKILL)
     wait_for(lambda: any("their process ended (killed by signal 9" in line for line in machine.lines), timeout=10,

@@ -53,7 +53,7 @@ def test_a_guard_placed_on_a_ros2_keeper_clamps_there_and_the_estop_reaches_it(m
     wait_for(lambda: nd.write("/placed21/cmd_vel", fast) or any(x == 0.2 and t > released_at
                                                                  for x, t in twists(motors)),
              timeout=20, interval=0.1, what="commands after the release")
-    assert any("placed guard /placed21/cmd_vel" in line for line in machine.lines)
+    machine.wait_line("placed guard /placed21/cmd_vel", timeout=10)
 
 
 SESSION = """
@@ -113,7 +113,7 @@ def test_a_basenode_placed_on_a_ros2_keeper_runs_there_and_is_relayed(make_node,
     w.reuse.service("check", type="std_srvs/SetBool")
     w.create()
     pid = w.base.pid
-    assert any("service relay " in line and " -> /robot23/check for " in line for line in machine.lines)
+    machine.wait_line(" -> /robot23/check for ", timeout=10)  # its service relay, on the machine
     from std_srvs.srv import SetBool
 
     answer = wait_for(lambda: _answered(session, "/robot23/check", SetBool), timeout=30, interval=0.5,
@@ -127,7 +127,7 @@ def test_a_basenode_placed_on_a_ros2_keeper_runs_there_and_is_relayed(make_node,
     wait_for(lambda: mouth.write("/robot23/in", String(data="hi")) or out, timeout=30, interval=0.2,
              what="a message through the placed basenode, relayed")
     # relayed on the machine, beside it, by the keeper (its relays' own node): not by this session
-    assert any(" -> /robot23/out for " in line for line in machine.lines), machine.lines[-6:]
+    machine.wait_line(" -> /robot23/out for ", timeout=10)
     relayed = wait_for(lambda: engine_of(w).status().rows and
                        {r.name: r for r in engine_of(w).status().rows}["/robot23/out"], timeout=10, what="its row")
     assert relayed.kind == "relay on testbot2"
