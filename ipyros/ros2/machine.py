@@ -45,6 +45,15 @@ class _Subscription:
         self._node.destroy_subscription(self._sub)
 
 
+def _own_participant(name: str) -> tuple[Any, Any]:
+    """An rclpy context of its own (a DDS participant, an executor thread) and its node ``name``."""
+    from .runtime import ProcessNode
+
+    process = ProcessNode()
+    process.start(name)
+    return process, process.host(f"/{name}", parameters=False)
+
+
 class RclpyKeeper(Lookup):
     """What the keeper asks of ROS 2, with rclpy, on ``node``."""
 
@@ -73,11 +82,7 @@ class RclpyKeeper(Lookup):
 
     def _relays_node(self) -> tuple[Any, Any]:
         if self._relaying is None:
-            from .runtime import ProcessNode
-
-            process = ProcessNode()
-            process.start(self._relays_name)
-            self._relaying = process, process.host(f"/{self._relays_name}", parameters=False)
+            self._relaying = _own_participant(self._relays_name)
         return self._relaying
 
     def service_relay(self, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
@@ -133,12 +138,7 @@ class RclpyKeeper(Lookup):
         made as the first guard was placed, it was once in a dozen tries not matched with the session for many
         seconds."""
         if self._beating is None:
-            from .runtime import ProcessNode
-
-            process = ProcessNode()
-            name = f"{self._node.get_name()}_beats"
-            process.start(name)
-            self._beating = process, process.host(f"/{name}", parameters=False)
+            self._beating = _own_participant(f"{self._node.get_name()}_beats")
         return self._beating[1]
 
     def text(self, data: str) -> Any:

@@ -163,6 +163,7 @@ def test_a_command_the_keepers_gate_cannot_check_goes_out_as_the_stop_message():
     guard._out = SimpleNamespace(write=sent.append)
     guard.command({"linear": 9.0})
     assert sent == [{"linear": 0.0}]
+    assert guard.check({"linear": 9.0}).send == {"linear": 0.0}, "what a relay in the keeper passes its messages through"
 
 
 @pytest.mark.parametrize("ros, argv, why", [

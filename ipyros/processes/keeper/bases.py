@@ -10,7 +10,7 @@ from ...core import names
 from ...core.errors import IpyrosError
 from ...core.model import BaseModel
 from ..basenode import BaseProcess, exit_reason, log_dir
-from .lease import Lease, Refused, beat_topics
+from .lease import Lease, Refused, beat_topics, checked_grace
 from .ros import REPORT, Keeping, Reporter
 
 __all__ = ["KeptBase"]
@@ -34,9 +34,7 @@ class KeptBase:
             argv = keeper.ros.basenode_command(base)
         except IpyrosError as error:
             raise Refused(str(error)) from None
-        grace = spec.get("grace", 30.0)
-        if grace is not None and (not isinstance(grace, (int, float)) or isinstance(grace, bool) or grace <= 0):
-            raise Refused(f"basenode {self.what}: grace={grace!r}: give the seconds (> 0), or None to keep it")
+        grace = checked_grace(spec.get("grace", 30.0), f"basenode {self.what}")
         self.lease = Lease(float("inf"), grace, keeper.clock())
         self._last_lines: list[str] = []
         #: Its exit nobody asked for was read (its last lines with it): reported as ended from then on, not at the

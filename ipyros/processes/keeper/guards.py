@@ -8,7 +8,7 @@ from typing import Any, Optional
 
 from ...core import msgtypes
 from ...core.errors import DeclarationError, IpyrosError
-from ...core.guard import Gate, check_rules, check_stop
+from ...core.guard import Acting, Gate, Verdict, check_rules, check_stop
 from ..basenode import log_dir
 from ..sentinel import Sentinel, Shared
 from .lease import Lease, Refused, beat_topics
@@ -85,14 +85,20 @@ class KeptGuard:
         ran out, or not yet: its first heartbeat may come after its first command), or its stop process lost."""
         return self.shared.estopped or self.lost is not None or self.lease.first
 
+    def check(self, msg: Any) -> Verdict:
+        """The gate's verdict on ``msg`` (a session's command, a relay's message); one the gate fails on is the
+        stop message in its place: when in doubt, stop (neither dropped, leaving the last command in force, nor sent
+        unchecked). What a relay in the keeper passes its messages through (see ``Keeper.gate_relays``)."""
+        try:
+            return self.gate.check(msg)
+        except Exception as error:  # noqa: BLE001 - a bad message never ends the keeper
+            self._log(f"guard {self.topic}: a message could not be checked ({error}): the stop message goes in its "
+                      "place")
+            return Verdict(self.stop_message(), Acting.ESTOPPED)
+
     def command(self, msg: Any) -> None:
         """A message from the session: through the gate, onto the robot's topic."""
-        try:
-            send = self.gate.check(msg).send
-        except Exception as error:  # noqa: BLE001 - a bad message never ends the keeper; when in doubt, stop
-            self._log(f"guard {self.topic}: a message from the session could not be checked ({error}): the stop "
-                      "message goes in its place")
-            send = self.stop_message()
+        send = self.check(msg).send
         if send is not None:
             try:
                 self._out.write(send)

@@ -25,7 +25,7 @@ from typing import Any, Optional
 from ...core import names
 from ...core.errors import IpyrosError
 
-__all__ = ["BEAT_LINES", "Lease", "MachineError", "Refused", "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "namespace", "token_path"]
+__all__ = ["checked_grace", "BEAT_LINES", "Lease", "MachineError", "Refused", "Token", "Verifier", "beat_text", "beat_topics", "check_machine_name", "namespace", "token_path"]
 
 #: A machine's name: a ROS name's word (it is part of the keeper's topics' names).
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -170,6 +170,13 @@ class Verifier:
             if n <= last:
                 raise Refused(f"replayed request (counter {n}, already at {last})")
             self._last[sender] = n
+
+
+def checked_grace(grace: Any, what: str) -> Optional[float]:
+    """A placed thing's grace as a request gives it: seconds (> 0), or None to keep it; else refused in one line."""
+    if grace is not None and (not isinstance(grace, (int, float)) or isinstance(grace, bool) or grace <= 0):
+        raise Refused(f"{what}: grace={grace!r}: give the seconds (> 0), or None to keep it")
+    return None if grace is None else float(grace)
 
 
 @dataclass

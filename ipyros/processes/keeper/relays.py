@@ -12,7 +12,7 @@ from ...core import msgtypes, names
 from ...core.errors import IpyrosError, first_line
 from ..basenode import log_dir
 from ..relayhost import RelayHost, Relaying
-from .lease import Lease, Refused, beat_topics
+from .lease import Lease, Refused, beat_topics, checked_grace
 from .ros import REPORT, Keeping, Reporter, child_env
 
 __all__ = ["KeptRelay", "KeptRelays"]
@@ -41,8 +41,7 @@ class KeptRelays:
     (None: they are left running, as its basenode is)."""
 
     def __init__(self, keeper: Keeping, owner: str, lid: str, grace: Any) -> None:
-        if grace is not None and (not isinstance(grace, (int, float)) or isinstance(grace, bool) or grace <= 0):
-            raise Refused(f"relays: grace={grace!r}: give the seconds (> 0), or None to keep them")
+        grace = checked_grace(grace, "relays")
         self.owner, self.id, self._keeper = owner, lid, keeper
         self.lease = Lease(float("inf"), grace, keeper.clock())
         self.relays: dict[str, KeptRelay] = {}
@@ -101,8 +100,10 @@ class KeptRelays:
         elif self._host is not None and self._host.ended is None:
             try:
                 self._host.ask("remove", rid=kept.id)
-            except IpyrosError as error:
-                self._keeper.log(f"{kept.what} of {self.owner}: {error}")
+            except IpyrosError as error:  # it may relay on, onto a topic a guard now stands on or none should: when
+                # in doubt, its process ends (all its relays with it; the relays' report says so to the session)
+                self._keeper.log(f"{kept.what} of {self.owner}: {error}; their process is ended")
+                self._host.close()
 
     def remove(self, rid: str) -> Optional[KeptRelay]:
         kept = self.relays.pop(rid, None)
@@ -111,8 +112,9 @@ class KeptRelays:
         return kept
 
     def set_gate(self, topic: str, gate: Any) -> None:
-        """The guard on ``topic`` here changed: each relay onto it passes its gate from now on (moved into the keeper,
-        closed first: nothing passes unchecked meanwhile), or none (moved back to the relays' process)."""
+        """The guard on ``topic`` here changed: each relay onto it passes its check from now on (``gate``: the guard,
+        :meth:`KeptGuard.check`; moved into the keeper, closed first: nothing passes unchecked meanwhile), or none
+        (moved back to the relays' process)."""
         for kept in list(self.relays.values()):
             if kept.target != topic or kept.kind != "topic":
                 continue

@@ -129,12 +129,16 @@ class Keeper:
         guard.report(self.clock(), every=0.0)
         return {"id": gid}
 
-    def _guard_of(self, body: dict[str, Any]) -> KeptGuard:
+    def _owned(self, table: dict[str, Any], body: dict[str, Any], what: str) -> Any:
+        """The thing ``body`` names in ``table`` (its guards, basenodes, relays), if the asking session placed it."""
         with self._lock:
-            guard = self.guards.get(str(body.get("id")))
-        if guard is None or guard.owner != body["from"]:
-            raise Refused(f"no guard {body.get('id')} of this session here")
-        return guard
+            found = table.get(str(body.get("id")))
+        if found is None or found.owner != body["from"]:
+            raise Refused(f"no {what} {body.get('id')} of this session here")
+        return found
+
+    def _guard_of(self, body: dict[str, Any]) -> KeptGuard:
+        return self._owned(self.guards, body, "guard")
 
     def _estop(self, body: dict[str, Any]) -> dict[str, Any]:
         guard = self._guard_of(body)
@@ -169,11 +173,7 @@ class Keeper:
         return {"id": bid, "pid": base.process.pid}
 
     def _base_of(self, body: dict[str, Any]) -> KeptBase:
-        with self._lock:
-            base = self.bases.get(str(body.get("id")))
-        if base is None or base.owner != body["from"]:
-            raise Refused(f"no basenode {body.get('id')} of this session here")
-        return base
+        return self._owned(self.bases, body, "basenode")
 
     def _stop_base(self, body: dict[str, Any]) -> dict[str, Any]:
         base = self._base_of(body)
@@ -212,7 +212,7 @@ class Keeper:
         with self._lock:
             groups = list(self.relays.values())
         for group in groups:
-            group.set_gate(topic, guard.gate if guard is not None else None)
+            group.set_gate(topic, guard)
 
     def _unguarded(self, topic: str) -> None:
         """A guard ended past its session's grace: what its relays sent through it would reach the robot unchecked
@@ -240,7 +240,7 @@ class Keeper:
         spec = dict(body.get("relay") or {})
         guard = self.guard_on(str(spec.get("target")))  # its gate from the relay's first message on
         try:
-            what = group.add(rid, spec, guard.gate if guard is not None else None)
+            what = group.add(rid, spec, guard)
         except Refused:
             if not group.relays:
                 with self._lock:
@@ -254,11 +254,7 @@ class Keeper:
         return {"rid": rid}
 
     def _relays_of(self, body: dict[str, Any]) -> KeptRelays:
-        with self._lock:
-            group = self.relays.get(str(body.get("id")))
-        if group is None or group.owner != body["from"]:
-            raise Refused(f"no relays {body.get('id')} of this session here")
-        return group
+        return self._owned(self.relays, body, "relays")
 
     def _unrelay(self, body: dict[str, Any]) -> dict[str, Any]:
         group = self._relays_of(body)
