@@ -33,7 +33,7 @@ ros1_setup() {
     catkin g++ cmake libroscpp-dev libtopic-tools-dev libstd-msgs-dev libgeometry-msgs-dev libstd-srvs-dev
     libsensor-msgs-dev  # the relay bench's path (h) relays images too
     chromium  # the notebooks checked in a real browser (tests/ros1/test_browser.py, playwright drives it)
-    nftables iproute2  # a lossy link to a robot in its own network namespace (tests/ros1/test_machine_link.py)
+    nftables iproute2  # a lossy link to a robot in its own network namespace (tests/both/test_machine_link.py)
   )
 
   local missing=() p stamp

@@ -18,7 +18,7 @@ Figures per kind (TwistStamped, 1 MiB Image): one-way latency p50/p99 of a paced
 wall clock in the message, the subscriber's at arrival: one machine, one clock) and flat-out messages/s,
 the placed relay's beside the session's as its anchor, over several runs each (five for small messages,
 three for images; latency: the messages of all of them; flat out: their median), the two routes taking
-turns, each process pinned alike (the relay on one core, publisher and subscriber on the other). The link
+turns, each process pinned alike (ipyros's on one core, the bench's on the other). The link
 is shaped to 100 Mbit/s each way (tc's token bucket; this kernel has no netem, so no fixed delay is added:
 a small message crosses it at once, a camera's images queue as on Wi-Fi). Target (issue 48): the placed relay does not lose
 (p50 and p99 at most the session's, flat out at least the session's).
@@ -81,9 +81,10 @@ def shape(link: Link, rate: str) -> None:
 
 
 def _pin(pid: int, cpu: int) -> None:
-    """Every thread of process ``pid`` onto ``cpu`` (2 cores: the relay on one, publisher and subscriber on the
-    other, whichever route; left to the scheduler, where each lands differs run to run by more than the routes
-    differ)."""
+    """Every thread of process ``pid`` onto ``cpu`` (2 cores: ipyros's processes on one, whichever route and
+    machine: the relay's, the keeper, the sessions; the bench's publisher, subscriber and motors on the other.
+    Left to the scheduler, where each lands differs run to run by more than the routes differ; and an unpinned
+    keeper waking beside the pinned relay host, or beside the subscriber, made a tail of its own)."""
     if (os.cpu_count() or 1) < 2:
         return
     for task in Path(f"/proc/{pid}/task").iterdir():
@@ -128,9 +129,10 @@ def run_once(both: Placed, route: str, load: Load, workdir: Path) -> Run:
         wait_until(lambda: _connected(master, names[0], out), 30, "the subscriber to connect to the relay")
         pub = start("pub", [*in_ns, sys.executable, str(NODES / "bench_pub.py"), source, load.kind,
                             str(load.rate_hz), str(load.rate_count), str(load.flat_count)], both.on_robot)
-        _pin(_relay_pid(both, route, relay), 1)
-        _pin(sub.proc.pid, 0)
-        _pin(pub.proc.pid, 0)
+        for pid in (_relay_pid(both, route, relay), relay.proc.pid, both.keeper.proc.pid, both.session.proc.pid):
+            _pin(pid, 1)  # ipyros's processes, on either machine, on one core
+        for pid in (sub.proc.pid, pub.proc.pid, both.motors.proc.pid):
+            _pin(pid, 0)  # the bench's own, standing for the robot's other nodes, on the other
         pub.expect("rate-done", load.rate_count / load.rate_hz * 3 + 60)
         seen.rate_received = wait_drained(sub, load.rate_count, quiet=1.0, timeout=30)
         pub.send("go")
@@ -188,6 +190,7 @@ def main(argv: Optional[list[str]] = None) -> int:
     stop_cleanly_on_sigterm()
     parser = argparse.ArgumentParser(prog="python -m bench.machine_relay", description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="1 s paced streams, smaller bursts")
+    parser.add_argument("--kind", choices=("twist", "image"), help="only this kind of message")
     args, _ = parser.parse_known_args(argv)
     if ros_name() != "ROS 1":
         print("bench.machine_relay: ROS 1 only for now (its publisher and subscriber are rospy's): skipped")
@@ -196,6 +199,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         print("bench.machine_relay: needs root (network namespaces): skipped")
         return 0
     load_list = loads(1.0, 5000, 50) if args.quick else loads(3.0, 20000, 100)
+    load_list = [load for load in load_list if args.kind in (None, load.kind)]
     repeats = 1 if args.quick else 3
     began = time.monotonic()
     with tempfile.TemporaryDirectory(prefix="ipyros-bench-mrelay-") as tmp:

@@ -1,6 +1,6 @@
 """A guard placed on another machine's keeper (``nd.guard(..., machine=NAME)``), on ROS 1, with real processes: the
 keeper, a plain subscriber standing for the motors, sessions in this process and in processes of their own (killed
-as a crash kills them). The link itself cut between two network namespaces is tests/ros1/test_machine_link.py's."""
+as a crash kills them). The link itself cut between two network namespaces is tests/both/test_machine_link.py's."""
 
 from __future__ import annotations
 
@@ -490,3 +490,38 @@ def test_the_relays_process_killed_on_the_machine_is_told_at_the_prompt(make_nod
              what="the keeper's word")
     wait_for(lambda: any("the relays of /placedbase7 on machine testbot ended (killed by signal 9)" in n
                          for n in notices), timeout=10, what="the session's word")
+
+
+def test_a_placed_basenodes_action_is_relayed_on_its_machine_then_intercepted_in_the_session(keeper, make_node,
+                                                                                             counting, session):
+    """The action relay of a placed basenode runs on its machine (goals, feedback, result and a cancel pass through
+    it); a handler declared on the running node takes the action over in the session and forwards to the basenode
+    there; removed, the keeper relays it again."""
+    machine = keeper("testbot", "ipyros_test_nodes")
+    nd = make_node("placedaction")
+    nd.baseNode("count_server").basePackage("ipyros_test_nodes").machine("testbot")
+    nd.reuse.action("count", type=counting.type)
+    nd.create()
+    machine.wait_line("action relay /placedaction/base/count -> /count for ", timeout=20)
+    assert counting.plain_send("/count", 4) == ("succeeded", 4, [1, 2, 3, 4])
+    state, reached, _ = counting.plain_send("/count", 1000, cancel_after=2)
+    assert state == "cancelled" and reached < 1000
+    wait_for(lambda: "cancelled 1000" in nd.base.tail(), timeout=20, what="the cancel to reach the basenode there")
+    goals = lambda: set(session.backend.graph_snapshot().subscribers.get("/count/goal", ()))  # noqa: E731
+    (host,) = goals()
+    assert host.startswith("/ipyros_machine_testbot_relays_"), "the goals go to the relays' process there"
+
+    def clamp(goal, action):  # the goal changed on its way: the basenode on the robot counts to 3 at most
+        return action.forward(counting.goal(min(counting.n_of(goal), 3)))
+
+    nd.new.action("count", counting.type, clamp)
+    wait_for(lambda: any("action relay /placedaction/base/count -> /count of " in line
+                         and "removed" in line for line in machine.lines), timeout=20, what="the keeper's relay to go")
+    assert counting.plain_send("/count", 10) == ("succeeded", 3, [1, 2, 3])
+    assert "goal 3" in nd.base.tail()
+    assert goals() and not any(n.startswith("/ipyros_machine_") for n in goals()), "to the session's handler now"
+    nd.remove(action="count")
+    nd.reuse.action("count", type=counting.type)  # given back to the basenode, relayed on its machine again
+    assert counting.plain_send("/count", 5)[:2] == ("succeeded", 5)
+    assert sum("action relay /placedaction/base/count -> /count for " in line for line in machine.lines) == 2
+    nd.shutdown()

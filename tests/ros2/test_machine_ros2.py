@@ -135,3 +135,35 @@ def test_a_basenode_placed_on_a_ros2_keeper_runs_there_and_is_relayed(make_node,
              what="the keeper's count of what it relayed")
     w.shutdown()
     wait_for(lambda: not pid_alive(pid), timeout=20, what="the node's shutdown to stop it there")
+
+
+def test_a_placed_basenodes_action_is_relayed_on_a_ros2_keeper_then_intercepted_in_the_session(
+        keeper, make_node, counting, tmp_path, monkeypatch):
+    """ROS 2's action relay of a placed basenode runs on its machine (goal, feedback, result, cancel); a handler
+    declared on the running node takes the action over in the session; removed, the keeper relays it again."""
+    use_ament_echo(tmp_path, monkeypatch, sys.executable)
+    machine = keeper("echo_pkg")
+    w = make_node("placed24")
+    w.baseNode("count_server", namespace="robot24").basePackage("echo_pkg").machine("testbot2")
+    w.reuse.action("count", type=counting.type)
+    w.create()
+    relayed = "action relay /robot24/placed24/base/robot24/count -> /robot24/count "
+    machine.wait_line(relayed + "for ", timeout=20)
+    assert counting.plain_send("/robot24/count", 4) == ("succeeded", 4, [1, 2, 3, 4])
+    state, reached, _ = counting.plain_send("/robot24/count", 1000, cancel_after=2)
+    assert state == "cancelled" and reached < 1000
+    wait_for(lambda: "cancelled 1000" in w.base.tail(), timeout=20, what="the cancel to reach the basenode there")
+
+    def clamp(goal, action):  # the goal changed on its way: the basenode on the robot counts to 3 at most
+        return action.forward(counting.goal(min(counting.n_of(goal), 3)))
+
+    w.new.action("count", counting.type, clamp)
+    wait_for(lambda: any(relayed + "of " in line and "removed" in line for line in machine.lines), timeout=20,
+             what="the keeper's relay to go")
+    assert counting.plain_send("/robot24/count", 10) == ("succeeded", 3, [1, 2, 3])
+    assert "goal 3" in w.base.tail()
+    w.remove(action="count")
+    w.reuse.action("count", type=counting.type)  # given back to the basenode, relayed on its machine again
+    wait_for(lambda: sum(relayed + "for " in line for line in machine.lines) == 2, timeout=20, what="relayed again")
+    assert counting.plain_send("/robot24/count", 5)[:2] == ("succeeded", 5)
+    w.shutdown()

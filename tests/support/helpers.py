@@ -18,19 +18,22 @@ def use_test_nodes(monkeypatch) -> None:
 
 #: The ROS 2 test echo node ("in" → prefix + data → "out"), installed as a package by :func:`use_ament_echo`.
 ROS2_ECHO = Path(__file__).resolve().parents[1] / "ros2" / "peers" / "echo_node.py"
+ROS2_COUNT = Path(__file__).resolve().parents[1] / "both" / "peers" / "count_server_ros2.py"
 
 
 def use_ament_echo(folder: Path, monkeypatch, python: str) -> Path:
-    """Install package ``echo_pkg`` (executable ``echo_node``, run by ``python``) in an ament index of its own under
-    ``folder``, as colcon installs one, and put it on ``AMENT_PREFIX_PATH`` for this test; the prefix."""
+    """Install package ``echo_pkg`` (executables ``echo_node`` and the action tests' ``count_server``, run by
+    ``python``) in an ament index of its own under ``folder``, as colcon installs one, and put it on
+    ``AMENT_PREFIX_PATH`` for this test; the prefix."""
     prefix = folder / "install"
     index = prefix / "share" / "ament_index" / "resource_index" / "packages"
     index.mkdir(parents=True)
     (index / "echo_pkg").touch()
     (prefix / "lib" / "echo_pkg").mkdir(parents=True)
-    node = prefix / "lib" / "echo_pkg" / "echo_node"
-    node.write_text(f"#!{python}\n" + ROS2_ECHO.read_text())
-    node.chmod(0o755)
+    for name, source in (("echo_node", ROS2_ECHO), ("count_server", ROS2_COUNT)):
+        node = prefix / "lib" / "echo_pkg" / name
+        node.write_text(f"#!{python}\n" + source.read_text())
+        node.chmod(0o755)
     monkeypatch.setenv("AMENT_PREFIX_PATH", os.pathsep.join([str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
     return prefix
 
