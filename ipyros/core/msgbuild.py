@@ -190,9 +190,9 @@ def _copier(cls: type) -> Any:
 
     names, types = field_types(cls)
     slots = list(getattr(cls, "__slots__", ()))
-    scope: dict[str, Any] = {"new": cls.__new__, "cls": cls, "IMM": _IMMUTABLE, "slow": _copy_value,
-                             "SEQ": (list, tuple, bytes, array.array), "stamp": _copy_stamp, "COP": _COPIERS,
-                             "message": copy_message, "MISSING": _MISSING}
+    scope: dict[str, Any] = {"new": cls.__new__, "cls": cls, "IMM": frozenset(_IMMUTABLE), "slow": _copy_value,
+                             "SEQ": frozenset((list, tuple, bytes, array.array)), "stamp": _copy_stamp,
+                             "COP": _COPIERS, "message": copy_message, "MISSING": _MISSING}  # (a set: one hash)
     lines = ["def copy(m):", "    n = new(cls)"]
     fielded = set()
     for name, kind in zip(names, types):
@@ -222,6 +222,67 @@ def _copier(cls: type) -> Any:
     exec("\n".join(lines), scope)  # noqa: S102 - our own code, from the class's field names
     found = _COPIERS[cls] = scope["copy"]
     return found
+
+
+def same_message(a: Any, b: Any) -> bool:
+    """Whether two messages are equal, as ``a == b`` says, faster: genpy's ``__eq__`` walks each nested message's
+    slots through ``getattr`` (about 1.2 µs for a ``TwistStamped``, and a try over a bag compares what both handlers
+    wrote for every message). Each class gets a comparer of its own, generated once as straight-line code from its
+    fields; an array, a stamp, or a value of another class than its field declares is compared by ``==``."""
+    comparer = _COMPARERS.get(type(a))
+    if comparer is None:
+        if not _is_message(a):
+            return bool(a == b)
+        comparer = _comparer(type(a))
+    return comparer(a, b)
+
+
+_COMPARERS: dict[type, Any] = {}
+
+
+def _comparer(cls: type) -> Any:
+    """``same(a, b)`` for an ``a`` of ``cls`` (see :func:`same_message`), made once."""
+    found = _COMPARERS.get(cls)
+    if found is not None:
+        return found
+    names, types = field_types(cls)
+    slots = set(getattr(cls, "__slots__", ()))
+    terms = []
+    for name, kind in zip(names, types):
+        slot = name if name in slots else f"_{name}" if f"_{name}" in slots else None
+        if slot is None or not slot.isidentifier():
+            return _general_comparer(cls)  # a field that is no slot: the class's own ==
+        if _ARRAY.match(kind) or kind in ("time", "duration") or kind in _PRIMITIVE_TYPES:
+            terms.append(f"same(a.{slot}, b.{slot})" if _ARRAY.match(kind) else f"a.{slot} == b.{slot}")
+        else:  # a nested message: its own comparer, as the value's class is at run time
+            terms.append(f"(COMP.get(type(a.{slot})) or message)(a.{slot}, b.{slot})")
+    lines = ["def same(a, b):", "    if type(b) is not cls:", "        return bool(a == b)",
+             f"    return bool({' and '.join(terms) or 'True'})"]
+    scope: dict[str, Any] = {"cls": cls, "COMP": _COMPARERS, "message": same_message, "same": _same_value}
+    exec("\n".join(lines), scope)  # noqa: S102 - our own code, from the class's field names
+    found = _COMPARERS[cls] = scope["same"]
+    return found
+
+
+def _general_comparer(cls: type) -> Any:
+    def same(a: Any, b: Any) -> bool:
+        return bool(a == b)
+
+    _COMPARERS[cls] = same
+    return same
+
+
+def _same_value(a: Any, b: Any) -> bool:
+    """``a == b`` for an array's values of either ROS (a numpy array's ``==`` is an array of its own)."""
+    if type(a) in (list, tuple, bytes) and type(b) in (list, tuple, bytes):
+        return bool(a == b) if type(a) is type(b) else list(a) == list(b)
+    equal = a == b
+    if isinstance(equal, bool):
+        return equal
+    try:
+        return len(a) == len(b) and bool(equal.all())
+    except (AttributeError, TypeError):
+        return bool(equal)
 
 
 _STAMPS: dict[type, bool] = {}  # type → whether it is a ROS 1 time or duration (genpy's)

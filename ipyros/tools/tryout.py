@@ -36,7 +36,7 @@ from typing import Any, Callable, Iterator, Optional, Sequence
 
 from ..core import msgpath, msgtypes, plan as planning, streams
 from ..core.errors import IpyrosError, NotDeclaredError
-from ..core.msgbuild import copy_message, flow_yaml
+from ..core.msgbuild import copy_message, flow_yaml, same_message
 from ..core.slots import call_arity
 from ..core.records import short_repr
 from ..core.tables import Column, TextTable
@@ -46,7 +46,9 @@ from ..node.writing import writes_recorded
 from .record import bag_module
 
 
-@dataclass(frozen=True, slots=True)
+# Write and Outcome are not frozen: a frozen dataclass's __init__ sets each field through object.__setattr__, 3.5x
+# the time of a plain one, and a try over a bag makes four of them a message (nothing changes them once made).
+@dataclass(slots=True)
 class Write:
     """One ``node.write(topic, message)`` a handler made during the try."""
 
@@ -61,7 +63,7 @@ class Write:
         return f"write {self.topic}: {one_line(self.message)}"
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Outcome:
     """What one handler did with one message."""
 
@@ -80,8 +82,10 @@ class Outcome:
     def same_as(self, other: "Outcome") -> bool:
         if self.printed != other.printed or self.error != other.error or len(self.writes) != len(other.writes):
             return False
-        return all(a.topic == b.topic and a.problem == b.problem and a.message == b.message
-                   for a, b in zip(self.writes, other.writes))
+        for a, b in zip(self.writes, other.writes):  # (a loop: a generator for all() costs as much as a compare)
+            if a.topic != b.topic or a.problem != b.problem or not same_message(a.message, b.message):
+                return False
+        return True
 
 
 def silent_sides(pairs: Sequence[Any]) -> list[str]:
@@ -255,25 +259,30 @@ def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, 
     began = time.perf_counter()
     stopped = False
     messages = bag_module().bag_messages(path, {resolved, *handlers})
+    live_out, candidate_out = outputs["live"], outputs["candidate"]
     with _intercepted() as run, contextlib.closing(messages), _young_collections_only() as tick:
         try:  # (the bag's reader is closed at once, even on Ctrl-C)
             for name, stamp, msg in messages:
                 tick()
-                start = stamp if start is None else start
-                at = (stamp - start) / 1e9
+                if start is None:
+                    start = stamp
                 if name != resolved:
                     run(handlers[name], msg)
                     others += 1
                     continue
-                sides = {"live": run(live, msg), "candidate": run(candidate, msg)}
+                done, tried = run(live, msg), run(candidate, msg)
                 total += 1  # counted once both sides ran: a message Ctrl-C cut in half is not half-counted
-                for side, outcome in sides.items():
-                    for write in outcome.writes:
-                        outputs[side].setdefault(write.topic, []).append((at, write.message))
-                if not sides["live"].same_as(sides["candidate"]):
+                at = (stamp - start) / 1e9
+                for out, made in ((live_out, done.writes), (candidate_out, tried.writes)):
+                    for write in made:
+                        series = out.get(write.topic)
+                        if series is None:
+                            series = out[write.topic] = []
+                        series.append((at, write.message))
+                if not done.same_as(tried):
                     differing += 1
                     if len(first) < shown:
-                        first.append(Difference(at, msg, sides["live"], sides["candidate"]))
+                        first.append(Difference(at, msg, done, tried))
         except KeyboardInterrupt:
             stopped = True  # what ran until now is the answer
     if stopped and total == 0:
@@ -314,21 +323,6 @@ def _young_collections_only() -> Iterator[Callable[[], None]]:
 # -- capturing one thread's prints and writes -----------------------------------------------
 
 
-class _Recorder:
-    """The writes of one handler call; ``problems`` is the try's (a write's problem depends only on the node, the
-    topic and the message's type, which a try does not change: checked once, not for each of a bag's messages)."""
-
-    def __init__(self, problems: dict[tuple[int, str, type], Optional[str]]) -> None:
-        self.writes: list[Write] = []
-        self.problems = problems
-
-    def record(self, node: NodeEngine, topic: str, msg: Any) -> None:
-        key = (id(node), topic, type(msg))
-        if key not in self.problems:
-            self.problems[key] = _write_problem(node, topic, msg)
-        self.writes.append(Write(node.name, topic, copy_message(msg), self.problems[key]))
-
-
 def _write_problem(node: NodeEngine, topic: str, msg: Any) -> Optional[str]:
     """What ``node.write(topic, msg)`` would raise, in words; None if it would publish."""
     try:
@@ -349,15 +343,21 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
     alone: its prints go to a sink of this thread (:mod:`ipyros.core.streams`), its writes to a recorder of this
     thread's context (:func:`~ipyros.node.writing.writes_recorded`); other threads print and publish as usual."""
     buffer = io.StringIO()  # this thread's prints, for the whole try: read and emptied after each call
-    recorder: list[_Recorder] = []  # the recorder of the call in progress, if any
-    problems: dict[tuple[int, str, type], Optional[str]] = {}
+    writes: list[Write] = []  # the writes of the calls in progress, the innermost call's last
+    # A write's problem depends only on the node, the topic and the message's type, which a try does not change:
+    # checked once (with the node's name), not for each of a bag's messages.
+    checked: dict[tuple[int, str, type], tuple[str, Optional[str]]] = {}
     clock = time.perf_counter
 
     def record(node: NodeEngine, topic: str, msg: Any) -> None:
-        recorder[-1].record(node, topic, msg)
+        key = (id(node), topic, type(msg))
+        found = checked.get(key)
+        if found is None:
+            found = checked[key] = (node.name, _write_problem(node, topic, msg))
+        writes.append(Write(found[0], topic, copy_message(msg), found[1]))
 
     def run(handler: Callable[..., Any], msg: Any) -> Outcome:
-        recorder.append(_Recorder(problems))
+        mark = len(writes)
         error = None
         start = clock()
         try:
@@ -367,13 +367,14 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
             error = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         finally:
             elapsed = (clock() - start) * 1e3
-            writes = tuple(recorder.pop().writes)
+            made = tuple(writes[mark:])
+            del writes[mark:]
         printed = ""
         if buffer.tell():
             printed = buffer.getvalue()
             buffer.seek(0)
             buffer.truncate()
-        return Outcome(printed, writes, error, elapsed)
+        return Outcome(printed, made, error, elapsed)
 
     streams.route()  # once (the extension does it as it loads): a no-op after
     with writes_recorded(record), streams.into(buffer):

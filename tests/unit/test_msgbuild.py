@@ -162,3 +162,28 @@ def test_a_message_copy_shares_nothing_mutable_and_copies_what_its_fields_do_not
     assert copied.count == [1, [2]] and copied.count[1] is not odd.count[1]
     copied.fixed[0], copied.names[0], copied.points[1].position.x = 7.0, "b", 7.0
     assert (odd.fixed[0], odd.names[0], odd.points[1].position.x) == (1.0, "a", 0.0)
+
+
+def test_same_message_says_what_equality_says_field_by_field_on_both_shapes():
+    """The comparer made for a class (straight-line over its fields): any field that differs, nested or in an array,
+    makes two messages differ; NaN is no more equal to itself than == says; another class is compared by ==."""
+    from unit2_msgs.msg import Pose
+    from unit_msgs.msg import Sample, Vector3
+
+    from ipyros.core.msgbuild import copy_message, same_message
+
+    sample = Sample(label="s", gains=[1.0, 2.0], fixed=[1.0, 2.0, 3.0], names=["a"], points=[Vector3(x=1.0)])
+    assert same_message(sample, copy_message(sample))
+    for change in (lambda m: setattr(m, "label", "t"), lambda m: m.gains.__setitem__(1, 2.5),
+                   lambda m: m.points[0].__setattr__("x", 1.5), lambda m: m.names.append("b"),
+                   lambda m: setattr(m, "count", 1)):
+        other = copy_message(sample)
+        change(other)
+        assert not same_message(sample, other) and not same_message(other, sample) and (other == sample) is False
+    pose, other = Pose(), Pose()
+    assert same_message(pose, other)
+    other.position.x = float("nan")
+    assert not same_message(other, copy_message(other)), "NaN is not equal to NaN, as == says"
+    assert not same_message(pose, Vector3()) and not same_message(Vector3(), pose)
+    assert same_message(3, 3) and not same_message([1], [2])
+
