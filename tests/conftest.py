@@ -4,8 +4,9 @@ The folders are the layers, each run where it can run:
 
 * ``unit/``: no ROS at all (the model, the plan, names, messages built from data, the
   completion line parser, ...): runs in seconds in a venv without ROS (``bash run.sh unit``);
-  a module's tests are ``unit/test_<module>.py`` (every module of ``ipyros/core/`` has one),
-  messages of both ROS's shapes come from ``unit/msgpkgs/``;
+  a module's tests are ``unit/<layer>/test_<module>.py`` (``unit/core/test_plan.py``; every module of
+  ``ipyros/core/`` has one; ``unit/test_layers.py`` checks the mirror), messages of both ROS's shapes come
+  from ``unit/msgpkgs/``;
 * ``both/``: the DSL's behaviour, one source run on each ROS: in the ROS 1 venv against a
   rosmaster of the run's own, in the ROS 2 venv in a DDS domain of the run's own;
 * ``ros1/`` and ``ros2/``: what exists on one ROS only, or is checked there in its own way.

@@ -2,7 +2,7 @@
 
 ROS 1 here: a venv made from Debian's python sees rospy, as a catkin workspace's venv would. (On ROS 2 from
 PyPI a second venv needs wheels of its own; what ipyros does for it, leaving out its own venv's bootstrap, is
-checked in tests/unit/test_basenode_argv.py.)
+checked in tests/unit/processes/test_basenode.py.)
 """
 
 from __future__ import annotations

@@ -132,3 +132,29 @@ def test_scripts_outside_the_package_import_what_exists(graph):
             elif f"{module}.{name}" not in graph.modules and not defines(source_of(module), name):
                 missing.append(f"{path.relative_to(ROOT)}: {module} has no {name}")
     assert not missing, "\n".join(missing)
+
+
+UNIT = Path(__file__).resolve().parent
+#: What the unit layer checks of the project as a whole, not of one module: beside this file, not in a layer's folder.
+PROJECT_WIDE = {"test_bench_figures.py", "test_layers.py", "test_readme.py", "test_types.py"}
+
+
+def test_the_unit_tests_mirror_the_package():
+    """``tests/unit/<layer>/test_<module>.py``: each test file in a layer's folder is named after a module (or a
+    package) of that layer, ``test_<module>_<concern>.py`` where two layers' modules share a name (pytest needs one
+    basename a file: ``tools/test_graph_cache.py`` beside ``core/test_graph.py``); every module of ``core/`` has
+    one. A newcomer finds a module's tests by its path, and a module's tests by the module's."""
+    misplaced = []
+    for test in sorted(UNIT.glob("*/test_*.py")):
+        layer = ROOT / "ipyros" / test.parent.name
+        stem = test.stem.removeprefix("test_")
+        modules = {p.stem for p in layer.glob("*.py")} | {p.name for p in layer.iterdir() if (p / "__init__.py").exists()}
+        modules |= {f"magics_{p.stem}" for p in (layer / "magics").glob("*.py")}  # ipython/magics/plot.py
+        if not layer.is_dir() or not any(stem == m or stem.startswith(m + "_") for m in modules):
+            misplaced.append(str(test.relative_to(UNIT)))
+    loose = sorted(p.name for p in UNIT.glob("test_*.py") if p.name not in PROJECT_WIDE)
+    untested = sorted(p.stem for p in (ROOT / "ipyros" / "core").glob("*.py")
+                      if p.stem != "__init__" and not (UNIT / "core" / f"test_{p.stem}.py").exists())
+    assert not misplaced, f"named after no module of their layer's folder: {misplaced}"
+    assert not loose, f"test files of one module outside its layer's folder: {loose}"
+    assert not untested, f"modules of core/ with no tests/unit/core/test_<module>.py: {untested}"
