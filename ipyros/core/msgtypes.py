@@ -44,6 +44,14 @@ def short_name(type_name: str) -> str:
     return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else type_name
 
 
+def another_type_line(topic: str, peers: str, theirs: str, declared: str, ros: str) -> str:
+    """What a subscription of ``topic`` as ``declared`` is told of ``peers`` ("a publisher" when unnamed) that
+    publish it as ``theirs``, on either ROS (``ros``: "ROS", "ROS 2"): nothing passes, and what to do."""
+    return (f"{topic}: {peers} publishes {theirs} there, and this node subscribes to it as {declared}: nothing "
+            f"passes between them ({ros} connects no two types); subscribe with msgType={theirs!r}, or publish "
+            f"{declared}")
+
+
 def is_service(cls: type) -> bool:
     """A service class: ROS 1's have ``_request_class``, ROS 2's ``Request``."""
     return hasattr(cls, "_request_class") or (hasattr(cls, "Request") and hasattr(cls, "Response"))

@@ -20,6 +20,7 @@ The players load this file by its path, without ipyros: it needs only the standa
 
 from __future__ import annotations
 
+import argparse
 import math
 import queue
 import sys
@@ -27,7 +28,7 @@ import threading
 import time
 from typing import Any, Callable, Iterator, Optional
 
-__all__ = ["Playback", "parse_state", "play", "player_args", "read_controls"]
+__all__ = ["Playback", "parse_player_args", "parse_state", "play", "player_args", "read_controls"]
 
 #: What a player reads from a bag: ``(topic, stamp in ns, message)`` in recorded order, from a stamp on (None: all).
 Read = Callable[[Optional[int]], Iterator[tuple[str, int, Any]]]
@@ -148,6 +149,19 @@ def player_args(path: Any, rate: float, loop: bool, topics: Optional[list[str]],
     if topics:
         args += ["--topics", *topics]
     return args
+
+
+def parse_player_args(argv: list[str]) -> argparse.Namespace:
+    """What a player (either ROS's) reads of the arguments :func:`player_args` made (ROS's own already removed):
+    ``bag``, ``rate``, ``loop``, ``delay``, ``clock``, ``topics`` (None: every topic)."""
+    parser = argparse.ArgumentParser(prog="bag_player")
+    parser.add_argument("bag")
+    parser.add_argument("--rate", type=float, default=1.0)
+    parser.add_argument("--loop", action="store_true")
+    parser.add_argument("--delay", type=float, default=1.0)
+    parser.add_argument("--clock", action="store_true")
+    parser.add_argument("--topics", nargs="*")
+    return parser.parse_args(argv)
 
 
 def read_controls() -> "queue.Queue[str]":

@@ -13,7 +13,6 @@ which it loads by its path). It needs only rospy and Debian's python3-rosbag (MC
 not ipyros.
 """
 
-import argparse
 import sys
 import threading
 import time
@@ -82,14 +81,7 @@ class McapBag:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="bag_player")
-    parser.add_argument("bag")
-    parser.add_argument("--rate", type=float, default=1.0)
-    parser.add_argument("--loop", action="store_true")
-    parser.add_argument("--delay", type=float, default=1.0)
-    parser.add_argument("--clock", action="store_true")
-    parser.add_argument("--topics", nargs="*")
-    args = parser.parse_args(rospy.myargv(sys.argv)[1:])
+    args = playback.parse_player_args(rospy.myargv(sys.argv)[1:])
     controls = playback.read_controls()
     rospy.init_node("bag_player", disable_signals=True)
     with (McapBag(args.bag) if args.bag.endswith(".mcap") else RosBag(args.bag)) as bag:

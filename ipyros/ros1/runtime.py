@@ -36,6 +36,7 @@ import genpy
 import rospy
 from rospy.msg import serialize_message
 
+from ..core import msgtypes
 from ..core.errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
 from ..core.msgbuild import explain_unsendable
 from ..core.names import is_tool
@@ -481,9 +482,7 @@ class _OtherTypes(logging.Handler):
                 continue
             self.told.add((topic, theirs, complain))
             peers = _publishers_of_type(topic, theirs)
-            complain(f"{topic}: {', '.join(peers) or 'a publisher'} publishes {theirs} there, and this node "
-                     f"subscribes to it as {declared}: nothing passes between them (ROS connects no two types); "
-                     f"subscribe with msgType={theirs!r}, or publish {declared}")
+            complain(msgtypes.another_type_line(topic, ", ".join(peers) or "a publisher", theirs, declared, "ROS"))
 
 
 def _publishers_of_type(topic: str, type_name: str) -> list[str]:

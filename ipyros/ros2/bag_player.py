@@ -12,7 +12,6 @@ looping (:mod:`ipyros.processes.playback`, which it loads by its path). It needs
 rosbags, not ipyros.
 """
 
-import argparse
 import importlib
 import sys
 import threading
@@ -72,14 +71,7 @@ def message_class(msgtype: str) -> type:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="bag_player")
-    parser.add_argument("bag")
-    parser.add_argument("--rate", type=float, default=1.0)
-    parser.add_argument("--loop", action="store_true")
-    parser.add_argument("--delay", type=float, default=1.0)
-    parser.add_argument("--clock", action="store_true")
-    parser.add_argument("--topics", nargs="*")
-    args = parser.parse_args(remove_ros_args(sys.argv)[1:])
+    args = playback.parse_player_args(remove_ros_args(sys.argv)[1:])
     controls = playback.read_controls()
     rclpy.init(args=sys.argv)
     node = rclpy.create_node("bag_player")

@@ -358,9 +358,7 @@ class ProcessNode:
                 if theirs == type_name or peer is None or (topic, peer, theirs, complain) in self._told:
                     continue  # (a peer discovery has not named yet is looked at again next time)
                 self._told.add((topic, peer, theirs, complain))
-                complain(f"{topic}: {peer} publishes {theirs} there, and this node subscribes to it as {type_name}: "
-                         f"nothing passes between them (ROS 2 connects no two types); subscribe with "
-                         f"msgType={theirs!r}, or publish {type_name}")
+                complain(msgtypes.another_type_line(topic, peer, theirs, type_name, "ROS 2"))
 
     def hosts(self) -> list[str]:
         """The full names of the DSL nodes that have a ROS 2 node now."""

@@ -78,3 +78,12 @@ def test_an_action_type_that_is_not_there():
         msgtypes.resolve_action("unit_msgs/Nope")
     with pytest.raises(MessageTypeError, match="no action type given"):
         msgtypes.resolve_action(None)
+
+
+def test_a_peer_of_another_type_is_told_in_the_same_words_on_both_ros():
+    from ipyros.core.msgtypes import another_type_line
+
+    line = another_type_line("/cmd", "/teleop", "geometry_msgs/Twist", "std_msgs/String", "ROS 2")
+    assert line == ("/cmd: /teleop publishes geometry_msgs/Twist there, and this node subscribes to it as "
+                    "std_msgs/String: nothing passes between them (ROS 2 connects no two types); subscribe with "
+                    "msgType='geometry_msgs/Twist', or publish std_msgs/String")

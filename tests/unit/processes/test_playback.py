@@ -106,3 +106,14 @@ def test_play_publishes_in_order_from_where_a_seek_says_and_answers_each_control
     assert lines[0].startswith("bag_player: state 1 at=0.005 paused=0 rate=1 ")
     assert lines[1].startswith("bag_player: state 2 ") and "rate=4" in lines[1]
     assert lines[-1] == "bag_player: played to the end"
+
+
+def test_a_player_reads_back_the_arguments_the_session_gives_it():
+    """One parser for both ROS's players, reading what player_args writes (topics last: every word after it)."""
+    from ipyros.processes.playback import parse_player_args, player_args
+
+    args = parse_player_args(player_args("/bags/run.bag", 2.0, True, ["/scan", "/odom"], 0.5, clock=True))
+    assert (args.bag, args.rate, args.loop, args.delay, args.clock, args.topics) == \
+        ("/bags/run.bag", 2.0, True, 0.5, True, ["/scan", "/odom"])
+    plain = parse_player_args(player_args("run", 1.0, False, None, 1.0))
+    assert (plain.loop, plain.clock, plain.topics) == (False, False, None)
