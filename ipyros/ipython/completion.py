@@ -425,6 +425,21 @@ def is_dsl_node(obj: Any) -> bool:
 
 
 # -- answering ------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Asked:
+    """One TAB's question, as each answer of :data:`_ANSWERS` gets it."""
+
+    want: Want
+    snap: GraphSnapshot
+    user_ns: Mapping[str, Any]
+    limit: Optional[int]
+
+
+def _words(kind: str, words: Callable[[Asked], Sequence[str]]) -> Callable[["Answerer", Asked], list[tuple[str, str]]]:
+    """An answer offering ``words(asked)`` that start with the fragment typed, each described as ``kind``."""
+    return lambda answerer, asked: [(w, kind) for w in words(asked) if w.startswith(asked.want.fragment)]
+
+
 class Answerer:
     """Turns a :class:`Want` into completions, from the graph snapshot, the catalog and user_ns.
 
@@ -452,6 +467,8 @@ class Answerer:
         return out
 
     def _found(self, want: Want, user_ns: Mapping[str, Any], limit: Optional[int] = None) -> list[tuple[str, str]]:
+        """What the kind of word wanted is answered with: a path's fields where the word is a message path, else
+        the answer of :data:`_ANSWERS` for its kind (none for a kind it lacks)."""
         snap, frag, kind = self.graph.snapshot, want.fragment, want.kind
         if kind == FIELD and not frag.startswith("/"):  # %plot TOPIC linear.<TAB>: a field of that topic
             fields = msgpath.complete(self._carried(want.before[0], snap), "." + frag) if want.before else []
@@ -459,64 +476,56 @@ class Answerer:
         if kind in (MSG_PATH, FIELD) and msgpath.is_path(frag):  # %echo /odom.pose.<TAB>: the fields there
             topic, into = msgpath.split_topic(frag)
             return [(topic + text, meta) for text, meta in msgpath.complete(self._carried(topic, snap), into)]
-        if kind in (TOPIC, OWN_TOPIC, MSG_PATH, FIELD):
-            return self._topics(want, snap, limit)
-        if kind == SERVICE:
-            return self._services(want, snap)
-        if kind == TIMER:
-            timers = want.model.timers if want.model else []
-            return sorted((t.name, TIMER) for t in timers if t.name.startswith(frag))
-        if kind == NODE:
-            return [(n, _stale(NODE, snap)) for n, _ in _relative_or_global(snap.nodes, frag, "/")]
-        if kind == DSL_NODE:
-            return sorted((k, type(v).__name__) for k, v in list(user_ns.items())
-                          if k.startswith(frag) and not k.startswith("_") and is_dsl_node(v))
-        if kind == FUNCTION:
-            return sorted((k, FUNCTION) for k, v in list(user_ns.items())
-                          if k.startswith(frag) and not k.startswith("_") and isinstance(v, types.FunctionType))
-        if kind == MSG_TYPE:
-            found = [(t, kind) for t in _types(self.catalog.message_types(), frag)]
-            live = snap.topics.get(_global(want.before[0])) if want.before else None
-            if live and live.startswith(frag):  # %pub TOPIC <TAB>: the type the topic carries, first
-                found = [(live, f"carried by {_global(want.before[0])}")] + [f for f in found if f[0] != live]
-            return found
-        if kind == MSG_TEMPLATE:
-            if frag or len(want.before) < 2:
-                return []  # a template replaces nothing: it is offered before anything is typed
-            try:
-                return [(self.catalog.templates(want.before[1]), f"{want.before[1]}, every field at its default")]
-            except Exception:  # an unknown type: %pub itself will say so, in one line
-                return []
-        if kind == REQUEST_TEMPLATE:
-            if frag or len(want.before) < 2:
-                return []
-            try:
-                return [(self.catalog.request_templates(want.before[1]), f"{want.before[1]} request, at its defaults")]
-            except Exception:  # an unknown type: %call itself will say so, in one line
-                return []
-        if kind == SRV_TYPE:
-            return [(t, kind) for t in _types(self.catalog.service_types(), frag)]
-        if kind == ACTION:
-            return [(a.name, a.type) for a in actions_of(snap) if a.name.startswith(_global(frag) if frag else "/")]
-        if kind in (ACTION_TYPE, GOAL_TEMPLATE):
-            return self._action_words(want, snap)
-        if kind == TRANSITION:  # the standard ones: asking the node which it offers now would wait on it
-            return [(t, kind) for t in ("configure", "cleanup", "activate", "deactivate", "shutdown")
-                    if t.startswith(frag)]
-        if kind == PACKAGE:
-            placed = self._placed(snap)  # a keeper's packages need not be here
-            return [(p, kind if p not in placed or p in self.catalog.packages() else "package on a machine")
-                    for p in names_with_prefix(sorted({*self.catalog.packages(), *placed}), frag)]
-        if kind == DEMO_ROBOT:
-            return [(n, kind) for n in ROBOTS if n.startswith(frag)]
-        if kind == MACHINE:
-            return [(n, kind) for n in machine_names(snap.topics) if n.startswith(frag)]
-        if kind == EXECUTABLE and want.package:
-            here = self._executables_here(want.package)
-            there = self._placed(snap).get(want.package, ())
-            return [(e, kind if e in here else "executable on a machine")
-                    for e in names_with_prefix(sorted({*here, *there}), frag)]
-        return []
+        answer = _ANSWERS.get(kind)
+        return answer(self, Asked(want, snap, user_ns, limit)) if answer is not None else []
+
+    def _timers(self, asked: "Asked") -> list[tuple[str, str]]:
+        timers = asked.want.model.timers if asked.want.model else []
+        return sorted((t.name, TIMER) for t in timers if t.name.startswith(asked.want.fragment))
+
+    def _nodes(self, asked: "Asked") -> list[tuple[str, str]]:
+        nodes = _relative_or_global(asked.snap.nodes, asked.want.fragment, "/")
+        return [(n, _stale(NODE, asked.snap)) for n, _ in nodes]
+
+    def _in_namespace(self, asked: "Asked", fits: Callable[[Any], bool], meta: Callable[[Any], str]
+                      ) -> list[tuple[str, str]]:
+        """The user's variables whose value ``fits`` (a DSL node, a function), by the fragment typed."""
+        frag = asked.want.fragment
+        return sorted((k, meta(v)) for k, v in list(asked.user_ns.items())
+                      if k.startswith(frag) and not k.startswith("_") and fits(v))
+
+    def _message_types(self, asked: "Asked") -> list[tuple[str, str]]:
+        want, frag = asked.want, asked.want.fragment
+        found = [(t, MSG_TYPE) for t in _types(self.catalog.message_types(), frag)]
+        live = asked.snap.topics.get(_global(want.before[0])) if want.before else None
+        if live and live.startswith(frag):  # %pub TOPIC <TAB>: the type the topic carries, first
+            found = [(live, f"carried by {_global(want.before[0])}")] + [f for f in found if f[0] != live]
+        return found
+
+    def _template(self, asked: "Asked", make: Callable[[str], str], what: str) -> list[tuple[str, str]]:
+        """A whole message (or request) at its defaults for the type before it: offered before anything is typed,
+        as it replaces nothing; an unknown type offers none (the magic itself says so, in one line)."""
+        want = asked.want
+        if want.fragment or len(want.before) < 2:
+            return []
+        try:
+            return [(make(want.before[1]), f"{want.before[1]}{what}")]
+        except Exception:  # noqa: BLE001 - an unknown type: the magic says so
+            return []
+
+    def _packages(self, asked: "Asked") -> list[tuple[str, str]]:
+        placed = self._placed(asked.snap)  # a keeper's packages need not be here
+        return [(p, PACKAGE if p not in placed or p in self.catalog.packages() else "package on a machine")
+                for p in names_with_prefix(sorted({*self.catalog.packages(), *placed}), asked.want.fragment)]
+
+    def _executables(self, asked: "Asked") -> list[tuple[str, str]]:
+        package = asked.want.package
+        if not package:
+            return []
+        here = self._executables_here(package)
+        there = self._placed(asked.snap).get(package, ())
+        return [(e, EXECUTABLE if e in here else "executable on a machine")
+                for e in names_with_prefix(sorted({*here, *there}), asked.want.fragment)]
 
     def _placed(self, snap: GraphSnapshot) -> Mapping[str, Sequence[str]]:
         """What the keepers on the graph allow (asked only when one is there)."""
@@ -579,6 +588,30 @@ class Answerer:
         own = _own(model.services if model else [], None, frag, namespace)
         return own + [(text, _stale(SERVICE, snap)) for text, _ in _relative_or_global(tuple(snap.services), frag,
                                                                                         namespace)]
+
+
+#: Per kind of word wanted, how a TAB answers it (the kinds of :mod:`ipyros.ipython.arguments`).
+_ANSWERS: dict[str, Callable[[Answerer, Asked], list[tuple[str, str]]]] = {
+    **dict.fromkeys((TOPIC, OWN_TOPIC, MSG_PATH, FIELD), lambda a, q: a._topics(q.want, q.snap, q.limit)),
+    SERVICE: lambda a, q: a._services(q.want, q.snap),
+    TIMER: Answerer._timers,
+    NODE: Answerer._nodes,
+    DSL_NODE: lambda a, q: a._in_namespace(q, is_dsl_node, lambda v: type(v).__name__),
+    FUNCTION: lambda a, q: a._in_namespace(q, lambda v: isinstance(v, types.FunctionType), lambda v: FUNCTION),
+    MSG_TYPE: Answerer._message_types,
+    MSG_TEMPLATE: lambda a, q: a._template(q, a.catalog.templates, ", every field at its default"),
+    REQUEST_TEMPLATE: lambda a, q: a._template(q, a.catalog.request_templates, " request, at its defaults"),
+    SRV_TYPE: lambda a, q: [(t, SRV_TYPE) for t in _types(a.catalog.service_types(), q.want.fragment)],
+    ACTION: lambda a, q: [(x.name, x.type) for x in actions_of(q.snap)
+                          if x.name.startswith(_global(q.want.fragment) if q.want.fragment else "/")],
+    **dict.fromkeys((ACTION_TYPE, GOAL_TEMPLATE), lambda a, q: a._action_words(q.want, q.snap)),
+    # the standard transitions: asking the node which it offers now would wait on it
+    TRANSITION: _words(TRANSITION, lambda q: ("configure", "cleanup", "activate", "deactivate", "shutdown")),
+    PACKAGE: Answerer._packages,
+    DEMO_ROBOT: _words(DEMO_ROBOT, lambda q: list(ROBOTS)),
+    MACHINE: _words(MACHINE, lambda q: machine_names(q.snap.topics)),
+    EXECUTABLE: Answerer._executables,
+}
 
 
 def _stale(meta: str, snap: GraphSnapshot) -> str:

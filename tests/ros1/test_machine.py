@@ -418,7 +418,7 @@ def test_machines_lists_the_keepers_with_what_they_allow_and_keep_and_tab_comple
            "nd.guard('/listed/cmd_vel', limits={'linear.x': (-0.5, 0.5)}, machine='testbot')\nnd.create()")
     machines = ok(ip, "%machines").result
     (testbot,) = [m for m in machines if m.name == "testbot"]
-    assert testbot.allows == {"ipyros_test_nodes": ["echo_node"]} and testbot.token and testbot.ros == "ROS 1"
+    assert testbot.allows == {"ipyros_test_nodes": ["count_server", "echo_node"]} and testbot.token and testbot.ros == "ROS 1"
     assert testbot.guards == ("/listed/cmd_vel",) and testbot.rtt_ms is not None and 0 < testbot.rtt_ms < 1000
     text = str(machines)
     assert "testbot" in text and "ipyros_test_nodes" in text and "/listed/cmd_vel" in text, text
