@@ -10,11 +10,15 @@ from __future__ import annotations
 
 import bisect
 import fnmatch
+import time
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Iterable, Mapping, Optional, Sequence
+from typing import Callable, Iterable, Mapping, Optional, Sequence, TypeVar
 
-__all__ = ["EMPTY", "ActionEntry", "GraphSnapshot", "actions_of", "frozen", "name_matches", "names_with_prefix"]
+from .errors import BaseNodeError
+
+__all__ = ["EMPTY", "ActionEntry", "GraphSnapshot", "actions_of", "frozen", "name_matches", "names_with_prefix",
+           "settled"]
 
 
 def frozen(mapping: dict) -> Mapping:
@@ -143,3 +147,31 @@ def actions_of(graph: GraphSnapshot) -> list[ActionEntry]:
                 found.append(ActionEntry(name, type_name.removesuffix("ActionGoal"), graph.subscribers.get(topic, ()),
                                          graph.publishers.get(topic, ())))
     return found
+
+
+T = TypeVar("T")
+
+
+def settled(read: Callable[[], Optional[T]], node: str, timeout: float = 10.0, settle: float = 0.5,
+            alive: Optional[Callable[[], bool]] = None, clock: Callable[[], float] = time.monotonic,
+            sleep: Callable[[float], None] = time.sleep) -> Optional[T]:
+    """What ``read()`` gives for ``node`` (its interface in the graph; None while it is not there) once it has
+    given the same for ``settle`` seconds: a node registers its topics one by one as it starts, and what it has
+    registered halfway is not its interface. At ``timeout``, what it gives then (None: the node never showed up:
+    the caller says so in its ROS's words). A :class:`BaseNodeError` at once when ``alive()`` (of the process
+    that should make the node) turns False: a node that crashed at start is not waited for. Both ROS wait so."""
+    deadline = clock() + timeout
+    last: Optional[T] = None
+    stable_since = clock()
+    while True:
+        current = read()
+        now = clock()
+        if current != last:
+            last, stable_since = current, now
+        elif current is not None and now - stable_since >= settle:
+            return current
+        if alive is not None and not alive():
+            raise BaseNodeError(f"node {node} ended before it settled")
+        if now > deadline:
+            return current
+        sleep(0.05)

@@ -22,7 +22,7 @@ import time
 from typing import Callable, Optional
 
 from ..core.errors import BaseNodeError, IpyrosError, MasterError
-from ..core.graph import GraphSnapshot
+from ..core.graph import GraphSnapshot, settled
 from ..core.records import Interface
 from . import introspect
 from .graph import fetch_snapshot
@@ -72,24 +72,15 @@ def wait_for_node(master_uri: str, node_name: str, timeout: float = 10.0, settle
     that should register it) turns False: a node that crashed at start is not waited for.
     """
     node = global_node_name(node_name)
-    deadline = time.monotonic() + timeout
-    last: Optional[Interface] = None
-    stable_since = time.monotonic()
-    while True:
-        snapshot = _snapshot(master_uri)
-        now = time.monotonic()
-        current = _read(snapshot, node) if node in snapshot.nodes else None
-        if current != last:
-            last, stable_since = current, now
-        elif current is not None and now - stable_since >= settle:
-            break
-        if alive is not None and not alive():
-            raise BaseNodeError(f"node {node} ended before it settled")
-        if now > deadline:
-            if current is None:
-                raise _not_registered(master_uri, node, snapshot, timeout)
-            break
-        time.sleep(0.05)
+    seen: list[GraphSnapshot] = []  # the last snapshot read: what a node that never showed up is told of
+
+    def read() -> Optional[Interface]:
+        seen[:] = [_snapshot(master_uri)]
+        return _read(seen[0], node) if node in seen[0].nodes else None
+
+    last = settled(read, node, timeout, settle, alive)
+    if last is None:
+        raise _not_registered(master_uri, node, seen[0], timeout)
     return _with_service_types(master_uri, last)
 
 

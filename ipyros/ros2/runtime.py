@@ -36,6 +36,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 
 from ..core import msgtypes
 from ..core.errors import BaseNodeError, DeclarationError, HandlerError, MessageTypeError, NodeStateError, cut
+from ..core.graph import settled
 from ..core.msgbuild import conform
 from ..core.qos import Qos
 from ..core.records import Interface
@@ -969,26 +970,13 @@ def wait_for_node(graph: Node, fullname: str, timeout: float = 10.0, settle: flo
 
     Raises :class:`BaseNodeError` if it never shows up, at once when ``alive()`` turns False.
     """
-    deadline = time.monotonic() + timeout
-    last, stable_since = None, time.monotonic()
-    while True:
-        current = node_interface(graph, fullname)
-        now = time.monotonic()
-        if current != last:
-            last, stable_since = current, now
-        elif current is not None and now - stable_since >= settle:
-            return current
-        if alive is not None and not alive():
-            raise BaseNodeError(f"node {fullname} ended before it settled")
-        if now > deadline:
-            if current is None:
-                names = ", ".join(sorted(ns.rstrip("/") + "/" + n for n, ns in graph.get_node_names_and_namespaces()
-                                         if not n.startswith("_"))) or "none"
-                raise BaseNodeError(f"node {fullname} did not appear in the ROS 2 graph (ROS_DOMAIN_ID "
-                                    f"{domain_id()}) after {timeout:g}s: start it first "
-                                    f"(nodes seen: {names})")
-            return current
-        time.sleep(0.05)
+    current = settled(lambda: node_interface(graph, fullname), fullname, timeout, settle, alive)
+    if current is None:
+        names = ", ".join(sorted(ns.rstrip("/") + "/" + n for n, ns in graph.get_node_names_and_namespaces()
+                                 if not n.startswith("_"))) or "none"
+        raise BaseNodeError(f"node {fullname} did not appear in the ROS 2 graph (ROS_DOMAIN_ID {domain_id()}) after "
+                            f"{timeout:g}s: start it first (nodes seen: {names})")
+    return current
 
 
 # -- parameters: a node's own, by global name ----------------------------------------------

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from ipyros.core import graph
 
 
@@ -57,3 +59,36 @@ def test_ros2_actions_are_found_by_their_feedback_topic():
     (found,) = graph.actions_of(snap)
     assert (found.name, found.type, found.servers, found.clients) == ("/fib", "test_msgs/Fibonacci", ("/server",),
                                                                       ("/c",))
+
+
+class _Clock:
+    """A clock of the test's: each sleep moves it on."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        self.now += seconds
+
+
+def test_a_node_is_settled_once_its_interface_stays_the_same_for_the_settle_time():
+    from ipyros.core.errors import BaseNodeError
+    from ipyros.core.graph import settled
+
+    clock = _Clock()
+    reads = iter([None, None, ("/a",), ("/a", "/b")])  # registering its topics one by one, then the same
+    found = settled(lambda: next(reads, ("/a", "/b")), "/n", timeout=10, settle=0.5, clock=clock, sleep=clock.sleep)
+    assert found == ("/a", "/b") and 0.5 <= clock.now <= 0.75, clock.now
+    clock = _Clock()
+    assert settled(lambda: None, "/n", timeout=2, clock=clock, sleep=clock.sleep) is None and clock.now >= 2
+    clock = _Clock()
+    changing = iter(range(1000))
+    assert settled(lambda: (next(changing),), "/n", timeout=1, clock=clock, sleep=clock.sleep)[0] >= 20, \
+        "still changing at the timeout: what it is then"
+    clock = _Clock()
+    with pytest.raises(BaseNodeError, match="node /n ended before it settled"):
+        settled(lambda: None, "/n", alive=lambda: clock.now < 0.2, clock=clock, sleep=clock.sleep)
+    assert clock.now < 0.5, "not waited for once its process ended"
