@@ -341,11 +341,11 @@ class rosNode:  # noqa: N801 - the paper's name
 
         Displays as a table; ``nd.versions("cmd_vel")[0].source`` is the first one's source.
         """
-        return self._engine.versions(what)
+        return self._engine.handlers_of.versions(what)
 
     def revert(self, what: str, version: int) -> "rosNode":
         """Serve ``what`` with handler ``version`` again (see :meth:`versions`), live, no message lost."""
-        self._engine.revert(what, version)
+        self._engine.handlers_of.revert(what, version)
         return self
 
     def restore_versions(self, what: str, versions: list[tuple[str, str]], current: Optional[int] = None) -> "rosNode":
@@ -355,7 +355,7 @@ class rosNode:  # noqa: N801 - the paper's name
         are kept as source and compiled by :meth:`revert` when chosen, in the namespace
         of the handler then serving. This is how a saved file brings versions back.
         """
-        self._engine.restore_versions(what, versions, current)
+        self._engine.handlers_of.restore(what, versions, current)
         return self
 
     def __repr__(self) -> str:

@@ -9,7 +9,8 @@ rejected change leaves model and running node as they were.
 
 Its other concerns are parts of their own: declaring (:mod:`.declaring`: every checked edit,
 whoever makes it), opening an endpoint (:mod:`.endpoints`), handler versions (:mod:`.versions`),
-parameters and ``on_param`` (:mod:`.params`), what a name is on the node (:mod:`.targets`).
+parameters and ``on_param`` (:mod:`.params`), what a name is on the node and its handler's versions
+(:mod:`.handlers`, over :mod:`.targets`).
 ipyros's own modules (wrapping, saving and exporting, the tools and the magics) use a node
 through its engine (:func:`ipyros.dsl.engine_of`), never through private fields.
 """
@@ -25,7 +26,7 @@ from ..core.errors import NodeStateError, NotDeclaredError, TopicTypeConflict
 from ..core.guard import ESTOP_TYPE
 from ..core.model import NodeModel, TopicModel
 from ..core.plan import Spec
-from ..core.records import History, NodeStatus, StatusRow, Versions
+from ..core.records import History, NodeStatus, StatusRow
 from ..core.remapping import base_fullname, basenode_remaps, check_wrapping, resolve_for
 from ..core.slots import HandlerSlot, OutputScope, SendFigures
 from ..core.versions import HandlerVersion
@@ -33,11 +34,12 @@ from ..processes.basenode import BaseHandle
 from . import declaring
 from .endpoints import Opening, describe, open_endpoint, output_of
 from .guards import NodeGuards, guard_of
+from .handlers import HandlerEdits
 from .params import NodeParameters
 from .placedrelay import PlacedRelay, PlacedRelays, PlacedSpec
 from .session import Session
-from .targets import HandlerTarget, find_target, handler_slots, relayed_target
-from .versions import HandlerVersions, parse_versions
+from .targets import HandlerTarget, handler_slots
+from .versions import HandlerVersions
 from .writing import Writing
 from .wrapping import interrupted, learn_relayed_types, start_bag_clock, start_base, stop_bag_clock
 
@@ -74,6 +76,8 @@ class NodeEngine:
         self.params = NodeParameters(self, self._lock)
         #: What it sends by hand: write, a message on a guarded output, goals.
         self.writing = Writing(self)
+        #: What a name is on it, the function serving it, and its versions (%handler, %edit, nd.revert).
+        self.handlers_of = HandlerEdits(self, self._versions, self._lock)
         #: Its guards, while it runs.
         self.guards = NodeGuards(session.backend, lambda text: session.notify(f"ipyros: {text}"), session.guard_watch,
                                  self.writing.send)
@@ -272,7 +276,8 @@ class NodeEngine:
         with self._lock:
             if self.created:
                 return
-            check_wrapping(self._model, [n.declared() for n in self.session.nodes.values() if n is not self and n.created])
+            running = [n.declared() for n in self.session.nodes.values() if n is not self and n.created]
+            check_wrapping(self._model, running)
             session = self.session
             session.add(self)
             try:
@@ -357,52 +362,6 @@ class NodeEngine:
                 self.writing.send(topic, self.guards.live[topic].stop_message())
             self.record("estop()" if on else "release()")
             return topics
-
-    # -- handlers: what a name is, its versions --------------------------------------------------
-    def find_target(self, name: str) -> HandlerTarget:
-        """What ``name`` (a topic, a timer name, a service or an action) is on this node, if it has a handler."""
-        return find_target(self.model(), self.resolve, name, self.called)
-
-    def relayed_target(self, name: str) -> Optional[HandlerTarget]:
-        """``name`` as a topic this node only relays, as a target a handler can take over; None if it is not one."""
-        return relayed_target(self.model(), self.resolve, name)
-
-    def current_handler(self, target: HandlerTarget) -> Callable[..., Any]:
-        """The function that serves ``target`` now."""
-        handler = self.handler(target.name)
-        if handler is None:  # the node changed since find_target
-            raise NotDeclaredError(f"{self.name} has no handler for {target.label} any more")
-        return handler
-
-    def redeclare(self, target: HandlerTarget, handler: Callable[..., Any]) -> None:
-        """Declare ``target`` again exactly as it is, but served by ``handler`` (a live swap, as the DSL does it)."""
-        declaring.redeclare(self, target, handler)
-
-    def versions(self, what: str) -> Versions:
-        target = self.find_target(what)
-        with self._lock:
-            found, current = self._versions.of(target.slot)
-            return Versions(f"{self.name} {target.label}", tuple(found), current)
-
-    def revert(self, what: str, version: int) -> None:
-        target = self.find_target(what)
-        with self._lock:
-            chosen = self._versions.choose(
-                target.slot, version, f"{self.name} {target.label}", f"{self.called}.versions({what!r})",
-                lambda: getattr(self.current_handler(target), "__globals__", {}))
-            self._versions.reverting = version
-            try:
-                assert chosen.function is not None
-                self.redeclare(target, chosen.function)
-            finally:
-                self._versions.reverting = None
-
-    def restore_versions(self, what: str, versions: list[tuple[str, str]], current: Optional[int]) -> None:
-        target = self.find_target(what)
-        restored, current = parse_versions(what, versions, current)
-        with self._lock:
-            restored[current - 1].function = self.current_handler(target)
-            self._versions.set(target.slot, restored, current)
 
     # -- reconciling the live node with the model ----------------------------------------------
     def _reconcile(self, new_model: NodeModel, handlers: Handlers) -> None:

@@ -2,7 +2,7 @@
 
 The flow behind ``%handler nd /turtle1/pose``:
 
-1. the node's engine says what ``/turtle1/pose`` is on ``nd`` (``find_target``: a
+1. the node's engine says what ``/turtle1/pose`` is on ``nd`` (``handlers_of.find_target``: a
    subscription with a handler, a timer or a service) and :func:`handler_source` gets the
    source of the function serving it. ``inspect.getsource`` works for functions typed at an IPython
    prompt, because IPython keeps every cell in ``linecache``; it fails for lambdas
@@ -141,7 +141,7 @@ class EditWatch:
                             f"{where} keeps its handler")
                 continue
             try:
-                engine_of(edit.node).redeclare(edit.target, new)
+                engine_of(edit.node).handlers_of.redeclare(edit.target, new)
             except IpyrosError as error:
                 news.append(f"{where} keeps its handler: {error}")
                 continue

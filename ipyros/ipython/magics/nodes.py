@@ -63,12 +63,12 @@ class NodeMagics(ExtensionMagics):
         args = parse_argstring(self.handler, line)
         node = find_node(self.shell, args.node)
         engine = engine_of(node)
-        relayed = engine.relayed_target(args.topic)
+        relayed = engine.handlers_of.relayed_target(args.topic)
         if relayed is not None and cell is None:
             self._offer_pass_through(node, relayed)
             return
-        target = relayed or engine.find_target(args.topic)
-        old = None if relayed is not None else engine.current_handler(target)
+        target = relayed or engine.handlers_of.find_target(args.topic)
+        old = None if relayed is not None else engine.handlers_of.current_handler(target)
         if cell is None:
             if getattr(old, "__name__", "") == "<lambda>" and (
                     as_def := lambda_as_def(old, fresh_name(target, self.shell.user_ns))) is not None:
@@ -99,7 +99,7 @@ class NodeMagics(ExtensionMagics):
             raise UsageError(f"the cell defines {', '.join(sorted(defined))}; which is the handler? "
                              f"name it {old_name}, like the one it replaces")
         name = name or next(iter(defined))
-        engine_of(node).redeclare(target, defined[name])
+        engine_of(node).handlers_of.redeclare(target, defined[name])
         print(f"ipyros: {node.name} {target.label} is now handled by the new {name}")
 
     # -- %try ------------------------------------------------------------------------------
