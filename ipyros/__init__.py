@@ -9,10 +9,11 @@ from __future__ import annotations
 __version__ = "0.1.0"
 
 from .core.errors import IpyrosError  # noqa: E402
+from .core.rules import rule  # noqa: E402
 from .dsl import build_messages, restore, restoring, rosNode, save_session, shutdown, spin  # noqa: E402
 from .tools.robot import demo_robot, stop_demo_robot  # noqa: E402
 
-__all__ = ["rosNode", "IpyrosError", "save_session", "restore", "restoring", "shutdown", "spin", "demo_robot",
+__all__ = ["rosNode", "rule", "IpyrosError", "save_session", "restore", "restoring", "shutdown", "spin", "demo_robot",
            "stop_demo_robot", "build_messages", "load_ipython_extension", "unload_ipython_extension"]
 
 

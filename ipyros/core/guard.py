@@ -31,10 +31,11 @@ import re
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Mapping, Optional
 
 from .errors import DeclarationError, cut
-from .msgbuild import field_types, nested_class
+from .msgbuild import copy_message, field_types, nested_class
+from .rules import RuleSet
 
 __all__ = ["DEFAULT_GRACE", "DEFAULT_LEASE", "DEFAULT_MACHINE_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE",
            "Acting", "Gate", "GuardFigures", "Path", "Verdict", "check_rules", "check_stop", "finite_checker", "parse_path"]
@@ -268,6 +269,7 @@ class Acting(enum.Enum):
     DROPPED = "dropped"  # outside its limits, with on_limit="drop": nothing sent
     NOT_FINITE = "not finite"  # a NaN or an infinity: the stop message in its place
     ESTOPPED = "e-stopped"  # the stop message in its place, whatever came
+    RULE_STOPPED = "stopped by a rule"  # a rule over what the robot senses: the stop message in its place
 
 
 @dataclass(frozen=True)
@@ -286,6 +288,8 @@ class Verdict:
             return ""
         if self.acting is Acting.NOT_FINITE:
             return f"non-finite {self.path}"
+        if self.acting is Acting.RULE_STOPPED:
+            return self.path
         return "outside its limits" if self.acting is Acting.DROPPED else self.acting.value
 
 
@@ -315,7 +319,9 @@ class Gate:
 
     def __init__(self, topic: str, cls: type, limits: dict[str, tuple[float, float]], rates: dict[str, float],
                  on_limit: str, stop: Callable[[], Any], estopped: Callable[[], bool], passed: Callable[[], None],
-                 say: Callable[[str], None], clock: Callable[[], float] = time.monotonic) -> None:
+                 say: Callable[[str], None], clock: Callable[[], float] = time.monotonic,
+                 rules: Optional[RuleSet] = None,
+                 heard: Callable[[], Mapping[str, tuple[Any, float]]] = lambda: {}) -> None:
         self.topic, self.cls = topic, cls
         self._limits = [(parse_path(cls, p, topic), low, high) for p, (low, high) in limits.items()]
         self._rates = [(parse_path(cls, p, topic), most) for p, most in rates.items()]
@@ -330,6 +336,9 @@ class Gate:
         self._replacing, self._replaced_at = "", -math.inf  # why the last message was replaced, and when
         self._passed_at = -math.inf  # when a command last passed
         self.commands = 0  # messages that passed as commands (as they came, or clamped): not replaced, not dropped
+        #: Its rules over what the robot senses, and each input's last message and when it came (this clock).
+        self._rules, self._heard = rules, heard
+        self.last_command: Any = None  # the last message that passed as a command (what an idle check judges)
 
     def check(self, msg: Any) -> Verdict:
         """What to send for ``msg``, which is left as it is (a clamped message is a copy of it)."""
@@ -353,6 +362,16 @@ class Gate:
             self._replacing, self._replaced_at = f"{bad} not finite", self._clock()
             self._episode_of(Acting.NOT_FINITE, f"{bad} is not a finite number: the stop message was sent in its place")
             return Verdict(self._stop(), Acting.NOT_FINITE, bad)
+        ruled = ""
+        if self._rules is not None:
+            judged = self._rules.judge(self._heard(), self._clock(), msg)
+            sent, ruled, stopped = self._rules.apply(judged, msg, self._stop)
+            if stopped:
+                self.figures.replaced += 1
+                self._replacing, self._replaced_at = ruled, self._clock()
+                self._episode_of(Acting.RULE_STOPPED, f"{ruled}: the stop message was sent in its place")
+                return Verdict(sent, Acting.RULE_STOPPED, ruled)
+            msg = sent  # scaled or clamped by the rules in force (a copy), or as it came
         outside = self._outside(msg)
         if outside and self._drop:
             self.figures.dropped += 1
@@ -367,9 +386,12 @@ class Gate:
         ramped = self._ramp(msg)
         self.commands += 1
         self._passed_at = self._clock()
-        if outside or ramped:
+        if self._rules is not None:  # a copy: the sender may change its message once sent
+            self.last_command = copy_message(msg)
+        if outside or ramped or ruled:
             self.figures.clamped += 1
-            what = [f"{p.text} {v:g} -> {c:g}" for p, _, _, v, c in outside] + ramped
+            what = [f"{p.text} {v:g} -> {c:g}" for p, _, _, v, c in outside] + ramped + ([f"rules: {ruled}"] if ruled
+                                                                                          else [])
             self._episode_of(Acting.CLAMPED, f"clamped ({', '.join(what[:3])}{' ...' if len(what) > 3 else ''})")
             return Verdict(msg, Acting.CLAMPED)
         return Verdict(msg)
@@ -410,6 +432,14 @@ class Gate:
                 if change:
                     self._last[(path.text, place)] = (target, now)
         return done
+
+    def idle(self) -> str:
+        """Judged with no new command (the guard's watch, a few times a second): why the stop message must go out
+        now by its rules (an input gone stale, a stop rule, a last command they would now change), or ""."""
+        if self._rules is None:
+            return ""
+        with self._lock:
+            return self._rules.idle(self._heard(), self._clock(), self.last_command, self._stop)
 
     def stopped(self) -> None:
         """The stop message went out (the output is at rest): a rate-limited field starts again from it."""

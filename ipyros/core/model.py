@@ -80,7 +80,9 @@ class GuardModel:
     and held ``grace`` seconds after the session ends; ``estop_topic`` (a ``std_msgs/Bool``) trips it too.
     ``machine`` places it on another machine's keeper (see :mod:`ipyros.processes.keeper`), which holds the stop
     message when the session is not heard for ``lease`` seconds and ends the guard after ``machine_grace`` (None:
-    never). Plain data: a guard in a model file runs without ``trust``.
+    never). ``rules`` are conditions over what the robot senses and what the guard does while one holds, and
+    ``stale`` how old an input's last message may be (see :mod:`ipyros.core.rules`). Plain data: a guard in a
+    model file runs without ``trust`` (a rule's condition is compiled from a whitelist, never run as code).
     """
 
     name: str
@@ -97,6 +99,8 @@ class GuardModel:
     machine: Optional[str] = None
     lease: float = 0.5
     machine_grace: Optional[float] = 30.0
+    rules: list[dict[str, Any]] = field(default_factory=list)  # each as :meth:`ipyros.core.rules.Rule.as_data`
+    stale: dict[str, float] = field(default_factory=dict)  # an input topic → the seconds its last message is good
 
 
 @dataclass

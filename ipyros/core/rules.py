@@ -42,9 +42,9 @@ from typing import Any, Callable, Iterable, Mapping, Optional, Sequence
 
 from . import msgpath
 from .errors import DeclarationError, cut
-from .msgbuild import field_types, nested_class
+from .msgbuild import copy_message, field_types, nested_class
 
-__all__ = ["Condition", "Judgement", "Rule", "RuleSet", "rule"]
+__all__ = ["Condition", "Judgement", "Rule", "RuleSet", "as_rule", "compile_condition", "rule"]
 
 
 # -- a rule, as declared --------------------------------------------------------------------------
@@ -134,6 +134,22 @@ def rule(condition: Any, *, limit: Any = None, scale: Any = None, only: Any = No
                                "condition ends, 0 or more")
     return Rule(condition.strip(), tuple(bounds), None if scale is None else float(scale),
                 None if only is None else only.strip(), bool(stop), float(hold))
+
+
+def as_rule(given: Any, where: str) -> Rule:
+    """``given`` as a :class:`Rule`: one already, or its data (a saved file's, a model file's: :meth:`Rule.as_data`,
+    the keywords of :func:`rule`); anything else, one line."""
+    if isinstance(given, Rule):
+        return given
+    if isinstance(given, dict):
+        unknown = set(given) - {"condition", "limit", "scale", "only", "stop", "hold"}
+        if unknown or "condition" not in given:
+            raise DeclarationError(f"{where}: a rule as data holds condition= and one of limit=, scale=, only=, "
+                                   f"stop=, and hold=, not {cut(sorted(unknown) or given)}")
+        data = dict(given)
+        return rule(data.pop("condition"), **data)
+    raise DeclarationError(f"{where}: {cut(given)} is not a rule; make each with rule(condition, ...), e.g. "
+                           "rule('/bumper.state == 1', only='linear.x <= 0')")
 
 
 # -- conditions, compiled -------------------------------------------------------------------------
@@ -465,23 +481,21 @@ class RuleSet:
         bounds = tuple((path, low, high) for path, (low, high) in limits.items())
         return Judgement(limits=bounds, scale=scale, acting=tuple(acting), only=tuple(onlys))
 
-    def apply(self, judgement: Judgement, command: Any, stop: Callable[[], Any]) -> tuple[Any, str]:
-        """The message to send for ``command`` under ``judgement``, and why it changed ("" when it did not):
-        the stop message (a stop, an ``only`` broken), or a copy scaled then clamped. ``command`` is left as
-        it is."""
-        import copy
-
+    def apply(self, judgement: Judgement, command: Any, stop: Callable[[], Any]) -> tuple[Any, str, bool]:
+        """The message to send for ``command`` under ``judgement``, why it changed ("" when it did not), and
+        whether it is the stop message (a stop, an ``only`` broken) rather than a copy scaled then clamped.
+        ``command`` is left as it is."""
         if judgement.stop:
-            return stop(), judgement.stop
+            return stop(), judgement.stop, True
         for number, only in judgement.only:
             try:
                 if not only.holds((), command):
-                    return stop(), f"rule {number}: only {only.text}"
+                    return stop(), f"rule {number}: only {only.text}", True
             except RuleValueError as error:
-                return stop(), f"rule {number}: only {only.text} could not be told ({error})"
+                return stop(), f"rule {number}: only {only.text} could not be told ({error})", True
         if judgement.scale == 1.0 and not judgement.limits:
-            return command, ""
-        out = copy.deepcopy(command)
+            return command, "", False
+        out = copy_message(command)
         changed = []
         if judgement.scale != 1.0 and self._floats:
             for path in self._floats:
@@ -490,12 +504,12 @@ class RuleSet:
             changed.append(f"scaled {judgement.scale:g}")
         for text, low, high in judgement.limits:
             if low > high:
-                return stop(), f"rules {', '.join(map(str, judgement.acting))}: {text}'s limits leave no value"
+                return stop(), f"rules {', '.join(map(str, judgement.acting))}: {text}'s limits leave no value", True
             for owner, key, value in _places(out, _steps(text)):
                 if not low <= value <= high:
                     _set(owner, key, type(value)(min(max(value, low), high)))
                     changed.append(f"{text} {value:g} -> {min(max(value, low), high):g}")
-        return out, ", ".join(changed)
+        return out, ", ".join(changed), False
 
     def idle(self, heard: Mapping[str, tuple[Any, float]], now: float, last: Any, stop: Callable[[], Any]) -> str:
         """Judged with no new command (the gate's timer): why the stop message must go out now, or "". ``last``:
@@ -506,7 +520,7 @@ class RuleSet:
             return judgement.stop
         if last is None:
             return ""
-        _, why = self.apply(judgement, last, stop)
+        _, why, _ = self.apply(judgement, last, stop)
         return f"the last command would now be changed ({why})" if why else ""
 
     def check_stop(self, stop: Any, where: str) -> None:

@@ -228,7 +228,8 @@ class rosNode:  # noqa: N801 - the paper's name
               stop: Any = None, on_limit: str = "clamp", rate: Optional[dict] = None,
               estop_topic: Optional[str] = None, grace: float = 3.0, repeat: float = 10.0,
               machine: Optional[str] = None, lease: Optional[float] = None,
-              machine_grace: Optional[float] = 30.0) -> "rosNode":
+              machine_grace: Optional[float] = 30.0, rules: Optional[list] = None,
+              stale: Optional[dict] = None) -> "rosNode":
         """Guard the output ``topic``: every message that leaves the node there passes the guard first, whatever
         sent it (a handler, ``write``, ``%pub``, the relay of the basenode's output).
 
@@ -242,10 +243,13 @@ class rosNode:  # noqa: N801 - the paper's name
         live. ``machine="robot1"`` places the guard on the robot, in its keeper (``python -m ipyros.machine``):
         the node's messages go there to be checked, and the robot holds the stop message when it has not heard
         this session for ``lease`` s (0.5), a lost link too; it ends the guard after ``machine_grace`` s (30).
+        ``rules=[rule("min(/scan.ranges) < 0.5", limit={"linear.x": (-0.2, 0.2)}), ...]`` act on what the robot
+        senses (``limit``, ``scale``, ``only``, ``stop``; see :func:`ipyros.rule`), ``stale={"/scan": 0.3}`` says
+        how old an input's last message may be: an input never heard or stale is a stop.
         Not certified functional safety: the robot's hardware e-stop stays the last line.
         """
         declaring.guard(self._engine, topic, limits, rate, on_limit, timeout, stop, repeat, grace, estop_topic,
-                        machine, lease, machine_grace)
+                        machine, lease, machine_grace, rules, stale)
         return self
 
     def estop(self) -> list[str]:

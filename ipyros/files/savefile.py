@@ -223,7 +223,8 @@ def guard_line(var: str, guard: GuardModel) -> str:
                "stop": guard.stop, "repeat": guard.repeat if guard.repeat != DEFAULT_REPEAT else None,
                "grace": guard.grace if guard.grace != DEFAULT_GRACE else None, "estop_topic": guard.estop_topic,
                "machine": guard.machine,
-               "lease": guard.lease if guard.machine and guard.lease != DEFAULT_LEASE else None}
+               "lease": guard.lease if guard.machine and guard.lease != DEFAULT_LEASE else None,
+               "rules": guard.rules or None, "stale": guard.stale or None}  # rules as data: rule()'s keywords
     text = "".join(f", {key}={value!r}" for key, value in options.items() if value is not None)
     if guard.machine is not None and guard.machine_grace != DEFAULT_MACHINE_GRACE:
         text += f", machine_grace={guard.machine_grace!r}"

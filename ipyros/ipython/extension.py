@@ -32,6 +32,7 @@ from typing import Any, Optional
 from ..core import plan as planning, streams
 from ..core.errors import IpyrosError
 from ..core.names import is_tool
+from ..core.rules import rule
 from ..dsl import build_messages, end_chains, rosNode
 from ..files.export import ExportWarning
 from ..files.savefile import SaveWarning
@@ -297,7 +298,7 @@ class Extension:
 
 
 #: What the extension puts in the user's namespace (and takes back, if the user has not rebound them).
-_NAMES = {"rosNode": rosNode, "build_messages": build_messages}
+_NAMES = {"rosNode": rosNode, "rule": rule, "build_messages": build_messages}
 
 
 def _output_below_the_cell(node: rosNode) -> Optional[cell_output.NodeOutput]:

@@ -25,6 +25,7 @@ from ..core.guard import (DEFAULT_GRACE, DEFAULT_LEASE, DEFAULT_MACHINE_GRACE, D
 from ..core.model import ActionModel, GuardModel, NodeModel, Role, ServiceModel, TimerModel, TopicModel
 from ..core.msgbuild import as_data, build_message
 from ..core.remapping import check_reuse
+from ..core.rules import Rule, RuleSet, as_rule, compile_condition
 from ..core.slots import call_arity
 from ..core.versions import name_of
 from ..processes.keeper import MachineError, Token, check_machine_name, token_path
@@ -225,7 +226,7 @@ def timer(engine: NodeEngine, period: Any, handler: Callable[..., Any], name: Op
 def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, on_limit: str = "clamp",
           timeout: Any = None, stop: Any = None, repeat: Any = DEFAULT_REPEAT, grace: Any = DEFAULT_GRACE,
           estop_topic: Optional[str] = None, machine: Optional[str] = None, lease: Any = None,
-          machine_grace: Any = DEFAULT_MACHINE_GRACE) -> str:
+          machine_grace: Any = DEFAULT_MACHINE_GRACE, rules: Any = None, stale: Any = None) -> str:
     """A safety guard on the output ``topic`` (see :mod:`ipyros.core.guard`); declared again, its rules change live
     (nothing reopens: no message is lost or sent unguarded). ``machine``: kept by that machine's keeper."""
     where = f"{engine.name}.guard({topic!r})"
@@ -252,6 +253,7 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
     if taken is not None:
         raise TopicTypeConflict(f"{where}: estop_topic {estop} carries {taken.type} on {engine.name}, not "
                                 f"{ESTOP_TYPE}: an e-stop topic is a {ESTOP_TYPE} of its own; give it another name")
+    given_rules, stale_ = _sensed_rules(engine, where, cls, output.resolved, stop_message, rules, stale, machine)
     lease, machine_grace = _placement(where, machine, lease, machine_grace)
     before = model.guard(output.resolved)
     if before is not None and before.machine != machine:
@@ -260,7 +262,7 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
                                f"when removed first: {engine.name}.remove(guard={output.resolved!r}), then declared")
     entry = GuardModel(topic, output.resolved, output.type, {p: list(b) for p, b in limits_.items()}, rates, on_limit,
                        float(timeout) if timeout is not None else None, stop, float(repeat), float(grace), estop,
-                       machine, lease, machine_grace)
+                       machine, lease, machine_grace, [r.as_data() for r in given_rules], stale_)
 
     def edit(model: NodeModel) -> None:
         model.guards = [g for g in model.guards if g.resolved != output.resolved] + [entry]
@@ -270,10 +272,50 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
             f"rate {', '.join(f'{p} {m:g}/s' for p, m in rates.items())}" if rates else "",
             f"stop after {timeout:g} s of silence" if timeout is not None else "", on_limit if limits_ else "",
             f"e-stop topic {estop}" if estop else "",
-            f"kept by machine {machine} (lease {lease:g} s)" if machine else ""]
+            f"kept by machine {machine} (lease {lease:g} s)" if machine else "",
+            "; ".join(str(r) for r in given_rules),
+            f"stale after {', '.join(f'{t} {s:g} s' for t, s in stale_.items())}" if stale_ else ""]
     text = f"guard {output.resolved}: " + ("; ".join(s for s in said if s) or "NaN and infinities stopped")
     engine.record(text)
     return text
+
+
+def _sensed_rules(engine: NodeEngine, where: str, cls: type, output: str, stop_message: Any, rules: Any, stale: Any,
+                  machine: Optional[str]) -> tuple[list[Rule], dict[str, float]]:
+    """A guard's rules over what the robot senses (``rule(...)`` or their data), compiled against the guarded type
+    and the inputs' types the graph knows, and the stop message checked against them; each refusal one line."""
+    if rules is None and stale is None:
+        return [], {}
+    if machine is not None:
+        raise DeclarationError(f"{where}: rules= and stale= are enforced by a guard kept in this session, and a "
+                               f"keeper does not read sensors yet: leave out machine={machine!r}, or the rules")
+    if rules is not None and not isinstance(rules, (list, tuple)):
+        raise DeclarationError(f"{where}: rules={cut(rules)}: give a list of rule(...), e.g. "
+                               "rules=[rule('min(/scan.ranges) < 0.5', limit={'linear.x': (-0.2, 0.2)})]")
+    if stale is not None and not isinstance(stale, dict):
+        raise DeclarationError(f"{where}: stale={cut(stale)}: give a dict of input topics and seconds, e.g. "
+                               "stale={'/scan': 0.3}")
+    given = [as_rule(r, where) for r in rules or ()]
+    stale_ = {engine.resolve(str(t)) if isinstance(t, str) else t: s for t, s in (stale or {}).items()}
+    ruleset = RuleSet(given, cls, output, stale_, where, _known_types(engine, given, stale_))
+    ruleset.check_stop(stop_message, where)
+    return given, {t: float(s) for t, s in stale_.items()}
+
+
+def _known_types(engine: NodeEngine, rules: list[Rule], stale: dict[str, Any]) -> dict[str, Any]:
+    """The message classes of the inputs the live graph (or the node itself) knows and this Python has."""
+    topics = {p.topic for r in rules for p in compile_condition(r.condition, "").inputs} | set(stale)
+    try:
+        live = engine.session.backend.graph_snapshot(timeout=0.5).topics
+    except Exception:  # noqa: BLE001 - no graph to ask: the types are checked at the first message
+        live = {}
+    found = {}
+    for topic in topics:
+        name = live.get(topic) or next((t.type for t in engine.model().topics if t.resolved == topic), None)
+        cls = msgtypes.message_class_or_none(name) if name else None
+        if cls is not None:
+            found[topic] = cls
+    return found
 
 
 def _placement(where: str, machine: Any, lease: Any, grace: Any) -> tuple[float, Optional[float]]:

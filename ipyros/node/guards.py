@@ -83,7 +83,7 @@ class NodeGuards:
         if model.machine is not None:
             guard: LiveGuard = PlacedGuard(model, output, self._backend, self._say, self._send, host)
         else:
-            guard = LiveGuard(model, output, self._backend, self._say, self._send)
+            guard = LiveGuard(model, output, self._backend, self._say, self._send, host)
         try:
             guard.start()
         except BaseException:

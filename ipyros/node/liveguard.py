@@ -7,12 +7,16 @@ from __future__ import annotations
 
 import copy
 import os
+import time
 from pathlib import Path
 from typing import Any, Callable, Optional
 
 from ..core import msgtypes
 from ..core.guard import Gate, GuardState, Verdict, check_stop
 from ..core.model import GuardModel, TopicModel
+from ..core.qos import PROFILES
+from ..core.rules import RuleSet, as_rule
+from ..core.slots import HandlerSlot
 from ..core.msgbuild import build_message
 from ..core.names import tool_name
 from ..processes.basenode import log_dir
@@ -22,6 +26,8 @@ __all__ = ["LiveGuard", "limits_of"]
 
 #: How long a guard's process may take to publish on its topic (s): a rospy or rclpy start, on a loaded machine.
 SENTINEL_START = 30.0
+#: How long a guard waits for the graph to show an input of its rules, whose type it subscribes with (s).
+INPUT_TYPE_WAIT = 5.0
 
 _count = iter(range(1, 1 << 30))
 
@@ -30,13 +36,19 @@ class LiveGuard:
     """One guard of a running node: what its output's endpoint passes every message through (:meth:`check`)."""
 
     def __init__(self, model: GuardModel, output: TopicModel, backend: Any, say: Callable[[str], None],
-                 send: Callable[[str, Any], bool] = lambda topic, msg: False) -> None:
+                 send: Callable[[str, Any], bool] = lambda topic, msg: False, host: str = "") -> None:
         self.topic, self.type = model.resolved, model.type
         self.cls = msgtypes.resolve_message(model.type)[1]
-        self._backend, self._say, self._output, self._send = backend, say, output, send
+        self._backend, self._say, self._output, self._send, self._host = backend, say, output, send, host
         self.shared = Shared.create()
         self.model = model
         self._stop_message = self._make_stop(model)
+        #: Its rules over what the robot senses (None: it has none), each input's last message and when it came
+        #: (monotonic), and the subscriptions that hear them.
+        self.rules = self._ruleset(model, self._stop_message)
+        self.heard: dict[str, tuple[Any, float]] = {}
+        self._inputs: dict[str, Any] = {}
+        self._ruling = ""  # why its rules hold the stop message now, with no command coming ("": they do not)
         self.gate = self._gate(model)
         self.sentinel: Optional[Sentinel] = None
         self._noticed, self._by_topic = self.shared.state, False
@@ -54,9 +66,65 @@ class LiveGuard:
         check_stop(self.cls, stop, limits_of(model), f"guard {self.topic}", given=model.stop is not None)
         return stop
 
+    def _ruleset(self, model: GuardModel, stop: Any) -> Optional[RuleSet]:
+        if not model.rules and not model.stale:
+            return None
+        where = f"guard {self.topic}"
+        rules = RuleSet([as_rule(r, where) for r in model.rules], self.cls, self.topic, model.stale, where)
+        rules.check_stop(stop, where)  # checked when declared; again here, whatever way into the model it came
+        return rules
+
     def _gate(self, model: GuardModel) -> Gate:
-        return Gate(self.topic, self.cls, limits_of(model), dict(model.rate),
-                    model.on_limit, self.stop_message, self.holding, self.shared.passed, self._say)
+        return Gate(self.topic, self.cls, limits_of(model), dict(model.rate), model.on_limit, self.stop_message,
+                    self.holding, self.shared.passed, self._say, rules=self.rules, heard=lambda: self.heard)
+
+    # -- what its rules read ----------------------------------------------------------------------
+    def _listen(self, rules: Optional[RuleSet]) -> list[str]:
+        """Subscribe to each input ``rules`` read that is not heard yet (best effort: a sensor's publisher of
+        either reliability is heard); the topics newly subscribed. Its type is the live graph's, waited for a
+        few seconds; one that does not show up, or is not installed here, is a one-line error (nothing kept)."""
+        added: list[str] = []
+        try:
+            for topic in rules.topics if rules is not None else ():
+                if topic not in self._inputs:
+                    self._inputs[topic] = self._subscribe(topic)
+                    added.append(topic)
+        except BaseException:
+            self._unlisten(added)
+            raise
+        return added
+
+    def _subscribe(self, topic: str) -> Any:
+        from ..core.errors import BaseNodeError
+
+        deadline = time.monotonic() + INPUT_TYPE_WAIT
+        type_name = None
+        while type_name is None:
+            type_name = self._backend.graph_snapshot(timeout=1.0).topics.get(topic) or None
+            if type_name is None and time.monotonic() > deadline:
+                raise BaseNodeError(f"guard {self.topic}: its rules read {topic}, which nothing publishes, so its "
+                                    "type is not known here: start what publishes it, then the node")
+            if type_name is None:
+                time.sleep(0.1)
+        cls = msgtypes.message_class_or_none(type_name)
+        if cls is None:
+            raise BaseNodeError(f"guard {self.topic}: its rules read {topic}, a {type_name}, which is not installed "
+                                f"here ({msgtypes.install_hint(type_name.split('/')[0])})")
+
+        def hear(msg: Any) -> None:
+            self.heard[topic] = (msg, time.monotonic())
+
+        slot = HandlerSlot(f"guard {self.topic} input {topic}", hear,
+                           lambda failure: self._say(f"guard {self.topic}: reading {topic}: {failure.error}"))
+        return self._backend.subscription(self._host, topic, cls, slot, PROFILES["best_effort"],
+                                          lambda text: self._say(f"guard {self.topic}: {text}"))
+
+    def _unlisten(self, topics: Any) -> None:
+        for topic in list(topics):
+            endpoint = self._inputs.pop(topic, None)
+            self.heard.pop(topic, None)
+            if endpoint is not None:
+                endpoint.close()
 
     def holding(self) -> bool:
         """Whether the stop message goes in place of every message: e-stopped, or its process lost."""
@@ -67,12 +135,17 @@ class LiveGuard:
         return copy.deepcopy(self._stop_message)
 
     def update(self, model: GuardModel) -> None:
-        """The guard declared again: its new rules from the next message on (its figures kept)."""
+        """The guard declared again: its new rules from the next message on (its figures kept). The inputs its new
+        rules read are subscribed first (a one-line error changes nothing); those no longer read are let go."""
         figures, commands = self.gate.figures, self.gate.commands
-        self._stop_message = self._make_stop(model)
+        stop = self._make_stop(model)
+        rules = self._ruleset(model, stop)
+        self._listen(rules)
+        self._stop_message, self.rules = stop, rules
         self.gate = self._gate(model)
         self.gate.figures, self.gate.commands = figures, commands
         self.model = model
+        self._unlisten([t for t in self._inputs if rules is None or t not in rules.topics])
         self._tell({"settings": self._settings()})
 
     def _tell(self, message: dict[str, Any]) -> None:
@@ -95,6 +168,7 @@ class LiveGuard:
         """Start its sentinel, and wait until it publishes on the topic; a one-line error if it cannot."""
         from ..core.errors import BaseNodeError
 
+        self._listen(self.rules)  # what its rules read, heard before anything passes
         name = f"{tool_name('guard')}_{next(_count)}"
         settings = {**self._settings(), "node": name, "topic": self.topic, "type": self.type,
                     "latch": bool(self._output.latch), "qos": self._output.qos, "estop_topic": self.model.estop_topic}
@@ -106,6 +180,7 @@ class LiveGuard:
         problem = self.sentinel.ready(SENTINEL_START)
         if problem is not None:
             self.sentinel = None
+            self._unlisten(list(self._inputs))
             raise BaseNodeError(f"the guard of {self.topic} could not start its process ({problem}); "
                                 f"{'the stop message holds' if self.lost else 'nothing of the node runs'}: see {log}")
 
@@ -135,7 +210,7 @@ class LiveGuard:
         sentinel, said = self.sentinel, list[str]()
         if self.lost is None:
             if sentinel is None or self._closing or sentinel.running:
-                return said
+                return self._rule(now) if sentinel is not None and not self._closing else said
             code = sentinel.returncode
             self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
             said.append(f"guard {self.topic}: its process ended ({self.lost}; its log: {sentinel.log_path}): the stop "
@@ -151,6 +226,21 @@ class LiveGuard:
             self._unsent = problem
         return said
 
+    def _rule(self, now: float) -> list[str]:
+        """Its rules judged with no new command: while they hold the stop message (an input not heard or stale, a
+        stop rule, a last command they would now change), the session sends it at the guard's rate, said once."""
+        why = self.gate.idle()
+        said = []
+        if why and now - self._stopped_at >= 1.0 / self.model.repeat:
+            self._stopped_at = now
+            self._send_stop()  # through the gate: a stop message its rules let pass, or theirs in its place
+        if why and not self._ruling:
+            said.append(f"guard {self.topic}: {why}: the stop message goes out until its rules let a command pass")
+        elif not why and self._ruling and not self._ruling.startswith("the last command"):
+            said.append(f"guard {self.topic}: its rules let commands pass again")
+        self._ruling = why
+        return said
+
     def _send_stop(self) -> Optional[str]:
         """The stop message sent by the session on the guarded output; why not, if it could not be."""
         try:
@@ -163,6 +253,7 @@ class LiveGuard:
         """End the guard: its sentinel holds the stop message for its grace first (``hold``: the node stops), or
         quits at once (the guard was removed; the output goes on unguarded)."""
         self._closing = True
+        self._unlisten(list(self._inputs))
         if self.sentinel is not None:
             self.sentinel.end(hold=hold, wait=not hold)
             self.sentinel = None
@@ -175,6 +266,8 @@ class LiveGuard:
             state = f"{STATES[ESTOPPED]} (its process ended: {self.lost})"
         elif shared.estopped:
             state = STATES[ESTOPPED] + (" (by its e-stop topic)" if shared.estop_topic else "")
+        elif state == STATES[PASSING] and self._ruling:  # its rules hold the stop message, no command coming
+            state = f"stopping: {self._ruling}"
         elif state == STATES[PASSING] and self.gate.replacing:  # messages go out, but each as the stop message
             state = f"stopping: {self.gate.replacing}"
         return GuardState(self.topic, state, self.gate.figures, shared.stops_sent, shared.reach)

@@ -32,6 +32,7 @@ class PlacedGuard(LiveGuard):
     def __init__(self, model: GuardModel, output: TopicModel, backend: Any, say: Callable[[str], None],
                  send: Callable[[str, Any], bool], host: str) -> None:
         assert model.machine is not None
+        _no_rules(model)
         self.machine = model.machine
         # the token is read before anything opens
         self._link = KeeperLink(backend, host, self.machine, "guards", f"guard {model.resolved}", say)
@@ -83,6 +84,7 @@ class PlacedGuard(LiveGuard):
         return Verdict(None, verdict.acting, verdict.path)
 
     def update(self, model: GuardModel) -> None:
+        _no_rules(model)
         super().update(model)
         self._link.ask("place", again=True, guard=self._spec())
 
@@ -143,3 +145,14 @@ class PlacedGuard(LiveGuard):
                       "then ends the guard after its grace")
         finally:
             self._link.close()
+
+
+def _no_rules(model: GuardModel) -> None:
+    """A keeper does not read sensors yet: a guard with rules placed on it (a model file's, say) is refused, never
+    kept with its rules left out."""
+    from ..core.errors import DeclarationError
+
+    if model.rules or model.stale:
+        raise DeclarationError(f"guard {model.resolved}: rules= and stale= are enforced by a guard kept in the "
+                               f"session, and machine {model.machine}'s keeper does not read sensors yet: leave out "
+                               "the machine, or the rules")

@@ -239,3 +239,28 @@ def test_a_verdict_says_what_the_gate_did_as_a_value():
                                                                          "outside its limits")
     held, _, _ = gate(limits=LIMITS, estopped=lambda: True)
     assert held.check(Twist()).acting is guard.Acting.ESTOPPED
+
+
+def test_a_gate_with_rules_judges_each_command_by_what_was_heard_and_again_with_none_coming():
+    """The rules act between the NaN check and the guard's own limits: a stale input is the stop message in the
+    command's place (said once), a limit in force clamps (said with the rules' words), and idle() judges the last
+    command that passed against what is heard now."""
+    from ipyros.core.rules import RuleSet, rule
+
+    clock, said = Clock(), []
+    heard = {"/scan": (Sample(gains=[2.0]), clock.now)}
+    rules = RuleSet([rule("min(/scan.gains) < 0.5", limit={"linear.x": (-0.2, 0.2)})], Twist, "/cmd_vel",
+                    {"/scan": 0.5}, "guard /cmd_vel")
+    made = guard.Gate("/cmd_vel", Twist, {"linear.x": (-1.0, 1.0)}, {}, "clamp", Twist, lambda: False, lambda: None,
+                      said.append, clock, rules=rules, heard=lambda: heard)
+    assert made.check(Twist(linear=Vector3(x=0.4))).send.linear.x == 0.4
+    assert made.idle() == ""
+    heard["/scan"] = (Sample(gains=[0.3]), clock.now)
+    assert "linear.x 0.4 -> 0.2" in made.idle(), "the last command would now be limited"
+    verdict = made.check(Twist(linear=Vector3(x=0.4)))
+    assert (verdict.send.linear.x, verdict.acting) == (0.2, guard.Acting.CLAMPED) and "rules:" in said[-1]
+    clock.now += 1.0  # the scan was not heard again: stale
+    verdict = made.check(Twist(linear=Vector3(x=0.1)))
+    assert verdict.acting is guard.Acting.RULE_STOPPED and verdict.send == Twist()
+    assert verdict.why.startswith("/scan stale") and made.idle().startswith("/scan stale")
+    assert made.figures.replaced == 1 and made.replacing.startswith("/scan stale")

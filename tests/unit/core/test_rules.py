@@ -35,7 +35,8 @@ def rules(*given, stale=None) -> RuleSet:
 
 
 def sent(ruleset: RuleSet, inputs, command, now: float = 0.1):
-    out, why = ruleset.apply(ruleset.judge(inputs, now, command), command, lambda: twist(0.0))
+    out, why, stopped = ruleset.apply(ruleset.judge(inputs, now, command), command, lambda: twist(0.0))
+    assert stopped == (out.linear.x == 0.0 and bool(why) and "->" not in why and "scaled" not in why)
     return out.linear.x, out.angular.z, why
 
 

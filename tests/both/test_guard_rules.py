@@ -1,0 +1,143 @@
+"""A guard's rules over what the robot senses, on either ROS, with real processes: a laser and a bumper published by
+the test, a plain subscriber as the motors; the rules limit, stop and let only backing off pass, fail closed on an
+input never heard or gone stale, and stop the last command when an obstacle appears with no new command."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+from geometry_msgs.msg import Twist
+from sensor_msgs.msg import LaserScan
+from std_msgs.msg import Bool
+from support import wait_for
+
+from ipyros import rule
+from ipyros.core import errors
+from ipyros.dsl import engine_of
+
+NEAR = rule("min(/ruled/scan.ranges) < 0.5", limit={"linear.x": (-0.2, 0.2)})
+BUMPER = rule("/ruled/bumper.data", only="linear.x <= 0")
+
+
+def xs(listener, after: float = 0.0) -> list[float]:
+    """linear.x of each command the motors heard after ``after`` (their clock: this machine's monotonic clock)."""
+    heard = [line.split()[1:] for line in list(listener.lines) if line.startswith("twist ")]
+    return [float(x) for x, _, _, t in heard if float(t) > after]
+
+
+class Sensors:
+    """The laser and the bumper, published at 20 Hz by a thread until stopped (``ranges``, ``pressed`` as set)."""
+
+    def __init__(self, node) -> None:
+        self.node, self.ranges, self.pressed = node, [2.0, 3.0], False
+        self.running = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        while self.running.is_set():
+            scan = LaserScan()
+            scan.ranges = list(self.ranges)
+            self.node.write("/ruled/scan", scan)
+            self.node.write("/ruled/bumper", Bool(data=self.pressed))
+            time.sleep(0.05)
+
+    def start(self) -> None:
+        self.running.set()
+        self.thread.start()
+
+    def stop(self) -> None:
+        if self.running.is_set():
+            self.running.clear()
+            self.thread.join(5)
+
+
+def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_stop_on_what_is_stale(
+        make_node, peer, notices):
+    motors = peer("listen_twist.py", "/ruled/cmd_vel", "--name=ruled_motors")
+    motors.wait_line("ready")
+    sensing = make_node("ruled_sensors")
+    sensing.new.publish("/ruled/scan", msgType=LaserScan)
+    sensing.new.publish("/ruled/bumper", msgType=Bool)
+    sensing.create()
+    sensors = Sensors(sensing)
+    nd = make_node("ruled")
+    nd.new.publish("/ruled/cmd_vel", msgType=Twist)
+    nd.guard("/ruled/cmd_vel", limits={"linear.x": (-1.0, 1.0)}, rules=[NEAR, BUMPER], stale={"/ruled/scan": 0.5})
+    nd.create()
+
+    def drive(x: float, expect: float, what: str) -> None:
+        since = time.monotonic()
+        wait_for(lambda: nd.write("/ruled/cmd_vel", Twist(linear=_vector(x))) or expect in xs(motors, since),
+                 timeout=30, interval=0.1, what=what)
+        time.sleep(0.3)
+        assert set(xs(motors, time.monotonic() - 0.2)) <= {expect}, f"{what}: {xs(motors, since)[-10:]}"
+
+    try:
+        try:
+            drive(0.4, 0.0, "the stop message while the laser was never heard")
+        except AssertionError:
+            print("DEBUG", list(motors.lines)[-10:], notices, engine_of(nd).status())
+            raise
+        sensors.start()
+        drive(0.4, 0.4, "a command passing as it came, nothing near")
+        sensors.ranges = [0.3, 3.0]
+        drive(0.4, 0.2, "the command limited near an obstacle")
+        sensors.ranges = [2.0, 3.0]
+        drive(0.4, 0.4, "the command as it came once the obstacle is gone")
+        appeared = time.monotonic()
+        sensors.ranges = [0.3, 3.0]  # and no new command: the last one, 0.4, would now be limited
+        wait_for(lambda: 0.0 in xs(motors, appeared), timeout=10, what="the stop with no new command")
+        assert "the last command would now be changed" in "".join(notices), notices
+        sensors.ranges, sensors.pressed = [2.0, 3.0], True
+        drive(0.3, 0.0, "the stop message for a forward command while the bumper is pressed")
+        drive(-0.2, -0.2, "backing off while the bumper is pressed")
+        sensors.pressed = False
+    finally:
+        sensors.stop()
+    gone = time.monotonic()
+    wait_for(lambda: 0.0 in xs(motors, gone + 0.5), timeout=10, what="the stop once the laser went stale")
+    wait_for(lambda: any("/ruled/scan stale" in n for n in notices), timeout=10, what="the stale laser told")
+    state = engine_of(nd).status().guards[0].state
+    assert state.startswith("stopping: /ruled/scan stale"), state
+    nd.write("/ruled/cmd_vel", Twist(linear=_vector(0.4)))
+    time.sleep(0.5)
+    assert 0.4 not in xs(motors, gone + 0.5), "nothing but the stop message while the laser is stale"
+
+
+def _vector(x: float):
+    from geometry_msgs.msg import Vector3
+
+    return Vector3(x=x)
+
+
+@pytest.mark.parametrize("rules, said", [
+    ([rule("/ruled2/scan.nope < 1", stop=True)], "has no field 'nope'"),
+    ([rule("true", limit={"linear.x": (0.1, 0.3)})], "outside rule 1's limit 0.1..0.3"),
+    (["min(/ruled2/scan.ranges) < 1"], "is not a rule; make each with rule(condition, ...)"),
+    ([rule("/ruled2/cmd_vel.linear.x > 1", stop=True)], "reads the guarded output itself"),
+    ([rule("min(/ruled2/scan.ranges) <", stop=True)], "does not parse at its end"),
+])
+def test_a_rule_given_wrong_is_one_line_and_leaves_the_guard_as_it_was(make_node, rules, said):
+    make_node("ruled2_laser").new.publish("/ruled2/scan", msgType=LaserScan).create()
+    nd = make_node("ruled2")
+    nd.new.publish("/ruled2/cmd_vel", msgType=Twist)
+    with pytest.raises(errors.DeclarationError) as error:
+        nd.guard("/ruled2/cmd_vel", rules=rules)
+    assert said in str(error.value) and "\n" not in str(error.value)
+    assert nd.model().guards == []
+
+
+def test_a_guard_with_rules_is_kept_by_save_and_refused_by_export_and_by_a_machine(make_node, tmp_path):
+    nd = make_node("ruled3")
+    nd.new.publish("/ruled3/cmd_vel", msgType=Twist)
+    with pytest.raises(errors.DeclarationError, match="a keeper does not read sensors yet"):
+        nd.guard("/ruled3/cmd_vel", rules=[NEAR], machine="robot1")
+    nd.guard("/ruled3/cmd_vel", rules=[BUMPER], stale={"/ruled/scan": 0.3})
+    saved = nd.save(tmp_path / "ruled3.py").read_text()
+    assert "rules=[{'condition': '/ruled/bumper.data', 'only': 'linear.x <= 0'}]" in saved, saved
+    assert "stale={'/ruled/scan': 0.3}" in saved
+    with pytest.raises(errors.IpyrosError, match="has rules over what the robot senses, which an exported node"):
+        nd.export(tmp_path / "ruled3_export.py")
+    assert not (tmp_path / "ruled3_export.py").exists()
