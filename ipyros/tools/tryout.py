@@ -30,7 +30,7 @@ import gc
 import io
 import time
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator, Optional, Sequence
 
@@ -44,6 +44,7 @@ from ..dsl import engine_of, rosNode
 from ..node.engine import NodeEngine
 from ..node.writing import writes_recorded
 from .record import bag_module
+from .rehearsal import RehearsedGuards, said
 
 
 # Write and Outcome are not frozen: a frozen dataclass's __init__ sets each field through object.__setattr__, 3.5x
@@ -56,11 +57,17 @@ class Write:
     topic: str
     message: Any
     problem: Optional[str] = None  # why the real write would have failed
+    guard: str = ""  # what the topic's guard did with it, in a try over a bag ("": passed as it came, or none)
+    reached: Any = None  # what of it would reach the robot then (None: nothing, dropped)
 
     def __str__(self) -> str:
         if self.problem:
             return f"write {self.topic} would fail: {self.problem}"
-        return f"write {self.topic}: {one_line(self.message)}"
+        text = f"write {self.topic}: {one_line(self.message)}"
+        if self.guard:
+            text += f", {self.guard}" + (f": {one_line(self.reached)} reaches the robot" if self.reached is not None
+                                         else "")
+        return text
 
 
 @dataclass(slots=True)
@@ -177,12 +184,17 @@ class BagTrial:
     others: int = 0  # messages of the node's other subscriptions run through their live handlers
     seconds: float = 0.0  # how long the run took
     stopped: bool = False  # Ctrl-C ended it: what ran until then
+    #: Per side, per guarded output, how many writes its guard passed as they came, clamped, dropped or stopped.
+    guarded: dict[str, dict[str, dict[str, int]]] = field(default_factory=dict)
 
     def table(self) -> TextTable:
         """Counts per output topic on each side, then the first differences side by side."""
         topics = sorted({t for side in self.outputs.values() for t in side})
         rows: list[tuple[str, ...]] = [(topic, str(len(self.outputs["live"].get(topic, ()))),
                                         str(len(self.outputs["candidate"].get(topic, ())))) for topic in topics]
+        for topic in sorted({t for side in self.guarded.values() for t in side}):
+            rows.append((f"its guard, {topic}", *(_tally(self.guarded.get(side, {}).get(topic, {}))
+                                                  for side in ("live", "candidate"))))
         sections = (len(rows),) if self.first else ()
         for diff in self.first:  # a side that did nothing is an empty cell, said once in the title
             rows.append((f"at {diff.at:.3f} s: {one_line(diff.message, 40)}", "\n".join(diff.live.lines()),
@@ -258,7 +270,9 @@ def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, 
     start: Optional[int] = None
     began = time.perf_counter()
     stopped = False
-    messages = bag_module().bag_messages(path, {resolved, *handlers})
+    guards = RehearsedGuards(node.model().guards) if node.model().guards else None
+    inputs = guards.inputs if guards is not None else set()
+    messages = bag_module().bag_messages(path, {resolved, *handlers, *inputs})
     live_out, candidate_out = outputs["live"], outputs["candidate"]
     with _intercepted() as run, contextlib.closing(messages), _young_collections_only() as tick:
         try:  # (the bag's reader is closed at once, even on Ctrl-C)
@@ -266,13 +280,21 @@ def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, 
                 tick()
                 if start is None:
                     start = stamp
+                at = (stamp - start) / 1e9
+                if guards is not None:
+                    guards.now = at
+                    if name in inputs:  # what the guards' rules read, as the robot sensed it then
+                        guards.heard_at(name, msg, at)
                 if name != resolved:
-                    run(handlers[name], msg)
-                    others += 1
+                    if name in handlers:
+                        run(handlers[name], msg)
+                        others += 1
                     continue
                 done, tried = run(live, msg), run(candidate, msg)
                 total += 1  # counted once both sides ran: a message Ctrl-C cut in half is not half-counted
-                at = (stamp - start) / 1e9
+                if guards is not None:
+                    _guard(guards, "live", done)
+                    _guard(guards, "candidate", tried)
                 for out, made in ((live_out, done.writes), (candidate_out, tried.writes)):
                     for write in made:
                         series = out.get(write.topic)
@@ -290,7 +312,21 @@ def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, 
     if total == 0:
         raise IpyrosError(f"the bag {path} holds no message of {resolved}; %bag info {path} lists what it holds")
     return BagTrial(node.name, resolved, str(path), _name(live), _name(candidate), total, differing, outputs,
-                    tuple(first), others, time.perf_counter() - began, stopped)
+                    tuple(first), others, time.perf_counter() - began, stopped,
+                    guards.counts if guards is not None else {})
+
+
+def _guard(guards: RehearsedGuards, side: str, outcome: Outcome) -> None:
+    """Each write of ``outcome`` on a guarded output through that side's gate: what the guard did, what reaches."""
+    for write in outcome.writes:
+        verdict = guards.judge(side, write.topic, write.message)
+        if verdict is not None:
+            write.guard, write.reached = said(verdict), verdict.send
+
+
+def _tally(counts: dict[str, int]) -> str:
+    """``45 passed, 5 clamped``: a guard's verdicts on one side's writes."""
+    return ", ".join(f"{n} {acting}" for acting, n in sorted(counts.items(), key=lambda kv: -kv[1])) or "-"
 
 
 #: Messages between two collections of the young objects while a try runs over a bag.

@@ -83,3 +83,39 @@ def test_ctrl_c_stops_a_rehearsal_in_one_line_and_gives_what_ran_a_systemexit_is
     r = ip.user_ns["r"]
     assert (r.total, r.differing, r.stopped) == (50, 50, False)
     assert r.first[0].candidate.error == "SystemExit: 3"
+
+
+GUARDED = (
+    "from std_msgs.msg import Bool, Float32\n"
+    "from geometry_msgs.msg import Twist, Vector3\n"
+    "def drive(msg):\n    tg.write('/tg/cmd', Twist(linear=Vector3(x=msg.data)))\n"
+    "def rush(msg):\n    tg.write('/tg/cmd', Twist(linear=Vector3(x=-5.0)))\n"
+    "tg = rosNode('tg')\n"
+    "tg.new.subscribe('/tg/in', drive, msgType=Float32)\n"
+    "tg.new.publish('/tg/cmd', msgType=Twist)\n"
+    "tg.guard('/tg/cmd', limits={'linear.x': (-1.0, 1.0)}, rules=[rule('/tg/bumper.data', only='linear.x <= 0')])\n"
+)
+
+
+def test_try_over_a_bag_shows_what_the_guards_let_reach_the_robot(ip, session, tmp_path):
+    """Each write on a guarded output passes the node's guard as the session's would, its rules fed with the bag's
+    own sensor messages: what reaches the robot, and how many writes each verdict took, per side."""
+    ok(ip, GUARDED)
+    bag = tmp_path / ("guarded.bag" if session.backend.name == "ROS 1" else "guarded")
+    ok(ip, "from ipyros.tools.record import bag_module\n"
+           f"writer = bag_module().BagWriter(__import__('pathlib').Path({str(bag)!r}))\n"
+           "writer.write('/tg/bumper', Bool(data=False))\n"
+           "for i in range(10):\n    writer.write('/tg/in', Float32(data=0.5))\n"
+           "writer.write('/tg/bumper', Bool(data=True))\n"
+           "for i in range(10):\n    writer.write('/tg/in', Float32(data=0.5))\n"
+           "writer.close()")
+    ok(ip, f"r = %try tg /tg/in rush --bag {bag}")
+    r = ip.user_ns["r"]
+    assert r.guarded == {"live": {"/tg/cmd": {"passed": 10, "stopped by a rule": 10}},
+                         "candidate": {"/tg/cmd": {"clamped": 20}}}, r.guarded
+    live, candidate = r.first[0].live.writes[0], r.first[0].candidate.writes[0]
+    assert (live.guard, live.reached.linear.x) == ("", 0.5)
+    assert candidate.guard == "clamped by its guard" and candidate.reached.linear.x == -1.0
+    assert candidate.message.linear.x == -5.0, "what the handler wrote, kept as it wrote it"
+    text = str(r)
+    assert "its guard, /tg/cmd" in text and "10 passed, 10 stopped by a rule" in text and "20 clamped" in text

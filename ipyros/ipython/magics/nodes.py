@@ -111,7 +111,8 @@ class NodeMagics(ExtensionMagics):
     @argument("-n", "--last", type=int, help="only the last N messages (default: all the node keeps, "
               "c.RosMagics.try_history)")
     @argument("--bag", default=None, help="every message of TOPIC in this bag instead (offline: the node need not "
-              "run, nothing is published); returns the outcome (r.total, r.differing, r.outputs)")
+              "run, nothing is published), each write on a guarded output through its guard; returns the outcome "
+              "(r.total, r.differing, r.outputs, r.guarded)")
     @argument("--plot", metavar="FIELD", default=None,
               help="with --bag: draw FIELD of both sides' outputs over bag time (linear.x, or /cmd_vel.linear.x)")
     @line_magic("try")
