@@ -475,3 +475,4 @@ class GuardState:
     figures: GuardFigures = field(default_factory=GuardFigures)
     stops_sent: int = 0  # by its process, on silence or e-stopped
     reach: int = 0  # subscribers of the topic its process's publisher has found: where a stop message goes
+    rules: tuple[str, ...] = ()  # its rules over what the robot senses, each in words, "in force" said

@@ -114,6 +114,7 @@ class NodeStatus(Rows):
             state: Union[str, Cell] = Cell(did, "bold red") if guard.state != "passing" else did
             # subscribers: those its process reaches, where a stop message on silence goes
             rows.append(("guard", guard.topic, state, str(f.passed), *[""] * 4, str(guard.reach), ""))
+            rows += [("rule", guard.topic, text, *[""] * 7) for text in getattr(guard, "rules", ())]
         title = f"status of {self.node}" + ("" if self.running else " (not running)")
         return TextTable(title, columns, tuple(rows))
 

@@ -439,10 +439,20 @@ class RuleSet:
         self.topics = tuple(dict.fromkeys([p.topic for c in self.conditions for p in c.inputs] + list(self.stale)))
         self._floats = _float_paths(cls) if cls is not None else None
         self._held_until = [-math.inf] * len(self.rules)
+        self.acting: tuple[int, ...] = ()  # the rules in force at the last judgement, by number
 
     def judge(self, heard: Mapping[str, tuple[Any, float]], now: float, command: Any = None) -> Judgement:
         """What the rules make of ``command`` (or of none), given each input topic's last message and when it
-        came (``heard``), at ``now`` (the same clock)."""
+        came (``heard``), at ``now`` (the same clock); the rules in force are kept in :attr:`acting`."""
+        judgement = self._judge(heard, now, command)
+        self.acting = judgement.acting
+        return judgement
+
+    def described(self) -> tuple[str, ...]:
+        """Each rule in words, numbered, those in force at the last judgement said so (``%status``)."""
+        return tuple(f"{n}. {r}" + (" (in force)" if n in self.acting else "") for n, r in enumerate(self.rules, 1))
+
+    def _judge(self, heard: Mapping[str, tuple[Any, float]], now: float, command: Any) -> Judgement:
         for topic in self.topics:
             got = heard.get(topic)
             if got is None:

@@ -270,7 +270,8 @@ class LiveGuard:
             state = f"stopping: {self._ruling}"
         elif state == STATES[PASSING] and self.gate.replacing:  # messages go out, but each as the stop message
             state = f"stopping: {self.gate.replacing}"
-        return GuardState(self.topic, state, self.gate.figures, shared.stops_sent, shared.reach)
+        return GuardState(self.topic, state, self.gate.figures, shared.stops_sent, shared.reach,
+                          self.rules.described() if self.rules is not None else ())
 
     def news(self) -> Optional[str]:
         """One line when the sentinel's state changed since the last look: a trip on silence, an e-stop by its

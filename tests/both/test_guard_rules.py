@@ -84,6 +84,7 @@ def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_s
         drive(0.4, 0.4, "a command passing as it came, nothing near")
         sensors.ranges = [0.3, 3.0]
         drive(0.4, 0.2, "the command limited near an obstacle")
+        assert "limit linear.x -0.2..0.2 (in force)" in engine_of(nd).status().guards[0].rules[0]
         sensors.ranges = [2.0, 3.0]
         drive(0.4, 0.4, "the command as it came once the obstacle is gone")
         appeared = time.monotonic()
@@ -99,8 +100,11 @@ def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_s
     gone = time.monotonic()
     wait_for(lambda: 0.0 in xs(motors, gone + 0.5), timeout=10, what="the stop once the laser went stale")
     wait_for(lambda: any("/ruled/scan stale" in n for n in notices), timeout=10, what="the stale laser told")
-    state = engine_of(nd).status().guards[0].state
-    assert state.startswith("stopping: /ruled/scan stale"), state
+    status = engine_of(nd).status()
+    assert status.guards[0].state.startswith("stopping: /ruled/scan stale"), status.guards[0].state
+    assert status.guards[0].rules == ("1. when min(/ruled/scan.ranges) < 0.5: limit linear.x -0.2..0.2",
+                                      "2. when /ruled/bumper.data: only linear.x <= 0")
+    assert "2. when /ruled/bumper.data: only linear.x <= 0" in str(status)
     nd.write("/ruled/cmd_vel", Twist(linear=_vector(0.4)))
     time.sleep(0.5)
     assert 0.4 not in xs(motors, gone + 0.5), "nothing but the stop message while the laser is stale"
