@@ -1,6 +1,7 @@
 """One guard of a running node, kept by the session: its gate in front of the output, the page it shares with its
-sentinel process, the sentinel, and what the prompt is told (see :mod:`ipyros.core.guard` and
-:mod:`ipyros.processes.sentinel`). A guard placed on another machine is :mod:`ipyros.node.placed`'s.
+sentinel process, the sentinel, the subscriptions its rules read, and what the prompt is told (see
+:mod:`ipyros.core.guard`, :mod:`ipyros.core.rules` and :mod:`ipyros.processes.sentinel`). A guard placed on another
+machine is :mod:`ipyros.node.placed`'s.
 """
 
 from __future__ import annotations
@@ -14,11 +15,11 @@ from typing import Any, Callable, Optional
 from ..core import msgtypes
 from ..core.guard import Gate, GuardState, Verdict, check_stop
 from ..core.model import GuardModel, TopicModel
+from ..core.msgbuild import build_message
+from ..core.names import tool_name
 from ..core.qos import PROFILES
 from ..core.rules import RuleSet, as_rule
 from ..core.slots import HandlerSlot
-from ..core.msgbuild import build_message
-from ..core.names import tool_name
 from ..processes.basenode import log_dir
 from ..processes.sentinel import ESTOPPED, PASSING, STATES, STOPPED, Sentinel, Shared
 
