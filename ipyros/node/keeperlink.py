@@ -20,12 +20,17 @@ from ..core.qos import PROFILES
 from ..core.slots import HandlerSlot
 from ..processes.keeper import MachineError, Token, beat_text, beat_topics, namespace, token_path
 
-__all__ = ["ANSWER", "FIND", "KeeperLink"]
+__all__ = ["ANSWER", "FIND", "GONE", "KeeperLink"]
 
 #: How long the keeper may take to answer a request (s): placing starts a process on the robot.
 ANSWER = 40.0
 #: How long the session waits for a keeper's first word (s) before it says none is there.
 FIND = 10.0
+#: A keeper whose reports stopped this long ago (s) is taken for gone (killed, or the link lost): a request then
+#: waits a moment for its answer, not its whole time (what this session placed there ends after its grace anyway).
+GONE = 2.0
+#: The requests that let go of what was placed (a node's shutdown asks them): those that wait a moment only then.
+LETTING_GO = frozenset({"stop_base", "unrelay", "remove"})
 
 _STRING = "std_msgs/String"
 
@@ -121,6 +126,8 @@ class KeeperLink:
         """A signed request to the keeper; its answer, or a one-line :class:`MachineError`. ``again``: asked again
         each second until it answers (a request may go out before the keeper's subscriber has found this link's
         publisher): only for what may be done twice (placing a guard)."""
+        if op in LETTING_GO and self.heard_at and time.monotonic() - self.heard_at > GONE:
+            timeout = min(timeout, 1.0)  # a node shut down with its robot gone is not held up for seconds a thing
         deadline = time.monotonic() + timeout
         found_by = min(deadline, time.monotonic() + FIND)
         with self._lock:

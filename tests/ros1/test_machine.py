@@ -405,6 +405,8 @@ def test_a_placed_basenode_ends_after_its_sessions_grace_and_with_its_keeper(mak
     machine.proc.kill()
     wait_for(lambda: not pid_alive(pid), timeout=20, what="its basenode to end with the keeper")
     wait_for(lambda: any("no word from machine testbot" in n for n in notices), timeout=20, what="the session's word")
+    nd.shutdown()  # its machine gone: each thing's answer is waited for a moment, not its whole time
+    assert any("did not answer 'stop_base' within 1 s" in n for n in notices), notices
 
 
 
@@ -477,7 +479,7 @@ def test_wrap_places_the_basenode_on_a_machine_and_its_export_says_where_to_star
     robo.shutdown()
 
 
-def test_the_relays_process_killed_on_the_machine_is_told_at_the_prompt(make_node, keeper, notices):
+def test_the_relays_process_killed_on_the_machine_is_told_at_the_prompt(keeper, make_node, notices):
     machine = keeper("testbot", "ipyros_test_nodes")
     nd = make_node("placedbase7")
     nd.baseNode("echo_node").basePackage("ipyros_test_nodes").machine("testbot")
