@@ -505,6 +505,13 @@ class RuleSet:
                 return stop(), f"rule {number}: only {only.text} could not be told ({error})", True
         if judgement.scale == 1.0 and not judgement.limits:
             return command, "", False
+        try:
+            return self._changed(judgement, command, stop)
+        except (RuleValueError, AttributeError, IndexError, TypeError, ValueError) as error:  # fails closed
+            return stop(), f"rules {', '.join(map(str, judgement.acting))} could not be applied ({error})", True
+
+    def _changed(self, judgement: Judgement, command: Any, stop: Callable[[], Any]) -> tuple[Any, str, bool]:
+        """A copy of ``command`` scaled, then clamped to the limits in force (see :meth:`apply`)."""
         out = copy_message(command)
         changed = []
         if judgement.scale != 1.0 and self._floats:

@@ -142,3 +142,12 @@ def test_a_condition_reads_paths_fields_and_division_apart_and_a_rule_reads_back
     assert condition.holds([[0.1, 5.0], False], twist(0.4)) and not condition.holds([[0.3, 5.0], False], twist(0.4))
     again = rule(**NEAR.as_data())
     assert again == NEAR and str(NEAR) == "when min(/scan.gains) < 0.5: limit linear.x -0.2..0.2"
+
+
+def test_a_rule_that_cannot_be_applied_to_the_command_is_the_stop_message():
+    """A limit on a fixed array the sender gave as a tuple cannot be clamped in place: the stop message, never the
+    command unchecked."""
+    ruleset = RuleSet([rule("true", limit={"fixed[0]": (0.0, 1.0)})], Sample, "/out", {}, "guard /out")
+    command = Sample(fixed=(5.0, 0.0, 0.0))
+    out, why, stopped = ruleset.apply(ruleset.judge({}, 0.0, command), command, lambda: Sample())
+    assert stopped and out == Sample() and "could not be applied" in why
