@@ -48,6 +48,7 @@ class Change:
     version: Optional[int] = None
     handler: Optional[str] = None
     source: Optional[str] = None
+    by: Optional[str] = None  # who made it, when not the person at the prompt ("the agent, request #3")
 
 
 def default_dir() -> Path:

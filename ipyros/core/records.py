@@ -130,7 +130,8 @@ class History(Rows):
     def table(self) -> TextTable:
         kept = f" (kept in {self.path})" if self.path else ""
         return TextTable(f"history of {self.node}{kept}", (Column("#", True), Column("time"), Column("change", fold=True)),
-                         tuple((str(number), time.strftime("%H:%M:%S", time.localtime(change.time)), change.change)
+                         tuple((str(number), time.strftime("%H:%M:%S", time.localtime(change.time)),
+                                change.change + (f" (by {change.by})" if getattr(change, "by", None) else ""))
                                for number, change in enumerate(self.rows, 1)))
 
 

@@ -10,6 +10,8 @@ start and watch) is the backend's: the session reads the same on both.
 from __future__ import annotations
 
 import atexit
+import contextlib
+import contextvars
 import ctypes
 import difflib
 import os
@@ -19,7 +21,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Optional, Protocol
+from typing import Any, Callable, Iterator, Optional, Protocol
 
 from ..core import msgtypes
 from ..core.errors import NodeStateError, NotDeclaredError, shorten
@@ -48,6 +50,20 @@ class SessionNode(Protocol):
     def release_base(self) -> Any: ...  # its running basenode (stop()), handed over to be stopped elsewhere
     def quieten(self) -> None: ...
     def shutdown(self) -> None: ...
+
+
+#: Who makes the changes recorded now, when not the person at the prompt (``with made_by("the agent, #3"): ...``).
+MADE_BY: contextvars.ContextVar[Optional[str]] = contextvars.ContextVar("made_by", default=None)
+
+
+@contextlib.contextmanager
+def made_by(who: str) -> Iterator[None]:
+    """The changes recorded within the block are said to be made by ``who`` (in the history and its file)."""
+    token = MADE_BY.set(who)
+    try:
+        yield
+    finally:
+        MADE_BY.reset(token)
 
 
 def print_notice(text: str) -> None:
@@ -91,6 +107,8 @@ class Session:
         self._on_close: list[Callable[[], None]] = []
         self.report: Callable[[HandlerFailure], None] = print_failure
         self.notice: Callable[[str], None] = print_notice  # a basenode died, a relay got the wrong type, ...
+        #: Who else hears each notice (an agent's server, ...): :meth:`listen` adds one, and gives back its removal.
+        self._listeners: list[Callable[[str], None]] = []
         #: How advice names a node (``nd.base.restart()``): the extension finds the user's variable.
         self.call_name: Callable[[Any], str] = lambda node: node.name
         #: Where a node created now has its handlers print (the extension gives Jupyter cells an area).
@@ -116,7 +134,7 @@ class Session:
 
     def record(self, node: str, change: str, **handler: Any) -> Change:
         """Add a change to the session's history, and to its file (see :mod:`ipyros.core.journal`)."""
-        entry = Change(time.time(), node, change, **handler)
+        entry = Change(time.time(), node, change, **handler, by=MADE_BY.get())
         self.history.append(entry)
         journal = self.journal
         if journal is not None:
@@ -136,8 +154,29 @@ class Session:
         return self._journal
 
     def notify(self, text: str) -> None:
-        """Tell the user something that happened on its own (a basenode died, ...); each line :func:`shorten`-ed."""
-        self.notice("\n".join(shorten(line) for line in text.split("\n")))
+        """Tell the user something that happened on its own (a basenode died, ...); each line :func:`shorten`-ed.
+
+        The prompt hears it through :attr:`notice`, and every listener added by :meth:`listen` hears it too; a
+        listener that raises is taken off, said once, and never stops the others.
+        """
+        said = "\n".join(shorten(line) for line in text.split("\n"))
+        self.notice(said)
+        for listener in list(self._listeners):
+            try:
+                listener(said)
+            except Exception as error:  # noqa: BLE001 - one listener's fault is not the session's
+                self.unlisten(listener)
+                self.notice(f"ipyros: a listener of the session's notices raised {type(error).__name__}: {error}; "
+                            "it hears no more")
+
+    def listen(self, listener: Callable[[str], None]) -> Callable[[], None]:
+        """``listener(text)`` hears every notice from now on, beside the prompt; the call it returns ends that."""
+        self._listeners.append(listener)
+        return lambda: self.unlisten(listener)
+
+    def unlisten(self, listener: Callable[[str], None]) -> None:
+        if listener in self._listeners:
+            self._listeners.remove(listener)
 
     def start_process_node(self, fullname: str) -> str:
         """Start this process's ROS side (on ROS 1 the master is found or started first) once; its node's name."""

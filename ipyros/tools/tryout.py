@@ -329,6 +329,9 @@ def _tally(counts: dict[str, int]) -> str:
     return ", ".join(f"{n} {acting}" for acting, n in sorted(counts.items(), key=lambda kv: -kv[1])) or "-"
 
 
+#: The writes of one call kept by a try: a handler that writes more for one input is said to, and the rest only counted.
+WRITES_KEPT = 1000
+
 #: Messages between two collections of the young objects while a try runs over a bag.
 YOUNG_EVERY = 10000
 
@@ -384,8 +387,12 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
     # checked once (with the node's name), not for each of a bag's messages.
     checked: dict[tuple[int, str, type], tuple[str, Optional[str]]] = {}
     clock = time.perf_counter
+    call = [0, 0]  # where the call in progress starts in writes, and how many of its writes were not kept
 
     def record(node: NodeEngine, topic: str, msg: Any) -> None:
+        if len(writes) - call[0] >= WRITES_KEPT:  # a runaway handler: counted, not kept (memory stays bounded)
+            call[1] += 1
+            return
         key = (id(node), topic, type(msg))
         found = checked.get(key)
         if found is None:
@@ -394,6 +401,7 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
 
     def run(handler: Callable[..., Any], msg: Any) -> Outcome:
         mark = len(writes)
+        outer, call[:] = call[:], [mark, 0]
         error = None
         start = clock()
         try:
@@ -405,6 +413,10 @@ def _intercepted() -> Iterator[Callable[[Callable[..., Any], Any], Outcome]]:
             elapsed = (clock() - start) * 1e3
             made = tuple(writes[mark:])
             del writes[mark:]
+            if call[1]:
+                error = (f"{error}; " if error else "") + (f"wrote {WRITES_KEPT + call[1]:,} messages for one input: "
+                                                           f"the first {WRITES_KEPT:,} kept")
+            call[:] = outer
         printed = ""
         if buffer.tell():
             printed = buffer.getvalue()

@@ -12,12 +12,14 @@
 * :class:`PlotMagics` (``plot.py``): ``%plot``, topic fields drawn live;
 * :class:`RecordMagics` (``record.py``): ``%record``, topics written to a bag;
 * :class:`SafetyMagics` (``safety.py``): ``%estop``, the session's guards held at their stop message;
-* :class:`MachineMagics` (``machines.py``): ``%machines``, the robots' keepers the session sees.
+* :class:`MachineMagics` (``machines.py``): ``%machines``, the robots' keepers the session sees;
+* :class:`AgentMagics` (``agent.py``): ``%mcp``, an AI agent's server, its requests approved or denied here.
 
 :mod:`ipyros.ipython.extension` creates and registers them; ``%magic?`` shows each one's help.
 """
 
 from .actions import ActionMagics
+from .agent import AgentMagics
 from .config import RosMagics
 from .demo import DemoMagics
 from .graph import TopicMagics
@@ -31,4 +33,5 @@ from .safety import SafetyMagics
 from .wrap import WrapMagics
 
 __all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics",
-           "RateMagics", "IntrospectMagics", "ActionMagics", "SafetyMagics", "MachineMagics"]
+           "RateMagics", "IntrospectMagics", "ActionMagics", "SafetyMagics", "MachineMagics",
+           "AgentMagics"]
