@@ -9,7 +9,6 @@ a magic line split into its options and its free text (YAML, an expression).
 
 from __future__ import annotations
 
-import dataclasses
 import difflib
 import re
 import time
@@ -17,12 +16,11 @@ from typing import Any, Callable, Optional, Protocol
 
 from IPython.core.error import UsageError
 
-from ..core import msgpath, names, plan as planning
-from ..core.errors import MasterError
-from ..core.graph import GraphSnapshot, frozen
+from ..core import msgpath, names
+from ..core.graph import GraphSnapshot
 from ..dsl import node_of, rosNode
 from ..node.session import Session, current
-from ..tools.graph import GraphCache
+from ..tools.graph import GraphCache, as_dsl_nodes, live_graph as graph_now
 from ..tools.probe import PromptPublisher
 
 __all__ = ["Host", "as_dsl_nodes", "close_names", "compile_filter", "evaluate", "find_node", "global_topic", "live_graph",
@@ -45,12 +43,7 @@ class Host(Protocol):
 # -- the live graph ----------------------------------------------------------------------------
 def live_graph(host: Host) -> GraphSnapshot:
     """The graph read afresh (a master that just restarted gets the session registered again first)."""
-    host.session.backend.check_graph()  # a master just restarted: the session registers again first
-    snap = host.graph.refresh_now()
-    if not snap.master_up:
-        raise MasterError(f"no ROS master answers at {host.graph.where}; start roscore, "
-                          "or check ROS_MASTER_URI (c.RosMagics.master_uri)")
-    return snap
+    return graph_now(host.session.backend, host.graph)
 
 def topic_and_field(snap: GraphSnapshot, name: str) -> tuple[str, str]:
     """``/turtle1/pose/position.x`` → ``("/turtle1/pose", "position.x")``, as rostopic echo reads a
@@ -93,39 +86,6 @@ def live_type(host: Host, topic: str, for_pub: bool = False, snap: Optional[Grap
     if not type_name or type_name == "*":
         raise UsageError(f"the master does not know the type of {topic} yet; try again in a moment")
     return type_name
-
-
-def as_dsl_nodes(snap: GraphSnapshot, session: Any) -> GraphSnapshot:
-    """``snap`` with this session's ROS 1 node replaced, topic by topic, by its DSL nodes that use the topic.
-
-    On ROS 1 every DSL node of the session lives in one ROS node, named after the first
-    one created: after ``nd.shutdown()`` the master still lists that name as publishing
-    what the session's other nodes (a ``%pub``) publish. Naming the DSL nodes says who.
-    """
-    process = session.process.name if session.process.shared else None
-    if not process:
-        return snap
-    uses: dict[tuple[str, str], list[str]] = {}
-    for node in list(session.nodes.values()):
-        for spec in planning.plan(node.model()):
-            if isinstance(spec, planning.PublishSpec):
-                ends = [(spec.topic, "publish")]
-            elif isinstance(spec, planning.SubscribeSpec):
-                ends = [(spec.topic, "subscribe")]
-            elif isinstance(spec, planning.RelaySpec) and spec.machine is None:  # a placed one runs on its machine
-                ends = [(spec.source, "subscribe"), (spec.target, "publish")]
-            else:  # timers and services: no topic
-                ends = []
-            for end in ends:
-                uses.setdefault(end, []).append(node.fullname)
-
-    def named(mapping: Any, side: str) -> dict[str, tuple[str, ...]]:
-        return {topic: tuple(sorted({n for node in nodes for n in (uses.get((topic, side)) or [node]
-                                                                    if node == process else [node])}))
-                for topic, nodes in mapping.items()}
-
-    return dataclasses.replace(snap, publishers=frozen(named(snap.publishers, "publish")),
-                               subscribers=frozen(named(snap.subscribers, "subscribe")))
 
 
 def close_names(name: str, known: Any) -> str:

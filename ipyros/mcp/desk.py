@@ -28,7 +28,7 @@ from ..core.remapping import base_fullname
 from ..dsl import engine_of, node_of, rosNode
 from ..node.engine import NodeEngine
 from ..node.session import Session, made_by
-from ..tools.graph import GraphCache
+from ..tools.graph import GraphCache, as_dsl_nodes, live_graph
 from ..tools.probe import Echo, PromptPublisher
 from ..tools.record import bag_module
 from ..tools.tryout import one_line, try_bag, try_candidate
@@ -66,7 +66,7 @@ class Desk:
     # -- reading -------------------------------------------------------------------------------------------
     def graph_now(self, pattern: str = "", node: Optional[str] = None) -> Answer:
         """Topics (type, publishers, subscribers), nodes, services and actions; ``pattern`` a glob or a part."""
-        snap = self._snapshot()
+        snap = as_dsl_nodes(self._snapshot(), self.session)  # the session's own nodes by their DSL names
         topics = snap.topics_matching(pattern or "", node=node and normal(node, "node", self.allowed.namespace))
         shown = topics[:MOST_SHOWN]
         data: dict[str, Any] = {"topics": [{"name": t, "type": snap.topics.get(t, ""), "publishers": list(snap.publishers.get(t, ())),
@@ -305,10 +305,7 @@ class Desk:
                       "they answer", request.as_data())
 
     def _snapshot(self) -> GraphSnapshot:
-        snap = self.graph.refresh_now()
-        if not snap.master_up:
-            raise IpyrosError(f"no ROS graph answers at {self.graph.where}: nothing to read now")
-        return snap
+        return live_graph(self.session.backend, self.graph)
 
     def _nodes(self) -> list[rosNode]:
         return [node_of(cast(NodeEngine, e)) for e in list(self.session.nodes.values()) if not is_tool(e.name)]

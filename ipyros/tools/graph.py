@@ -21,11 +21,13 @@ import dataclasses
 import logging
 import threading
 import time
-from typing import Callable, Optional
+from typing import Any, Callable, Optional
 
-from ..core.graph import EMPTY, GraphSnapshot
+from ..core.errors import MasterError
+from ..core import plan as planning
+from ..core.graph import EMPTY, GraphSnapshot, frozen
 
-__all__ = ["REST", "GraphCache"]
+__all__ = ["REST", "GraphCache", "as_dsl_nodes", "live_graph"]
 
 log = logging.getLogger(__name__)
 
@@ -145,3 +147,47 @@ class GraphCache:
         snap = self._snapshot
         state = "up" if snap.master_up else "down"
         return f"<GraphCache {self.where} master {state}, {len(snap.topics)} topics, {'running' if self.running else 'stopped'}>"
+
+
+def live_graph(backend: Any, graph: GraphCache) -> GraphSnapshot:
+    """The graph read afresh through ``graph`` (a master that just restarted gets the session registered again
+    first); a one-line error when no master answers. What the magics and an agent's tools both read."""
+    backend.check_graph()
+    snap = graph.refresh_now()
+    if not snap.master_up:
+        raise MasterError(f"no ROS master answers at {graph.where}; start roscore, "
+                          "or check ROS_MASTER_URI (c.RosMagics.master_uri)")
+    return snap
+
+
+def as_dsl_nodes(snap: GraphSnapshot, session: Any) -> GraphSnapshot:
+    """``snap`` with this session's ROS 1 node replaced, topic by topic, by its DSL nodes that use the topic.
+
+    On ROS 1 every DSL node of the session lives in one ROS node, named after the first
+    one created: after ``nd.shutdown()`` the master still lists that name as publishing
+    what the session's other nodes (a ``%pub``) publish. Naming the DSL nodes says who.
+    """
+    process = session.process.name if session.process.shared else None
+    if not process:
+        return snap
+    uses: dict[tuple[str, str], list[str]] = {}
+    for node in list(session.nodes.values()):
+        for spec in planning.plan(node.model()):
+            if isinstance(spec, planning.PublishSpec):
+                ends = [(spec.topic, "publish")]
+            elif isinstance(spec, planning.SubscribeSpec):
+                ends = [(spec.topic, "subscribe")]
+            elif isinstance(spec, planning.RelaySpec) and spec.machine is None:  # a placed one runs on its machine
+                ends = [(spec.source, "subscribe"), (spec.target, "publish")]
+            else:  # timers and services: no topic
+                ends = []
+            for end in ends:
+                uses.setdefault(end, []).append(node.fullname)
+
+    def named(mapping: Any, side: str) -> dict[str, tuple[str, ...]]:
+        return {topic: tuple(sorted({n for node in nodes for n in (uses.get((topic, side)) or [node]
+                                                                    if node == process else [node])}))
+                for topic, nodes in mapping.items()}
+
+    return dataclasses.replace(snap, publishers=frozen(named(snap.publishers, "publish")),
+                               subscribers=frozen(named(snap.subscribers, "subscribe")))

@@ -32,6 +32,9 @@ BUILD = (
     "mc = rosNode('mc')\n"
     "mc.new.subscribe('/mc/in', drive, msgType=Twist).publish('/mc/cmd_vel', msgType=Twist)\n"
     "mc.guard('/mc/cmd_vel', limits={'linear.x': (-0.5, 0.5)})\n"
+    "from std_srvs.srv import SetBool\n"
+    "answer = getattr(SetBool, '_response_class', None) or SetBool.Response  # ROS 1, ROS 2\n"
+    "mc.new.service('/mc/ping', SetBool, handler=lambda request: answer(success=request.data, message='pong'))\n"
     "mc.create()\n"
 )
 
@@ -54,11 +57,12 @@ def twist_xs(listener) -> list[float]:
     return [float(line.split()[1]) for line in list(listener.lines) if line.startswith("twist ")]
 
 
-def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, session, peer, capsys, monkeypatch):
+def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, session, peer, capsys, monkeypatch,
+                                                                             tmp_path):
     motors = peer("listen_twist.py", "/mc/cmd_vel", "--name=mc_motors")
     motors.wait_line("ready")
     ok(ip, BUILD)
-    ok(ip, "started = %mcp start --allow-publish mc/cmd_vel --allow-swap mc --allow-call /mw/reset")
+    ok(ip, "started = %mcp start --allow-publish mc/cmd_vel --allow-swap mc --allow-call /mw/reset mc/ping")
     started = ip.user_ns["started"]
     assert started.url.startswith("http://127.0.0.1:") and len(started.token) > 30
     assert started.token not in repr(started)  # shown once, not in every repr
@@ -102,6 +106,19 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
         flood = "def flood(msg):\n    for _ in range(100000):\n        mc.write('/mc/cmd_vel', msg)\n"
         text, data, error = call(server, "rehearse", node="mc", topic="/mc/in", source=flood, last=1)
         assert not error and "wrote 100,000 messages for one input: the first 1,000 kept" in text
+        bag = tmp_path / ("in.bag" if session.backend.name == "ROS 1" else "in")  # ROS 2: a rosbag2 folder
+        ok(ip, "from ipyros.tools.record import bag_module\n"
+               f"writer = bag_module().BagWriter(__import__('pathlib').Path({str(bag)!r}))\n"
+               "for i in range(1, 11):\n    writer.write('/mc/in', Twist(linear=type(Twist().linear)(x=i / 10)))\n"
+               "writer.close()")
+        text, data, error = call(server, "bag_info", path=str(bag))
+        assert not error and [(t["topic"], t["count"]) for t in data["topics"]] == [("/mc/in", 10)], data
+        assert data["topics"][0]["type"].replace("/msg/", "/") == "geometry_msgs/Twist"  # ROS 2 bags: pkg/msg/Type
+        text, data, error = call(server, "rehearse", node="mc", topic="/mc/in", source=double, bag=str(bag))
+        assert not error and (data["messages"], data["differing"]) == (10, 10), data
+        # what the guard would do: the live handler's 0.6 ... 1.0 clamped, the candidate's 0.6 ... 2.0 too
+        assert data["guarded"]["live"]["/mc/cmd_vel"] == {"passed": 5, "clamped": 5}, data["guarded"]
+        assert data["guarded"]["candidate"]["/mc/cmd_vel"] == {"passed": 2, "clamped": 8}, data["guarded"]
         monkeypatch.setattr(desk_module, "REHEARSAL_SECONDS", 1.0)
         text, data, error = call(server, "rehearse", node="mc", topic="/mc/in", source="def spin(msg):\n    while True:\n"
                                  "        pass\n", last=1)
@@ -156,6 +173,14 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
     wait_for(lambda: 0.5 in twist_xs(motors)[before:], what="the published command, clamped by the guard")
     assert 3.0 not in twist_xs(motors)
 
+    # a call of an allowed service, once approved
+    text, data, error = call(server, "call", service="/mc/ping", request={"data": True})
+    assert not error and data["state"] == "pending", text
+    ok(ip, f"%mcp approve {data['number']}")
+    text, data, error = call(server, "request", number=data["number"])
+    assert data["state"] == "approved" and "called /mc/ping (std_srvs/SetBool)" in data["answer"], data
+    assert "'success': True, 'message': 'pong'" in data["answer"]
+
     # the e-stop: always allowed, released only at the prompt
     text, data, error = call(server, "estop")
     assert not error and data["estopped"] == ["/mc/cmd_vel (/mc)"]
@@ -195,6 +220,8 @@ def test_the_server_listens_on_loopback_behind_its_token_and_leaves_nothing_list
     assert post(listing, Authorization="Bearer wrong")[0] == 401
     assert post(listing, Authorization=f"Bearer {started.token}", Host="evil.example:80")[0] == 421
     assert post(b"x" * 400_000, Authorization=f"Bearer {started.token}")[0] == 413
+    status, said = post(b'{"jsonrpc": "2.0", "id": 1, "method": ', Authorization=f"Bearer {started.token}")
+    assert status == 400 and "Parse error" in said, (status, said)
 
     async def over_http():
         import httpx2
