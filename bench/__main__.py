@@ -3,7 +3,7 @@
 ROS 1 (a venv that sees rospy): the relay bench against topic_tools, where a handler's time goes,
 the guard (stop on silence, hostile commands), a robot on another machine (link cuts, a lossy link, a relay
 placed on it beside the session's),
-%try over a bag, completion, scale; ROS 2 (rclpy): the relay bench, the guard, %try over a bag,
+%try over a bag, completion, an agent's tool calls (MCP), scale; ROS 2 (rclpy): the relay bench, the guard, %try over a bag,
 a robot on another machine, completion and scale on rclpy. Each bench starts what it needs (a
 rosmaster on a free port, or a DDS domain of its own), prints a table, saves it under bench/results/, keeps its figures for
 ``python -m bench.figures`` and stops everything it started. The exit code is non-zero if a
@@ -18,14 +18,14 @@ import sys
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    from bench import completion, guard, scale, try_bag
+    from bench import agent, completion, guard, scale, try_bag
 
     if importlib.util.find_spec("rospy") is None:
         from bench import machine_link, relay_ros2 as relay
-        benches = (relay, guard, machine_link, try_bag, completion, scale)
+        benches = (relay, guard, machine_link, try_bag, completion, agent, scale)
     else:
         from bench import handler_cost, machine_link, machine_relay, relay
-        benches = (relay, handler_cost, guard, machine_link, machine_relay, try_bag, completion, scale)
+        benches = (relay, handler_cost, guard, machine_link, machine_relay, try_bag, completion, agent, scale)
 
     status = 0
     for bench in benches:
