@@ -34,6 +34,7 @@ ros1_setup() {
     libsensor-msgs-dev  # the relay bench's path (h) relays images too
     chromium  # the notebooks checked in a real browser (tests/ros1/test_browser.py, playwright drives it)
     nftables iproute2  # a lossy link to a robot in its own network namespace (tests/both/test_machine_link.py)
+    graphviz  # %graph lays the live graph out with dot (an SVG in Jupyter, --save FILE.svg|.png)
   )
 
   local missing=() p stamp

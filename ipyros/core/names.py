@@ -68,8 +68,9 @@ def tool_name(purpose: str) -> str:
 
 
 def is_tool(name: str) -> bool:
-    """Whether ``name`` (base or global) is a helper node's, of any ipyros session: not a node the user made."""
-    return re.fullmatch(r"ipyros_[a-z]+_\d+", name.rsplit(SEP, 1)[-1]) is not None
+    """Whether ``name`` (base or global) is a helper node's, of any ipyros session: not a node the user made (a
+    guard's own process is ``ipyros_guard_<pid>_<n>``)."""
+    return re.fullmatch(r"ipyros_[a-z]+_\d+(?:_\d+)?", name.rsplit(SEP, 1)[-1]) is not None
 
 
 def is_legal_name(name: str) -> bool:

@@ -20,12 +20,15 @@ from rich.protocol import rich_cast
 from rich.table import Table
 from rich.text import Text
 
+from ..core.errors import IpyrosError
 from ..core.graph import GraphSnapshot
+from ..core.picture import Picture, to_dot, to_text
 from ..core.qos import from_model as qos_of
 from ..core.records import History, Interface, NodeStatus, Rows, Versions
 from ..core.tables import Cell, TextTable
 from ..core.text import counted
 from ..dsl import rosNode
+from ..tools.drawing import layout
 from ..tools.probe import Rate
 from ..tools.robot import DemoRobot
 from ..tools.tryout import BagTrial, TrialReport, one_line, silent_sides
@@ -329,15 +332,30 @@ def renderable(obj: Any) -> Any:
 
 
 def register(shell: Any) -> list[tuple[Any, type, Any]]:
-    """Have ``shell`` show the records as tables (text in a terminal, HTML in Jupyter); what :func:`unregister`
-    takes to put things back as they were."""
+    """Have ``shell`` show the records as tables (text in a terminal, HTML in Jupyter) and a drawn graph as itself
+    (a tree in a terminal, an SVG in Jupyter); what :func:`unregister` takes to put things back as they were."""
     formatters = shell.display_formatter.formatters
     done = []
     for cls in _with_subclasses(RENDERERS):
         for mime, show in (("text/plain", _pretty), ("text/html", render_html)):
             formatter = formatters[mime]
             done.append((formatter, cls, formatter.for_type(cls, show)))
+    for mime, show in (("text/plain", _picture_text), ("image/svg+xml", picture_svg)):
+        formatter = formatters[mime]
+        done.append((formatter, Picture, formatter.for_type(Picture, show)))
     return done
+
+
+def _picture_text(drawn: Picture, printer: Any, cycle: bool) -> None:
+    printer.text(to_text(drawn, _width(100)))
+
+
+def picture_svg(drawn: Picture) -> Optional[str]:
+    """The picture laid out by Graphviz, as SVG text; None without Graphviz (the tree is shown instead)."""
+    try:
+        return layout(to_dot(drawn)).decode()
+    except IpyrosError:
+        return None
 
 
 def _with_subclasses(classes: Any) -> list[type]:

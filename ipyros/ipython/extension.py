@@ -45,6 +45,7 @@ from .magics import (
     ActionMagics,
     AgentMagics,
     DemoMagics,
+    DrawingMagics,
     IntrospectMagics,
     MachineMagics,
     NodeMagics,
@@ -80,10 +81,11 @@ class Extension:
         self.plot_magics = PlotMagics(shell, self)
         self.record_magics = RecordMagics(shell, self)
         self.agent_magics = AgentMagics(shell, self)
+        self.drawing_magics = DrawingMagics(shell, self)
         self.magics = [self.settings, TopicMagics(shell, self), RateMagics(shell, self), IntrospectMagics(shell, self),
                        self.node_magics, WrapMagics(shell, self), self.plot_magics, self.record_magics,
                        DemoMagics(shell, self), ActionMagics(shell, self), SafetyMagics(shell, self),
-                       MachineMagics(shell, self), self.agent_magics]
+                       MachineMagics(shell, self), self.agent_magics, self.drawing_magics]
         self._completion: Optional[completion.Installed] = None
         self._freezer: Optional[collector.Freezer] = None  # takes what the session loaded out of full collections
         self._log_handler = StderrLogHandler()
@@ -262,6 +264,7 @@ class Extension:
         self.plot_magics.stop_live()
         self.record_magics.stop()
         self.agent_magics.stop()
+        self.drawing_magics.stop_live()
         self.settings.unobserve(self._setting_changed, names=_LIVE_SETTINGS)
         shell.events.unregister("post_run_cell", self._after_cell)
         logger = logging.getLogger("ipyros")

@@ -13,7 +13,8 @@
 * :class:`RecordMagics` (``record.py``): ``%record``, topics written to a bag;
 * :class:`SafetyMagics` (``safety.py``): ``%estop``, the session's guards held at their stop message;
 * :class:`MachineMagics` (``machines.py``): ``%machines``, the robots' keepers the session sees;
-* :class:`AgentMagics` (``agent.py``): ``%mcp``, an AI agent's server, its requests approved or denied here.
+* :class:`AgentMagics` (``agent.py``): ``%mcp``, an AI agent's server, its requests approved or denied here;
+* :class:`DrawingMagics` (``drawing.py``): ``%graph``, the live graph drawn as the paper draws wrapping.
 
 :mod:`ipyros.ipython.extension` creates and registers them; ``%magic?`` shows each one's help.
 """
@@ -22,6 +23,7 @@ from .actions import ActionMagics
 from .agent import AgentMagics
 from .config import RosMagics
 from .demo import DemoMagics
+from .drawing import DrawingMagics
 from .graph import TopicMagics
 from .machines import MachineMagics
 from .introspect import IntrospectMagics
@@ -34,4 +36,4 @@ from .wrap import WrapMagics
 
 __all__ = ["RosMagics", "TopicMagics", "NodeMagics", "WrapMagics", "DemoMagics", "PlotMagics", "RecordMagics",
            "RateMagics", "IntrospectMagics", "ActionMagics", "SafetyMagics", "MachineMagics",
-           "AgentMagics"]
+           "AgentMagics", "DrawingMagics"]
