@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Sequence
 
 from ..core.errors import DeclarationError, first_line
+from ..core.progress import Progress, Step, no_progress
 from ..core.records import short_repr
 
 __all__ = ["Converted", "convert"]
@@ -55,11 +56,13 @@ def _rosbags() -> Any:
 
 
 def convert(source: Path, target: Path, topics: Optional[Sequence[str]] = None, start: Optional[float] = None,
-            end: Optional[float] = None, keep: Optional[Keep] = None, storage: Optional[str] = None) -> Converted:
+            end: Optional[float] = None, keep: Optional[Keep] = None, storage: Optional[str] = None,
+            progress: Progress = no_progress) -> Converted:
     """Write the messages of ``source`` that pass the filters to ``target`` (see the module's docstring).
 
-    ``topics``: only these; ``start``/``end``: seconds from the bag's start; ``keep``: a content filter.
-    Nothing is left behind when it fails: a half-written target is removed.
+    ``topics``: only these; ``start``/``end``: seconds from the bag's start; ``keep``: a content filter;
+    ``progress`` shows how far it got (:mod:`ipyros.core.progress`). Nothing is left behind when it fails (Ctrl-C
+    too): a half-written target is removed.
     """
     _rosbags()
     from rosbags.highlevel import AnyReader
@@ -95,8 +98,10 @@ def convert(source: Path, target: Path, topics: Optional[Sequence[str]] = None, 
         connections = [c for c in reader.connections if not topics or c.topic in topics]
         window = (None if start is None else reader.start_time + int(start * 1e9),
                   None if end is None else reader.start_time + int(end * 1e9) + 1)
+        total = sum(getattr(c, "msgcount", 0) for c in connections) or None
         try:
-            return _write(reader, connections, source, target, ros1_out, storage or "mcap", window, keep)
+            with progress(f"converting {source.name}", total, "messages") as step:
+                return _write(reader, connections, source, target, ros1_out, storage or "mcap", window, keep, step)
         except BaseException:
             _remove(target)
             raise
@@ -105,7 +110,7 @@ def convert(source: Path, target: Path, topics: Optional[Sequence[str]] = None, 
 
 
 def _write(reader: Any, connections: list, source: Path, target: Path, ros1_out: bool, storage: str,
-           window: tuple[Optional[int], Optional[int]], keep: Optional[Keep]) -> Converted:
+           window: tuple[Optional[int], Optional[int]], keep: Optional[Keep], step: Step) -> Converted:
     from rosbags.rosbag1 import Writer as Ros1Writer
     from rosbags.rosbag2 import StoragePlugin, Writer as Ros2Writer
 
@@ -121,6 +126,8 @@ def _write(reader: Any, connections: list, source: Path, target: Path, ros1_out:
         out: dict[int, Any] = {}
         for connection, stamp, raw in reader.messages(connections=connections, start=window[0], stop=window[1]):
             read += 1
+            if not read & 1023:
+                step(read)
             ros1_in = connection.msgtype and _is_ros1(connection)
             if keep is not None:
                 message = store.deserialize_ros1(raw, connection.msgtype) if ros1_in else \

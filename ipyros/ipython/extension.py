@@ -40,7 +40,7 @@ from ..node.session import Session, configure, current, started as session_start
 from ..tools import collector
 from ..tools.graph import GraphCache
 from ..tools.probe import PromptPublisher
-from . import completion, display
+from . import completion, display, progress
 from .magics import (
     ActionMagics,
     AgentMagics,
@@ -120,6 +120,8 @@ class Extension:
         self.session.call_name = self._variable_of
         self._saved["known_graph"] = self.session.known_graph
         self.session.known_graph = self._known_graph
+        self._saved["progress"] = self.session.progress
+        self.session.progress = progress.view(shell)
         streams.route()  # a thread's prints to where it says (%try keeps a handler's; Jupyter: below its cell)
         if cell_output.in_kernel(shell):
             self._saved["output_scope"] = self.session.output_scope
@@ -282,6 +284,7 @@ class Extension:
             session.call_name = self._saved["call_name"]
         if session.known_graph == self._known_graph:
             session.known_graph = self._saved["known_graph"]
+        session.progress = self._saved.get("progress", session.progress)
         if "output_scope" in self._saved:
             session.output_scope = self._saved["output_scope"]
         streams.unroute()

@@ -27,6 +27,7 @@ from ..core import msgtypes
 from ..core.errors import NodeStateError, NotDeclaredError, shorten
 from ..core.graph import EMPTY, GraphSnapshot, actions_of
 from ..core.journal import Change, Journal
+from ..core.progress import Progress, no_progress
 from ..core.model import NodeModel
 from ..core.slots import HandlerFailure, OutputScope
 from ..processes.basenode import stop_together
@@ -116,6 +117,9 @@ class Session:
         #: The graph as last read, never waited for (the extension's cache): what TAB offers after
         #: ``nd.reuse.publish.``; empty without one.
         self.known_graph: Callable[[], GraphSnapshot] = lambda: EMPTY
+        #: How long work shows its progress (``%try --bag``, ``%bag convert``): drawn by the front end, nowhere in a
+        #: script (see :mod:`ipyros.core.progress`).
+        self.progress: Progress = no_progress
         self._lock = threading.RLock()
         self._closing: Optional[threading.Thread] = None  # the thread that closes the session, once one does
         self._closed = threading.Event()  # set once it closed

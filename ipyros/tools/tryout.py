@@ -272,12 +272,20 @@ def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, 
     stopped = False
     guards = RehearsedGuards(node.model().guards) if node.model().guards else None
     inputs = guards.inputs if guards is not None else set()
-    messages = bag_module().bag_messages(path, {resolved, *handlers, *inputs})
+    bags = bag_module()
+    wanted = {resolved, *handlers, *inputs}
+    messages = bags.bag_messages(path, wanted)
     live_out, candidate_out = outputs["live"], outputs["candidate"]
-    with _intercepted() as run, contextlib.closing(messages), _young_collections_only() as tick:
+    count = sum(row.count for row in bags.bag_info(path).rows if row.topic in wanted)
+    seen = 0
+    with engine_of(node).session.progress(f"%try {resolved} over {path.name}", count, "messages") as step, \
+            _intercepted() as run, contextlib.closing(messages), _young_collections_only() as tick:
         try:  # (the bag's reader is closed at once, even on Ctrl-C)
             for name, stamp, msg in messages:
                 tick()
+                seen += 1
+                if not seen & 1023:  # a view redraws a few times a second: told every 1,024 messages
+                    step(seen)
                 if start is None:
                     start = stamp
                 at = (stamp - start) / 1e9

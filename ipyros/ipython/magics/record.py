@@ -19,6 +19,7 @@ from IPython.core.error import UsageError
 from IPython.core.magic import line_magic, magics_class
 from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
+from ...core.errors import IpyrosError
 from ...files.bagconvert import Converted, convert
 from ...tools.bagplay import CONTROLS, control
 from ...tools.record import Recording, bag_module
@@ -131,5 +132,9 @@ class RecordMagics(ExtensionMagics):
                              "rosbag2)")
         test = compile_filter(args.filter, self.shell.user_ns) if args.filter is not None else None
         keep = (lambda m, topic, t: test(m, topic=topic, t=t)) if test is not None else None
-        # shown once, as the cell's result (c = %bag convert ... keeps it)
-        return convert(Path(args.target), Path(args.value), args.topics, args.start, args.end, keep, args.storage)
+        try:  # shown once, as the cell's result (c = %bag convert ... keeps it)
+            return convert(Path(args.target), Path(args.value), args.topics, args.start, args.end, keep,
+                           args.storage, self.ext.session.progress)
+        except KeyboardInterrupt:
+            raise IpyrosError(f"stopped by Ctrl-C: {args.value} was not written (what was written of it is "
+                              "removed)") from None
