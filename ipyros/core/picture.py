@@ -18,6 +18,7 @@ node; what is left out is counted in :attr:`Picture.left_out`. :func:`to_dot` wr
 
 from __future__ import annotations
 
+from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from typing import Collection, Mapping, Optional, Sequence
 
@@ -125,10 +126,12 @@ def picture(snap: GraphSnapshot, ours: Mapping[str, Drawn], pattern: str = "", f
         wires.append(Wire(topic, snap.topics.get(topic, ""),
                           tuple(n for n in snap.publishers.get(topic, ()) if n not in unseen),
                           tuple(n for n in snap.subscribers.get(topic, ()) if n not in unseen), role, guard))
+    drawn_topics = {w.topic for w in wires}
     for name, drawn in ours.items():  # a node's declared topics, even before the graph shows them
         for t in drawn.model.topics:
-            if t.resolved in internal or any(w.topic == t.resolved for w in wires):
+            if t.resolved in internal or t.resolved in drawn_topics:
                 continue
+            drawn_topics.add(t.resolved)
             role, guard = roles.get(t.resolved, ("", ""))
             out = t.direction == "publish"
             wires.append(Wire(t.resolved, t.type, (name,) if out else (), () if out else (name,), role, guard))
@@ -139,7 +142,7 @@ def picture(snap: GraphSnapshot, ours: Mapping[str, Drawn], pattern: str = "", f
     kept_boxes, kept_wires = _cut(list(boxes.values()), wires, pattern, focus, depth)
     said = ""
     if len(kept_boxes) > most:  # the session's own first, then the busiest
-        busy = {b.name: sum(b.name in (*w.publishers, *w.subscribers) for w in kept_wires) for b in kept_boxes}
+        busy = Counter(end for w in kept_wires for end in {*w.publishers, *w.subscribers})
         order = sorted(kept_boxes, key=lambda b: (b.kind == "node", -busy[b.name], b.name))
         chosen = {b.name for b in order[:most]} | {b.frame for b in order[:most] if b.frame}
         chosen |= {b.name for b in kept_boxes if b.frame in chosen}  # a frame is drawn whole
@@ -293,6 +296,10 @@ def to_text(drawn: Picture, width: int = 80) -> str:
     out: list[str] = []
     order = sorted(drawn.boxes, key=lambda b: (b.kind not in ("session", "wrapping"), b.frame or b.name,
                                                b.kind == "basenode", b.name))
+    ends: dict[str, list[Wire]] = defaultdict(list)  # each node's wires, in the picture's order, found once
+    for wire in drawn.wires:
+        for end in dict.fromkeys((*wire.publishers, *wire.subscribers)):
+            ends[end].append(wire)
     for box in order:
         if box.kind == "basenode":
             continue  # under its wrapping node
@@ -306,7 +313,7 @@ def to_text(drawn: Picture, width: int = 80) -> str:
             for link in [w for w in drawn.inner if w.frame == box.name]:
                 way = "out" if link.source != box.name else "in"
                 lines.append(f"  its {link.topic} {way}: {link.role}")
-        for wire in drawn.wires:
+        for wire in ends.get(box.name, ()):
             typed = f" [{wire.type}]" if drawn.types and wire.type else ""
             ours = box.kind in ("session", "wrapping")  # what it does to a topic is said on its own lines
             extra = (f" ({wire.role})" if wire.role and ours else "") + (

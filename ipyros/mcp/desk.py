@@ -15,6 +15,8 @@ import dataclasses
 import difflib
 import inspect
 import threading
+import time
+from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Optional, cast
@@ -29,7 +31,7 @@ from ..dsl import engine_of, node_of, rosNode
 from ..node.engine import NodeEngine
 from ..node.session import Session, made_by
 from ..tools.graph import GraphCache, as_dsl_nodes, live_graph
-from ..tools.probe import Echo, PromptPublisher
+from ..tools.probe import Echo, PromptPublisher, measure_rates
 from ..tools.record import bag_module
 from ..tools.tryout import one_line, try_bag, try_candidate
 from .allow import AgentRefused, Allowed, Reach, normal
@@ -42,6 +44,10 @@ __all__ = ["Answer", "Desk", "REHEARSAL_SECONDS", "MOST_SHOWN"]
 REHEARSAL_SECONDS = 20.0
 #: At most this many topics (nodes, services) in one answer of ``graph``: the rest counted, not listed.
 MOST_SHOWN = 500
+#: The session's notices kept for the agent.
+NOTICES_KEPT = 50
+#: At most this many topics measured for ``graph(rates=True)`` (one second, all at once).
+MOST_MEASURED = 100
 #: At most this many messages in one answer of ``echo``, and this long a wait for them.
 MOST_MESSAGES, LONGEST_WAIT = 100, 30.0
 
@@ -62,10 +68,20 @@ class Desk:
                  allowed: Allowed, requests: Requests) -> None:
         self.session, self.graph, self.publisher = session, graph, publisher
         self.namespace, self.allowed, self.requests = namespace, allowed, requests
+        #: What the session told the person on its own since the server started (a basenode died, a guard
+        #: tripped, ...), the last :data:`NOTICES_KEPT`, with their times: the agent reads them with ``history``.
+        self.notices: deque[tuple[float, str]] = deque(maxlen=NOTICES_KEPT)
+
+    def heard(self, text: str) -> None:
+        """A notice of the session's (:meth:`Session.listen <ipyros.node.session.Session.listen>` calls it)."""
+        self.notices.append((time.time(), text))
 
     # -- reading -------------------------------------------------------------------------------------------
-    def graph_now(self, pattern: str = "", node: Optional[str] = None) -> Answer:
-        """Topics (type, publishers, subscribers), nodes, services and actions; ``pattern`` a glob or a part."""
+    def graph_now(self, pattern: str = "", node: Optional[str] = None, rates: bool = False,
+                  parameters: bool = False) -> Answer:
+        """Topics (type, publishers, subscribers), nodes, services and actions; ``pattern`` a glob or a part; with
+        ``rates`` each listed topic's rate, measured for a second (the first :data:`MOST_MEASURED`); with
+        ``parameters`` the parameters and their values (under ``node`` if given, else all but those every node has)."""
         snap = as_dsl_nodes(self._snapshot(), self.session)  # the session's own nodes by their DSL names
         topics = snap.topics_matching(pattern or "", node=node and normal(node, "node", self.allowed.namespace))
         shown = topics[:MOST_SHOWN]
@@ -76,6 +92,16 @@ class Desk:
                 "actions": [{"name": a.name, "type": a.type} for a in actions_of(snap)][:MOST_SHOWN],
                 "left_out": {"topics": len(topics) - len(shown), "nodes": max(0, len(snap.nodes) - MOST_SHOWN),
                              "services": max(0, len(snap.services) - MOST_SHOWN)}}
+        if rates:
+            measured = measure_rates({t: snap.topics[t] for t in shown[:MOST_MEASURED] if snap.topics.get(t)}, 1.0)
+            for entry in data["topics"]:
+                rate = measured.get(entry["name"])
+                entry["hz"] = None if rate is None else rate.hz
+        if parameters:
+            backend = self.session.backend
+            found = backend.params_under(normal(node, "node", self.allowed.namespace) if node else "/")
+            data["parameters"] = {k: v for k, v in list(found.items())[:MOST_SHOWN]
+                                  if k.rsplit("/", 1)[-1] not in backend.standard_params}
         more = f" (the first {MOST_SHOWN} listed; give a pattern)" if len(topics) > MOST_SHOWN else ""
         text = (f"{len(topics)} topics{f' matching {pattern!r}' if pattern else ''}{more}, {len(snap.nodes)} nodes, "
                 f"{len(snap.services)} services, {len(data['actions'])} actions")
@@ -149,7 +175,9 @@ class Desk:
         rows = [{"time": c.time, "node": c.node, "change": c.change, "version": c.version, "by": c.by}
                 for c in changes]
         asked = [r.as_data() for r in self.requests.latest()]
-        return Answer(f"{len(rows)} changes, {len(asked)} requests of the agent", {"changes": rows, "requests": asked})
+        told = [{"time": when, "notice": text} for when, text in self.notices]
+        return Answer(f"{len(rows)} changes, {len(asked)} requests of the agent, {len(told)} notices",
+                      {"changes": rows, "requests": asked, "notices": told})
 
     def bag_info(self, path: str) -> Answer:
         """What a bag holds: each topic, its type and message count; start, end, storage."""

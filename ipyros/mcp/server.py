@@ -79,10 +79,12 @@ class _Tools:
     """The tools' signatures and descriptions (what the SDK makes each tool's schema of); each calls the desk."""
 
     @staticmethod
-    def graph(desk: Desk, pattern: str = "", node: Optional[str] = None) -> Answer:
+    def graph(desk: Desk, pattern: str = "", node: Optional[str] = None, rates: bool = False,
+              parameters: bool = False) -> Answer:
         """The live ROS graph: topics (type, publishers, subscribers), nodes, services, actions. pattern: a glob
-        (/turtle*) or a part of the name; node: only its topics."""
-        return desk.graph_now(pattern, node)
+        (/turtle*) or a part of the name; node: only its topics; rates: each topic's rate, measured for a second;
+        parameters: the parameters and their values (the node's, if node is given)."""
+        return desk.graph_now(pattern, node, rates, parameters)
 
     @staticmethod
     def interface(desk: Desk, type: str) -> Answer:  # noqa: A002 - the word ROS uses
@@ -103,7 +105,8 @@ class _Tools:
 
     @staticmethod
     def history(desk: Desk, node: Optional[str] = None, last: int = 50) -> Answer:
-        """The session's changes, newest last (who made each), and your requests with their answers."""
+        """The session's changes, newest last (who made each), your requests with their answers, and what the session
+        told the person on its own since the server started (a basenode died, a guard tripped)."""
         return desk.history(node, last)
 
     @staticmethod

@@ -71,11 +71,13 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
     feeding = threading.Event()
     feeding.set()
 
-    def feed():  # the input the handler turns into commands, 20 Hz
+    def feed():  # the input the handler turns into commands, 20 Hz, numbered in linear.y
         from geometry_msgs.msg import Twist
+        number = 0
         while feeding.is_set():
+            number += 1
             msg = Twist()
-            msg.linear.x = 0.2
+            msg.linear.x, msg.linear.y = 0.2, float(number)
             ip.user_ns["feeder"].write("/mc/in", msg)
             time.sleep(0.05)
 
@@ -84,8 +86,10 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
     thread.start()
     try:
         # reading
-        text, data, error = call(server, "graph", pattern="/mc/*")
+        text, data, error = call(server, "graph", pattern="/mc/*", rates=True, parameters=True)
         assert not error and {t["name"]: t["type"] for t in data["topics"]}["/mc/cmd_vel"] == "geometry_msgs/Twist"
+        assert 10 < {t["name"]: t["hz"] for t in data["topics"]}["/mc/in"] < 30, data["topics"]
+        assert isinstance(data["parameters"], dict)
         text, data, error = call(server, "interface", type="geometry_msgs/Twist")
         assert not error and "Vector3 linear" in text and "float64 x" in text
         text, data, error = call(server, "echo", topic="/mc/in.linear.x", count=2)
@@ -139,6 +143,11 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
         ok(ip, "%mcp approve 1")
         assert mc.handler("/mc/in").__name__ == "agent_in"
         wait_for(lambda: 0.4 in twist_xs(motors), what="the approved handler's commands")
+        time.sleep(0.3)
+        heard = [line.split() for line in list(motors.lines) if line.startswith("twist ")]
+        swapped = next(i for i, words in enumerate(heard) if float(words[1]) == 0.4)
+        around = [float(words[2]) for words in heard[max(0, swapped - 20):]]
+        assert around == [around[0] + i for i in range(len(around))], "no message lost across the swap"
         assert [c.by for c in session.history if c.node.strip("/") == "mc"][-1] == "the agent, request #1"
         assert "(by the agent, request #1)" in str(mc.history())
         assert "cannot be answered: it was approved already" in str(error_of(ip, "%mcp approve 1"))
@@ -184,6 +193,8 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
     # the e-stop: always allowed, released only at the prompt
     text, data, error = call(server, "estop")
     assert not error and data["estopped"] == ["/mc/cmd_vel (/mc)"]
+    text, data, error = call(server, "history")
+    assert any("the agent e-stopped /mc/cmd_vel" in n["notice"] for n in data["notices"]), data["notices"]
     assert "e-stopped" in str(mc.status())
     mc.release()
 

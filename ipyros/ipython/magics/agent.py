@@ -87,6 +87,7 @@ class AgentMagics(ExtensionMagics):
             raise IpyrosError(f"cannot write the token file ({error.strerror}); set IPYROS_MCP_FILE to a "
                               "writable path") from None
         self.server, self.desk = server, desk
+        self._unlisten = session.listen(desk.heard)  # the agent reads what the session tells the person
         session.on_close(self.stop)
         print(f"ipyros: the agent's MCP server listens at {server.url} ({allowed.describe()}); its token is kept in "
               f"{path} (yours alone) and shown here once. Claude Code:\n"
@@ -124,6 +125,9 @@ class AgentMagics(ExtensionMagics):
     def stop(self) -> int:
         """Stop the server, if one runs; how many pending requests were denied."""
         server, desk, self.server, self.desk = self.server, self.desk, None, None
+        if self._unlisten is not None:
+            self._unlisten()
+            self._unlisten = None
         denied = desk.requests.deny_all("the server stopped") if desk is not None else 0
         if server is not None:
             server.stop()
