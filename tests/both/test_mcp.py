@@ -263,3 +263,25 @@ def test_the_server_listens_on_loopback_behind_its_token_and_leaves_nothing_list
     with pytest.raises(OSError):
         socket.create_connection(("127.0.0.1", port), timeout=2).close()
     assert "no agent's server runs" in str(error_of(ip, "%mcp approve 3"))
+
+
+def test_an_agent_reads_the_demo_turtle(ip, session):
+    """The graph, a type, a message path of the turtle's pose, and the turtle's node, read by an agent."""
+    from ipyros.tools.robot import demo_robot, stop_demo_robot
+
+    demo_robot("turtle")
+    try:
+        ok(ip, "%mcp start")
+        server = agent(ip).server.mcp
+        wait_for(lambda: any(t["name"] == "/turtle1/pose" for t in call(server, "graph", pattern="/turtle1*")[1]["topics"]),
+                 timeout=20, interval=0.2, what="the turtle's pose in the agent's graph")
+        text, data, error = call(server, "graph", pattern="/turtle1*")
+        pose = next(t for t in data["topics"] if t["name"] == "/turtle1/pose")
+        assert pose["publishers"] and "/turtle1/cmd_vel" in {t["name"] for t in data["topics"]}
+        text, data, error = call(server, "interface", type=pose["type"])
+        assert not error and "position" in text
+        text, data, error = call(server, "echo", topic="/turtle1/pose.position", count=1)
+        assert not error and set(data["messages"][0]) == {"x", "y", "z"}, data
+        ok(ip, "%mcp stop")
+    finally:
+        stop_demo_robot()
