@@ -18,6 +18,7 @@ node; what is left out is counted in :attr:`Picture.left_out`. :func:`to_dot` wr
 
 from __future__ import annotations
 
+import dataclasses
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from typing import Collection, Mapping, Optional, Sequence
@@ -65,6 +66,7 @@ class Wire:
     subscribers: tuple[str, ...]
     role: str = ""  # "relayed", "replaced by h", "added"
     guard: str = ""  # its guard's state, if guarded
+    by: str = ""  # the node of the session whose role and guard those are
 
 
 @dataclass(frozen=True)
@@ -122,19 +124,19 @@ def picture(snap: GraphSnapshot, ours: Mapping[str, Drawn], pattern: str = "", f
     for topic in sorted(set(snap.topics) - set(hidden)):
         if topic in internal:
             continue
-        role, guard = roles.get(topic, ("", ""))
+        role, guard, by = roles.get(topic, ("", "", ""))
         wires.append(Wire(topic, snap.topics.get(topic, ""),
                           tuple(n for n in snap.publishers.get(topic, ()) if n not in unseen),
-                          tuple(n for n in snap.subscribers.get(topic, ()) if n not in unseen), role, guard))
+                          tuple(n for n in snap.subscribers.get(topic, ()) if n not in unseen), role, guard, by))
     drawn_topics = {w.topic for w in wires}
     for name, drawn in ours.items():  # a node's declared topics, even before the graph shows them
         for t in drawn.model.topics:
             if t.resolved in internal or t.resolved in drawn_topics:
                 continue
             drawn_topics.add(t.resolved)
-            role, guard = roles.get(t.resolved, ("", ""))
+            role, guard, by = roles.get(t.resolved, ("", "", ""))
             out = t.direction == "publish"
-            wires.append(Wire(t.resolved, t.type, (name,) if out else (), () if out else (name,), role, guard))
+            wires.append(Wire(t.resolved, t.type, (name,) if out else (), () if out else (name,), role, guard, by))
     for wire in wires:
         for end in (*wire.publishers, *wire.subscribers):
             boxes.setdefault(end, Box(end))
@@ -152,8 +154,8 @@ def picture(snap: GraphSnapshot, ours: Mapping[str, Drawn], pattern: str = "", f
         said = (f"{total - len(kept_boxes)} of {total} nodes not drawn (the session's and the busiest are): give a "
                 "pattern, or --node NAME --depth K")
     names = {b.name for b in kept_boxes}
-    kept_wires = [Wire(w.topic, w.type, tuple(p for p in w.publishers if p in names),
-                       tuple(s for s in w.subscribers if s in names), w.role, w.guard) for w in kept_wires]
+    kept_wires = [dataclasses.replace(w, publishers=tuple(p for p in w.publishers if p in names),
+                                      subscribers=tuple(s for s in w.subscribers if s in names)) for w in kept_wires]
     all_topics = len(set(snap.topics) - set(hidden) - internal)
     if len(kept_wires) < all_topics and not said and (pattern or focus):
         said = f"{all_topics - len(kept_wires)} topics and {len(boxes) - len(kept_boxes)} nodes outside " + (
@@ -161,10 +163,10 @@ def picture(snap: GraphSnapshot, ours: Mapping[str, Drawn], pattern: str = "", f
     return Picture(tuple(kept_boxes), tuple(kept_wires), tuple(i for i in inner if i.frame in names), said, types)
 
 
-def _wrapping(ours: Mapping[str, Drawn]) -> tuple[dict[str, tuple[str, str]], list[Inner], set[str]]:
-    """Per outer topic of the session's nodes, its role and its guard's state; the wires inside wrapping frames;
-    the internal names those wires are."""
-    roles: dict[str, tuple[str, str]] = {}
+def _wrapping(ours: Mapping[str, Drawn]) -> tuple[dict[str, tuple[str, str, str]], list[Inner], set[str]]:
+    """Per outer topic of the session's nodes, its role, its guard's state and whose they are; the wires inside
+    wrapping frames; the internal names those wires are."""
+    roles: dict[str, tuple[str, str, str]] = {}
     inner: list[Inner] = []
     internal: set[str] = set()
     for name, drawn in ours.items():
@@ -174,15 +176,16 @@ def _wrapping(ours: Mapping[str, Drawn]) -> tuple[dict[str, tuple[str, str]], li
         for t in model.topics:
             guard = drawn.guards.get(t.resolved, "")
             if base is None or t.role == "new" and not _reused(model, t.resolved):
-                if t.direction == "publish" or guard:
-                    roles[t.resolved] = ("added" if base is not None else "", guard)
+                if base is not None and t.direction == "publish" or guard:  # a plain node's topic has no role
+                    roles[t.resolved] = ("added" if base is not None else roles.get(t.resolved, ("",))[0], guard,
+                                         name)
                 continue
             if t.role != "reuse":
                 continue
             handler = handlers.get((t.resolved, "subscribe"))
             role = f"replaced by {handler}" if handler else "relayed"
             internal.add(internal_name(model, t.resolved))
-            roles[t.resolved] = (role, guard)
+            roles[t.resolved] = (role, guard, name)
             ends = (base, name) if t.direction == "publish" else (name, base)
             inner.append(Inner(name, *ends, t.resolved, role))
     return roles, inner, internal
@@ -232,7 +235,6 @@ def to_dot(drawn: Picture) -> str:
     """Graphviz's dot language for ``drawn``: node ids are the names themselves (quoted), so an SVG's text and its
     ``<title>`` elements name every node and topic as ROS does."""
     types, rates = drawn.types, drawn.rates
-    ours = {b.name for b in drawn.boxes if b.kind in ("session", "wrapping")}
     lines = ["digraph ros {", '  graph [rankdir=LR, fontname="Helvetica", fontsize=11, newrank=true];',
              '  node [fontname="Helvetica", fontsize=10];', '  edge [fontname="Helvetica", fontsize=9];']
     for frame in drawn.frames:
@@ -255,15 +257,15 @@ def to_dot(drawn: Picture) -> str:
                      f"fillcolor={_q(fill)}, height=0.25, fontsize=9];")
         for publisher in wire.publishers:
             attrs = []
-            if wire.role and publisher in ours:  # what the session's node does to it, on its own edge
+            if wire.role and publisher == wire.by:  # what the session's node does to it, on its own edge
                 attrs.append(f"label={_q(wire.role)}")
-            if wire.guard:
+            if wire.guard and publisher == wire.by:
                 attrs += [f"headlabel={_q('guard: ' + wire.guard)}", f"color={_q(_guard_colour(wire.guard))}",
                           f"fontcolor={_q(_guard_colour(wire.guard))}", "penwidth=2"]
             lines.append(f"  {_q(publisher)} -> {_q('topic ' + wire.topic)}" + (f" [{', '.join(attrs)}]" if attrs
                                                                                   else "") + ";")
         for subscriber in wire.subscribers:
-            attrs = [f"label={_q(wire.role)}"] if wire.role and subscriber in ours else []
+            attrs = [f"label={_q(wire.role)}"] if wire.role and subscriber == wire.by else []
             lines.append(f"  {_q('topic ' + wire.topic)} -> {_q(subscriber)}" + (f" [{', '.join(attrs)}]"
                                                                                   if attrs else "") + ";")
     for link in drawn.inner:
@@ -315,7 +317,7 @@ def to_text(drawn: Picture, width: int = 80) -> str:
                 lines.append(f"  its {link.topic} {way}: {link.role}")
         for wire in ends.get(box.name, ()):
             typed = f" [{wire.type}]" if drawn.types and wire.type else ""
-            ours = box.kind in ("session", "wrapping")  # what it does to a topic is said on its own lines
+            ours = box.name == wire.by  # what a node of the session does to a topic is said on its own lines
             extra = (f" ({wire.role})" if wire.role and ours else "") + (
                 f" guard: {wire.guard}" if wire.guard and ours and box.name in wire.publishers else "")
             if box.name in wire.publishers:

@@ -2,7 +2,7 @@
 playwright, its kernels on the test master.
 
 What a person sees, read from the page: the tour runs top to bottom from the Run menu with no error output;
-``%topics`` is an HTML table and ``%plot`` a figure redrawn while the tour goes on; a ``%pub --widget`` slider
+``%topics`` is an HTML table, ``%graph`` an SVG of the wrapping and ``%plot`` a figure redrawn while the tour goes on; a ``%pub --widget`` slider
 dragged with the mouse publishes the value it shows, as a plain subscriber receives it. Screenshots land in the
 test's temporary folder (``pytest --basetemp DIR`` keeps them to look at). Through kernel messages alone the same
 is tested in test_kernel.py and test_notebook.py; here it is the browser's rendering that must hold.
@@ -96,7 +96,10 @@ def _pixels_like(png: Path, colour: tuple[int, int, int], within: int = 60) -> i
 
 def test_the_tour_runs_top_to_bottom_in_the_browser_with_no_error_output(tour):
     assert tour.errors == [], "the tour shows error output in the browser:\n" + "\n---\n".join(tour.errors)
-    said = tour.notebook.cell("%load_nodes $saved").locator(".jp-OutputArea-output").all_inner_texts()
+    last = tour.notebook.cell("%load_nodes $saved")
+    last.scroll_into_view_if_needed()  # JupyterLab draws the cells in view only
+    said = wait_for(lambda: [t for t in last.locator(".jp-OutputArea-output").all_inner_texts() if t.strip()],
+                    timeout=10, what="the last cell's output drawn")
     assert any("poses since the restore:" in text for text in said), said  # the last cells ran, and saw poses
 
 
@@ -112,6 +115,26 @@ def test_topics_is_an_html_table_in_the_browser(tour):
     shot = tour.shots / "topics.png"
     table.screenshot(path=str(shot))
     assert _pixels_like(shot, TEXT) > 500, f"no text in the table's screenshot: {shot}"
+
+
+def test_graph_is_an_svg_of_the_wrapping_in_the_browser(tour):
+    """%graph: one SVG below the cell (JupyterLab draws it as an image), the wrapping node's frame around the turtle
+    it launched, the topics named in its text."""
+    from urllib.parse import unquote
+
+    cell = tour.notebook.cell("%graph /turtle1*")
+    cell.scroll_into_view_if_needed()  # JupyterLab draws the cells in view only
+    picture = cell.locator(".jp-OutputArea-output img")
+    wait_for(lambda: picture.count() == 1, timeout=10, what="the picture drawn")
+    source = picture.get_attribute("src")
+    assert source.startswith("data:image/svg+xml,"), source[:80]
+    svg = unquote(source.split(",", 1)[1])
+    assert "wraps ipyros_demo/turtle_sim" in svg and "/turtle1/pose" in svg and "(basenode)" in svg, svg[:400]
+    width = picture.evaluate("image => image.naturalWidth")
+    assert width > 200, "the browser did not draw the picture"
+    shot = tour.shots / "graph.png"
+    picture.screenshot(path=str(shot))
+    assert _pixels_like(shot, TEXT) > 200, f"no text in the picture's screenshot: {shot}"
 
 
 def test_plot_is_a_live_figure_in_the_browser(tour):

@@ -97,3 +97,15 @@ def test_a_large_graph_draws_the_sessions_nodes_and_the_busiest_and_counts_the_r
                               "or --node NAME --depth K")
     assert all(w.publishers or w.subscribers for w in drawn.wires)
     assert repr(drawn) == "<the ROS graph drawn: 20 nodes, 400 topics>"
+
+
+def test_a_role_is_said_on_the_wrapping_nodes_edges_only_not_on_another_session_nodes():
+    viewer = NodeModel(name="viewer", namespace="/", topics=[
+        TopicModel("odom", "/odom", "subscribe", "nav_msgs/Odometry", "new", handler="show"),
+        TopicModel("scan", "/scan", "publish", "sensor_msgs/LaserScan", "new")])  # a second sender of /scan
+    for ours in ({**OURS, "/viewer": Drawn(viewer)}, {"/viewer": Drawn(viewer), **OURS}):  # whichever comes first
+        assert '"topic /scan" -> "/w" [label="relayed"];' in to_dot(picture(SNAP, ours))
+    drawn = picture(SNAP, {**OURS, "/viewer": Drawn(viewer)}, unseen={"/ipyros_guard_12_1"})
+    dot = to_dot(drawn)
+    assert '"/w" -> "topic /odom" [label="relayed"];' in dot and '"topic /odom" -> "/viewer";' in dot
+    assert "└─ in  /odom ← /w" in to_text(drawn, 80).splitlines()
