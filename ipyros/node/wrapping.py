@@ -336,7 +336,8 @@ def start_base(node: "NodeEngine", settle_timeout: Optional[float] = None) -> No
     notice.daemon = True
     notice.start()
     try:
-        interface = backend.wait_for_node(base_fullname(model), timeout=timeout, alive=lambda: process.running)
+        with session.progress(f"waiting for basenode {base_fullname(model)} to show up in the graph"):
+            interface = backend.wait_for_node(base_fullname(model), timeout=timeout, alive=lambda: process.running)
         starting.clear()
         if not process.running:  # it ended after settling, before a notice could be sent
             raise BaseNodeError("ended")

@@ -219,3 +219,10 @@ def test_try_over_a_bag_with_plot_in_a_kernel_is_a_figure(kernel, tmp_path):
     cell = kernel.ok(f"r = %try kt /kt/in triple --bag {bag} --plot data")
     pngs = [c["data"]["image/png"] for c in cell.outputs("display_data") if "image/png" in c["data"]]
     assert len(pngs) == 1 and kernel.value("r.differing") == 20
+    # the try's progress: one line redrawn in place once the work has run a moment (here at once), gone when done
+    kernel.ok("import time, ipyros.ipython.progress as progress\nprogress.DELAY = 0.0\n"
+              "def slow(m):\n    time.sleep(0.05)\n    double(m)")
+    cell = kernel.ok(f"r = %try kt /kt/in slow --bag {bag}")
+    lines = [c["data"].get("text/html", "") for c in cell.outputs("display_data", "update_display_data")]
+    assert any("%try /kt/in over kt.bag: " in line and "of 20 messages" in line for line in lines), lines
+    assert lines[-1] == "" and kernel.value("r.total") == 20
