@@ -3,9 +3,10 @@
 ROS 1 (a venv that sees rospy): the relay bench against topic_tools, where a handler's time goes,
 the guard (stop on silence, hostile commands), a robot on another machine (link cuts, a lossy link, a relay
 placed on it beside the session's),
-%try over a bag, completion, an agent's tool calls (MCP), scale; ROS 2 (rclpy): the relay bench, the guard, %try over a bag,
-a robot on another machine, completion and scale on rclpy. Each bench starts what it needs (a
-rosmaster on a free port, or a DDS domain of its own), prints a table, saves it under bench/results/, keeps its figures for
+%try over a bag, completion, an agent's tool calls (MCP) and %graph, scale; ROS 2 (rclpy): the relay bench,
+the guard, %try over a bag, a robot on another machine, completion, the agent and %graph, and scale on rclpy.
+Each bench starts what it needs (a rosmaster on a free port, or a DDS domain of its own), prints a table,
+saves it under bench/results/, keeps its figures for
 ``python -m bench.figures`` and stops everything it started. The exit code is non-zero if a
 target was missed.
 """

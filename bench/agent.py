@@ -191,7 +191,8 @@ def run(ros: str, topics: int, nodes: int, repeats: int) -> list[Figure]:
                                ("10 messages of a 500 Hz topic", tool_echo, prompt_echo)):
         for q in (50, 99):
             figures.append(Figure(ros, f"MCP tool over HTTP, {what}, p{q}", percentile(tool, q / 100), "ms",
-                                  "the magic at the prompt", percentile(prompt, q / 100), most=2.0 if q == 50 else None))
+                                  "the magic at the prompt", percentile(prompt, q / 100),
+                                  most=2.0 if q == 50 else None))
     return figures
 
 

@@ -85,13 +85,14 @@ class Desk:
         snap = as_dsl_nodes(self._snapshot(), self.session)  # the session's own nodes by their DSL names
         topics = snap.topics_matching(pattern or "", node=node and normal(node, "node", self.allowed.namespace))
         shown = topics[:MOST_SHOWN]
-        data: dict[str, Any] = {"topics": [{"name": t, "type": snap.topics.get(t, ""), "publishers": list(snap.publishers.get(t, ())),
-                            "subscribers": list(snap.subscribers.get(t, ()))} for t in shown],
-                "nodes": list(snap.nodes[:MOST_SHOWN]),
-                "services": [{"name": s, "nodes": list(n)} for s, n in list(snap.services.items())[:MOST_SHOWN]],
-                "actions": [{"name": a.name, "type": a.type} for a in actions_of(snap)][:MOST_SHOWN],
-                "left_out": {"topics": len(topics) - len(shown), "nodes": max(0, len(snap.nodes) - MOST_SHOWN),
-                             "services": max(0, len(snap.services) - MOST_SHOWN)}}
+        data: dict[str, Any] = {
+            "topics": [{"name": t, "type": snap.topics.get(t, ""), "publishers": list(snap.publishers.get(t, ())),
+                        "subscribers": list(snap.subscribers.get(t, ()))} for t in shown],
+            "nodes": list(snap.nodes[:MOST_SHOWN]),
+            "services": [{"name": s, "nodes": list(n)} for s, n in list(snap.services.items())[:MOST_SHOWN]],
+            "actions": [{"name": a.name, "type": a.type} for a in actions_of(snap)][:MOST_SHOWN],
+            "left_out": {"topics": len(topics) - len(shown), "nodes": max(0, len(snap.nodes) - MOST_SHOWN),
+                         "services": max(0, len(snap.services) - MOST_SHOWN)}}
         if rates:
             measured = measure_rates({t: snap.topics[t] for t in shown[:MOST_MEASURED] if snap.topics.get(t)}, 1.0)
             for entry in data["topics"]:
@@ -164,7 +165,7 @@ class Desk:
                            for g in status.guards],
                 "may_propose": node.fullname in self.allowed.swap, "status": str(status)})
         text = "; ".join(f"{n['name']} ({'running' if n['running'] else 'not running'}, {len(n['handlers'])} handlers"
-                         f"{', guards ' + ', '.join(g['topic'] + ': ' + g['state'] for g in n['guards']) if n['guards'] else ''})"
+                         + "".join(f", guard {g['topic']}: {g['state']}" for g in n['guards']) + ")"
                          for n in found) or "no node of the session"
         return Answer(text, {"nodes": found})
 
@@ -194,6 +195,7 @@ class Desk:
         """``source`` (one def) beside the live handler of ``topic`` on ``node``, over ``bag`` or the node's recent
         messages: nothing swapped, nothing sent; with a bag each write passes the node's guard as it would live."""
         target = self._node(node)
+        self.allowed.to_swap(target.fullname)  # a rehearsal runs the agent's code: only where the person allowed it
         live = target.handler(topic)
         scope = dict(getattr(live, "__globals__", None) or self.namespace)  # a copy: the person's stays as it is
         candidate = make_candidate(source, scope)
@@ -362,7 +364,8 @@ def _within(seconds: float, work: Callable[[], Any]) -> Any:
     thread.start()
     thread.join(seconds)
     if thread.is_alive():
-        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread.ident or 0), ctypes.py_object(KeyboardInterrupt))
+        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread.ident or 0),
+                                                   ctypes.py_object(KeyboardInterrupt))
         thread.join(5.0)
         if thread.is_alive():
             raise IpyrosError(f"the rehearsal ran {seconds:g} s and did not stop (the candidate is stuck outside "

@@ -119,7 +119,7 @@ class _Tools:
                  last: Optional[int] = None) -> Answer:
         """Run a candidate handler (source: one def taking the message) beside the live one of TOPIC on NODE, over
         a bag or the node's last messages: what each writes, where they differ, what the guard would do. Nothing is
-        swapped or sent."""
+        swapped or sent. Only on a node the person allowed you to propose handlers for."""
         return desk.rehearse(node, topic, source, bag, last)
 
     @staticmethod
@@ -134,13 +134,15 @@ class _Tools:
         return desk.revert(node, topic, version)
 
     @staticmethod
-    def publish(desk: Desk, topic: str, message: dict[str, Any] | str, type: Optional[str] = None) -> Answer:  # noqa: A002
+    def publish(desk: Desk, topic: str, message: dict[str, Any] | str,
+                type: Optional[str] = None) -> Answer:  # noqa: A002 - the word ROS uses
         """Ask to publish one message (a mapping of fields, or YAML) on an allowed topic; a guarded output's guard
         clamps or stops it as any command."""
         return desk.publish(topic, message, type)
 
     @staticmethod
-    def call(desk: Desk, service: str, request: dict[str, Any] | str = "{}", type: Optional[str] = None) -> Answer:  # noqa: A002
+    def call(desk: Desk, service: str, request: dict[str, Any] | str = "{}",
+             type: Optional[str] = None) -> Answer:  # noqa: A002 - the word ROS uses
         """Ask to call an allowed service once with REQUEST (a mapping of fields, or YAML)."""
         return desk.call(service, request, type)
 
@@ -180,8 +182,9 @@ def _tool(method: Callable[..., Any], desk: Desk) -> Callable[..., Any]:
         return CallToolResult(content=[TextContent(type="text", text=answer.text)], structured_content=data)
 
     signature = inspect.signature(method, eval_str=True)
-    call.__signature__ = signature.replace(parameters=list(signature.parameters.values())[1:],  # type: ignore[attr-defined]
-                                           return_annotation=inspect.Signature.empty)
+    bound = signature.replace(parameters=list(signature.parameters.values())[1:],
+                              return_annotation=inspect.Signature.empty)
+    call.__signature__ = bound  # type: ignore[attr-defined]
     call.__annotations__ = {k: v.annotation for k, v in list(signature.parameters.items())[1:]}
     del call.__wrapped__  # the SDK reads the signature above, not the method's with its desk
     return call

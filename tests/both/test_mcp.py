@@ -124,8 +124,8 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
         assert data["guarded"]["live"]["/mc/cmd_vel"] == {"passed": 5, "clamped": 5}, data["guarded"]
         assert data["guarded"]["candidate"]["/mc/cmd_vel"] == {"passed": 2, "clamped": 8}, data["guarded"]
         monkeypatch.setattr(desk_module, "REHEARSAL_SECONDS", 1.0)
-        text, data, error = call(server, "rehearse", node="mc", topic="/mc/in", source="def spin(msg):\n    while True:\n"
-                                 "        pass\n", last=1)
+        spin = "def spin(msg):\n    while True:\n        pass\n"
+        text, data, error = call(server, "rehearse", node="mc", topic="/mc/in", source=spin, last=1)
         assert error and "stopped after 1 s" in text
         text, data, error = call(server, "rehearse", node="mc", topic="/mc/in", source="def bad(msg):\n"
                                  "    raise SystemExit(3)\n", last=1)
@@ -138,7 +138,8 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
         time.sleep(0.3)
         assert mc.handler("/mc/in").__name__ == "drive" and 0.4 not in twist_xs(motors)
         told = capsys.readouterr().err
-        assert "the agent asks (#1): make this the handler of /mc/in on /mc" in told and "+    msg.linear.x *= 2" in told
+        assert "the agent asks (#1): make this the handler of /mc/in on /mc" in told
+        assert "+    msg.linear.x *= 2" in told
         assert "%mcp approve 1" in told
         ok(ip, "%mcp approve 1")
         assert mc.handler("/mc/in").__name__ == "agent_in"
@@ -205,6 +206,9 @@ def test_an_agent_reads_rehearses_and_changes_only_what_the_person_approves(ip, 
            "mw.guard('/mw/cmd_vel', limits={'linear.x': (-0.5, 0.5)})\nmw.create()")
     text, data, error = call(server, "call", service="mw//reset/")
     assert error and "/mw/reset is relayed to the basenode" in text and "/mw/cmd_vel are guarded" in text, text
+    # a rehearsal runs the agent's code: only on a node the person allowed
+    text, data, error = call(server, "rehearse", node="mw", topic="/mw/cmd_vel", source="def h(msg): pass", last=1)
+    assert error and "the agent may not change /mw's handlers" in text, text
     ok(ip, "%mcp stop")
     assert agent(ip).server is None
 
@@ -273,7 +277,8 @@ def test_an_agent_reads_the_demo_turtle(ip, session):
     try:
         ok(ip, "%mcp start")
         server = agent(ip).server.mcp
-        wait_for(lambda: any(t["name"] == "/turtle1/pose" for t in call(server, "graph", pattern="/turtle1*")[1]["topics"]),
+        wait_for(lambda: any(t["name"] == "/turtle1/pose"
+                             for t in call(server, "graph", pattern="/turtle1*")[1]["topics"]),
                  timeout=20, interval=0.2, what="the turtle's pose in the agent's graph")
         text, data, error = call(server, "graph", pattern="/turtle1*")
         pose = next(t for t in data["topics"] if t["name"] == "/turtle1/pose")

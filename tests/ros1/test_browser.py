@@ -2,8 +2,8 @@
 playwright, its kernels on the test master.
 
 What a person sees, read from the page: the tour runs top to bottom from the Run menu with no error output;
-``%topics`` is an HTML table, ``%graph`` an SVG of the wrapping and ``%plot`` a figure redrawn while the tour goes on; a ``%pub --widget`` slider
-dragged with the mouse publishes the value it shows, as a plain subscriber receives it. Screenshots land in the
+``%topics`` is an HTML table, ``%graph`` an SVG of the wrapping and ``%plot`` a figure redrawn while the tour goes
+on; a ``%pub --widget`` slider dragged with the mouse publishes the value it shows, as a plain subscriber receives it. Screenshots land in the
 test's temporary folder (``pytest --basetemp DIR`` keeps them to look at). Through kernel messages alone the same
 is tested in test_kernel.py and test_notebook.py; here it is the browser's rendering that must hold.
 """

@@ -22,6 +22,7 @@ from IPython.core.magic_arguments import magic_arguments, parse_argstring
 from ...core.errors import IpyrosError
 from ...core.names import default_namespace
 from ..arguments import DSL_NODE, SERVICE, TOPIC, argument
+from .cell_output import in_kernel
 from .common import ExtensionMagics
 
 
@@ -89,9 +90,14 @@ class AgentMagics(ExtensionMagics):
         self.server, self.desk = server, desk
         self._unlisten = session.listen(desk.heard)  # the agent reads what the session tells the person
         session.on_close(self.stop)
-        print(f"ipyros: the agent's MCP server listens at {server.url} ({allowed.describe()}); its token is kept in "
-              f"{path} (yours alone) and shown here once. Claude Code:\n"
-              f"claude mcp add --transport http ipyros {server.url} --header \"Authorization: Bearer {server.token}\"")
+        where = (f"ipyros: the agent's MCP server listens at {server.url} ({allowed.describe()}); its token is kept "
+                 f"in {path}")
+        if in_kernel(self.shell):  # a notebook keeps its outputs in its file: the token stays out of it
+            print(f"{where} (yours alone); give it to the client from there (s = %mcp start: s.token)")
+        else:
+            header = f"Authorization: Bearer {server.token}"
+            print(f"{where} (yours alone) and shown here once. Claude Code:\n"
+                  f"claude mcp add --transport http ipyros {server.url} --header \"{header}\"")
         return Started(server.url, server.token, allowed.describe(), str(path))
 
     def _stop(self, args: Any) -> None:
@@ -100,7 +106,8 @@ class AgentMagics(ExtensionMagics):
             return
         url = self.server.url
         denied = self.stop()
-        print(f"ipyros: the agent's server at {url} stopped" + (f"; {denied} pending requests denied" if denied else ""))
+        print(f"ipyros: the agent's server at {url} stopped"
+              + (f"; {denied} pending requests denied" if denied else ""))
 
     def _status(self, args: Any) -> None:
         if self.server is None or self.desk is None:

@@ -68,7 +68,8 @@ def test_the_text_is_a_tree_by_node_that_fits_the_width():
     lines = text.splitlines()
     assert lines[0] == "/w (this session, wraps ipyros_demo/move_base)"
     assert "├─ basenode /move_base" in lines and "├─   its /cmd_vel out: replaced by slow" in lines
-    assert any(line.startswith("├─ out /cmd_vel [geometry_msgs/Twist] (replaced by slow) guard: passing") for line in lines)
+    assert any(line.startswith("├─ out /cmd_vel [geometry_msgs/Twist] (replaced by slow) guard: passing")
+               for line in lines)
     assert "└─ out /scan [sensor_msgs/LaserScan] → /w" in lines  # the laser's own lines say no role
     for width in (40, 80, 200):
         assert max(len(line) for line in to_text(drawn, width).splitlines()) <= width

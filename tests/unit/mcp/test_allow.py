@@ -35,7 +35,8 @@ def test_what_is_not_a_legal_ros_name_is_refused_not_guessed(bad):
 def test_publish_is_allowed_name_by_name_in_any_spelling():
     allowed = Allowed.of(publish=["cmd_vel"])
     assert allowed.to_publish("//cmd_vel/") == "/cmd_vel"
-    with pytest.raises(AgentRefused, match=r"may not publish on /cmd_vel2: allowed /cmd_vel; .*--allow-publish /cmd_vel2"):
+    with pytest.raises(AgentRefused,
+                       match=r"may not publish on /cmd_vel2: allowed /cmd_vel; .*--allow-publish /cmd_vel2"):
         allowed.to_publish("cmd_vel2")
     with pytest.raises(AgentRefused, match="allowed none"):
         Allowed().to_publish("/cmd_vel")
