@@ -226,7 +226,10 @@ class AgentServer:
         deadline = time.monotonic() + timeout
         while not self._uvicorn.started:
             if not self._thread.is_alive() or time.monotonic() > deadline:
+                self._uvicorn.should_exit = True  # nothing of it is left running
+                self._thread.join(timeout)
                 sock.close()
+                self._uvicorn = self._thread = None
                 raise IpyrosError("the MCP server did not start; see the lines above")
             time.sleep(0.01)
         self.url = f"http://127.0.0.1:{self.port}/mcp"

@@ -13,6 +13,7 @@ see :mod:`ipyros.mcp.desk` and the guide's "An AI agent in the session".
 
 from __future__ import annotations
 
+import importlib.util
 from typing import Any, Optional
 
 from IPython.core.error import UsageError
@@ -46,7 +47,7 @@ class AgentMagics(ExtensionMagics):
     @argument("--allow-call", nargs="+", default=[], metavar="SERVICE", complete=SERVICE,
               help="start: services the agent may ask to call")
     @argument("--allow-swap", nargs="+", default=[], metavar="NODE", complete=DSL_NODE,
-              help="start: the session's nodes whose handlers the agent may propose (and revert)")
+              help="start: the session's nodes whose handlers the agent may rehearse, propose and revert")
     @argument("--no-ask", action="store_true", help="start: an allowed publish or call is made without asking "
               "(a handler is always asked for)")
     @line_magic
@@ -66,14 +67,13 @@ class AgentMagics(ExtensionMagics):
     def _start(self, args: Any) -> Any:
         if self.server is not None and self.server.running:
             raise UsageError(f"the agent's server already runs at {self.server.url}; %mcp stop first")
-        try:
-            from ...mcp.allow import Allowed
-            from ...mcp.approvals import Requests
-            from ...mcp.desk import Desk
-            from ...mcp.server import AgentServer, Started
-        except ImportError as error:  # the SDK is an extra
-            raise UsageError(f"the MCP SDK is not installed ({error.name} missing): pip install 'mcp>=2' "
-                             "(or pip install 'ipyros[agent]')") from None
+        if importlib.util.find_spec("mcp") is None:  # the SDK is an extra
+            raise UsageError("the MCP SDK is not installed: pip install 'mcp>=2' (or pip install 'ipyros[agent]')")
+        from ...mcp.allow import Allowed
+        from ...mcp.approvals import Requests
+        from ...mcp.desk import Desk
+        from ...mcp.server import AgentServer, Started
+
         session = self.ext.session
         swap = [self._node_name(name) for name in args.allow_swap]
         allowed = Allowed.of(args.allow_publish, args.allow_call, swap, ask=not args.no_ask,
