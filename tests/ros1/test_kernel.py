@@ -226,3 +226,18 @@ def test_try_over_a_bag_with_plot_in_a_kernel_is_a_figure(kernel, tmp_path):
     lines = [c["data"].get("text/html", "") for c in cell.outputs("display_data", "update_display_data")]
     assert any("%try /kt/in over kt.bag: " in line and "of 20 messages" in line for line in lines), lines
     assert lines[-1] == "" and kernel.value("r.total") == 20
+
+
+def test_graph_live_in_a_kernel_is_one_picture_redrawn_as_the_graph_changes(kernel):
+    """%graph --live: one SVG below the cell, replaced (not appended) when a node appears, until %graph --stop."""
+    kernel.ok("%load_ext ipyros")
+    cell = kernel.ok("import ipyros.ipython.magics.drawing as drawing\ndrawing.LIVE_LOOK = 0.2\n%graph /kl* --live")
+    (shown,) = [c for c in cell.outputs("display_data") if "image/svg+xml" in c["data"]]
+    place = shown["transient"]["display_id"]
+    assert "/kl_node" not in shown["data"]["image/svg+xml"]
+    cell = kernel.ok("from std_msgs.msg import UInt32\nimport time\nkl = rosNode('kl_node')\n"
+                     "kl.new.publish('/kl/out', msgType=UInt32)\nkl.create()\ntime.sleep(3)")
+    redrawn = [c for c in cell.outputs("update_display_data") if c["transient"]["display_id"] == place]
+    assert any("/kl_node" in c["data"].get("image/svg+xml", "") for c in redrawn), len(redrawn)
+    assert not [c for c in cell.outputs("display_data") if "image/svg+xml" in c["data"]], "redrawn, not appended"
+    kernel.ok("%graph --stop\nkl.shutdown()")
