@@ -11,7 +11,7 @@ from __future__ import annotations
 import threading
 import time
 from pathlib import Path
-from typing import Any, Collection, Iterator, Optional
+from typing import Any, Callable, Collection, Iterator, Optional
 
 from ..core.errors import DeclarationError, first_line
 from ..core.records import BagInfo, BagTopic
@@ -68,9 +68,11 @@ def bag_info(path: Path) -> BagInfo:
         raise _unreadable(path, error) from None
 
 
-def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int, Any]]:
+def bag_messages(path: Path, topics: Collection[str],
+                 counted: Optional[Callable[[int], None]] = None) -> Iterator[tuple[str, int, Any]]:
     """``(topic, stamp in ns, message)`` of each message of ``topics`` in the bag, in recorded order (the
-    messages of the types the bag recorded, as rosbag reads them)."""
+    messages of the types the bag recorded, as rosbag reads them). ``counted(n)`` hears how many there are as the
+    bag opens, from its index (reading it once more would cost a fifth of a second a 100,000 messages)."""
     if path.suffix == ".mcap":
         yield from mcapfile.mcap_messages(path, topics)
         return
@@ -80,6 +82,8 @@ def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int
     except Exception as error:  # noqa: BLE001 - rosbag's errors of any kind
         raise _unreadable(path, error) from None
     with bag:
+        if counted is not None:
+            counted(bag.get_message_count(topic_filters=list(topics)))
         for topic, msg, stamp in bag.read_messages(topics=list(topics)):
             yield topic, stamp.to_nsec(), msg
 

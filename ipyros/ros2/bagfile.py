@@ -13,7 +13,7 @@ import queue
 import threading
 import time
 from pathlib import Path
-from typing import Any, Collection, Iterator, Optional
+from typing import Any, Callable, Collection, Iterator, Optional
 
 from ..core.errors import DeclarationError, first_line
 from ..core.msgtypes import type_name
@@ -79,9 +79,11 @@ def bag_info(path: Path) -> BagInfo:
         reader.close()
 
 
-def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int, Any]]:
+def bag_messages(path: Path, topics: Collection[str],
+                 counted: Optional[Callable[[int], None]] = None) -> Iterator[tuple[str, int, Any]]:
     """``(topic, stamp in ns, message)`` of each message of ``topics`` in the bag, in recorded order, as this
-    Python's message classes (a ROS 1 ``.bag``'s turned into ROS 2 messages, as the player turns them)."""
+    Python's message classes (a ROS 1 ``.bag``'s turned into ROS 2 messages, as the player turns them).
+    ``counted(n)`` hears how many there are as the bag opens."""
     from rclpy.serialization import deserialize_message
 
     from .bag_player import Ros1Bag, message_class
@@ -98,6 +100,8 @@ def bag_messages(path: Path, topics: Collection[str]) -> Iterator[tuple[str, int
     try:
         connections = [c for c in reader.connections if c.topic in topics]
         classes = {c.id: message_class(c.msgtype) for c in connections}
+        if counted is not None:
+            counted(sum(getattr(c, "msgcount", 0) for c in connections))
         for connection, stamp, raw in reader.messages(connections=connections):
             yield connection.topic, stamp, deserialize_message(bytes(raw), classes[connection.id])
     finally:

@@ -28,6 +28,7 @@ from __future__ import annotations
 import contextlib
 import gc
 import io
+import itertools
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -272,16 +273,16 @@ def try_bag(node: rosNode, topic: str, candidate: Callable[..., Any], bag: Any, 
     stopped = False
     guards = RehearsedGuards(node.model().guards) if node.model().guards else None
     inputs = guards.inputs if guards is not None else set()
-    bags = bag_module()
-    wanted = {resolved, *handlers, *inputs}
-    messages = bags.bag_messages(path, wanted)
+    counts: list[int] = []  # how many messages there are, heard as the bag opens (for the progress's time left)
+    messages = bag_module().bag_messages(path, {resolved, *handlers, *inputs}, counts.append)
     live_out, candidate_out = outputs["live"], outputs["candidate"]
-    count = sum(row.count for row in bags.bag_info(path).rows if row.topic in wanted)
+    opening = next(messages, None)  # opens the bag
     seen = 0
-    with engine_of(node).session.progress(f"%try {resolved} over {path.name}", count, "messages") as step, \
+    with engine_of(node).session.progress(f"%try {resolved} over {path.name}", counts[0] if counts else None,
+                                          "messages") as step, \
             _intercepted() as run, contextlib.closing(messages), _young_collections_only() as tick:
         try:  # (the bag's reader is closed at once, even on Ctrl-C)
-            for name, stamp, msg in messages:
+            for name, stamp, msg in itertools.chain((opening,) if opening is not None else (), messages):
                 tick()
                 seen += 1
                 if not seen & 1023:  # a view redraws a few times a second: told every 1,024 messages
