@@ -48,12 +48,11 @@ class Reach:
     """What the session's nodes do with names, read from their plans: where a name leads past the session.
 
     ``relays``: a relayed service or action (its global name) → the basenode that serves it (a call goes to the
-    basenode, past the wrapping node and its guard). ``guarded``: each guarded output → the node whose guard holds
-    it. ``wrapped``: a basenode's full name → the guarded outputs of its wrapping node.
+    basenode, past the wrapping node and its guard). ``wrapped``: a basenode's full name → the guarded outputs of its
+    wrapping node.
     """
 
     relays: Mapping[str, str] = field(default_factory=dict)
-    guarded: Mapping[str, str] = field(default_factory=dict)
     wrapped: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from typing import Callable
 
 from ..core.errors import IpyrosError
 
@@ -116,7 +116,3 @@ class Requests:
     def latest(self, count: int = 20) -> list[Request]:
         with self._lock:
             return list(self._all.values())[-count:]
-
-    def find(self, number: Optional[int]) -> Optional[Request]:
-        with self._lock:
-            return self._all.get(number) if number is not None else None

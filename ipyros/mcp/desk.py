@@ -30,6 +30,7 @@ from ..core.remapping import base_fullname
 from ..dsl import engine_of, node_of, rosNode
 from ..node.engine import NodeEngine
 from ..node.session import Session, made_by
+from ..tools.estop import estop_each
 from ..tools.graph import GraphCache, as_dsl_nodes, live_graph
 from ..tools.probe import Echo, PromptPublisher, measure_rates
 from ..tools.record import bag_module
@@ -268,7 +269,7 @@ class Desk:
             sender, reached = self.publisher.publish(name, resolved, msg)
             return f"published a {resolved} on {name}{through} (from {sender}) to {reached} subscribers"
 
-        what = f"publish {_flow(msg)} on {name}{through}"
+        what = f"publish {one_line(msg, 200)} on {name}{through}"
         if not self.allowed.ask:
             return Answer(send(), {"published": name, "guarded": bool(guarded)})
         return self._asked(self.requests.ask("publish", what, "", send))
@@ -290,7 +291,7 @@ class Desk:
 
         if not self.allowed.ask:
             return Answer(make(), {"service": name, **answered})
-        return self._asked(self.requests.ask("call", f"call {name} with {_flow(built)}", "", make))
+        return self._asked(self.requests.ask("call", f"call {name} with {one_line(built, 200)}", "", make))
 
     def estop(self, node: Optional[str] = None) -> Answer:
         """Every guarded output (of ``node``, or of the session) to its stop message now, held until the person
@@ -298,7 +299,7 @@ class Desk:
         nodes = [self._node(node)] if node else [n for n in self._nodes() if n.created and n.model().guards]
         if not nodes:
             raise IpyrosError("no running node of the session has a guard: there is nothing to e-stop from here")
-        stopped = [f"{topic} ({n.fullname})" for n in nodes for topic in n.estop()]
+        stopped = [f"{topic} ({n.fullname})" for n, topics in estop_each(nodes) for topic in topics]
         self.session.notify(f"ipyros: the agent e-stopped {', '.join(stopped) or 'nothing'}; %estop --release "
                             "lets commands through again")
         return Answer(f"e-stopped {', '.join(stopped)}; only the person can release it", {"estopped": stopped})
@@ -311,13 +312,11 @@ class Desk:
 
     # -- what the session relays --------------------------------------------------------------------------
     def reach(self) -> Reach:
-        """Where the session's relayed services and actions lead, and which outputs its guards hold."""
-        relays, guarded, wrapped = {}, {}, {}
+        """Where the session's relayed services and actions lead, and which outputs guard the basenodes there."""
+        relays, wrapped = {}, {}
         for node in self._nodes():
             model = node.model()
             outputs = tuple(g.resolved for g in model.guards)
-            for topic in outputs:
-                guarded[topic] = node.fullname
             if model.base is None:
                 continue
             base = base_fullname(model)
@@ -327,7 +326,7 @@ class Desk:
                     relays[spec.target] = relays[spec.source] = base  # its outer name, and the basenode's own
                 elif isinstance(spec, planning.ActionServerSpec) and spec.forward:
                     relays[spec.name] = relays[spec.forward] = base
-        return Reach(relays, guarded, wrapped)
+        return Reach(relays, wrapped)
 
     # -- helpers ----------------------------------------------------------------------------------------------
     def _asked(self, request: Request) -> Answer:
@@ -373,8 +372,8 @@ def _within(seconds: float, work: Callable[[], Any]) -> Any:
     if "error" in done:
         error = done["error"]
         if isinstance(error, KeyboardInterrupt):
-            raise IpyrosError(f"the rehearsal was stopped after {seconds:g} s before a message was tried "
-                              "(the candidate loops?)")
+            raise IpyrosError(f"the rehearsal was stopped after {seconds:g} s before a message was tried: the "
+                              f"candidate must return within {seconds:g} s of each message (does it loop?)")
         raise error
     return done["value"]
 
@@ -421,10 +420,6 @@ def _ended(text: str) -> str:
 def _first_lines(text: str, count: int) -> str:
     lines = text.splitlines()
     return "\n".join(lines[:count] + ([f"... ({len(lines) - count} more lines)"] if len(lines) > count else []))
-
-
-def _flow(msg: Any) -> str:
-    return one_line(msg, 200)
 
 
 def _last_part(name: str) -> str:

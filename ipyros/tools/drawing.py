@@ -16,7 +16,7 @@ from ..core.errors import IpyrosError
 from ..core.graph import GraphSnapshot
 from ..core.names import is_tool
 from ..core.picture import MOST_BOXES, Drawn, Picture, picture
-from ..dsl import node_of
+from ..dsl import engine_of, node_of
 from ..node.session import Session
 from .graph import as_dsl_nodes
 
@@ -39,7 +39,7 @@ def session_picture(session: Session, snap: GraphSnapshot, pattern: str = "", fo
         node = node_of(engine)  # type: ignore[arg-type]
         model = node.model()
         states = {}
-        for guard in node.status().guards:
+        for guard in engine_of(node).guards.states():  # not node.status(): its handlers' figures are not drawn
             clamped = guard.figures.clamped
             states[guard.topic] = guard.state + (f", {clamped} clamped" if clamped and guard.state == "passing"
                                                  else "")

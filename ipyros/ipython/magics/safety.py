@@ -15,6 +15,7 @@ from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
 from ...dsl import engine_of, node_of
 from ...node.session import current
+from ...tools.estop import estop_each
 from ..api import find_node
 from ..arguments import DSL_NODE, argument
 from .common import ExtensionMagics
@@ -41,10 +42,8 @@ class SafetyMagics(ExtensionMagics):
         if not nodes:
             raise UsageError("no running node of this session has a guard; guard an output first: "
                              "nd.guard('/cmd_vel', limits={'linear.x': (-0.5, 0.5)}, timeout=0.5)")
-        done = []
-        for node in nodes:
-            topics = node.release() if args.release else node.estop()
-            done += [f"{topic} ({engine_of(node).called})" for topic in topics]
+        done = [f"{topic} ({engine_of(node).called})" for node, topics in estop_each(nodes, not args.release)
+                for topic in topics]
         if args.release:
             print(f"ipyros: released {', '.join(done)}: commands pass the guards again")
         else:

@@ -22,7 +22,9 @@ def test_a_terminal_gets_a_bar_that_says_what_and_is_gone_when_done(monkeypatch)
     monkeypatch.setattr(progress, "DELAY", 0.0)
     with view(SimpleNamespace(kernel=None))("converting run.bag", 4096, "messages") as step:
         step(2048)
-        time.sleep(0.3)
+        deadline = time.monotonic() + 10
+        while "2,048/4,096" not in out.getvalue() and time.monotonic() < deadline:  # drawn by rich's own thread
+            time.sleep(0.01)
     drawn = out.getvalue()
     assert "converting run.bag" in drawn and "2,048/4,096 messages" in drawn
     assert drawn.endswith("\x1b[1A\x1b[2K")  # the line erased once the work is done

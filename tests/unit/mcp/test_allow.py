@@ -44,8 +44,7 @@ def test_publish_is_allowed_name_by_name_in_any_spelling():
 
 def test_a_call_relayed_to_a_basenode_whose_outputs_are_guarded_is_refused_even_when_allowed():
     allowed = Allowed.of(call=["/base/reset", "/other/reset"])
-    reach = Reach(relays={"/base/reset": "/base/driver"}, guarded={"/cmd_vel": "/wrapper"},
-                  wrapped={"/base/driver": ("/cmd_vel",)})
+    reach = Reach(relays={"/base/reset": "/base/driver"}, wrapped={"/base/driver": ("/cmd_vel",)})
     with pytest.raises(AgentRefused, match="relayed to the basenode /base/driver, whose outputs /cmd_vel are guarded"):
         allowed.to_call("base/reset/", reach)
     assert allowed.to_call("/other/reset", reach) == "/other/reset"
