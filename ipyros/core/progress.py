@@ -57,7 +57,7 @@ class Tally:
             tail = f", {_seconds(left)} left" if left is not None else ""
         else:
             said, tail = f"{self.done:,.0f}{unit}", ""
-        speed = f", {rate:,.0f}/s" if self.done else ""
+        speed = f", {rate:,.0f}/s" if self.done and self.unit != "s" else ""  # time goes at 1 s a second
         return f"{self.what}: {said}{speed}{tail}" if self.done or self.total else f"{self.what}: {_seconds(elapsed)}"
 
 

@@ -9,10 +9,12 @@ A :class:`Recording` subscribes to each topic through a small DSL node of its ow
 from __future__ import annotations
 
 import threading
+import time
 from pathlib import Path
 from typing import Any, Callable, Mapping, Optional
 
 from ..core.names import tool_name
+from ..core.progress import Progress, no_progress
 from ..core.text import counted
 from ..dsl import rosNode
 from ..node.session import current
@@ -27,13 +29,18 @@ def bag_module() -> Any:
 
 class Recording:
     """``topics`` ({name: type}) written to the bag ``path`` from now on, for ``duration`` seconds or until stopped;
-    ``storage`` as the session's ROS writes bags (ROS 2: ``mcap``, the default, or ``sqlite3``)."""
+    ``storage`` as the session's ROS writes bags (ROS 2: ``mcap``, the default, or ``sqlite3``).
+
+    A recording for a ``duration`` shows its ``progress`` (the seconds gone, from a thread of its own, as the
+    prompt stays free) and, when its time is up, tells the session how many messages it wrote where.
+    """
 
     def __init__(self, path: Path, topics: Mapping[str, str], duration: Optional[float] = None,
-                 storage: Optional[str] = None, keep: Optional[Callable[[Any, str], bool]] = None) -> None:
+                 storage: Optional[str] = None, keep: Optional[Callable[[Any, str], bool]] = None,
+                 progress: Progress = no_progress) -> None:
         bagfile = bag_module()
 
-        self.path, self.topics = Path(path), dict(topics)
+        self.path, self.topics, self.duration = Path(path), dict(topics), duration
         self._stopping = threading.Lock()
         self._writer = bagfile.BagWriter(self.path, storage)
         self._keep = keep
@@ -47,10 +54,27 @@ class Recording:
         except BaseException:
             self._writer.close()
             raise
-        self._timer = threading.Timer(duration, self.stop) if duration else None
-        if self._timer is not None:
+        self._ended = threading.Event()
+        self._timer = threading.Timer(duration, self._time_up) if duration else None
+        self._shown: Optional[threading.Thread] = None
+        if self._timer is not None and duration:
             self._timer.daemon = True
             self._timer.start()
+            self._shown = threading.Thread(target=self._show, args=(progress, duration), daemon=True,
+                                           name="ipyros-record-progress")
+            self._shown.start()
+
+    def _show(self, progress: Progress, duration: float) -> None:
+        started = time.monotonic()
+        with progress(f"recording {', '.join(self.topics)} to {self.path.name}", duration, "s") as step:
+            while not self._ended.wait(1 / 4):
+                step(min(duration, time.monotonic() - started))
+
+    def _time_up(self) -> None:
+        self.stop()
+        if self.problem is None:
+            current().notify(f"ipyros: recorded {counted(self.count, 'message')} of {', '.join(self.topics)} to "
+                             f"{self.path} (its {self.duration:g} s are up)")
 
     def _write(self, topic: str, msg: Any) -> None:
         keep = self._keep
@@ -83,6 +107,9 @@ class Recording:
         """Stop and close the bag (twice does nothing)."""
         if self._timer is not None:
             self._timer.cancel()
+        self._ended.set()
+        if self._shown is not None and self._shown is not threading.current_thread():
+            self._shown.join(timeout=2)  # the progress is gone before the stop is said
         with self._stopping:  # the timer's thread and the prompt may both stop it
             if self._node is not None:
                 self._node.shutdown()

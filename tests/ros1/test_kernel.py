@@ -123,7 +123,7 @@ def wait_ticks(word: str, count: int) -> str:
             f"assert sum(w == {word!r} for w, _ in ticks) >= start + {count}, 'too few messages'")
 
 
-def test_plot_in_a_kernel_is_a_figure_redrawn_below_the_cell_and_its_data_stays(kernel, ticks):
+def test_plot_and_record_in_a_kernel_redraw_below_the_cell_and_their_data_stays(kernel, ticks, tmp_path):
     import base64
 
     kernel.ok("%load_ext ipyros")
@@ -140,6 +140,20 @@ def test_plot_in_a_kernel_is_a_figure_redrawn_below_the_cell_and_its_data_stays(
     found = re.search(r"DATA (\d+) (True|False)", cell.stdout())
     assert found and int(found[1]) >= 20 and found[2] == "True", cell.stdout()
     assert f"(stopped): {found[1]} samples;" in kernel.ok("p").shown()
+    # %record for a duration: its seconds shown as one line redrawn in place while the prompt is free, gone when
+    # the time is up; then how many messages it wrote, said once
+    bag = tmp_path / "k.bag"
+    kernel.ok("import ipyros.ipython.progress as progress\nprogress.DELAY = 0.0")
+    started = kernel.ok(f"rec = %record {bag} {TOPIC} --duration 2")
+    ended = kernel.ok("import time\nwhile rec.running: time.sleep(0.1)\ntime.sleep(0.3)")
+    lines = [c["data"].get("text/html", "") for cell in (started, ended)
+             for c in cell.outputs("display_data", "update_display_data")]
+    assert any(f"recording {TOPIC} to k.bag: " in line and " of 2 s" in line for line in lines), lines
+    assert lines[-1] == "", "gone when done"
+    count = kernel.value("rec.count")
+    said = "".join(c["text"] for cell in (started, ended) for c in cell.outputs("stream"))
+    assert count >= 15 and said.count(f"ipyros: recorded {count} messages of {TOPIC} to {bag} (its 2 s are up)") == 1, \
+        said
 
 
 def test_echo_until_interrupted_in_a_kernel_is_one_rolling_view(kernel, ticks):

@@ -20,6 +20,7 @@ from IPython.core.magic import line_magic, magics_class
 from IPython.core.magic_arguments import magic_arguments, parse_argstring
 
 from ...core.errors import IpyrosError
+from ...core.progress import no_progress
 from ...files.bagconvert import Converted, convert
 from ...tools.bagplay import CONTROLS, control
 from ...tools.record import Recording, bag_module
@@ -73,7 +74,9 @@ class RecordMagics(ExtensionMagics):
         test = compile_filter(args.filter, self.shell.user_ns) if args.filter is not None else None
         keep = (lambda m, topic: test(m, topic=topic)) if test is not None else None
         self.stop()
-        self.recording = Recording(path, topics, args.duration, args.storage, keep)
+        # Its progress only in Jupyter: in a terminal the prompt stays free, and a bar would write over what is typed.
+        shown = self.ext.session.progress if in_kernel(self.shell) else no_progress
+        self.recording = Recording(path, topics, args.duration, args.storage, keep, shown)
         until = f"for {args.duration:g} s" if args.duration else "until %record --stop"
         storage = getattr(self.recording.writer, "storage", "")
         print(f"ipyros: recording {', '.join(topics)} to {path}{f' ({storage})' if storage else ''} {until}")

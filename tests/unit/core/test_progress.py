@@ -23,3 +23,8 @@ def test_no_progress_draws_nothing_and_takes_every_step():
     with no_progress("work", 10, "items") as step:
         for done in range(10):
             step(done)
+
+
+def test_work_measured_in_seconds_says_no_rate():
+    assert Tally("recording /scan to run.bag", 20, "s", done=3, started=10.0).line(now=13.0) == \
+        "recording /scan to run.bag: 3 of 20 s, 17 s left"
