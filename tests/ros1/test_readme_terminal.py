@@ -82,6 +82,17 @@ def test_the_readme_first_command_and_five_lines_move_the_turtle(readme_terminal
     screen = "\n".join(term.screen(history=True))
     assert "Traceback" not in screen and "_buff" not in screen, screen
 
+    # %graph: the wrapped move_base drawn as a tree that fits the terminal, at 80 columns and at 200.
+    for width in (80, 200):
+        term.resize(width)
+        term.press("C-l")
+        run(term, "%graph --types")
+        rows = term.screen(joined=True)
+        drawn = "\n".join(rows)
+        assert "/mb" in drawn and "/move_base" in drawn and "/turtle1/pose" in drawn, drawn
+        assert max(map(len, rows)) <= width, f"a line over {width} columns:\n{drawn}"
+    term.resize(160)
+
     # TAB after %pub TOPIC: the type the live topic carries comes first.
     term.type("%pub /turtle1/cmd_vel ")
     term.press("Tab")

@@ -107,15 +107,21 @@ class Terminal:
         self.press("Enter")
 
     # -- screen ----------------------------------------------------------------------------------
-    def screen(self, history: bool = False) -> list[str]:
+    def screen(self, history: bool = False, joined: bool = False) -> list[str]:
         """The visible screen, one string per row, trailing blanks stripped (no colours).
 
-        With ``history``, the rows scrolled off the top come first (all tmux keeps).
+        With ``history``, the rows scrolled off the top come first (all tmux keeps). With ``joined``, a line the
+        terminal wrapped is one string again (longer than the width: how a test sees that a line did not fit).
         """
         start = ["-S", "-"] if history else []
-        out = self._tmux("capture-pane", "-p", *start, "-t", self.name, check=False)
+        out = self._tmux("capture-pane", "-p", *start, *(["-J"] if joined else []), "-t", self.name, check=False)
         rows = [row.rstrip() for row in (out or "").split("\n")]
-        return rows if history else rows[: self.height]
+        return rows if history or joined else rows[: self.height]
+
+    def resize(self, width: int) -> None:
+        """Make the terminal ``width`` cells wide (the program hears SIGWINCH, as when a window is dragged)."""
+        self._tmux("resize-window", "-t", self.name, "-x", str(width), "-y", str(self.height))
+        self.width = width
 
     def last_line(self) -> str:
         """The last non-blank row of the screen: where the prompt sits."""
