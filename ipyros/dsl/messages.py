@@ -15,7 +15,8 @@ def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLi
     ``build_messages("~/catkin_ws/src/my_robot_msgs")`` then ``from my_robot_msgs.msg import Status``: no
     catkin, no sourcing. The classes are written under ``into`` (``$IPYROS_MESSAGES_DIR``, else
     ``~/.ipyros/messages``), which this session and the basenodes it starts import from; the types
-    complete at TAB and ``%pub``/``%echo`` take them. Returns the types built. ROS 1 (genpy); on ROS 2
-    a message package is built by colcon, and the line says so.
+    complete at TAB and ``%pub``/``%echo`` take them. Returns the types built. ROS 1: genpy's Python, at once;
+    ROS 2: rosidl's generators and the C compiler, a few seconds, shown as progress at the prompt.
     """
-    return current().backend.build_messages(package_dir, into)
+    session = current()
+    return session.backend.build_messages(package_dir, into, session.progress)

@@ -52,9 +52,9 @@ a basenode               ``basenode(base, log_path, on_exit)``: its process (loo
                          a launch file (``launch_params_on_server``: who sets its params);
                          ``note_link(base, process)``
 packages                 ``list_packages()``, ``list_executables(package)``
-message types            ``build_messages(package_dir, into)``: a workspace's package made
-                         importable; ``build_types_of(node, wanted)``: the types a running
-                         node uses and this Python lacks, from the node itself (ROS 2);
+message types            ``build_messages(package_dir, into, progress)``: a workspace's package
+                         made importable; ``build_types_of(node, wanted, progress)``: the types
+                         a running node uses and this Python lacks, from the node itself (ROS 2);
                          ``relays_any_type`` / ``raw_relay(...)``: bytes of any type (ROS 1)
 bags                     ``bags()``: reading, playing and writing bags of this ROS
 exports                  ``export_flavour()``: how a node is written as a script of this ROS
@@ -80,6 +80,7 @@ from ..core.errors import IpyrosError
 from ..core.graph import GraphSnapshot
 from ..core.model import BaseModel
 from ..core.names import NameRules
+from ..core.progress import Progress, no_progress
 from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
@@ -145,8 +146,8 @@ class Backend(Protocol):
     def delete_param(self, name: str) -> None: ...
     def forget_params(self, names: list[str]) -> None: ...
     def watch_param(self, name: str, tell: Callable[[Any], None]) -> Any: ...  # tell(value) on each set; close()
-    def build_messages(self, package_dir: Any, into: Any) -> list[str]: ...  # a package's .msg/.srv, importable
-    def build_types_of(self, node: str, wanted: dict[str, str]) -> list[str]: ...  # from a running node's own
+    def build_messages(self, package_dir: Any, into: Any, progress: Progress = no_progress) -> list[str]: ...
+    def build_types_of(self, node: str, wanted: dict[str, str], progress: Progress = no_progress) -> list[str]: ...
     def refuse_taken_name(self, name: str) -> None: ...
 
     # the graph

@@ -516,7 +516,7 @@ def learn_relayed_types(node: "NodeEngine", relays: list[RelaySpec], timeout: fl
 
     def build(running: str) -> None:
         try:
-            built = backend.build_types_of(running, wanted)
+            built = backend.build_types_of(running, wanted, node.session.progress)
         except MessageTypeError as error:
             raise MessageTypeError(f"{listed} not installed here, and {error}; or {hint}") from None
         if built:
@@ -550,7 +550,7 @@ def _build_its_own_types(node: "NodeEngine", interface: Interface) -> None:
     if not wanted:
         return
     try:
-        built = node.session.backend.build_types_of(interface.node, wanted)
+        built = node.session.backend.build_types_of(interface.node, wanted, node.session.progress)
     except MessageTypeError as error:
         node.session.notify(f"ipyros: {error}")
         return

@@ -10,6 +10,7 @@ from ..core import names
 from ..core.errors import IpyrosError, MasterError
 from ..core.graph import ROS1_ACTION_TOPICS, GraphSnapshot
 from ..core.model import BaseModel
+from ..core.progress import Progress, no_progress
 from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
@@ -230,12 +231,13 @@ class Ros1:
     has_param = staticmethod(runtime.has_param)
     delete_param = staticmethod(runtime.delete_param)
 
-    def build_messages(self, package_dir: Any, into: Any) -> list[str]:
+    def build_messages(self, package_dir: Any, into: Any, progress: Progress = no_progress) -> list[str]:
+        """genpy writes Python only: a moment, no progress to show."""
         from .msggen import build_messages
 
         return build_messages(package_dir, into)
 
-    def build_types_of(self, node: str, wanted: dict[str, str]) -> list[str]:
+    def build_types_of(self, node: str, wanted: dict[str, str], progress: Progress = no_progress) -> list[str]:
         """Nothing to build: a ROS 1 relay forwards bytes of any type (a handler needs the package installed)."""
         return []
 

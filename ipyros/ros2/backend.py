@@ -15,6 +15,7 @@ from ..core import msgtypes, names
 from ..core.errors import DeclarationError, IpyrosError, MessageTypeError, NodeStateError, first_line
 from ..core.graph import GraphSnapshot
 from ..core.model import BaseModel
+from ..core.progress import Progress, no_progress
 from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
@@ -215,16 +216,16 @@ class Ros2:
         """Nothing for the table: a ROS 2 parameter's range is in its descriptor (``%param NAME --describe``)."""
         return {}
 
-    def build_messages(self, package_dir: Any, into: Any) -> list[str]:
+    def build_messages(self, package_dir: Any, into: Any, progress: Progress = no_progress) -> list[str]:
         from .msggen import build_messages
 
-        return build_messages(package_dir, into)
+        return build_messages(package_dir, into, progress)
 
-    def build_types_of(self, node: str, wanted: dict[str, str]) -> list[str]:
+    def build_types_of(self, node: str, wanted: dict[str, str], progress: Progress = no_progress) -> list[str]:
         """Build the types ``wanted`` (type → a topic it is used on) from the running ``node``'s descriptions."""
         from .msggen import build_from_node
 
-        return build_from_node(self.process, node, wanted)
+        return build_from_node(self.process, node, wanted, progress=progress)
 
     def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
         node, key = self._owner(name)

@@ -37,10 +37,11 @@ import sys
 import sysconfig
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from ..core import msgtypes
 from ..core.errors import IpyrosError, MessageTypeError
+from ..core.progress import Progress, Step, no_progress
 from . import nodes
 
 __all__ = ["build_from_node", "build_messages"]
@@ -54,13 +55,17 @@ _KINDS = {"msg": ".msg", "srv": ".srv", "action": ".action"}  # and .idl in each
 _IMPLIED = {"srv": ("service_msgs", "builtin_interfaces"),
             "action": ("action_msgs", "unique_identifier_msgs", "builtin_interfaces", "service_msgs")}
 _INCLUDE = re.compile(r'^#include "(\w+)/(?:msg|srv|action)/\w+\.idl"', re.M)
+#: What a build does, in the steps its progress counts: each generator run, then each library compiled.
+_STEPS = len(_GENERATORS) + 8
 
 
-def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLike[str] | None" = None) -> list[str]:
+def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLike[str] | None" = None,
+                   progress: Progress = no_progress) -> list[str]:
     """Build the package at ``package_dir`` (its ``msg/``, ``srv/``, ``action/``) and make it importable.
 
     Built under ``into`` (default ``$IPYROS_MESSAGES_DIR``, else ``~/.ipyros/messages``, in
-    a ``ros2`` folder). Returns the types built (``pkg/Type``).
+    a ``ros2`` folder), its ``progress`` counted in generator runs and libraries compiled (a few seconds).
+    Returns the types built (``pkg/Type``).
     """
     package_dir = Path(package_dir).expanduser().resolve()
     package = msgtypes.package_name_of(package_dir)
@@ -79,13 +84,15 @@ def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLi
                                f"{' '.join(n if n == 'catkin_pkg' else 'ros-' + n.replace('_', '-') for n in missing)}")
     _check_field_types(package, files)
     root = msgtypes.messages_dir(into) / "ros2"
-    with tempfile.TemporaryDirectory(prefix="ipyros-rosidl-") as work:
+    with tempfile.TemporaryDirectory(prefix="ipyros-rosidl-") as work, \
+            progress(f"building {package}'s message types", _STEPS, "steps") as step:
         out = Path(work)
-        _generate(package, package_dir, files, out)
+        advance = _counter(step)
+        _generate(package, package_dir, files, out, advance)
         libs, python = root / "lib", root / "python" / package
         shutil.rmtree(python, ignore_errors=True)
         libs.mkdir(parents=True, exist_ok=True)
-        _compile(package, _dependencies(package, out, files), out, libs, python)
+        _compile(package, _dependencies(package, out, files), out, libs, python, advance)
     _import_from(root, package)
     return [f"{package}/{path.stem}" for path in files]
 
@@ -115,7 +122,18 @@ def _check_field_types(package: str, files: list[Path]) -> None:
                                    f"its package ({spelled})")
 
 
-def _generate(package: str, package_dir: Path, files: list[Path], out: Path) -> None:
+def _counter(step: Step) -> Callable[[], None]:
+    """A call that counts one more step of the build done."""
+    steps = [0]
+
+    def advance() -> None:
+        steps[0] += 1
+        step(steps[0])
+
+    return advance
+
+
+def _generate(package: str, package_dir: Path, files: list[Path], out: Path, advance: Callable[[], None]) -> None:
     """Each generator's sources for the package under ``out/<key>/<package>``; its one-line error if one fails."""
     interface_files = [f"{package_dir}:{path.relative_to(package_dir)}" for path in files]
     # where the types the package uses are found: every installed package that has .idl files
@@ -131,6 +149,7 @@ def _generate(package: str, package_dir: Path, files: list[Path], out: Path) -> 
         except Exception as error:  # noqa: BLE001 - rosidl's parsers raise plain exceptions naming the file
             raise MessageTypeError(f"cannot build {package} from {package_dir}: {' '.join(str(error).split())}") \
                 from None
+        advance()
 
 
 def _dependencies(package: str, out: Path, files: list[Path]) -> list[str]:
@@ -148,7 +167,7 @@ def _dependencies(package: str, out: Path, files: list[Path]) -> list[str]:
     return sorted(used)
 
 
-def _compile(package: str, deps: list[str], out: Path, libs: Path, python: Path) -> None:
+def _compile(package: str, deps: list[str], out: Path, libs: Path, python: Path, advance: Callable[[], None]) -> None:
     """The five libraries into ``libs``, the Python package (sources and extension modules) into ``python``."""
     import numpy
 
@@ -168,6 +187,7 @@ def _compile(package: str, deps: list[str], out: Path, libs: Path, python: Path)
         if done.returncode != 0:
             first = next((line for line in done.stderr.splitlines() if "error" in line), done.stderr.strip()[-300:])
             raise MessageTypeError(f"cannot compile {target.name} for {package}: {first.strip()}")
+        advance()
 
     def sources(key: str, pattern: str) -> list[Path]:
         return sorted(p for p in (out / key / package).rglob(pattern) if "_s.ep." not in p.name)
@@ -215,7 +235,7 @@ def _import_from(root: Any, package: str) -> None:
 # -- a type that only a running node has -------------------------------------------------------
 
 def build_from_node(process: Any, node: str, wanted: dict[str, str], into: "str | os.PathLike[str] | None" = None,
-                    patience: float = 5.0) -> list[str]:
+                    patience: float = 5.0, progress: Progress = no_progress) -> list[str]:
     """Build the types ``wanted`` (``pkg/Type`` → a topic ``node`` uses it on) from ``node``'s own descriptions.
 
     A ROS 2 node answers ``~/get_type_description`` (REP 2011) with each type's definition as
@@ -261,5 +281,5 @@ def build_from_node(process: Any, node: str, wanted: dict[str, str], into: "str 
                 path = Path(work) / package / kind / f"{stem}.{'idl' if encoding == 'idl' else kind}"
                 path.parent.mkdir(parents=True, exist_ok=True)
                 path.write_text(text)
-            built += build_messages(Path(work) / package, into)
+            built += build_messages(Path(work) / package, into, progress)
     return built

@@ -3,6 +3,7 @@ processes started after: ROS 1 builds it with genpy, ROS 2 with the rosidl gener
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import time
@@ -55,7 +56,20 @@ def test_ros2_builds_a_packages_actions_too(session, make_node, tmp_path, monkey
     package = tmp_path / "ws_count_msgs"
     (package / "action").mkdir(parents=True)
     (package / "action" / "Count.action").write_text("int32 target\n---\nint32 reached\n---\nint32 now\n")
+    shown: list[tuple[str, float, str, list[float]]] = []
+
+    @contextlib.contextmanager
+    def progress(what, total=None, unit=""):  # a view that keeps what it is told
+        steps: list[float] = []
+        shown.append((what, total, unit, steps))
+        yield steps.append
+
+    monkeypatch.setattr(session, "progress", progress)
     assert build_messages(package, tmp_path / "built") == ["ws_count_msgs/Count"]
+    # a few seconds of work: its progress, each generator run and each library compiled a step
+    assert [(what, total, unit) for what, total, unit, _ in shown] == \
+        [("building ws_count_msgs's message types", 13, "steps")]
+    assert shown[0][3] == list(range(1, 14)), shown
 
     def count(goal, action):
         for i in range(1, goal.target + 1):
