@@ -231,11 +231,13 @@ def _guard_colour(state: str) -> str:
     return "#b91c1c"  # stopped, stopping, e-stopped, not running
 
 
-def to_dot(drawn: Picture) -> str:
+def to_dot(drawn: Picture, fit: Optional[tuple[float, float]] = None) -> str:
     """Graphviz's dot language for ``drawn``: node ids are the names themselves (quoted), so an SVG's text and its
-    ``<title>`` elements name every node and topic as ROS does."""
+    ``<title>`` elements name every node and topic as ROS does. ``fit`` (inches wide, high): a larger drawing is
+    scaled down to it, as a notebook's cell is only so wide; a smaller one is left as it is."""
     types, rates = drawn.types, drawn.rates
-    lines = ["digraph ros {", '  graph [rankdir=LR, fontname="Helvetica", fontsize=11, newrank=true];',
+    size = f', size="{fit[0]:g},{fit[1]:g}"' if fit else ""
+    lines = ["digraph ros {", f'  graph [rankdir=LR, fontname="Helvetica", fontsize=11, newrank=true{size}];',
              '  node [fontname="Helvetica", fontsize=10];', '  edge [fontname="Helvetica", fontsize=9];']
     for frame in drawn.frames:
         boxes = [b for b in drawn.boxes if b.frame == frame]

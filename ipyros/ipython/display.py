@@ -350,10 +350,16 @@ def _picture_text(drawn: Picture, printer: Any, cycle: bool) -> None:
     printer.text(to_text(drawn, _width(100)))
 
 
+#: How large a picture is drawn below a cell at most (inches, wide and high): a notebook's output is about 10 inches
+#: wide beside JupyterLab's side bar; a larger graph is scaled down to fit, not cut (``--save`` keeps its size).
+CELL_FIT = (10.0, 12.0)
+
+
 def picture_svg(drawn: Picture) -> Optional[str]:
-    """The picture laid out by Graphviz, as SVG text; None without Graphviz (the tree is shown instead)."""
+    """The picture laid out by Graphviz, as SVG text, scaled to fit a cell; None without Graphviz (the tree is shown
+    instead)."""
     try:
-        return layout(to_dot(drawn)).decode()
+        return layout(to_dot(drawn, CELL_FIT)).decode()
     except IpyrosError:
         return None
 

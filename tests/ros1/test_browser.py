@@ -10,6 +10,7 @@ is tested in test_kernel.py and test_notebook.py; here it is the browser's rende
 
 from __future__ import annotations
 
+import re
 import shutil
 import time
 from dataclasses import dataclass, field
@@ -120,21 +121,41 @@ def test_topics_is_an_html_table_in_the_browser(tour):
 def test_graph_is_an_svg_of_the_wrapping_in_the_browser(tour):
     """%graph: one SVG below the cell (JupyterLab draws it as an image), the wrapping node's frame around the turtle
     it launched, the topics named in its text."""
+    svg = _drawn(tour.notebook.cell("%graph /turtle1*"), tour.shots / "graph.png")
+    assert "wraps ipyros_demo/turtle_sim" in svg and "/turtle1/pose" in svg and "(basenode)" in svg, svg[:400]
+
+
+def _drawn(cell: Any, shot: Path) -> str:
+    """The SVG text of the one picture below ``cell``, once the browser has drawn it with text in it (``shot``)."""
     from urllib.parse import unquote
 
-    cell = tour.notebook.cell("%graph /turtle1*")
     cell.scroll_into_view_if_needed()  # JupyterLab draws the cells in view only
     picture = cell.locator(".jp-OutputArea-output img")
     wait_for(lambda: picture.count() == 1, timeout=10, what="the picture drawn")
     source = picture.get_attribute("src")
     assert source.startswith("data:image/svg+xml,"), source[:80]
-    svg = unquote(source.split(",", 1)[1])
-    assert "wraps ipyros_demo/turtle_sim" in svg and "/turtle1/pose" in svg and "(basenode)" in svg, svg[:400]
     width = picture.evaluate("image => image.naturalWidth")
     assert width > 200, "the browser did not draw the picture"
-    shot = tour.shots / "graph.png"
     picture.screenshot(path=str(shot))
     assert _pixels_like(shot, TEXT) > 200, f"no text in the picture's screenshot: {shot}"
+    return unquote(source.split(",", 1)[1])
+
+
+def test_the_wrapped_kobuki_is_drawn_in_the_browser(lab, browser, tmp_path):
+    """The paper's second session run from the Run menu: its %graph draws move_base inside its wrapping node, the
+    handler that replaced its cmd_vel, and the guard on the output to the base with what it did."""
+    shutil.copy(NOTEBOOKS / "kobuki.ipynb", lab.root)
+    notebook = NotebookPage(lab, browser, "kobuki.ipynb", tmp_path)
+    try:
+        notebook.run_all()
+        wait_for(lambda: notebook.ran() or notebook.errors(), timeout=TIMEOUT, interval=0.2,
+                 what="the notebook to run to its end")
+        assert notebook.errors() == [], "\n---\n".join(notebook.errors())
+        svg = _drawn(notebook.cell("%graph --node /experimental_move_base"), tmp_path / "kobuki-graph.png")
+        assert "/experimental_move_base wraps ipyros_demo/move_base" in svg and "(basenode)" in svg, svg[:400]
+        assert "/cmd_vel: replaced by controlVelocity" in svg and re.search(r"guard: passing, \d+ clamped", svg)
+    finally:
+        notebook.close()
 
 
 def test_plot_is_a_live_figure_in_the_browser(tour):

@@ -106,6 +106,12 @@ def check_kobuki(nb: nbformat.NotebookNode, text: str) -> None:
     assert "e-stopped: the base is told 0.0 m/s while the planner still asks for 6.0" in text
     assert "released: the base is told 5.0 m/s again" in text
     assert re.search(r"mobile_base/commands/velocity.*passing", text), "%status shows no guard"
+    # the session drawn as the paper draws wrapping: the planner inside its wrapping node, the guard on its output
+    svg = "\n".join(out.get("data", {}).get("image/svg+xml", "") for out in cell_with(nb, "%graph").outputs)
+    said = re.findall(r">([^<>]+)</text>", svg)
+    assert "/experimental_move_base wraps ipyros_demo/move_base" in said and "(basenode)" in said, said
+    assert {"/cmd_vel: replaced by controlVelocity", "/move_base_simple/goal: relayed"} <= set(said), said
+    assert any(re.fullmatch(r"guard: passing, \d+ clamped", text) for text in said), said
     recorded, top = number(r"the live plot recorded (\d+) commands, up to ([\d.]+) m/s", text)
     assert recorded >= 20 and top == 6.0, "the live plot did not follow the commands"
     assert images(nb) == 2, "the live plot or the speed plot is missing"

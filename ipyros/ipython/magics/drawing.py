@@ -28,6 +28,7 @@ from ...tools.drawing import layout, session_picture
 from ...tools.probe import measure_rates
 from ..api import live_graph, node_name
 from ..arguments import NODE, TOPIC, argument
+from ..display import CELL_FIT
 from .cell_output import in_kernel
 from .common import ExtensionMagics
 
@@ -106,7 +107,7 @@ class DrawingMagics(ExtensionMagics):
         """One picture in the notebook, replaced (not appended) when the graph changes, until ``%graph --stop``."""
         from IPython.display import SVG, display
 
-        source = to_dot(drawn)
+        source = to_dot(drawn, CELL_FIT)
         handle = display(SVG(layout(source)), display_id=True)
         self.stop_live()
         stop = self._live = threading.Event()
@@ -116,7 +117,7 @@ class DrawingMagics(ExtensionMagics):
             while not stop.wait(LIVE_LOOK):
                 try:
                     fresh = self._draw(args.pattern, focus, args.depth, args.most, args.types)
-                    now = to_dot(dataclasses.replace(fresh, rates=drawn.rates))
+                    now = to_dot(dataclasses.replace(fresh, rates=drawn.rates), CELL_FIT)
                     if now != last:
                         handle.update(SVG(layout(now)))
                         last = now

@@ -60,6 +60,7 @@ def test_graphviz_gets_a_frame_a_wrapping_node_named_edges_and_the_guard_coloure
     assert "rosout" not in dot and "ipyros_guard" not in dot
     stopped = to_dot(picture(SNAP, {"/w": Drawn(WRAPPER, {"/cmd_vel": "e-stopped"})}))
     assert 'headlabel="guard: e-stopped", color="#b91c1c"' in stopped
+    assert ", size=" not in dot and 'newrank=true, size="10,12"];' in to_dot(drawn, (10, 12))  # a cell's width
 
 
 def test_the_text_is_a_tree_by_node_that_fits_the_width():
