@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import importlib.util
 import sys
+import time
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -29,9 +30,14 @@ def main(argv: list[str] | None = None) -> int:
         benches = (relay, handler_cost, guard, machine_link, machine_relay, try_bag, completion, agent, scale)
 
     status = 0
-    for bench in benches:
-        print(f"\n=== {bench.__name__} ===", flush=True)
+    started = time.monotonic()
+    for number, bench in enumerate(benches, 1):  # each bench prints as it goes; here which one, and how far along
+        gone = time.monotonic() - started
+        print(f"\n=== {bench.__name__} ({number} of {len(benches)}; {gone // 60:.0f} min {gone % 60:.0f} s so far) "
+              "===", flush=True)
         status |= bench.main(argv) or 0
+    gone = time.monotonic() - started
+    print(f"\n=== {len(benches)} benches in {gone // 60:.0f} min {gone % 60:.0f} s ===", flush=True)
     return status
 
 
