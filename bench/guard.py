@@ -19,6 +19,12 @@ of the session: *idle* (at the prompt, waiting), *busy* (pure Python holding the
 a long cell) and *frozen* (SIGSTOP, as Ctrl-Z or a debugger leaves it; SIGCONT once the stop came).
 Targets (issue 40): p99 within the timeout + 20 ms on ROS 1, + 50 ms on ROS 2.
 
+**An obstacle, no command coming**: the session's second output has a guard with one rule over what the robot
+senses (the stop while a range it publishes at 20 Hz is under 0.5 m); one command passes, then, with none after it,
+the range drops to 0.2 m; the figure is the time from that range's publication to the first stop message at a
+second robot, over ``--trips`` obstacles. Target (issue 49): p99 within the guard's repeat period (50 ms) + 20 ms
+on ROS 1, + 50 ms on ROS 2.
+
 **Hostile values**: the session writes ``--hostile`` messages flat out whose six numbers are drawn
 from NaN, infinities, +-1e308, 2**63, -0.0, denormals, just outside the limits and the wrong sign;
 the robot counts what it got and what broke the rules: the target is 0. The rate the guarded
@@ -52,8 +58,9 @@ TIMEOUT = 0.25  # s of silence before the stop message
 DRIVE = (20, 50.0)  # commands a trip, and their rate (Hz)
 BUSY = 1.0  # s the session computes after its last command, in the busy state
 STATES = ("idle", "busy", "frozen")
-#: What each ROS's p99 may add to the timeout (issue 40), ms.
+#: What each ROS's p99 may add to the timeout (issue 40), or to the repeat period for an obstacle (issue 49), ms.
 MARGIN_MS = {"ROS 1": 20.0, "ROS 2": 50.0}
+REPEAT = 0.05  # s between the guards' stop messages (20 Hz)
 
 
 def percentile(values: list[float], q: float) -> float:
@@ -109,6 +116,20 @@ def trips(session: Child, robot: Child, state: str, count: int) -> list[float]:
     return delays
 
 
+def obstacles(session: Child, robot: Child, count: int) -> list[float]:
+    """``count`` obstacles with no command coming: the ms from the range's publication to the first stop."""
+    delays = []
+    for _ in range(count):
+        session.send("obstacle")
+        near = float(session.expect("near", 30))
+        answer = wait_until(lambda: (lambda a: a if a != "none" else None)(robot.ask("trip")), 10,
+                            "the stop message after an obstacle", 0.01)
+        delays.append((float(answer.split()[1]) - near) * 1000.0)
+        session.send("clear")
+        session.expect("clear", 30)
+    return delays
+
+
 def run(ros: str, env: dict[str, str], workdir: Path, count: int, hostile: int) -> tuple[dict[str, list[float]], dict]:
     procs: list[Child] = []
     sentinel: Optional[int] = None
@@ -116,6 +137,9 @@ def run(ros: str, env: dict[str, str], workdir: Path, count: int, hostile: int) 
         robot = Child("robot", [sys.executable, str(NODES / "robot.py"), TOPIC], env, workdir)
         procs.append(robot)
         robot.expect("ready", 60)
+        ruled = Child("robot_ruled", [sys.executable, str(NODES / "robot.py"), TOPIC + "_ruled", "bench_robot_ruled"], env, workdir)
+        procs.append(ruled)
+        ruled.expect("ready", 60)
         session = Child("session", [sys.executable, str(NODES / "session.py"), TOPIC, str(TIMEOUT)], env, workdir)
         procs.append(session)
         sentinel = int(session.expect("ready", 90))
@@ -126,6 +150,11 @@ def run(ros: str, env: dict[str, str], workdir: Path, count: int, hostile: int) 
             delays[state] = trips(session, robot, state, count)
             print(f"  {ros} {state:6}: silence to stop p50 {statistics.median(delays[state]):.1f} ms, "
                   f"p99 {percentile(delays[state], 0.99):.1f} ms (timeout {TIMEOUT * 1000:.0f} ms)", flush=True)
+        wait_until(lambda: int(ruled.ask("publishers")) >= 2, 30, "the second robot to hear its output", 0.05)
+        obstacles(session, ruled, 2)  # warm-up
+        delays["obstacle"] = obstacles(session, ruled, count)
+        print(f"  {ros} obstacle: to the stop p50 {statistics.median(delays['obstacle']):.1f} ms, "
+              f"p99 {percentile(delays['obstacle'], 0.99):.1f} ms (repeat period {REPEAT * 1000:.0f} ms)", flush=True)
         before, _ = (int(w) for w in robot.ask("tally").split())
         session.send(f"hostile {hostile}")
         wrote, seconds = session.expect("wrote", 600).split()
@@ -150,6 +179,13 @@ def figures(ros: str, delays: dict[str, list[float]], hostile_run: dict) -> list
     most = TIMEOUT * 1000 + MARGIN_MS[ros]
     out = []
     for state, values in delays.items():
+        if state == "obstacle":
+            out += [Figure(ros, f"guard: an obstacle to the stop message, no command coming, p50 of {len(values)}",
+                           statistics.median(values), "ms"),
+                    Figure(ros, f"guard: an obstacle to the stop message, no command coming, p99 of {len(values)}",
+                           percentile(values, 0.99), "ms", most=REPEAT * 1000 + MARGIN_MS[ros],
+                           note=f"repeat period {REPEAT * 1000:.0f} ms + {MARGIN_MS[ros]:.0f} ms")]
+            continue
         out += [Figure(ros, f"guard: silence to the stop message, session {state}, p50 of {len(values)}",
                        statistics.median(values), "ms"),
                 Figure(ros, f"guard: silence to the stop message, session {state}, p99 of {len(values)}",

@@ -1,6 +1,6 @@
 """The robot of the guard bench: a plain subscriber of the guarded topic (rospy or rclpy, no ipyros).
 
-    python robot.py TOPIC
+    python robot.py TOPIC [NAME]
 
 Records every ``geometry_msgs/TwistStamped`` it gets: when it came (wall clock), its stamp, whether it is
 the stop message (all zeros), and whether it breaks the guard's rules (a number not finite, ``linear.x``
@@ -56,23 +56,23 @@ class Robot:
             return "none"
 
 
-def ros1(topic: str, robot: Robot):
+def ros1(topic: str, robot: Robot, name: str):
     import rospy
     from geometry_msgs.msg import TwistStamped
 
-    rospy.init_node("bench_robot", disable_signals=True)
+    rospy.init_node(name, disable_signals=True)
     sub = rospy.Subscriber(topic, TwistStamped, robot.heard, queue_size=None, tcp_nodelay=True)
     return lambda: sub.get_num_connections(), lambda: rospy.signal_shutdown("done")
 
 
-def ros2(topic: str, robot: Robot):
+def ros2(topic: str, robot: Robot, name: str):
     import rclpy
     from geometry_msgs.msg import TwistStamped
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     rclpy.init()
-    node = rclpy.create_node("bench_robot")
+    node = rclpy.create_node(name)
     qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
     node.create_subscription(TwistStamped, topic, robot.heard, qos)
     executor = SingleThreadedExecutor()
@@ -89,7 +89,8 @@ def ros2(topic: str, robot: Robot):
 
 def main() -> None:
     robot = Robot()
-    publishers, stop = (ros1 if importlib.util.find_spec("rospy") else ros2)(sys.argv[1], robot)
+    name = sys.argv[2] if len(sys.argv) > 2 else "bench_robot"  # a second robot needs a name of its own (ROS 1)
+    publishers, stop = (ros1 if importlib.util.find_spec("rospy") else ros2)(sys.argv[1], robot, name)
     print("ready", flush=True)
     try:
         for line in sys.stdin:

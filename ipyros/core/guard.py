@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import copy
 import enum
+import json
 import math
 import re
 import threading
@@ -38,7 +39,8 @@ from .msgbuild import copy_message, field_types, nested_class
 from .rules import RuleSet
 
 __all__ = ["DEFAULT_GRACE", "DEFAULT_LEASE", "DEFAULT_MACHINE_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE",
-           "Acting", "Gate", "GuardFigures", "Path", "Verdict", "check_rules", "check_stop", "finite_checker", "parse_path"]
+           "STATE_TOPIC", "Acting", "Gate", "GuardFigures", "Path", "Verdict", "check_rules", "check_stop",
+           "finite_checker", "parse_path", "verdict_text"]
 
 #: The type of a guard's e-stop topic: ``True`` holds the stop message.
 ESTOP_TYPE = "std_msgs/Bool"
@@ -55,6 +57,9 @@ DEFAULT_MACHINE_GRACE = 30.0
 #: An episode of a guard's acting ends when this long (s) has passed with nothing for it to do: each kind
 #: of acting (clamped, dropped, not finite, e-stopped) is said once an episode, however the kinds alternate.
 EPISODE_QUIET = 1.0
+#: Where a node's guards publish what they do (``std_msgs/String``, one JSON object a message: see
+#: :func:`verdict_text`), under the node's name, as ``~guard_state``: recorded with the commands, replayed beside them.
+STATE_TOPIC = "guard_state"
 _NUMBERS = {"float32", "float64", "int8", "int16", "int32", "int64", "uint8", "uint16", "uint32", "uint64",
             "byte", "char"}
 _FLOATS = {"float32", "float64"}
@@ -270,6 +275,15 @@ class Acting(enum.Enum):
     NOT_FINITE = "not finite"  # a NaN or an infinity: the stop message in its place
     ESTOPPED = "e-stopped"  # the stop message in its place, whatever came
     RULE_STOPPED = "stopped by a rule"  # a rule over what the robot senses: the stop message in its place
+    SILENT = "stopped on silence"  # nothing passed for its timeout: its process sends the stop message
+
+
+def verdict_text(output: str, acting: Acting, why: str, stamp: float) -> str:
+    """One verdict of a guard as a line of JSON (``~guard_state``'s ``data``): its output, what it did (an
+    :class:`Acting` value: ``"passed"`` once commands pass again), why in words (the rule and its input, the field),
+    and when (seconds since the epoch). ``json.loads(msg.data)`` reads it back."""
+    return json.dumps({"output": output, "acting": acting.value, "why": why, "stamp": round(stamp, 6)},
+                      separators=(", ", ": "))
 
 
 @dataclass(frozen=True)
@@ -321,12 +335,14 @@ class Gate:
                  on_limit: str, stop: Callable[[], Any], estopped: Callable[[], bool], passed: Callable[[], None],
                  say: Callable[[str], None], clock: Callable[[], float] = time.monotonic,
                  rules: Optional[RuleSet] = None,
-                 heard: Callable[[], Mapping[str, tuple[Any, float]]] = lambda: {}) -> None:
+                 heard: Callable[[], Mapping[str, tuple[Any, float]]] = lambda: {},
+                 report: Callable[[Acting, str], None] = lambda acting, what: None) -> None:
         self.topic, self.cls = topic, cls
         self._limits = [(parse_path(cls, p, topic), low, high) for p, (low, high) in limits.items()]
         self._rates = [(parse_path(cls, p, topic), most) for p, most in rates.items()]
         self._drop = on_limit == "drop"
         self._stop, self._estopped, self._passed, self._say, self._clock = stop, estopped, passed, say, clock
+        self._report = report  # each kind of acting once an episode, as a value (``~guard_state``)
         self._finite = finite_checker(cls)
         self._lock = threading.Lock()
         self._last: dict[tuple[str, int], tuple[float, float]] = {}  # (path, n-th value) → (value, when) that passed
@@ -360,7 +376,8 @@ class Gate:
         if bad is not None:
             self.figures.replaced += 1
             self._replacing, self._replaced_at = f"{bad} not finite", self._clock()
-            self._episode_of(Acting.NOT_FINITE, f"{bad} is not a finite number: the stop message was sent in its place")
+            self._episode_of(Acting.NOT_FINITE, f"{bad} is not a finite number: the stop message was sent in its place",
+                             why=f"{bad} not finite")
             return Verdict(self._stop(), Acting.NOT_FINITE, bad)
         ruled = ""
         if self._rules is not None:
@@ -369,7 +386,7 @@ class Gate:
             if stopped:
                 self.figures.replaced += 1
                 self._replacing, self._replaced_at = ruled, self._clock()
-                self._episode_of(Acting.RULE_STOPPED, f"{ruled}: the stop message was sent in its place")
+                self._episode_of(Acting.RULE_STOPPED, f"{ruled}: the stop message was sent in its place", why=ruled)
                 return Verdict(sent, Acting.RULE_STOPPED, ruled)
             msg = sent  # scaled or clamped by the rules in force (a copy), or as it came
         outside = self._outside(msg)
@@ -449,8 +466,9 @@ class Gate:
                 for place, (_, _, value) in enumerate(path.values(stop)):
                     self._last[(path.text, place)] = (value, now)
 
-    def _episode_of(self, acting: Acting, what: str, say: bool = True) -> None:
-        """Note that the gate acted (``what``, in words, for the prompt), said once an episode and kind of acting."""
+    def _episode_of(self, acting: Acting, what: str, say: bool = True, why: Optional[str] = None) -> None:
+        """Note that the gate acted (``what``, in words, for the prompt), said once an episode and kind of acting,
+        and reported as a value with ``why`` (the reason alone; ``what`` when not given)."""
         now = self._clock()
         if now - self._acted_at >= EPISODE_QUIET:
             self._said.clear()  # a quiet second: a new episode
@@ -460,6 +478,7 @@ class Gate:
             self.figures.last_trip, self.figures.last_trip_at = what, time.time()
             if say:
                 self._say(f"guard {self.topic}: {what}")
+            self._report(acting, what if why is None else why)
 
 
 def _cast(kind: str, value: float) -> Any:

@@ -8,16 +8,17 @@ from __future__ import annotations
 
 import copy
 import os
+import threading
 import time
 from pathlib import Path
 from typing import Any, Callable, Optional
 
 from ..core import msgtypes
-from ..core.guard import Gate, GuardState, Verdict, check_stop
+from ..core.guard import EPISODE_QUIET, STATE_TOPIC, Acting, Gate, GuardState, Verdict, check_stop, verdict_text
 from ..core.model import GuardModel, TopicModel
 from ..core.msgbuild import build_message
 from ..core.names import tool_name
-from ..core.qos import PROFILES
+from ..core.qos import PROFILES, Qos
 from ..core.rules import RuleSet, as_rule
 from ..core.slots import HandlerSlot
 from ..processes.basenode import log_dir
@@ -29,6 +30,8 @@ __all__ = ["LiveGuard", "limits_of"]
 SENTINEL_START = 30.0
 #: How long a guard waits for the graph to show an input of its rules, whose type it subscribes with (s).
 INPUT_TYPE_WAIT = 5.0
+#: How its verdicts go out: the last ten kept for a subscriber that comes later (latched, on ROS 1 the last).
+VERDICT_QOS = Qos(10, "reliable", "transient_local")
 
 _count = iter(range(1, 1 << 30))
 
@@ -50,6 +53,8 @@ class LiveGuard:
         self.heard: dict[str, tuple[Any, float]] = {}
         self._inputs: dict[str, Any] = {}
         self._ruling = ""  # why its rules hold the stop message now, with no command coming ("": they do not)
+        self._held = ""  # why an input's arrival sent the stop message, for the watch to say (see _judge_input)
+        self._holding = threading.Lock()
         self.gate = self._gate(model)
         self.sentinel: Optional[Sentinel] = None
         self._noticed, self._by_topic = self.shared.state, False
@@ -59,6 +64,8 @@ class LiveGuard:
         self._closing = False
         self._stopped_at = 0.0  # when the session last sent the stop message for a lost process (monotonic)
         self._unsent: Optional[str] = None  # why the session's last stop message could not be sent, if it could not
+        self._verdicts: Any = None  # where it publishes what it does (<node>/guard_state), once started
+        self._published: tuple[Optional[Acting], str, float] = (None, "", 0.0)  # its last verdict, and when
 
     # -- rules ------------------------------------------------------------------------------------
     def _make_stop(self, model: GuardModel) -> Any:
@@ -77,7 +84,22 @@ class LiveGuard:
 
     def _gate(self, model: GuardModel) -> Gate:
         return Gate(self.topic, self.cls, limits_of(model), dict(model.rate), model.on_limit, self.stop_message,
-                    self.holding, self.shared.passed, self._say, rules=self.rules, heard=lambda: self.heard)
+                    self.holding, self.shared.passed, self._say, rules=self.rules, heard=lambda: self.heard,
+                    report=self._publish_verdict)
+
+    def _publish_verdict(self, acting: Acting, why: str) -> None:
+        """A verdict published on ``<node>/guard_state`` (see :func:`~ipyros.core.guard.verdict_text`): what the
+        prompt is told, as a value, for a recording to keep beside the commands."""
+        verdicts, now = self._verdicts, time.time()
+        last_acting, last_why, last_at = self._published
+        if verdicts is None or acting is last_acting and last_why.startswith(why) and now - last_at < EPISODE_QUIET:
+            return  # the gate said it as it replaced a message by the stop message; the watch says it again
+        self._published = (acting, why, now)
+        try:
+            verdicts.write(msgtypes.resolve_message("std_msgs/String")[1](
+                data=verdict_text(self.topic, acting, why, now)))
+        except Exception:  # noqa: BLE001 - a verdict not published never changes what the guard does
+            pass
 
     # -- what its rules read ----------------------------------------------------------------------
     def _listen(self, rules: Optional[RuleSet]) -> list[str]:
@@ -114,11 +136,26 @@ class LiveGuard:
 
         def hear(msg: Any) -> None:
             self.heard[topic] = (msg, time.monotonic())
+            self._judge_input()
 
         slot = HandlerSlot(f"guard {self.topic} input {topic}", hear,
                            lambda failure: self._say(f"guard {self.topic}: reading {topic}: {failure.error}"))
         return self._backend.subscription(self._host, topic, cls, slot, PROFILES["best_effort"],
                                           lambda text: self._say(f"guard {self.topic}: {text}"))
+
+    def _judge_input(self) -> None:
+        """An input just came: when its rules now hold the stop message and did not a moment ago (an obstacle, no
+        command coming), the stop message goes out at once, not at the session watch's next look (0.1 s away at
+        most); the watch says why, and goes on sending it at the guard's rate."""
+        if self._ruling or self.sentinel is None or self._closing or self.lost is not None:
+            return
+        now = time.monotonic()
+        why = self.gate.idle() if now - self._stopped_at >= 1.0 / self.model.repeat else ""
+        if why:
+            self._stopped_at = now
+            self._send_stop()
+            with self._holding:
+                self._held = why
 
     def _unlisten(self, topics: Any) -> None:
         for topic in list(topics):
@@ -170,6 +207,7 @@ class LiveGuard:
         from ..core.errors import BaseNodeError
 
         self._listen(self.rules)  # what its rules read, heard before anything passes
+        self._open_verdicts()
         name = f"{tool_name('guard')}_{next(_count)}"
         settings = {**self._settings(), "node": name, "topic": self.topic, "type": self.type,
                     "latch": bool(self._output.latch), "qos": self._output.qos, "estop_topic": self.model.estop_topic}
@@ -182,8 +220,20 @@ class LiveGuard:
         if problem is not None:
             self.sentinel = None
             self._unlisten(list(self._inputs))
+            self._close_verdicts()
             raise BaseNodeError(f"the guard of {self.topic} could not start its process ({problem}); "
                                 f"{'the stop message holds' if self.lost else 'nothing of the node runs'}: see {log}")
+
+    def _open_verdicts(self) -> None:
+        if self._verdicts is None:
+            string = msgtypes.resolve_message("std_msgs/String")[1]
+            self._verdicts = self._backend.publication(self._host, f"{self._host.rstrip('/')}/{STATE_TOPIC}", string,
+                                                       VERDICT_QOS, lambda text: None)
+
+    def _close_verdicts(self) -> None:
+        verdicts, self._verdicts = self._verdicts, None
+        if verdicts is not None:
+            verdicts.close()
 
     def estop(self, on: bool) -> None:
         """Hold the stop message (``on``) or let commands pass again; the sentinel is woken to act at once. A
@@ -231,14 +281,18 @@ class LiveGuard:
         """Its rules judged with no new command: while they hold the stop message (an input not heard or stale, a
         stop rule, a last command they would now change), the session sends it at the guard's rate, said once."""
         why = self.gate.idle()
+        with self._holding:  # the stop an input's arrival sent since the last look: said now
+            told, self._held = why or self._held, ""
         said = []
         if why and now - self._stopped_at >= 1.0 / self.model.repeat:
             self._stopped_at = now
             self._send_stop()  # through the gate: a stop message its rules let pass, or theirs in its place
-        if why and not self._ruling:
-            said.append(f"guard {self.topic}: {why}: the stop message goes out until its rules let a command pass")
-        elif not why and self._ruling and not self._ruling.startswith("the last command"):
+        if told and not self._ruling:
+            said.append(f"guard {self.topic}: {told}: the stop message goes out until its rules let a command pass")
+            self._publish_verdict(Acting.RULE_STOPPED, told)
+        elif not told and self._ruling and not self._ruling.startswith("the last command"):
             said.append(f"guard {self.topic}: its rules let commands pass again")
+            self._publish_verdict(Acting.PASSED, "its rules let commands pass again")
         self._ruling = why
         return said
 
@@ -255,6 +309,7 @@ class LiveGuard:
         quits at once (the guard was removed; the output goes on unguarded)."""
         self._closing = True
         self._unlisten(list(self._inputs))
+        self._close_verdicts()
         if self.sentinel is not None:
             self.sentinel.end(hold=hold, wait=not hold)
             self.sentinel = None
@@ -288,11 +343,16 @@ class LiveGuard:
         before, self._noticed, self._by_topic = self._noticed, state, by_topic
         self._commands_at = self.gate.commands
         if state == STOPPED:
+            self._publish_verdict(Acting.SILENT, f"nothing passed for {self.model.timeout:g} s")
             return (f"guard {self.topic}: nothing passed for {self.model.timeout:g} s: its process sends the stop "
                     f"message ({self.model.repeat:g} Hz) until a command passes")
         if state == ESTOPPED:
+            self._publish_verdict(Acting.ESTOPPED, f"by {self.model.estop_topic}")
             return f"guard {self.topic}: e-stopped by {self.model.estop_topic}: the stop message holds until released"
-        return f"guard {self.topic}: commands pass again" if before in (STOPPED, ESTOPPED) else None
+        if before in (STOPPED, ESTOPPED):
+            self._publish_verdict(Acting.PASSED, "commands pass again")
+            return f"guard {self.topic}: commands pass again"
+        return None
 
 
 def limits_of(model: GuardModel) -> dict[str, tuple[float, float]]:

@@ -4,13 +4,14 @@ input never heard or gone stale, and stop the last command when an obstacle appe
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 
 import pytest
 from geometry_msgs.msg import Twist
 from sensor_msgs.msg import LaserScan
-from std_msgs.msg import Bool
+from std_msgs.msg import Bool, String
 from support import wait_for
 
 from ipyros import rule
@@ -62,6 +63,9 @@ def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_s
     sensing.new.publish("/ruled/bumper", msgType=Bool)
     sensing.create()
     sensors = Sensors(sensing)
+    verdicts: list[dict] = []  # what the guard publishes on ~guard_state, read back as a recording would
+    make_node("ruled_verdicts").new.subscribe("/ruled/guard_state", msgType=String,
+                                              handler=lambda m: verdicts.append(json.loads(m.data))).create()
     nd = make_node("ruled")
     nd.new.publish("/ruled/cmd_vel", msgType=Twist)
     nd.guard("/ruled/cmd_vel", limits={"linear.x": (-1.0, 1.0)}, rules=[NEAR, BUMPER], stale={"/ruled/scan": 0.5})
@@ -75,11 +79,7 @@ def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_s
         assert set(xs(motors, time.monotonic() - 0.2)) <= {expect}, f"{what}: {xs(motors, since)[-10:]}"
 
     try:
-        try:
-            drive(0.4, 0.0, "the stop message while the laser was never heard")
-        except AssertionError:
-            print("DEBUG", list(motors.lines)[-10:], notices, engine_of(nd).status())
-            raise
+        drive(0.4, 0.0, "the stop message while the laser was never heard")
         sensors.start()
         drive(0.4, 0.4, "a command passing as it came, nothing near")
         sensors.ranges = [0.3, 3.0]
@@ -87,10 +87,19 @@ def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_s
         assert "limit linear.x -0.2..0.2 (in force)" in engine_of(nd).status().guards[0].rules[0]
         sensors.ranges = [2.0, 3.0]
         drive(0.4, 0.4, "the command as it came once the obstacle is gone")
-        appeared = time.monotonic()
-        sensors.ranges = [0.3, 3.0]  # and no new command: the last one, 0.4, would now be limited
-        wait_for(lambda: 0.0 in xs(motors, appeared), timeout=10, what="the stop with no new command")
-        assert "the last command would now be changed" in "".join(notices), notices
+        # An obstacle, and no new command: the last one, 0.4, would now be limited. The stop goes out as the scan
+        # comes, not at the session watch's next look: with the watch's judging held back, it still comes.
+        guard = engine_of(nd).guards.live["/ruled/cmd_vel"]
+        watched = guard._rule
+        guard._rule = lambda now: []
+        try:
+            appeared = time.monotonic()
+            sensors.ranges = [0.3, 3.0]
+            wait_for(lambda: 0.0 in xs(motors, appeared), timeout=10, what="the stop with no new command")
+        finally:
+            guard._rule = watched
+        wait_for(lambda: "the last command would now be changed" in "".join(notices), timeout=10,
+                 what="the watch to say why")
         sensors.ranges, sensors.pressed = [2.0, 3.0], True
         drive(0.3, 0.0, "the stop message for a forward command while the bumper is pressed")
         drive(-0.2, -0.2, "backing off while the bumper is pressed")
@@ -108,6 +117,15 @@ def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_s
     nd.write("/ruled/cmd_vel", Twist(linear=_vector(0.4)))
     time.sleep(0.5)
     assert 0.4 not in xs(motors, gone + 0.5), "nothing but the stop message while the laser is stale"
+    # each verdict said at the prompt is a value on ~guard_state too: what it did, why, when
+    kinds = [(v["acting"], v["why"]) for v in verdicts]
+    assert {v["output"] for v in verdicts} == {"/ruled/cmd_vel"} and [v["stamp"] for v in verdicts] == \
+        sorted(v["stamp"] for v in verdicts), verdicts
+    assert ("stopped by a rule", "/ruled/scan not heard yet") in kinds, kinds
+    assert any(acting == "clamped" and "rules: linear.x 0.4 -> 0.2" in why for acting, why in kinds), kinds
+    assert len(kinds) == len(set(kinds)), f"a verdict published twice: {kinds}"
+    assert any(acting == "passed" for acting, _ in kinds) and \
+        any(acting == "stopped by a rule" and "/ruled/scan stale" in why for acting, why in kinds), kinds
 
 
 def _vector(x: float):

@@ -3,6 +3,7 @@ messages of both ROS's shapes, with a clock the test moves."""
 
 from __future__ import annotations
 
+import json
 import math
 import random
 
@@ -64,6 +65,20 @@ def test_kinds_of_acting_that_alternate_are_each_said_once_an_episode():
         g.check(Twist(linear=Vector3(x=(3.0, 0.1, math.nan)[n % 3])))
     assert [s.split(": ", 1)[1][:12] for s in said] == ["clamped (lin", "linear.x is "], said
     assert g.figures.clamped == g.figures.replaced == 100
+
+
+def test_what_is_said_is_reported_as_a_value_once_an_episode_and_kind_and_as_a_line_of_json():
+    clock = Clock()
+    reported: list[tuple[guard.Acting, str]] = []
+    g = guard.Gate("/cmd_vel", Twist, LIMITS, {}, "clamp", Twist, lambda: False, lambda: None, lambda text: None,
+                   clock, report=lambda acting, why: reported.append((acting, why)))
+    for n in range(30):
+        clock.now += 0.02
+        g.check(Twist(linear=Vector3(x=(3.0, 0.1, math.nan)[n % 3])))
+    assert reported == [(guard.Acting.CLAMPED, "clamped (linear.x 3 -> 0.5)"),
+                        (guard.Acting.NOT_FINITE, "linear.x not finite")]  # the reason alone, not the sentence
+    assert json.loads(guard.verdict_text("/cmd_vel", guard.Acting.NOT_FINITE, "linear.x not finite", 12.5)) == \
+        {"output": "/cmd_vel", "acting": "not finite", "why": "linear.x not finite", "stamp": 12.5}
 
 
 def test_on_limit_drop_sends_nothing():
