@@ -206,8 +206,6 @@ class LiveGuard:
         """Start its sentinel, and wait until it publishes on the topic; a one-line error if it cannot."""
         from ..core.errors import BaseNodeError
 
-        self._listen(self.rules)  # what its rules read, heard before anything passes
-        self._open_verdicts()
         name = f"{tool_name('guard')}_{next(_count)}"
         settings = {**self._settings(), "node": name, "topic": self.topic, "type": self.type,
                     "latch": bool(self._output.latch), "qos": self._output.qos, "estop_topic": self.model.estop_topic}
@@ -215,7 +213,14 @@ class LiveGuard:
         package_root = str(Path(__file__).resolve().parents[2])  # ipyros importable as it is here
         env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
         log = log_dir() / f"{name}.log"
-        self.sentinel = Sentinel(self._backend.sentinel_command(), settings, self.shared, log, env)
+        self._listen(self.rules)  # what its rules read, heard before anything passes
+        try:
+            self._open_verdicts()
+            self.sentinel = Sentinel(self._backend.sentinel_command(), settings, self.shared, log, env)
+        except BaseException:
+            self._unlisten(list(self._inputs))
+            self._close_verdicts()
+            raise
         problem = self.sentinel.ready(SENTINEL_START)
         if problem is not None:
             self.sentinel = None

@@ -29,6 +29,7 @@ import ctypes
 import importlib
 import importlib.util
 import io
+import itertools
 import os
 import re
 import shutil
@@ -41,7 +42,7 @@ from typing import Any, Callable
 
 from ..core import msgtypes
 from ..core.errors import IpyrosError, MessageTypeError
-from ..core.progress import Progress, Step, no_progress
+from ..core.progress import Progress, no_progress
 from . import nodes
 
 __all__ = ["build_from_node", "build_messages"]
@@ -55,7 +56,8 @@ _KINDS = {"msg": ".msg", "srv": ".srv", "action": ".action"}  # and .idl in each
 _IMPLIED = {"srv": ("service_msgs", "builtin_interfaces"),
             "action": ("action_msgs", "unique_identifier_msgs", "builtin_interfaces", "service_msgs")}
 _INCLUDE = re.compile(r'^#include "(\w+)/(?:msg|srv|action)/\w+\.idl"', re.M)
-#: What a build does, in the steps its progress counts: each generator run, then each library compiled.
+#: What a build does, in the steps its progress counts: each generator run, then each library compiled (the C
+#: structs, three type supports, the Python conversion, and the Python package's three extension modules).
 _STEPS = len(_GENERATORS) + 8
 
 
@@ -87,7 +89,11 @@ def build_messages(package_dir: "str | os.PathLike[str]", into: "str | os.PathLi
     with tempfile.TemporaryDirectory(prefix="ipyros-rosidl-") as work, \
             progress(f"building {package}'s message types", _STEPS, "steps") as step:
         out = Path(work)
-        advance = _counter(step)
+        steps = itertools.count(1)
+
+        def advance() -> None:
+            step(next(steps))
+
         _generate(package, package_dir, files, out, advance)
         libs, python = root / "lib", root / "python" / package
         shutil.rmtree(python, ignore_errors=True)
@@ -120,17 +126,6 @@ def _check_field_types(package: str, files: list[Path]) -> None:
             raise MessageTypeError(f"cannot build {package}/{path.stem} from {path}: {base} is neither a built-in "
                                    f"type nor a message of {package}; ROS 2 names another package's type with "
                                    f"its package ({spelled})")
-
-
-def _counter(step: Step) -> Callable[[], None]:
-    """A call that counts one more step of the build done."""
-    steps = [0]
-
-    def advance() -> None:
-        steps[0] += 1
-        step(steps[0])
-
-    return advance
 
 
 def _generate(package: str, package_dir: Path, files: list[Path], out: Path, advance: Callable[[], None]) -> None:
