@@ -220,12 +220,16 @@ class _Reconnect:
     that re-advertises quickly, one that starts up as another of the same URI goes): the
     update is ignored as "already connected", then the connection goes. So whenever a
     connection of a subscription of this process ends, the master is asked a moment later
-    for the topic's publishers, and rospy connects to those it lacks. A publisher that is
-    really gone is not listed any more, and nothing happens.
+    for the topic's publishers, and rospy connects to those it lacks; and asked again
+    :data:`AGAIN` times a second apart, as a connection that ends while a first ask is pending
+    starts no ask of its own. A publisher that is really gone is not listed any more, and
+    nothing happens.
     """
 
     _pending: set[str] = set()
     _lock = threading.Lock()
+    #: How many times the master is asked again after the first ask, a second apart.
+    AGAIN = 2
 
     @classmethod
     def guard(cls, subscriber: Any) -> None:
@@ -238,17 +242,22 @@ class _Reconnect:
             if impl.resolved_name in cls._pending:
                 return
             cls._pending.add(impl.resolved_name)
-        timer = threading.Timer(0.3, cls._ask, (impl,))
+        cls._later(0.3, impl, cls.AGAIN)
+
+    @classmethod
+    def _later(cls, delay: float, impl: Any, left: int) -> None:
+        timer = threading.Timer(delay, cls._ask, (impl, left))
         timer.daemon = True
         timer.start()
 
     @classmethod
-    def _ask(cls, impl: Any) -> None:
+    def _ask(cls, impl: Any, left: int) -> None:
         """Register the subscription again, unless it closed meanwhile (its node shut down as its publisher went):
         a closed subscription registered again would be left on the master as a dead entry."""
         topic = impl.resolved_name
-        with cls._lock:
-            cls._pending.discard(topic)
+        if left == cls.AGAIN:  # the first ask: a connection that ends from now on asks anew
+            with cls._lock:
+                cls._pending.discard(topic)
         manager = rospy_inside.registration_manager()
         if manager is None or rospy.is_shutdown() or impl.closed:
             return
@@ -257,8 +266,11 @@ class _Reconnect:
             _subscribe_again(master, manager, topic, impl.type)
             if impl.closed:  # it closed while it was being registered: take it back
                 master.unregisterSubscriber(rospy.get_name(), topic, rospy_inside.node_uri())
+                return
         except (OSError, xmlrpc.client.Error):
-            pass  # no master now: when it is back, the master watch registers everything again
+            return  # no master now: when it is back, the master watch registers everything again
+        if left > 0:
+            cls._later(1.0, impl, left - 1)
 
 
 def refuse_taken_name(master_uri: str, name: str) -> None:
