@@ -38,7 +38,7 @@ import ast
 import math
 import re
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Mapping, Optional, Sequence
+from typing import Any, Callable, Collection, Iterable, Mapping, Optional, Sequence
 
 from . import msgpath
 from .errors import DeclarationError, cut
@@ -448,9 +448,11 @@ class RuleSet:
         self.acting = judgement.acting
         return judgement
 
-    def described(self) -> tuple[str, ...]:
-        """Each rule in words, numbered, those in force at the last judgement said so (``%status``)."""
-        return tuple(f"{n}. {r}" + (" (in force)" if n in self.acting else "") for n, r in enumerate(self.rules, 1))
+    def described(self, acting: Optional[Collection[int]] = None) -> tuple[str, ...]:
+        """Each rule in words, numbered, those in force at the last judgement said so (``%status``); ``acting``: the
+        numbers in force where they are judged elsewhere (a guard placed on a machine: its keeper's report)."""
+        acting = self.acting if acting is None else acting
+        return tuple(f"{n}. {r}" + (" (in force)" if n in acting else "") for n, r in enumerate(self.rules, 1))
 
     def _judge(self, heard: Mapping[str, tuple[Any, float]], now: float, command: Any) -> Judgement:
         for topic in self.topics:

@@ -286,9 +286,6 @@ def _sensed_rules(engine: NodeEngine, where: str, cls: type, output: str, stop_m
     and the inputs' types the graph knows, and the stop message checked against them; each refusal one line."""
     if rules is None and stale is None:
         return [], {}
-    if machine is not None:
-        raise DeclarationError(f"{where}: rules= and stale= are enforced by a guard kept in this session, and a "
-                               f"keeper does not read sensors yet: leave out machine={machine!r}, or the rules")
     if rules is not None and not isinstance(rules, (list, tuple)):
         raise DeclarationError(f"{where}: rules={cut(rules)}: give a list of rule(...), e.g. "
                                "rules=[rule('min(/scan.ranges) < 0.5', limit={'linear.x': (-0.2, 0.2)})]")

@@ -84,8 +84,12 @@ class LiveGuard:
 
     def _gate(self, model: GuardModel) -> Gate:
         return Gate(self.topic, self.cls, limits_of(model), dict(model.rate), model.on_limit, self.stop_message,
-                    self.holding, self.shared.passed, self._say, rules=self.rules, heard=lambda: self.heard,
+                    self.holding, self.shared.passed, self._say, rules=self._judged_here(), heard=lambda: self.heard,
                     report=self._publish_verdict)
+
+    def _judged_here(self) -> Optional[RuleSet]:
+        """The rules its gate judges in this process: all of them (a placed guard's are judged on its machine)."""
+        return self.rules
 
     def _publish_verdict(self, acting: Acting, why: str) -> None:
         """A verdict published on ``<node>/guard_state`` (see :func:`~ipyros.core.guard.verdict_text`): what the
@@ -117,18 +121,24 @@ class LiveGuard:
             raise
         return added
 
-    def _subscribe(self, topic: str) -> Any:
+    def _input_type(self, topic: str) -> str:
+        """The type the live graph shows for an input of its rules, waited for a few seconds; one line if none."""
         from ..core.errors import BaseNodeError
 
         deadline = time.monotonic() + INPUT_TYPE_WAIT
-        type_name = None
-        while type_name is None:
+        while True:
             type_name = self._backend.graph_snapshot(timeout=1.0).topics.get(topic) or None
-            if type_name is None and time.monotonic() > deadline:
+            if type_name is not None:
+                return type_name
+            if time.monotonic() > deadline:
                 raise BaseNodeError(f"guard {self.topic}: its rules read {topic}, which nothing publishes, so its "
                                     "type is not known here: start what publishes it, then the node")
-            if type_name is None:
-                time.sleep(0.1)
+            time.sleep(0.1)
+
+    def _subscribe(self, topic: str) -> Any:
+        from ..core.errors import BaseNodeError
+
+        type_name = self._input_type(topic)
         cls = msgtypes.message_class_or_none(type_name)
         if cls is None:
             raise BaseNodeError(f"guard {self.topic}: its rules read {topic}, a {type_name}, which is not installed "

@@ -32,7 +32,6 @@ class PlacedGuard(LiveGuard):
     def __init__(self, model: GuardModel, output: TopicModel, backend: Any, say: Callable[[str], None],
                  send: Callable[[str, Any], bool], host: str) -> None:
         assert model.machine is not None
-        _no_rules(model)
         self.machine = model.machine
         # the token is read before anything opens
         self._link = KeeperLink(backend, host, self.machine, "guards", f"guard {model.resolved}", say)
@@ -52,11 +51,22 @@ class PlacedGuard(LiveGuard):
 
     def _spec(self) -> dict[str, Any]:
         model = self.model
+        # its rules' inputs with the types the live graph shows (the robot's sensors: the keeper subscribes there)
+        inputs = {topic: self._input_type(topic) for topic in self.rules.topics} if self.rules is not None else {}
         return {"topic": self.topic, "type": self.type, "limits": model.limits, "rate": model.rate,
                 "on_limit": model.on_limit, "timeout": model.timeout, "repeat": model.repeat, "grace": model.grace,
                 "estop_topic": model.estop_topic, "latch": bool(self._output.latch),
                 "stop": self._backend.serialize(self._stop_message).hex(), "lease": model.lease,
-                "grace_lease": model.machine_grace, "lossy": self._lossy()}
+                "grace_lease": model.machine_grace, "lossy": self._lossy(),
+                "rules": list(model.rules), "stale": dict(model.stale), "inputs": inputs}
+
+    def _judged_here(self) -> None:
+        """None: its rules are judged on the robot by the keeper, which reads the sensors there; the session's gate
+        checks the limits (and says at once what it clamps)."""
+        return None
+
+    def _listen(self, rules: Any) -> list[str]:
+        return []  # the keeper subscribes to the rules' inputs, on the robot
 
     # -- what a LiveGuard does, here done by the keeper ------------------------------------------------
     def start(self) -> None:
@@ -84,7 +94,6 @@ class PlacedGuard(LiveGuard):
         return Verdict(None, verdict.acting, verdict.path)
 
     def update(self, model: GuardModel) -> None:
-        _no_rules(model)
         super().update(model)
         self._link.ask("place", again=True, guard=self._spec())
 
@@ -130,11 +139,14 @@ class PlacedGuard(LiveGuard):
             state = f"{STATES[ESTOPPED]} (its stop process ended: {report['lost']})"
         elif not report.get("alive"):
             state = "its stop process ended on the machine"
+        elif report.get("ruling") and state == STATES[PASSING]:  # its rules hold the stop message there
+            state = f"stopping: {report['ruling']}"
         # What the session's own gate did (the same rules: the keeper's gate then passes what it sends), and the
         # stop messages the keeper put in place of commands (e-stopped, or the session not heard).
         figures = dataclasses.replace(self.gate.figures)
         figures.replaced += report["figures"][3]
-        return GuardState(self.topic, state + where, figures, report.get("stops", 0), report.get("reach", 0))
+        return GuardState(self.topic, state + where, figures, report.get("stops", 0), report.get("reach", 0),
+                          self.rules.described(report.get("in_force", ())) if self.rules is not None else ())
 
     def close(self, hold: bool) -> None:
         self._closing = True
@@ -146,13 +158,3 @@ class PlacedGuard(LiveGuard):
         finally:
             self._link.close()
 
-
-def _no_rules(model: GuardModel) -> None:
-    """A keeper does not read sensors yet: a guard with rules placed on it (a model file's, say) is refused, never
-    kept with its rules left out."""
-    from ..core.errors import DeclarationError
-
-    if model.rules or model.stale:
-        raise DeclarationError(f"guard {model.resolved}: rules= and stale= are enforced by a guard kept in the "
-                               f"session, and machine {model.machine}'s keeper does not read sensors yet: leave out "
-                               "the machine, or the rules")

@@ -1,14 +1,18 @@
 """A guard a session placed on this machine: its gate in front of the robot's topic, its stop process on
-the robot's clock, and its session's lease (see :mod:`ipyros.processes.keeper`)."""
+the robot's clock, its session's lease, and its rules over what the robot senses, read here, on the robot
+(see :mod:`ipyros.processes.keeper`)."""
 
 from __future__ import annotations
 
 import copy
+import threading
+import time
 from typing import Any, Optional
 
 from ...core import msgtypes
 from ...core.errors import DeclarationError, IpyrosError
 from ...core.guard import Acting, Gate, Verdict, check_rules, check_stop
+from ...core.rules import RuleSet, as_rule
 from ..basenode import log_dir
 from ..sentinel import Sentinel, Shared
 from .lease import Lease, Refused, beat_topics
@@ -39,8 +43,14 @@ class KeptGuard:
                                         spec.get("timeout"), spec.get("grace", 3.0), spec.get("repeat", 10.0), where)
             self._stop = ros.deserialize(cls, bytes.fromhex(str(spec["stop"])))
             check_stop(cls, self._stop, limits, where, given=True)
-        except (DeclarationError, ValueError) as error:
+            self.rules = self._ruleset(spec, cls, where)
+        except (DeclarationError, ValueError, TypeError) as error:
             raise Refused(str(error)) from None
+        #: Each input of its rules: its last message and when it came (monotonic), heard on this machine.
+        self.heard: dict[str, tuple[Any, float]] = {}
+        self.ruling = ""  # why its rules hold the stop message now, with no command coming ("": they do not)
+        self._ruled_at = -float("inf")  # when the keeper last sent the stop message for its rules
+        self._judging = threading.Lock()
         self.lease = Lease(float(spec.get("lease", 0.5)), spec.get("grace_lease", 30.0), keeper.clock())
         self.shared = Shared.create()
         #: Why its stop process is gone, if it ended on its own: the guard then fails closed (see :meth:`tend`).
@@ -48,7 +58,8 @@ class KeptGuard:
         self._stopped_at = -float("inf")  # when the keeper last sent the stop message for a lost process
         self.repeat = float(spec.get("repeat", 10.0))
         self.gate = Gate(self.topic, cls, limits, rates, str(spec.get("on_limit", "clamp")), self.stop_message,
-                         self.holding, self.shared.passed, lambda text: self._log(f"{where}: {text}"))
+                         self.holding, self.shared.passed, lambda text: self._log(f"{where}: {text}"),
+                         rules=self.rules, heard=lambda: self.heard)
         self._out = ros.publisher(self.topic, self.type, bool(spec.get("latch")))
         self._settings = {"node": f"ipyros_machine_{keeper.name}_guard_{gid}", "topic": self.topic,
                           "type": self.type, "latch": bool(spec.get("latch")), "estop_topic": spec.get("estop_topic"),
@@ -66,7 +77,32 @@ class KeptGuard:
         self._reporter = Reporter(ros, f"{ns}/guards/{gid}/state")
         self._subs = [ros.subscribe(f"{ns}/guards/{gid}/in", self.type, self.command, lossy=bool(spec.get("lossy"))),
                       *(ros.subscribe(topic, "std_msgs/String", keeper.beat, lossy=True)
-                        for topic in beat_topics(f"{ns}/guards/{gid}"))]
+                        for topic in beat_topics(f"{ns}/guards/{gid}")),
+                      *(ros.subscribe(topic, str(type_name), self._hearing(topic), lossy=True)  # a sensor: best effort
+                        for topic, type_name in dict(spec.get("inputs") or {}).items())]
+
+    @staticmethod
+    def _ruleset(spec: dict[str, Any], cls: type, where: str) -> Optional[RuleSet]:
+        """Its rules over what the robot senses, from their data; the stop message checked against them."""
+        rules, stale = list(spec.get("rules") or ()), dict(spec.get("stale") or {})
+        if not rules and not stale:
+            return None
+        inputs = dict(spec.get("inputs") or {})
+        ruleset = RuleSet([as_rule(r, where) for r in rules], cls, str(spec["topic"]),
+                          {str(t): float(s) for t, s in stale.items()}, where)
+        missing = [t for t in ruleset.topics if t not in inputs]
+        if missing:
+            raise DeclarationError(f"{where}: the types of {', '.join(missing)} were not sent: place it again")
+        return ruleset
+
+    def _hearing(self, topic: str) -> Any:
+        def hear(msg: Any) -> None:
+            self.heard[topic] = (msg, time.monotonic())
+            said = self._judge(time.monotonic())  # an obstacle with no command coming: the stop message at once
+            if said:
+                self._log(said)
+
+        return hear
 
     def _start_sentinel(self) -> None:
         self.shared.ready = False
@@ -141,7 +177,30 @@ class KeptGuard:
             self._out.write(self.stop_message())
             if self.lost is not None:  # a stop process counts its own
                 self.shared.stops_sent += 1
-        return said
+        ruled = self._judge(time.monotonic())
+        return "; ".join(line for line in (said, ruled) if line) or None
+
+    def _judge(self, now: float) -> Optional[str]:
+        """Its rules judged with no new command (an input gone stale or never heard, a stop rule, a last command they
+        would now change): while they hold the stop message, the keeper sends it at the guard's rate; the first time,
+        one line for its log and the session's report."""
+        if self.rules is None:
+            return None
+        with self._judging:  # the keeper's loop and an input's arrival
+            why = self.gate.idle()
+            said = None
+            if why and now - self._ruled_at >= 1.0 / self.repeat:
+                self._ruled_at = now
+                try:
+                    self._out.write(self.stop_message())  # checked against its rules when it was placed
+                except Exception as error:  # noqa: BLE001 - the next look sends it again
+                    self._log(f"guard {self.topic}: the stop message could not be sent ({error})")
+            if why and not self.ruling:
+                said = f"guard {self.topic}: {why}: the stop message goes out until its rules let a command pass"
+            elif not why and self.ruling and not self.ruling.startswith("the last command"):
+                said = f"guard {self.topic}: its rules let commands pass again"
+            self.ruling = why
+            return said
 
     def _wake(self) -> None:
         if self.sentinel is not None:
@@ -157,6 +216,7 @@ class KeptGuard:
                 "heard": not self.lease.first,
                 "estop_session": shared.estop_session, "estop_topic": shared.estop_topic, "alive": alive,
                 "stops": shared.stops_sent, "reach": shared.reach, "commands": self.gate.commands,
+                "ruling": self.ruling, "in_force": list(self.rules.acting) if self.rules is not None else [],
                 "figures": [figures.passed, figures.clamped, figures.dropped, figures.replaced, figures.last_trip]}
 
     def report(self, now: float, every: float = REPORT) -> None:

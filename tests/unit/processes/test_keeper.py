@@ -166,6 +166,46 @@ def test_a_command_the_keepers_gate_cannot_check_goes_out_as_the_stop_message():
     assert guard.check({"linear": 9.0}).send == {"linear": 0.0}, "what a relay in the keeper passes its messages through"
 
 
+def test_a_placed_guards_rules_are_judged_on_the_robot_as_a_sensor_comes_and_said_once():
+    """The keeper's side of rules: an input heard there judges at once; while the rules hold the stop message it
+    goes out on the robot at the guard's rate, said once, and what it reports says why and which rule acts."""
+    import threading
+    import time
+    from types import SimpleNamespace
+
+    from unit_msgs.msg import Sample, Twist, Vector3
+
+    from ipyros.core.errors import DeclarationError
+    from ipyros.core.guard import Gate
+    from ipyros.core.rules import rule
+    from ipyros.processes.keeper import KeptGuard
+
+    spec = {"topic": "/cmd_vel", "rules": [rule("min(/scan.gains) < 0.5", stop=True).as_data()],
+            "stale": {"/scan": 0.5}}
+    with pytest.raises(DeclarationError, match="the types of /scan were not sent: place it again"):
+        KeptGuard._ruleset(spec, Twist, "guard /cmd_vel")
+    sent: list = []
+    logged: list[str] = []
+    guard = KeptGuard.__new__(KeptGuard)  # its gate, rules and publisher only: no stop process, no ROS
+    guard.topic, guard._log, guard._stop, guard.repeat = "/cmd_vel", logged.append, Twist(), 10.0
+    guard.rules = KeptGuard._ruleset({**spec, "inputs": {"/scan": "unit_msgs/Sample"}}, Twist, "guard /cmd_vel")
+    guard.heard, guard.ruling, guard._ruled_at = {}, "", -float("inf")
+    guard._judging = threading.Lock()
+    guard.gate = Gate("/cmd_vel", Twist, {}, {}, "clamp", guard.stop_message, lambda: False, lambda: None,
+                      lambda text: None, rules=guard.rules, heard=lambda: guard.heard)
+    guard._out = SimpleNamespace(write=sent.append)
+    hear = guard._hearing("/scan")
+    hear(Sample(gains=[2.0, 3.0]))
+    guard.command(Twist(linear=Vector3(x=0.4)))
+    assert [m.linear.x for m in sent] == [0.4] and guard.ruling == ""
+    hear(Sample(gains=[0.3, 3.0]))  # an obstacle: judged as it comes, no command needed
+    assert [m.linear.x for m in sent] == [0.4, 0.0] and guard.ruling.startswith("rule 1")
+    assert logged == ["guard /cmd_vel: rule 1: min(/scan.gains) < 0.5: the stop message goes out until its rules "
+                      "let a command pass"], logged
+    assert guard._judge(time.monotonic()) is None and len(logged) == 1, "said once"
+    assert guard.rules.described((1,)) == ("1. when min(/scan.gains) < 0.5: stop (in force)",)
+
+
 @pytest.mark.parametrize("ros, argv, why", [
     ("1", ["--discovery-server", "11811"], "--discovery-server is ROS 2's; ROS 1 finds nodes through its master"),
     ("2", ["--discovery-server", "0"], "--discovery-server 0: give a UDP port"),
