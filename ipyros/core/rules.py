@@ -350,12 +350,10 @@ def _compare(terms: list[Callable[[Env], Any]], ops: list[Callable[[Any, Any], b
 
 
 def _function(name: str, args: list[Callable[[Env], Any]]) -> Callable[[Env], Any]:
-    def values(env: Env) -> list[Any]:
+    def values(env: Env) -> Sequence[Any]:
         found = [arg(env) for arg in args]
-        if len(found) == 1 and isinstance(found[0], (list, tuple)):
-            found = list(found[0])
-        elif len(found) == 1 and hasattr(found[0], "__len__") and not isinstance(found[0], (str, bytes)):
-            found = list(found[0])  # array.array, numpy
+        if len(found) == 1 and hasattr(found[0], "__len__") and not isinstance(found[0], (str, bytes)):
+            return found[0]  # one array (a list, a tuple, array.array, numpy): its elements, not copied
         return found
 
     if name == "len":
@@ -365,7 +363,16 @@ def _function(name: str, args: list[Callable[[Env], Any]]) -> Callable[[Env], An
     pick = min if name == "min" else max
 
     def extreme(env: Env) -> Any:
-        numbers = [_number(v) for v in values(env) if not (isinstance(v, float) and v != v)]  # a NaN ray: none
+        found = values(env)
+        try:
+            # At C's speed: a NaN after the first element is never picked (it compares false), so a float that is
+            # not NaN is the extreme of the numbers that are not NaN; anything else is judged one by one below.
+            quick = pick(found) if len(found) else None
+        except TypeError:
+            quick = None
+        if isinstance(quick, float) and quick == quick:
+            return quick
+        numbers = [_number(v) for v in found if not (isinstance(v, float) and v != v)]  # a NaN ray: none
         if not numbers:
             raise RuleValueError(f"{name} of no value (nothing but NaN, or empty)")
         return pick(numbers)

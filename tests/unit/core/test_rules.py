@@ -65,6 +65,10 @@ def test_an_input_never_heard_stale_or_that_cannot_be_judged_is_a_stop():
     assert sent(ruleset, heard(level=math.nan), twist(0.5))[:2] == (0.0, 0.0), "a NaN compared"
     assert "rule 1 could not be told" in sent(ruleset, heard(ranges=(math.nan,)), twist(0.5))[2], "no ray left"
     assert sent(ruleset, heard(ranges=(math.nan, 0.4)), twist(0.5))[0] == 0.2, "a NaN ray is left out of min"
+    for ranges in ((0.4, math.nan, 2.0), (2.0, math.nan, 0.4), (math.nan, math.nan, 0.4, math.nan)):
+        assert sent(ruleset, heard(ranges=ranges), twist(0.5))[0] == 0.2, f"NaN rays left out wherever: {ranges}"
+    assert sent(ruleset, heard(ranges=(math.inf, 2.0)), twist(0.5))[0] == 0.5, "an infinite ray is far"
+    assert "rule 1 could not be told" in sent(ruleset, heard(ranges=(True, 2.0)), twist(0.5))[2], "a bool is no range"
     wrong = heard()
     wrong["/battery"] = (Twist(), 0.0)  # of another type than the rule reads: its field is not there
     assert "rule 3 could not be told" in sent(ruleset, wrong, twist(0.5))[2]
