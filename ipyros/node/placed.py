@@ -15,7 +15,7 @@ import dataclasses
 import time
 from typing import Any, Callable
 
-from ..core.guard import GuardState, Verdict
+from ..core.guard import Acting, GuardState, Verdict
 from ..core.model import GuardModel, TopicModel
 from ..core.qos import from_model
 from ..processes.keeper import MachineError
@@ -35,7 +35,7 @@ class PlacedGuard(LiveGuard):
         self.machine = model.machine
         # the token is read before anything opens
         self._link = KeeperLink(backend, host, self.machine, "guards", f"guard {model.resolved}", say)
-        super().__init__(model, output, backend, say, send)
+        super().__init__(model, output, backend, say, send, host)
         self.id = self._link.id
         self._silent_said = False
 
@@ -48,6 +48,13 @@ class PlacedGuard(LiveGuard):
         shared = self.shared
         shared.state, shared.stops_sent, shared.reach = report["state"], report["stops"], report["reach"]
         shared.estop_topic = report["estop_topic"]
+        ruling = report.get("ruling", "")
+        if ruling != self._ruling:  # what its rules do on the robot, published here as the session's own are
+            if ruling:
+                self._publish_verdict(Acting.RULE_STOPPED, ruling)
+            elif not self._ruling.startswith("the last command"):
+                self._publish_verdict(Acting.PASSED, "its rules let commands pass again")
+            self._ruling = ruling
 
     def _spec(self) -> dict[str, Any]:
         model = self.model
@@ -74,6 +81,7 @@ class PlacedGuard(LiveGuard):
         link.open(self._report)
         self._in = link.publication(f"{link.topics}/in", self.cls, lossy=self._lossy())
         try:
+            self._open_verdicts()
             link.beat(min(0.1, self.model.lease / 5))
             link.ask("place", again=True, guard=self._spec())
             # The keeper lets no command pass until it hears this session's heartbeat (a new subscription takes a
@@ -82,6 +90,7 @@ class PlacedGuard(LiveGuard):
             while not link.report.get("heard") and time.monotonic() < until:
                 time.sleep(0.02)
         except BaseException:
+            self._close_verdicts()
             link.close()
             raise
         link.heard_at = time.monotonic()
@@ -156,5 +165,6 @@ class PlacedGuard(LiveGuard):
             self._say(f"guard {self.topic}: {error}; its lease runs out there: the robot holds the stop message, "
                       "then ends the guard after its grace")
         finally:
+            self._close_verdicts()
             self._link.close()
 

@@ -5,6 +5,7 @@ an obstacle, the stop with no new command when one appears, and the stop once th
 
 from __future__ import annotations
 
+import json
 import time
 
 import pytest
@@ -12,6 +13,7 @@ from geometry_msgs.msg import Twist
 from keepers import Keepers
 from sensing import Sensors, drive, xs
 from sensor_msgs.msg import LaserScan
+from std_msgs.msg import String
 from support import wait_for
 
 from ipyros import rule
@@ -34,6 +36,9 @@ def test_a_placed_guard_reads_the_robots_sensors_on_the_robot_and_keeps_to_its_r
     motors.wait_line("ready")
     sensing = make_node("pr_sensors").new.publish("/pr/scan", msgType=LaserScan).create()
     sensors = Sensors(sensing, "/pr/scan")
+    verdicts: list[dict] = []  # what the guard publishes on ~guard_state, as its keeper reports it
+    make_node("pr_verdicts").new.subscribe("/pr/guard_state", msgType=String,
+                                           handler=lambda m: verdicts.append(json.loads(m.data))).create()
     nd = make_node("pr")
     nd.new.publish("/pr/cmd_vel", msgType=Twist)
     nd.guard("/pr/cmd_vel", limits={"linear.x": (-1.0, 1.0)}, rules=[NEAR], stale={"/pr/scan": 0.5},
@@ -58,3 +63,6 @@ def test_a_placed_guard_reads_the_robots_sensors_on_the_robot_and_keeps_to_its_r
     wait_for(lambda: engine_of(nd).status().guards[0].state.startswith("stopping: /pr/scan stale"), timeout=10,
              what="the stale laser in the keeper's report")
     machine.wait_line("guard /pr/cmd_vel: /pr/scan stale", timeout=10)
+    kinds = [(v["acting"], v["why"]) for v in verdicts]
+    assert ("stopped by a rule", "/pr/scan not heard yet") in kinds and \
+        any(acting == "stopped by a rule" and why.startswith("/pr/scan stale") for acting, why in kinds), kinds
