@@ -22,7 +22,7 @@ import pytest
 from browser import TIMEOUT, Browser, Lab, NotebookPage
 from support import wait_for
 
-from notebooks import NOTEBOOKS
+from notebooks import NOTEBOOKS, check_kobuki, check_tour, text_of
 
 pytestmark = pytest.mark.timeout(4 * TIMEOUT)  # JupyterLab and Chromium on a loaded machine of 2 cores
 
@@ -56,6 +56,7 @@ class Tour:
     errors: list[str]
     figures: list[str] = field(default_factory=list)
     shots: Path = Path()
+    saved: Any = None  # the notebook as the page saved it once every cell had run
 
 
 def _pictures(cell: Any) -> list[str]:
@@ -77,7 +78,7 @@ def tour(lab, browser, tmp_path_factory):
             assert time.monotonic() < deadline, f"the tour did not finish within {TIMEOUT} s"
             figures += [src for src in _pictures(plot) if src not in figures]
             time.sleep(0.2)
-        yield Tour(notebook, notebook.errors(), figures, shots)
+        yield Tour(notebook, notebook.errors(), figures, shots, notebook.saved() if notebook.ran() else None)
     finally:
         notebook.close()
 
@@ -102,6 +103,12 @@ def test_the_tour_runs_top_to_bottom_in_the_browser_with_no_error_output(tour):
     said = wait_for(lambda: [t for t in last.locator(".jp-OutputArea-output").all_inner_texts() if t.strip()],
                     timeout=10, what="the last cell's output drawn")
     assert any("poses since the restore:" in text for text in said), said  # the last cells ran, and saw poses
+
+
+def test_the_tour_gets_its_results_in_the_browser(tour):
+    """What the tour shows, as the page saved it, holds what a kernel's run must (instead of a second run)."""
+    assert tour.saved is not None, "the tour did not run to its end"
+    check_tour(tour.saved, text_of(tour.saved))
 
 
 def test_topics_is_an_html_table_in_the_browser(tour):
@@ -154,6 +161,8 @@ def test_the_wrapped_kobuki_is_drawn_in_the_browser(lab, browser, tmp_path):
         svg = _drawn(notebook.cell("%graph --node /experimental_move_base"), tmp_path / "kobuki-graph.png")
         assert "/experimental_move_base wraps ipyros_demo/move_base" in svg and "(basenode)" in svg, svg[:400]
         assert "/cmd_vel: replaced by controlVelocity" in svg and re.search(r"guard: passing, \d+ clamped", svg)
+        saved = notebook.saved()  # the paper's numbers, as the page shows them (instead of a second run)
+        check_kobuki(saved, text_of(saved))
     finally:
         notebook.close()
 

@@ -235,6 +235,18 @@ class NotebookPage:
         cell.scroll_into_view_if_needed()
         return cell
 
+    def saved(self) -> Any:
+        """The notebook as File > Save Notebook writes it now, outputs and all (an ``nbformat`` notebook): what the
+        page shows, for the checks a kernel's run gets (tests/support/notebooks.py)."""
+        import nbformat
+
+        before = self.lab.api("GET", f"api/contents/{self.name}?content=0")["last_modified"]
+        self.page.get_by_role("menuitem", name="File", exact=True).click()
+        self.page.get_by_role("menuitem", name="Save Notebook", exact=False).first.click()
+        wait_for(lambda: self.lab.api("GET", f"api/contents/{self.name}?content=0")["last_modified"] != before,
+                 timeout=TIMEOUT, interval=0.2, what=f"{self.name} saved")
+        return nbformat.from_dict(self.lab.api("GET", f"api/contents/{self.name}")["content"])
+
     def errors(self) -> list[str]:
         """The text of every error output on the page (tracebacks, stderr)."""
         return self.page.locator(ERROR_OUTPUTS).all_inner_texts()

@@ -116,3 +116,23 @@ def check_kobuki(nb: nbformat.NotebookNode, text: str) -> None:
     assert recorded >= 20 and top == 6.0, "the live plot did not follow the commands"
     assert images(nb) == 2, "the live plot or the speed plot is missing"
     assert "demo robot kobuki stopped" in text
+
+
+def check_tour(nb: nbformat.NotebookNode, text: str) -> None:
+    assert "rosNode /turtle (running) wrapping ipyros_demo/turtle_sim" in text
+    assert "rosNode /turtle_control_node (running)" in text
+    assert "the turtle is at x=" in text and "x=0.00, y=0.00" not in text
+    assert "/turtle1/pose" in text and "geometry_msgs/Pose" in text
+    assert images(nb) == 1, "the live plot of the turtle's path is missing"
+    assert "status of /turtle_control_node" in text
+    # In Jupyter a status is an HTML table, and what a handler prints stays below the cell that made its node.
+    assert '<caption style="text-align:left">status of /turtle_control_node</caption>' in html_of(cell_with(nb, "%status nd"))
+    created, swapped = cell_with(nb, 'nd = rosNode("turtle_control_node")'), cell_with(nb, "if len(poses) % 20 == 0")
+    assert re.search(r"^x=-?\d", text_of_cell(created), re.M), "the handler's prints are not below the creating cell"
+    assert "x=" not in text_of_cell(swapped), "the handler's prints landed in the cell that ran when they came"
+    assert "versions of the handler of turtle_control_node /turtle1/pose" in text
+    assert "live handler: showPose version 1" in text
+    assert "ipyros: saved /turtle_control_node to" in text and "with restoring():" in text
+    assert "ipyros: loaded /turtle_control_node (running)" in text
+    restored, versions = number(r"poses since the restore: (\d+) \| handler versions: (\d+)", text)
+    assert restored > 5 and versions == 2, "the restored node does not get poses, or lost a handler version"
