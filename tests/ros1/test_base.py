@@ -67,6 +67,18 @@ def stopper():
         proc.stop()
 
 
+@pytest.fixture
+def forget(ros_master):
+    """Parameters a node's ``_name:=value`` arguments set on the run's master, deleted at the end of the test: they
+    would outlive it there (a later /move_base would start at the speed given here)."""
+    names: list[str] = []
+    yield names.append
+    master = rosgraph.Master("/pytest", master_uri=ros_master)
+    for name in names:
+        if master.hasParam(name):
+            master.deleteParam(name)
+
+
 # -- lookup ------------------------------------------------------------------------
 
 def test_debian_executables_are_found_in_their_libexec_dir():
@@ -241,7 +253,8 @@ def test_python_basenode_remapped_relays_through_its_internal_names(ros_master, 
             echo.wait_line("echo: ")
 
 
-def test_crash_after_start_is_reported_with_exit_code_and_last_lines(ros_master, stopper):
+def test_crash_after_start_is_reported_with_exit_code_and_last_lines(ros_master, stopper, forget):
+    forget("/crasher/exit_after")
     exits = Exits()
     proc = ros1_process(echo_node(), ["--spawn-child"], node_name="crasher", params={"exit_after": 0.5},
                        master_uri=ros_master, on_exit=exits)
@@ -380,7 +393,9 @@ def test_sigkilled_interpreter_takes_the_basenode_with_it(ros_master):
 
 # -- the bundled demo robot --------------------------------------------------------
 
-def test_demo_move_base_drives_turtle_sim_to_a_goal_and_the_speed_guard_trips(ros_master, stopper):
+def test_demo_move_base_drives_turtle_sim_to_a_goal_and_the_speed_guard_trips(ros_master, stopper, forget):
+    forget("/turtle_sim/max_speed")
+    forget("/move_base/speed")
     sim = ros1_process(find_executable("ipyros_demo", "turtle_sim"), master_uri=ros_master, params={"max_speed": 2.0})
     nav = ros1_process(find_executable("ipyros_demo", "move_base"), master_uri=ros_master,
                        remaps={"/cmd_vel": "/turtle1/cmd_vel"}, params={"speed": 1.5})
