@@ -86,8 +86,8 @@ def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_s
     kinds = [(v["acting"], v["why"]) for v in verdicts]
     assert {v["output"] for v in verdicts} == {"/ruled/cmd_vel"} and [v["stamp"] for v in verdicts] == \
         sorted(v["stamp"] for v in verdicts), verdicts
-    assert ("stopped by a rule", "/ruled/scan not heard yet") in kinds, kinds
-    assert any(acting == "clamped" and "rules: linear.x 0.4 -> 0.2" in why for acting, why in kinds), kinds
+    # (the gate's report of each kind once an episode, clamped included, is tests/unit/core/test_guard.py's)
+    assert ("stopped by a rule", "/ruled/scan not heard yet") in kinds, "\n".join(map(str, kinds))
     assert len(kinds) == len(set(kinds)), f"a verdict published twice: {kinds}"
     assert any(acting == "passed" for acting, _ in kinds) and \
         any(acting == "stopped by a rule" and "/ruled/scan stale" in why for acting, why in kinds), kinds
