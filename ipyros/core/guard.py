@@ -36,10 +36,10 @@ from typing import Any, Callable, Mapping, Optional
 
 from .errors import DeclarationError, cut
 from .msgbuild import copy_message, field_types, nested_class
-from .rules import RuleSet
+from .rules import CHANGED_LAST, RuleSet
 
 __all__ = ["DEFAULT_GRACE", "DEFAULT_LEASE", "DEFAULT_MACHINE_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE",
-           "STATE_TOPIC", "Acting", "Gate", "GuardFigures", "Path", "Verdict", "check_rules", "check_stop",
+           "RULES_PASS", "STATE_TOPIC", "Acting", "Gate", "GuardFigures", "Path", "RuleWatch", "Verdict", "check_rules", "check_stop",
            "finite_checker", "parse_path", "verdict_text"]
 
 #: The type of a guard's e-stop topic: ``True`` holds the stop message.
@@ -60,6 +60,8 @@ EPISODE_QUIET = 1.0
 #: Where a node's guards publish what they do (``std_msgs/String``, one JSON object a message: see
 #: :func:`verdict_text`), under the node's name, as ``~guard_state``: recorded with the commands, replayed beside them.
 STATE_TOPIC = "guard_state"
+#: What a guard says when its rules, which held the stop message with no command coming, let commands pass again.
+RULES_PASS = "its rules let commands pass again"
 _NUMBERS = {"float32", "float64", "int8", "int16", "int32", "int64", "uint8", "uint16", "uint32", "uint64",
             "byte", "char"}
 _FLOATS = {"float32", "float64"}
@@ -479,6 +481,51 @@ class Gate:
             if say:
                 self._say(f"guard {self.topic}: {what}")
             self._report(acting, what if why is None else why)
+
+
+class RuleWatch:
+    """What a guard's rules do with no command coming, looked at by its watch a few times a second and as each input
+    arrives: the one account of it for the session's guard and a keeper's on the robot.
+
+    ``look(why, now)``, with ``why`` what :meth:`Gate.idle` says: whether the stop message goes out now (the rules
+    hold it and its last went out a period of the guard's rate ago or more), and what to say once: the rules begin
+    to hold it (:attr:`Acting.RULE_STOPPED`, and why), or they let commands pass again (:attr:`Acting.PASSED`). A
+    last command the rules would now change is replaced by the stop message sent through the gate, which the rules
+    pass: the next look finds nothing to hold, and that end is not news (no command has passed since).
+    """
+
+    def __init__(self, repeat: float) -> None:
+        self.ruling = ""  # why its rules hold the stop message now ("": they do not)
+        self._period = 1.0 / repeat
+        self._sent_at = -math.inf
+        self._lock = threading.Lock()  # a watch's look and an input's arrival, from two threads
+
+    def due(self, why: str, now: float) -> bool:
+        """Whether the stop message goes out now for ``why`` (nothing for ""), at the guard's rate."""
+        with self._lock:
+            if not why or now - self._sent_at < self._period:
+                return False
+            self._sent_at = now
+            return True
+
+    def look(self, why: str, now: float) -> tuple[bool, Optional[tuple[Acting, str]]]:
+        """Whether to send the stop message now, and the change to say once, if any: its kind and why (the reason
+        alone, as ``~guard_state`` publishes it; :meth:`line` puts it in words for the prompt)."""
+        send = self.due(why, now)
+        with self._lock:
+            before, self.ruling = self.ruling, why
+        if why and not before:
+            return send, (Acting.RULE_STOPPED, why)
+        if not why and before and not before.startswith(CHANGED_LAST):
+            return send, (Acting.PASSED, RULES_PASS)
+        return send, None
+
+    @staticmethod
+    def line(change: tuple[Acting, str]) -> str:
+        """A change :meth:`look` found, in words."""
+        acting, why = change
+        return f"{why}: the stop message goes out until its rules let a command pass" \
+            if acting is Acting.RULE_STOPPED else why
 
 
 def _cast(kind: str, value: float) -> Any:

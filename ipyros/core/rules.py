@@ -44,7 +44,7 @@ from . import msgpath
 from .errors import DeclarationError, cut
 from .msgbuild import copy_message, field_types, nested_class
 
-__all__ = ["Condition", "Judgement", "Rule", "RuleSet", "as_rule", "compile_condition", "rule"]
+__all__ = ["CHANGED_LAST", "Condition", "Judgement", "Rule", "RuleSet", "as_rule", "compile_condition", "rule"]
 
 
 # -- a rule, as declared --------------------------------------------------------------------------
@@ -158,6 +158,8 @@ class RuleValueError(Exception):
     """A condition could not be evaluated on what was heard: the guard stops (the words say why)."""
 
 
+#: How the rules' judging with no command coming begins when the last command that passed would now be changed.
+CHANGED_LAST = "the last command would now be changed"
 #: A topic's path in a condition: a ``/`` where no value ends (not a division), then a name.
 _PATH = re.compile(r"/[A-Za-z_][\w/]*(?:\.[A-Za-z_]\w*|\[-?\d*:?-?\d*\])*")
 #: What a value ends with (a division follows it): a name or number that is no keyword, a ")" or a "]".
@@ -547,7 +549,7 @@ class RuleSet:
         if last is None:
             return ""
         _, why, _ = self.apply(judgement, last, stop)
-        return f"the last command would now be changed ({why})" if why else ""
+        return f"{CHANGED_LAST} ({why})" if why else ""
 
     def check_stop(self, stop: Any, where: str) -> None:
         """Refuse a stop message the rules would not pass as it is: outside a rule's limits, or breaking a rule's

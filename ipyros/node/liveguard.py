@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import copy
 import os
-import threading
 import time
 from pathlib import Path
 from typing import Any, Callable, Optional
 
 from ..core import msgtypes
-from ..core.guard import EPISODE_QUIET, STATE_TOPIC, Acting, Gate, GuardState, Verdict, check_stop, verdict_text
+from ..core.guard import (EPISODE_QUIET, STATE_TOPIC, Acting, Gate, GuardState, RuleWatch, Verdict, check_stop,
+                          verdict_text)
 from ..core.model import GuardModel, TopicModel
 from ..core.msgbuild import build_message
 from ..core.names import tool_name
@@ -52,9 +52,7 @@ class LiveGuard:
         self.rules = self._ruleset(model, self._stop_message)
         self.heard: dict[str, tuple[Any, float]] = {}
         self._inputs: dict[str, Any] = {}
-        self._ruling = ""  # why its rules hold the stop message now, with no command coming ("": they do not)
-        self._held = ""  # why an input's arrival sent the stop message, for the watch to say (see _judge_input)
-        self._holding = threading.Lock()
+        self.watch = RuleWatch(model.repeat)  # what its rules do with no command coming (see _look)
         self.gate = self._gate(model)
         self.sentinel: Optional[Sentinel] = None
         self._noticed, self._by_topic = self.shared.state, False
@@ -146,26 +144,14 @@ class LiveGuard:
 
         def hear(msg: Any) -> None:
             self.heard[topic] = (msg, time.monotonic())
-            self._judge_input()
+            if self.sentinel is not None and not self._closing and self.lost is None:
+                for line in self._look(time.monotonic()):  # an obstacle, no command coming: the stop message now
+                    self._say(line)
 
         slot = HandlerSlot(f"guard {self.topic} input {topic}", hear,
                            lambda failure: self._say(f"guard {self.topic}: reading {topic}: {failure.error}"))
         return self._backend.subscription(self._host, topic, cls, slot, PROFILES["best_effort"],
                                           lambda text: self._say(f"guard {self.topic}: {text}"))
-
-    def _judge_input(self) -> None:
-        """An input just came: when its rules now hold the stop message and did not a moment ago (an obstacle, no
-        command coming), the stop message goes out at once, not at the session watch's next look (0.1 s away at
-        most); the watch says why, and goes on sending it at the guard's rate."""
-        if self._ruling or self.sentinel is None or self._closing or self.lost is not None:
-            return
-        now = time.monotonic()
-        why = self.gate.idle() if now - self._stopped_at >= 1.0 / self.model.repeat else ""
-        if why:
-            self._stopped_at = now
-            self._send_stop()
-            with self._holding:
-                self._held = why
 
     def _unlisten(self, topics: Any) -> None:
         for topic in list(topics):
@@ -192,7 +178,7 @@ class LiveGuard:
         self._stop_message, self.rules = stop, rules
         self.gate = self._gate(model)
         self.gate.figures, self.gate.commands = figures, commands
-        self.model = model
+        self.model, self.watch = model, RuleWatch(model.repeat)
         self._unlisten([t for t in self._inputs if rules is None or t not in rules.topics])
         self._tell({"settings": self._settings()})
 
@@ -276,7 +262,7 @@ class LiveGuard:
         sentinel, said = self.sentinel, list[str]()
         if self.lost is None:
             if sentinel is None or self._closing or sentinel.running:
-                return self._rule(now) if sentinel is not None and not self._closing else said
+                return self._look(now) if sentinel is not None and not self._closing else said
             code = sentinel.returncode
             self.lost = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
             said.append(f"guard {self.topic}: its process ended ({self.lost}; its log: {sentinel.log_path}): the stop "
@@ -292,24 +278,18 @@ class LiveGuard:
             self._unsent = problem
         return said
 
-    def _rule(self, now: float) -> list[str]:
-        """Its rules judged with no new command: while they hold the stop message (an input not heard or stale, a
-        stop rule, a last command they would now change), the session sends it at the guard's rate, said once."""
-        why = self.gate.idle()
-        with self._holding:  # the stop an input's arrival sent since the last look: said now
-            told, self._held = why or self._held, ""
-        said = []
-        if why and now - self._stopped_at >= 1.0 / self.model.repeat:
-            self._stopped_at = now
+    def _look(self, now: float) -> list[str]:
+        """Its rules judged with no new command, at each look of the session's watch and as each input comes (an
+        obstacle with no command coming: the stop message at once): while they hold the stop message (an input not
+        heard or stale, a stop rule, a last command they would now change), the session sends it through the gate
+        at the guard's rate; what changed is said once, and published."""
+        send, change = self.watch.look(self.gate.idle(), now)
+        if send:
             self._send_stop()  # through the gate: a stop message its rules let pass, or theirs in its place
-        if told and not self._ruling:
-            said.append(f"guard {self.topic}: {told}: the stop message goes out until its rules let a command pass")
-            self._publish_verdict(Acting.RULE_STOPPED, told)
-        elif not told and self._ruling and not self._ruling.startswith("the last command"):
-            said.append(f"guard {self.topic}: its rules let commands pass again")
-            self._publish_verdict(Acting.PASSED, "its rules let commands pass again")
-        self._ruling = why
-        return said
+        if change is None:
+            return []
+        self._publish_verdict(*change)
+        return [f"guard {self.topic}: {RuleWatch.line(change)}"]
 
     def _send_stop(self) -> Optional[str]:
         """The stop message sent by the session on the guarded output; why not, if it could not be."""
@@ -337,8 +317,8 @@ class LiveGuard:
             state = f"{STATES[ESTOPPED]} (its process ended: {self.lost})"
         elif shared.estopped:
             state = STATES[ESTOPPED] + (" (by its e-stop topic)" if shared.estop_topic else "")
-        elif state == STATES[PASSING] and self._ruling:  # its rules hold the stop message, no command coming
-            state = f"stopping: {self._ruling}"
+        elif state == STATES[PASSING] and self.watch.ruling:  # its rules hold the stop message, no command coming
+            state = f"stopping: {self.watch.ruling}"
         elif state == STATES[PASSING] and self.gate.replacing:  # messages go out, but each as the stop message
             state = f"stopping: {self.gate.replacing}"
         return GuardState(self.topic, state, self.gate.figures, shared.stops_sent, shared.reach,

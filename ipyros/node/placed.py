@@ -15,7 +15,7 @@ import dataclasses
 import time
 from typing import Any, Callable
 
-from ..core.guard import Acting, GuardState, Verdict
+from ..core.guard import GuardState, Verdict
 from ..core.model import GuardModel, TopicModel
 from ..core.qos import from_model
 from ..processes.keeper import MachineError
@@ -48,13 +48,10 @@ class PlacedGuard(LiveGuard):
         shared = self.shared
         shared.state, shared.stops_sent, shared.reach = report["state"], report["stops"], report["reach"]
         shared.estop_topic = report["estop_topic"]
-        ruling = report.get("ruling", "")
-        if ruling != self._ruling:  # what its rules do on the robot, published here as the session's own are
-            if ruling:
-                self._publish_verdict(Acting.RULE_STOPPED, ruling)
-            elif not self._ruling.startswith("the last command"):
-                self._publish_verdict(Acting.PASSED, "its rules let commands pass again")
-            self._ruling = ruling
+        # what its rules do on the robot, published here as the session's own are
+        _, change = self.watch.look(str(report.get("ruling", "")), time.monotonic())
+        if change is not None:
+            self._publish_verdict(*change)
 
     def _spec(self) -> dict[str, Any]:
         model = self.model
@@ -83,7 +80,7 @@ class PlacedGuard(LiveGuard):
         try:
             self._open_verdicts()
             link.beat(min(0.1, self.model.lease / 5))
-            link.ask("place", again=True, guard=self._spec())
+            self._place()
             # The keeper lets no command pass until it hears this session's heartbeat (a new subscription takes a
             # moment to be found): create() returns once it does, or after FIND s, and then tend() says why not.
             until = time.monotonic() + FIND
@@ -104,7 +101,27 @@ class PlacedGuard(LiveGuard):
 
     def update(self, model: GuardModel) -> None:
         super().update(model)
-        self._link.ask("place", again=True, guard=self._spec())
+        self._place(again=True)
+
+    def _place(self, again: bool = False) -> None:
+        """Ask the keeper to place it (``again``: its new rules, on a running node). A keeper that does not say it
+        reads its rules' inputs (an older ipyros there, which keeps the limits and drops the rules) is refused in
+        one line, its rules never silently not enforced: the guard there is removed, holding the stop message for
+        its grace (placed again: e-stopped there, until released)."""
+        answer = self._link.ask("place", again=True, guard=self._spec())
+        wanted = sorted(self.rules.topics) if self.rules is not None else []
+        if not wanted or sorted(answer.get("reads") or ()) == wanted:
+            return
+        try:
+            if again:
+                self.estop(True)
+            else:
+                self._link.ask("remove", timeout=3.0, hold=True)
+        except MachineError:
+            pass  # unreached, its lease runs out there: the robot holds the stop message all the same
+        raise MachineError(f"guard {self.topic}: the keeper of machine {self.machine} does not judge a guard's rules "
+                           f"(an older ipyros runs there){': it is e-stopped' if again else ''}; update ipyros there "
+                           "and start its keeper again, or declare the guard without rules")
 
     def _tell(self, message: dict[str, Any]) -> None:
         pass  # no process of the session's: the keeper is asked (update, estop)

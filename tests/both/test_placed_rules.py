@@ -51,8 +51,7 @@ def test_a_placed_guard_reads_the_robots_sensors_on_the_robot_and_keeps_to_its_r
         appeared = time.monotonic()
         sensors.ranges = [0.3, 3.0]  # an obstacle, and no new command: the last one, 0.4, would now be limited
         wait_for(lambda: 0.0 in xs(motors, appeared), timeout=10, what="the stop with no new command")
-        wait_for(lambda: engine_of(nd).status().guards[0].state.startswith("stopping: the last command would now"),
-                 timeout=10, what="the keeper's report of why")
+        machine.wait_line("guard /pr/cmd_vel: the last command would now be changed (linear.x 0.4 -> 0.2)", timeout=10)
         drive(nd, "/pr/cmd_vel", motors, 0.4, 0.2, "the command limited near the obstacle, on the robot")
         (state,) = engine_of(nd).status().guards
         assert state.rules == ("1. when min(/pr/scan.ranges) < 0.5: limit linear.x -0.2..0.2 (in force)",), state

@@ -5,13 +5,12 @@ the robot's clock, its session's lease, and its rules over what the robot senses
 from __future__ import annotations
 
 import copy
-import threading
 import time
 from typing import Any, Optional
 
 from ...core import msgtypes
 from ...core.errors import DeclarationError, IpyrosError
-from ...core.guard import Acting, Gate, Verdict, check_rules, check_stop
+from ...core.guard import Acting, Gate, RuleWatch, Verdict, check_rules, check_stop
 from ...core.rules import RuleSet, as_rule
 from ..basenode import log_dir
 from ..sentinel import Sentinel, Shared
@@ -48,15 +47,13 @@ class KeptGuard:
             raise Refused(str(error)) from None
         #: Each input of its rules: its last message and when it came (monotonic), heard on this machine.
         self.heard: dict[str, tuple[Any, float]] = {}
-        self.ruling = ""  # why its rules hold the stop message now, with no command coming ("": they do not)
-        self._ruled_at = -float("inf")  # when the keeper last sent the stop message for its rules
-        self._judging = threading.Lock()
+        self.repeat = float(spec.get("repeat", 10.0))
+        self.watch = RuleWatch(self.repeat)  # what its rules do with no command coming (see _judge)
         self.lease = Lease(float(spec.get("lease", 0.5)), spec.get("grace_lease", 30.0), keeper.clock())
         self.shared = Shared.create()
         #: Why its stop process is gone, if it ended on its own: the guard then fails closed (see :meth:`tend`).
         self.lost: Optional[str] = None
         self._stopped_at = -float("inf")  # when the keeper last sent the stop message for a lost process
-        self.repeat = float(spec.get("repeat", 10.0))
         self.gate = Gate(self.topic, cls, limits, rates, str(spec.get("on_limit", "clamp")), self.stop_message,
                          self.holding, self.shared.passed, lambda text: self._log(f"{where}: {text}"),
                          rules=self.rules, heard=lambda: self.heard)
@@ -181,26 +178,16 @@ class KeptGuard:
         return "; ".join(line for line in (said, ruled) if line) or None
 
     def _judge(self, now: float) -> Optional[str]:
-        """Its rules judged with no new command (an input gone stale or never heard, a stop rule, a last command they
-        would now change): while they hold the stop message, the keeper sends it at the guard's rate; the first time,
-        one line for its log and the session's report."""
+        """Its rules judged with no new command, at each turn of the keeper's loop and as each input comes (an input
+        gone stale or never heard, a stop rule, a last command they would now change): while they hold the stop
+        message, the keeper sends it through its gate at the guard's rate, as a session's guard does (see
+        :class:`~ipyros.core.guard.RuleWatch`); what changed, one line for its log and the session's report."""
         if self.rules is None:
             return None
-        with self._judging:  # the keeper's loop and an input's arrival
-            why = self.gate.idle()
-            said = None
-            if why and now - self._ruled_at >= 1.0 / self.repeat:
-                self._ruled_at = now
-                try:
-                    self._out.write(self.stop_message())  # checked against its rules when it was placed
-                except Exception as error:  # noqa: BLE001 - the next look sends it again
-                    self._log(f"guard {self.topic}: the stop message could not be sent ({error})")
-            if why and not self.ruling:
-                said = f"guard {self.topic}: {why}: the stop message goes out until its rules let a command pass"
-            elif not why and self.ruling and not self.ruling.startswith("the last command"):
-                said = f"guard {self.topic}: its rules let commands pass again"
-            self.ruling = why
-            return said
+        send, change = self.watch.look(self.gate.idle(), now)
+        if send:
+            self.command(self.stop_message())  # checked against its rules when it was placed: they pass it
+        return f"guard {self.topic}: {RuleWatch.line(change)}" if change is not None else None
 
     def _wake(self) -> None:
         if self.sentinel is not None:
@@ -216,7 +203,7 @@ class KeptGuard:
                 "heard": not self.lease.first,
                 "estop_session": shared.estop_session, "estop_topic": shared.estop_topic, "alive": alive,
                 "stops": shared.stops_sent, "reach": shared.reach, "commands": self.gate.commands,
-                "ruling": self.ruling, "in_force": list(self.rules.acting) if self.rules is not None else [],
+                "ruling": self.watch.ruling, "in_force": list(self.rules.acting) if self.rules is not None else [],
                 "figures": [figures.passed, figures.clamped, figures.dropped, figures.replaced, figures.last_trip]}
 
     def report(self, now: float, every: float = REPORT) -> None:

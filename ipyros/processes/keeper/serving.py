@@ -127,7 +127,9 @@ class Keeper:
                  f"{guard.lease.grace} s)")
         self._publish_info()
         guard.report(self.clock(), every=0.0)
-        return {"id": gid}
+        # what its rules read here: a session whose guard has rules refuses a keeper that does not say so (an older
+        # one would place it without them)
+        return {"id": gid, "reads": list(guard.rules.topics) if guard.rules is not None else []}
 
     def _owned(self, table: dict[str, Any], body: dict[str, Any], what: str) -> Any:
         """The thing ``body`` names in ``table`` (its guards, basenodes, relays), if the asking session placed it."""

@@ -279,3 +279,22 @@ def test_a_gate_with_rules_judges_each_command_by_what_was_heard_and_again_with_
     assert verdict.acting is guard.Acting.RULE_STOPPED and verdict.send == Twist()
     assert verdict.why.startswith("/scan stale") and made.idle().startswith("/scan stale")
     assert made.figures.replaced == 1 and made.replacing.startswith("/scan stale")
+
+
+def test_the_rule_watch_sends_the_stop_at_the_guards_rate_and_says_each_change_once():
+    """What a guard's rules do with no command coming (the session's guard and a keeper's share it): the stop
+    message at the guard's rate while they hold it; their start said once with why, their end said once, except
+    after a last command they would have changed (the stop message that replaced it passes them: no news)."""
+    watch = guard.RuleWatch(repeat=4.0)
+    assert watch.look("", 10.0) == (False, None)
+    assert watch.look("/scan stale (0.6 s)", 10.0) == (True, (guard.Acting.RULE_STOPPED, "/scan stale (0.6 s)"))
+    assert watch.ruling == "/scan stale (0.6 s)"
+    assert watch.look("/scan stale (0.7 s)", 10.1) == (False, None), "within 1/repeat, and said already"
+    assert watch.look("/scan stale (0.8 s)", 10.25) == (True, None)
+    assert watch.look("", 10.3) == (False, (guard.Acting.PASSED, guard.RULES_PASS))
+    assert guard.RuleWatch.line((guard.Acting.RULE_STOPPED, "rule 1: x")) == \
+        "rule 1: x: the stop message goes out until its rules let a command pass"
+    changed = "the last command would now be changed (linear.x 0.4 -> 0.2)"
+    assert watch.look(changed, 11.0) == (True, (guard.Acting.RULE_STOPPED, changed))
+    assert watch.look("", 11.1) == (False, None) and watch.ruling == ""
+

@@ -169,14 +169,13 @@ def test_a_command_the_keepers_gate_cannot_check_goes_out_as_the_stop_message():
 def test_a_placed_guards_rules_are_judged_on_the_robot_as_a_sensor_comes_and_said_once():
     """The keeper's side of rules: an input heard there judges at once; while the rules hold the stop message it
     goes out on the robot at the guard's rate, said once, and what it reports says why and which rule acts."""
-    import threading
     import time
     from types import SimpleNamespace
 
     from unit_msgs.msg import Sample, Twist, Vector3
 
     from ipyros.core.errors import DeclarationError
-    from ipyros.core.guard import Gate
+    from ipyros.core.guard import Gate, RuleWatch
     from ipyros.core.rules import rule
     from ipyros.processes.keeper import KeptGuard
 
@@ -189,21 +188,58 @@ def test_a_placed_guards_rules_are_judged_on_the_robot_as_a_sensor_comes_and_sai
     guard = KeptGuard.__new__(KeptGuard)  # its gate, rules and publisher only: no stop process, no ROS
     guard.topic, guard._log, guard._stop, guard.repeat = "/cmd_vel", logged.append, Twist(), 10.0
     guard.rules = KeptGuard._ruleset({**spec, "inputs": {"/scan": "unit_msgs/Sample"}}, Twist, "guard /cmd_vel")
-    guard.heard, guard.ruling, guard._ruled_at = {}, "", -float("inf")
-    guard._judging = threading.Lock()
+    guard.heard, guard.watch = {}, RuleWatch(guard.repeat)
     guard.gate = Gate("/cmd_vel", Twist, {}, {}, "clamp", guard.stop_message, lambda: False, lambda: None,
                       lambda text: None, rules=guard.rules, heard=lambda: guard.heard)
     guard._out = SimpleNamespace(write=sent.append)
     hear = guard._hearing("/scan")
     hear(Sample(gains=[2.0, 3.0]))
     guard.command(Twist(linear=Vector3(x=0.4)))
-    assert [m.linear.x for m in sent] == [0.4] and guard.ruling == ""
+    assert [m.linear.x for m in sent] == [0.4] and guard.watch.ruling == ""
     hear(Sample(gains=[0.3, 3.0]))  # an obstacle: judged as it comes, no command needed
-    assert [m.linear.x for m in sent] == [0.4, 0.0] and guard.ruling.startswith("rule 1")
+    assert [m.linear.x for m in sent] == [0.4, 0.0] and guard.watch.ruling.startswith("rule 1")
     assert logged == ["guard /cmd_vel: rule 1: min(/scan.gains) < 0.5: the stop message goes out until its rules "
                       "let a command pass"], logged
     assert guard._judge(time.monotonic()) is None and len(logged) == 1, "said once"
     assert guard.rules.described((1,)) == ("1. when min(/scan.gains) < 0.5: stop (in force)",)
+
+
+def test_a_placed_guards_limit_rule_sends_the_stop_through_its_gate_once_as_a_sessions_guard_does():
+    """An obstacle under a limit rule with no command coming: the last command would now be limited, so the stop
+    message goes out, through the keeper's gate; then it is the last command, which the rules pass: not sent again
+    while the obstacle stays, and nothing said when it goes."""
+    import time
+    from types import SimpleNamespace
+
+    from unit_msgs.msg import Sample, Twist, Vector3
+
+    from ipyros.core.guard import Gate, RuleWatch
+    from ipyros.core.rules import rule
+    from ipyros.processes.keeper import KeptGuard
+
+    spec = {"topic": "/cmd_vel", "rules": [rule("min(/scan.gains) < 0.5", limit={"linear.x": (-0.2, 0.2)}).as_data()],
+            "inputs": {"/scan": "unit_msgs/Sample"}}
+    sent: list = []
+    logged: list[str] = []
+    guard = KeptGuard.__new__(KeptGuard)  # its gate, rules and publisher only: no stop process, no ROS
+    guard.topic, guard._log, guard._stop, guard.repeat = "/cmd_vel", logged.append, Twist(), 100.0
+    guard.rules = KeptGuard._ruleset(spec, Twist, "guard /cmd_vel")
+    guard.heard, guard.watch = {}, RuleWatch(guard.repeat)
+    guard.gate = Gate("/cmd_vel", Twist, {}, {}, "clamp", guard.stop_message, lambda: False, lambda: None,
+                      lambda text: None, rules=guard.rules, heard=lambda: guard.heard)
+    guard._out = SimpleNamespace(write=sent.append)
+    hear = guard._hearing("/scan")
+    hear(Sample(gains=[2.0]))
+    guard.command(Twist(linear=Vector3(x=0.4)))
+    hear(Sample(gains=[0.3]))
+    assert [m.linear.x for m in sent] == [0.4, 0.0] and len(logged) == 1
+    time.sleep(0.02)  # two periods of its rate
+    for _ in range(3):
+        hear(Sample(gains=[0.3]))
+        assert guard._judge(time.monotonic()) is None
+    assert [m.linear.x for m in sent] == [0.4, 0.0], "the stop message passed its gate: it is the last command now"
+    hear(Sample(gains=[2.0]))
+    assert len(logged) == 1 and guard.watch.ruling == ""
 
 
 @pytest.mark.parametrize("ros, argv, why", [
