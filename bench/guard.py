@@ -29,6 +29,12 @@ on ROS 1, + 50 ms on ROS 2.
 obstacle ahead, a slow-down band, a battery) beside the same gate with none, in this process, with no ROS in
 between; the figure is the time a check takes more with the rules, per command. Target (issue 49): at most 30 µs.
 
+**Hostile commands under rules**: ``RULED`` commands of the same hostile values through a gate with four rules (a
+stop and a limit over a laser's nearest ray, only backing off while a bumper is pressed, half speed on a low battery)
+whose inputs change underneath between commands: rays of NaN, infinities or none at all, a stale or never-heard
+input, one of the wrong type. An oracle written from what the rules promise checks each message that leaves
+(:func:`hostile_rules`); the target is 0 outside them. In this process, on this ROS's messages, no ROS in between.
+
 **Hostile values**: the session writes ``--hostile`` messages flat out whose six numbers are drawn
 from NaN, infinities, +-1e308, 2**63, -0.0, denormals, just outside the limits and the wrong sign;
 the robot counts what it got and what broke the rules: the target is 0. The rate the guarded
@@ -42,7 +48,9 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import math
 import os
+import random
 import signal
 import statistics
 import sys
@@ -157,6 +165,97 @@ def rules_cost(checks: int = CHECKS) -> tuple[float, float]:
     return statistics.median(timed(rules) for _ in range(3)), statistics.median(timed(None) for _ in range(3))
 
 
+#: Hostile commands through a gate with rules whose inputs change underneath (in this process: a few seconds).
+RULED = 100_000
+#: Values a hostile command's numbers are drawn from; a laser's rays, a battery's level.
+HOSTILE = (math.nan, math.inf, -math.inf, 1e308, -1e308, -0.0, 0.0, 0.29, 0.3, 0.31, 1.0, 1.0000001, -1.0000001,
+           3.0, -3.0, 0.4, -0.4, -0.2, 0.2)
+RAYS = (math.nan, math.inf, -math.inf, 0.29, 0.3, 0.31, 0.99, 1.0, *[2.0, 5.0] * 8)
+LEVELS = (math.nan, math.inf, 0.1, 0.19, 0.2, 0.21, 0.9, 0.9, 0.9, 0.9)
+
+
+def hostile_rules(count: int, twist: type, vector3: type, scan: tuple[type, str], bumper: tuple[type, str],
+                  battery: tuple[type, str], wrong: type, seed: int = 49) -> dict[str, int]:
+    """``count`` hostile commands through a gate with four rules whose inputs change underneath, at random, between
+    commands: a laser (``scan``: its class and array field; NaN, infinities, no ray at all), a bumper (a flag), a
+    battery (a level), each also gone stale, never heard, or of the ``wrong`` type; the clock goes on. Each message
+    that leaves is checked by an oracle of its own, written from what the rules promise, not from how they are
+    judged: finite; within the guard's limits; the stop message when an input is unknown, stale, of the wrong type,
+    or a laser with no valid ray or one under 0.3 m; linear.x within 0.3 under 1 m; never forward while the bumper
+    is pressed. What it returns: how many broke them (``outside``), and how many were stopped, changed or passed."""
+    from ipyros.core.guard import Gate
+    from ipyros.core.rules import RuleSet, rule
+
+    (scan_cls, ranges), (bumper_cls, pressed), (battery_cls, level) = scan, bumper, battery
+    rules = RuleSet([rule(f"min(/scan.{ranges}) < 0.3", stop=True),
+                     rule(f"min(/scan.{ranges}) < 1.0", limit={"linear.x": (-0.3, 0.3)}),
+                     rule(f"/bumper.{pressed}", only="linear.x <= 0"),
+                     rule(f"/battery.{level} < 0.2", scale=0.5)], twist, "/cmd_vel",
+                    {"/scan": 0.5, "/bumper": 0.5}, "bench")
+    now = [100.0]
+    heard: dict[str, tuple[object, float]] = {}
+    gate = Gate("/cmd_vel", twist, {"linear.x": (-1.0, 1.0), "angular.z": (-2.0, 2.0)}, {}, "clamp", twist,
+                lambda: False, lambda: None, lambda text: None, clock=lambda: now[0], rules=rules, heard=lambda: heard)
+    rng = random.Random(seed)
+
+    def message(cls: type, field: str, value: object) -> object:
+        msg = cls()
+        setattr(msg, field, value)
+        return msg
+
+    makers = {"/scan": lambda: message(scan_cls, ranges, [rng.choice(RAYS) for _ in range(rng.choice((0, 1, 2, 3, 3, 3, 3, 3)))]),
+              "/bumper": lambda: message(bumper_cls, pressed, rng.random() < 0.3),
+              "/battery": lambda: message(battery_cls, level, rng.choice(LEVELS))}
+    tally = {"outside": 0, "stopped": 0, "changed": 0, "passed": 0}
+    for _ in range(count):
+        now[0] += rng.random() * 0.05
+        for topic, make in makers.items():
+            roll = rng.random()
+            if roll < 0.3:
+                heard[topic] = (make(), now[0] - rng.random() * 0.3)
+            elif roll < 0.32:
+                heard[topic] = (make(), now[0] - 0.8)  # stale
+            elif roll < 0.33:
+                heard[topic] = (wrong(), now[0])
+            elif roll < 0.34:
+                heard.pop(topic, None)
+        command = twist(linear=vector3(x=rng.choice(HOSTILE), y=rng.choice(HOSTILE)),
+                        angular=vector3(z=rng.choice(HOSTILE)))
+        sent = gate.check(command).send
+        values = [sent.linear.x, sent.linear.y, sent.linear.z, sent.angular.x, sent.angular.y, sent.angular.z]
+        stop = not any(values) and all(math.isfinite(v) for v in values)
+        given = [command.linear.x, command.linear.y, command.angular.z]
+        tally["stopped" if stop else "passed" if [values[0], values[1], values[5]] == given else "changed"] += 1
+        if not all(math.isfinite(v) for v in values) or abs(values[0]) > 1.0 or abs(values[5]) > 2.0:
+            tally["outside"] += 1
+            continue
+
+        def fresh(topic: str, cls: type, stale: Optional[float]) -> object:
+            msg, at = heard.get(topic, (None, 0.0))
+            return msg if isinstance(msg, cls) and (stale is None or now[0] - at <= stale) else None
+
+        laser, bump, power = (fresh("/scan", scan_cls, 0.5), fresh("/bumper", bumper_cls, 0.5),
+                              fresh("/battery", battery_cls, None))
+        rays = [r for r in getattr(laser, ranges, []) if not math.isnan(r)]
+        if laser is None or bump is None or power is None or not rays or min(rays) < 0.3 or \
+                math.isnan(getattr(power, level)):
+            tally["outside"] += not stop
+            continue
+        if (min(rays) < 1.0 and abs(values[0]) > 0.3) or (getattr(bump, pressed) and values[0] > 0):
+            tally["outside"] += 1
+    return tally
+
+
+def hostile_ros_rules(count: int) -> dict[str, int]:
+    """:func:`hostile_rules` on this ROS's own messages: a Twist, a LaserScan, a Bool bumper, a BatteryState."""
+    from geometry_msgs.msg import Twist, Vector3
+    from sensor_msgs.msg import BatteryState, LaserScan
+    from std_msgs.msg import Bool, String
+
+    return hostile_rules(count, Twist, Vector3, (LaserScan, "ranges"), (Bool, "data"), (BatteryState, "percentage"),
+                         String)
+
+
 def obstacles(session: Child, robot: Child, count: int) -> list[float]:
     """``count`` obstacles with no command coming: the ms from the range's publication to the first stop."""
     delays = []
@@ -216,7 +315,8 @@ def run(ros: str, env: dict[str, str], workdir: Path, count: int, hostile: int) 
             print(f"bench: the guard's process {sentinel} outlived its grace (killed)", file=sys.stderr)
 
 
-def figures(ros: str, delays: dict[str, list[float]], hostile_run: dict, cost: tuple[float, float]) -> list[Figure]:
+def figures(ros: str, delays: dict[str, list[float]], hostile_run: dict, cost: tuple[float, float],
+            ruled: dict[str, int]) -> list[Figure]:
     most = TIMEOUT * 1000 + MARGIN_MS[ros]
     with_rules, without = cost
     out = [Figure(ros, "guard: a command checked against 3 rules over a 720-ray scan, more than with none",
@@ -237,7 +337,10 @@ def figures(ros: str, delays: dict[str, list[float]], hostile_run: dict, cost: t
                        note=f"timeout {TIMEOUT * 1000:.0f} ms + {MARGIN_MS[ros]:.0f} ms")]
     out += [Figure(ros, f"guard: hostile messages at the robot outside the rules, of {hostile_run['received']:,}",
                    hostile_run["outside"], "msgs", most=0),
-            Figure(ros, "guard: hostile messages written through it, flat out", hostile_run["per_s"], "msg/s")]
+            Figure(ros, "guard: hostile messages written through it, flat out", hostile_run["per_s"], "msg/s"),
+            Figure(ros, f"guard: hostile commands outside 4 rules, their inputs changing underneath, of "
+                        f"{sum(ruled.values()) - ruled['outside']:,}", ruled["outside"], "msgs", most=0,
+                   note=f"{ruled['stopped']:,} stopped, {ruled['changed']:,} changed, {ruled['passed']:,} as they came")]
     return out
 
 
@@ -275,7 +378,9 @@ def main(argv: Optional[list[str]] = None) -> int:
                 master.stop()
     cost = rules_cost()
     print(f"  {ros} rules: a check {cost[0]:.1f} µs with 3 rules over 720 rays, {cost[1]:.1f} µs without", flush=True)
-    checks = figures(ros, delays, hostile_run, cost)
+    ruled = hostile_ros_rules(RULED)
+    print(f"  {ros} hostile under rules, their inputs changing: {ruled}", flush=True)
+    checks = figures(ros, delays, hostile_run, cost, ruled)
     text = (f"Machine: {machine(ros)}; {count} trips a state, timeout {TIMEOUT * 1000:.0f} ms; "
             f"{hostile_run['sent']:,} hostile messages.\n\n{table(checks)}\n\n" + "\n".join(target_lines(checks))
             + f"\n\nWhole run: {time.monotonic() - began:.0f} s.\n")

@@ -298,3 +298,16 @@ def test_the_rule_watch_sends_the_stop_at_the_guards_rate_and_says_each_change_o
     assert watch.look(changed, 11.0) == (True, (guard.Acting.RULE_STOPPED, changed))
     assert watch.look("", 11.1) == (False, None) and watch.ruling == ""
 
+
+def test_no_hostile_command_breaks_four_rules_whose_inputs_change_underneath():
+    """The bench's hostile run under rules (bench/guard.py runs 100,000 on each ROS's messages): commands of NaN,
+    infinities and values just past each bound, through a stop, a limit, an only and a scale rule, while the laser,
+    the bumper and the battery change between commands (no ray, NaN rays, stale, never heard, the wrong type). An
+    oracle written from the rules' promises finds none outside them; every way out was taken."""
+    from unit_msgs.msg import Gain
+
+    from bench.guard import hostile_rules
+
+    tally = hostile_rules(20_000, Twist, Vector3, (Sample, "gains"), (Sample, "on"), (Gain, "gain"), Vector3)
+    assert tally["outside"] == 0, tally
+    assert min(tally["stopped"], tally["changed"], tally["passed"]) > 1000, tally
