@@ -32,6 +32,7 @@ relay process's peak memory. Medians over the repeats (start loss: the worst).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import statistics
@@ -266,6 +267,7 @@ def main(argv: Optional[list[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.relay_ros2", description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="one repeat, shorter streams")
     parser.add_argument("--repeats", type=int, default=None)
+    parser.add_argument("--only", help="comma-separated path keys to run, e.g. c,g (the loads that have them)")
     args, _ = parser.parse_known_args(argv)  # `bash run.sh bench` passes ROS 1's options too
     repeats = args.repeats or (1 if args.quick else 3)
     seconds = 2 if args.quick else 4
@@ -278,6 +280,10 @@ def main(argv: Optional[list[str]] = None) -> int:
              Load("image16m", "image16m", "Image 16 MiB (a point cloud's size)", 10.0, 10 * seconds, 20, paths="aef"),
              Load("image_be", "image", "Image 1 MiB, best effort, 30 Hz", 30.0, 30 * seconds, 0, paths="ae",
                   reliability="best_effort")]
+    if args.only:
+        keys = set(args.only.split(","))
+        loads = [dataclasses.replace(ld, paths="".join(k for k in ld.paths if k in keys)) for ld in loads]
+        loads = [ld for ld in loads if ld.paths]
     env = environment()
     results: dict[tuple[str, str], Run] = {}
     status = 0
@@ -286,11 +292,13 @@ def main(argv: Optional[list[str]] = None) -> int:
         env.update(ROS_HOME=workdir, ROS_LOG_DIR=str(Path(workdir) / "log"))
         from bench import exported
 
-        print("relay bench: building path (h), the exported package (colcon build)...", flush=True)
+        exporting = [ld.kind for ld in loads if "h" in ld.paths]
         try:
-            built = exported.build("ros2", Path(workdir), [ld.kind for ld in loads if "h" in ld.paths], TOPIC_OUT)
-            env["PYTHONPATH"] = os.pathsep.join([*exported.python_path(built), env["PYTHONPATH"]])
-            paths.append(exported_path(built))
+            if exporting:
+                print("relay bench: building path (h), the exported package (colcon build)...", flush=True)
+                built = exported.build("ros2", Path(workdir), exporting, TOPIC_OUT)
+                env["PYTHONPATH"] = os.pathsep.join([*exported.python_path(built), env["PYTHONPATH"]])
+                paths.append(exported_path(built))
         except BenchError as error:
             print(f"bench: {error}", file=sys.stderr, flush=True)
             status = 1

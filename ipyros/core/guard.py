@@ -32,15 +32,16 @@ import re
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping, Optional
+from typing import Any, Callable, Mapping, Optional, Protocol
 
+from . import wire
 from .errors import DeclarationError, cut
 from .msgbuild import copy_message, field_types, nested_class
 from .rules import CHANGED_LAST, RuleSet
 
 __all__ = ["DEFAULT_GRACE", "DEFAULT_LEASE", "DEFAULT_MACHINE_GRACE", "DEFAULT_REPEAT", "EPISODE_QUIET", "ESTOP_TYPE",
-           "RULES_PASS", "STATE_TOPIC", "Acting", "Gate", "GuardFigures", "Path", "RuleWatch", "Verdict", "check_rules", "check_stop",
-           "finite_checker", "parse_path", "verdict_text"]
+           "RULES_PASS", "STATE_TOPIC", "Acting", "Gate", "GuardFigures", "Guarding", "Path", "RuleWatch", "Verdict",
+           "check_rules", "check_stop", "finite_checker", "parse_path", "verdict_text"]
 
 #: The type of a guard's e-stop topic: ``True`` holds the stop message.
 ESTOP_TYPE = "std_msgs/Bool"
@@ -309,6 +310,17 @@ class Verdict:
         return "outside its limits" if self.acting is Acting.DROPPED else self.acting.value
 
 
+class Guarding(Protocol):
+    """What an output's endpoint (a publication, a relay) asks of the guard on its topic: a session's guard, one
+    placed on a machine, or a keeper's there."""
+
+    def check(self, msg: Any) -> Verdict:
+        """What to send for ``msg``."""
+
+    def passes_raw(self, raw: Any, encoding: str) -> bool:
+        """Whether the serialized ``raw`` goes on as it came, read in its bytes (False: :meth:`check` it whole)."""
+
+
 @dataclass
 class GuardFigures:
     """What a guard has done so far (``%status``): messages passed, clamped, dropped, stopped in its place."""
@@ -357,6 +369,7 @@ class Gate:
         #: Its rules over what the robot senses, and each input's last message and when it came (this clock).
         self._rules, self._heard = rules, heard
         self.last_command: Any = None  # the last message that passed as a command (what an idle check judges)
+        self._raw_checkers: dict[str, Any] = {}  # an encoding → its check of a message's bytes (None: read whole)
 
     def check(self, msg: Any) -> Verdict:
         """What to send for ``msg``, which is left as it is (a clamped message is a copy of it)."""
@@ -366,6 +379,50 @@ class Gate:
                 self.figures.passed += 1
                 self._passed()
             return verdict
+
+    def passes_raw(self, raw: Any, encoding: str) -> bool:
+        """Whether the serialized message ``raw`` passes as it came, read in its bytes (see :meth:`raw_checker`,
+        made once an encoding); False: read it whole and :meth:`check` it."""
+        checker = self._raw_checkers.get(encoding, self)
+        if checker is self:
+            checker = self._raw_checkers[encoding] = self.raw_checker(encoding)
+        return checker is not None and checker(raw)
+
+    def raw_checker(self, encoding: str) -> Optional[Callable[[Any], bool]]:
+        """A check of one message's serialized bytes (in ``encoding``: :data:`~ipyros.core.wire.ROS1` or
+        :data:`~ipyros.core.wire.CDR`) that says whether it passes as it came (not e-stopped, every float finite,
+        every limited field within its bounds), counted as :meth:`check` counts one; False: read it whole and
+        :meth:`check` it. None when this gate must read every message whole: it has rules or rates (they depend on
+        more than the message), a limit on a sequence's elements, or its type has no fixed layout (see
+        :mod:`ipyros.core.wire`). What a guarded relay forwards unchanged, without deserialising it."""
+        if self._rules is not None or self._rates:
+            return None
+        found = wire.layout(self.cls, encoding)
+        if found is None:
+            return None
+        place = {name: i for i, name in enumerate(found.names)}
+        if any(path.text not in place for path, _, _ in self._limits):
+            return None
+        limits = [(place[path.text], low, high) for path, low, high in self._limits]
+        read = found.read
+
+        def passes(raw: Any) -> bool:
+            numbers = read(raw)
+            if numbers is None:
+                return False
+            for i, low, high in limits:
+                if not low <= numbers[i] <= high:
+                    return False
+            with self._lock:
+                if self._estopped():
+                    return False
+                self.commands += 1
+                self._passed_at = self._clock()
+                self.figures.passed += 1
+                self._passed()
+            return True
+
+        return passes
 
     def _check(self, msg: Any) -> Verdict:
         if self._estopped():

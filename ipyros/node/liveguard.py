@@ -192,6 +192,9 @@ class LiveGuard:
     def check(self, msg: Any) -> Verdict:
         return self.gate.check(msg)
 
+    def passes_raw(self, raw: Any, encoding: str) -> bool:
+        return self.gate.passes_raw(raw, encoding)
+
     # -- its process ------------------------------------------------------------------------------
     def _settings(self) -> dict[str, Any]:
         model = self.model

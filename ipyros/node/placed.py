@@ -99,6 +99,10 @@ class PlacedGuard(LiveGuard):
             self._in.write(verdict.send)
         return Verdict(None, verdict.acting, verdict.path)
 
+    def passes_raw(self, raw: Any, encoding: str) -> bool:
+        """False: every message goes to the keeper as an object (:meth:`check`), never on here as bytes."""
+        return False
+
     def update(self, model: GuardModel) -> None:
         super().update(model)
         self._place(again=True)

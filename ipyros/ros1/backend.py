@@ -9,6 +9,7 @@ from typing import Any, Callable, Optional
 from ..core import names
 from ..core.errors import IpyrosError, MasterError
 from ..core.graph import ROS1_ACTION_TOPICS, GraphSnapshot
+from ..core.guard import Guarding
 from ..core.model import BaseModel
 from ..core.progress import Progress, no_progress
 from ..core.qos import Qos
@@ -130,7 +131,7 @@ class Ros1:
     # TCPROS is reliable and rospy queues are ipyros's own: of a QoS only durability
     # means something here (transient-local is latched); nothing can mismatch.
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
-                    follows: Optional[str] = None, gate: Any = None) -> runtime.Publication:
+                    follows: Optional[str] = None, gate: Optional[Guarding] = None) -> runtime.Publication:
         return runtime.Publication(topic, cls, qos.latched, follows, gate)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
@@ -138,7 +139,7 @@ class Ros1:
         return runtime.Subscription(topic, cls, slot, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Any = None) -> runtime.Relay:
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Optional[Guarding] = None) -> runtime.Relay:
         return runtime.Relay(source, target, cls, on_wrong_type, complain, gate)
 
     # -- guards: a message as bytes, the guard's own process -------------------------------------

@@ -36,8 +36,9 @@ import genpy
 import rospy
 from rospy.msg import serialize_message
 
-from ..core import msgtypes
+from ..core import msgtypes, wire
 from ..core.errors import DeclarationError, HandlerError, MasterError, MessageTypeError, NodeStateError
+from ..core.guard import Guarding
 from ..core.msgbuild import explain_unsendable
 from ..core.names import is_tool
 from ..core.slots import Arrival, HandlerSlot, Pristine, SendFigures
@@ -329,7 +330,7 @@ class Publication:
     """
 
     def __init__(self, topic: str, cls: type, latch: bool = False, follows: Optional[str] = None,
-                 gate: Any = None) -> None:
+                 gate: Optional[Guarding] = None) -> None:
         self.topic, self.cls = topic, cls
         self.count = 0
         self._pub = _publisher(topic, cls, latch)
@@ -600,7 +601,7 @@ class Relay:
 
     def __init__(self, source: str, target: str, cls: type,
                  on_wrong_type: Optional[Callable[[str], None]] = None,
-                 complain: Optional[Callable[[str], None]] = None, gate: Any = None) -> None:
+                 complain: Optional[Callable[[str], None]] = None, gate: Optional[Guarding] = None) -> None:
         self.source, self.target, self.cls = source, target, cls
         self._complain = complain
         #: A guard's gate: while set, each message is read, checked and sent as the gate says (a guarded relay
@@ -656,7 +657,7 @@ class Relay:
         if self._sending.locked() and not self._wait_for_pieces():
             return
         gate = self.gate
-        if gate is not None:
+        if gate is not None and not gate.passes_raw(raw._buff, wire.ROS1):  # read whole only when the guard acts on it
             self.send(_message(self.cls, raw._buff, header))
             return
         impl.acquire()

@@ -14,6 +14,7 @@ from rclpy.exceptions import NameValidationException
 from ..core import msgtypes, names
 from ..core.errors import DeclarationError, IpyrosError, MessageTypeError, NodeStateError, first_line
 from ..core.graph import GraphSnapshot
+from ..core.guard import Guarding
 from ..core.model import BaseModel
 from ..core.progress import Progress, no_progress
 from ..core.qos import Qos
@@ -70,7 +71,7 @@ class Ros2:
         self.process.shutdown()
 
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
-                    follows: Optional[str] = None, gate: Any = None) -> runtime.Publication:
+                    follows: Optional[str] = None, gate: Optional[Guarding] = None) -> runtime.Publication:
         return runtime.Publication(self.process.host(host), topic, cls, qos, complain, self.process, follows, gate)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
@@ -78,7 +79,7 @@ class Ros2:
         return runtime.Subscription(self.process, self.process.host(host), topic, cls, slot, qos, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Any = None) -> runtime.Relay:
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Optional[Guarding] = None) -> runtime.Relay:
         return runtime.Relay(self.process, self.process.host(host), source, target, cls, on_wrong_type, complain,
                              gate=gate)
 

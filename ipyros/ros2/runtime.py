@@ -34,9 +34,10 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
 
-from ..core import msgtypes
+from ..core import msgtypes, wire
 from ..core.errors import BaseNodeError, DeclarationError, HandlerError, MessageTypeError, NodeStateError, cut
 from ..core.graph import settled
+from ..core.guard import Guarding
 from ..core.msgbuild import conform
 from ..core.qos import Qos
 from ..core.records import Interface
@@ -454,7 +455,7 @@ class Publication:
 
     def __init__(self, node: Node, topic: str, cls: type, qos: Qos = Qos(),
                  complain: Optional[Complain] = None, process: Optional["ProcessNode"] = None,
-                 follows: Optional[str] = None, gate: Any = None) -> None:
+                 follows: Optional[str] = None, gate: Optional[Guarding] = None) -> None:
         self.topic, self.cls, self.count = topic, cls, 0
         #: A guard's gate every message passes first (``check(msg)``: what to send, or nothing), or None.
         self.gate = gate
@@ -663,7 +664,7 @@ class Relay:
 
     def __init__(self, process: ProcessNode, node: Node, source: str, target: str, cls: type,
                  on_wrong_type: Optional[Callable[[str], None]] = None, complain: Optional[Complain] = None,
-                 reader: Optional[Node] = None, gate: Any = None) -> None:
+                 reader: Optional[Node] = None, gate: Optional[Guarding] = None) -> None:
         self.source, self.target, self.cls, self.count, self.dropped = source, target, cls, 0, 0
         #: A guard's gate: while set, each message is read, checked and sent as the gate says (a guarded relay
         #: reads the values it must check; relays of other topics stay byte relays).
@@ -720,7 +721,7 @@ class Relay:
             if raw == skip:
                 return
         gate = self.gate
-        if gate is not None:
+        if gate is not None and not gate.passes_raw(raw, wire.CDR):  # read whole only when the guard acts on it
             sent = gate.check(deserialize_message(raw, self.cls)).send
             if sent is None:
                 return

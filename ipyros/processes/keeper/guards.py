@@ -129,6 +129,14 @@ class KeptGuard:
                       "place")
             return Verdict(self.stop_message(), Acting.ESTOPPED)
 
+    def passes_raw(self, raw: Any, encoding: str) -> bool:
+        """Whether a relay in the keeper forwards ``raw`` as it came (see ``Gate.raw_checker``); when in doubt, no:
+        :meth:`check` reads it whole."""
+        try:
+            return self.gate.passes_raw(raw, encoding)
+        except Exception:  # noqa: BLE001 - read whole, where a failure is the stop message
+            return False
+
     def command(self, msg: Any) -> None:
         """A message from the session: through the gate, onto the robot's topic."""
         send = self.check(msg).send

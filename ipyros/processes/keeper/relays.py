@@ -10,6 +10,7 @@ from typing import Any, Optional
 
 from ...core import msgtypes, names
 from ...core.errors import IpyrosError, first_line
+from ...core.guard import Guarding
 from ..basenode import log_dir
 from ..relayhost import RelayHost, Relaying
 from .lease import Lease, Refused, beat_topics, checked_grace
@@ -63,7 +64,7 @@ class KeptRelays:
             keeper.log(f"relays of {self.owner}: their process runs (pid {self._host.pid})")
         return self._host
 
-    def add(self, rid: str, spec: dict[str, Any], gate: Any) -> str:
+    def add(self, rid: str, spec: dict[str, Any], gate: Optional[Guarding]) -> str:
         """Open relay ``rid`` (``source``, ``target``, ``type``), its first message through ``gate``; what it is."""
         if rid in self.relays:
             raise Refused(f"relay {rid} runs already")
@@ -81,7 +82,7 @@ class KeptRelays:
         self.relays[rid] = kept
         return kept.what
 
-    def _open(self, kept: KeptRelay, gate: Any) -> None:
+    def _open(self, kept: KeptRelay, gate: Optional[Guarding]) -> None:
         try:
             if gate is None or kept.kind != "topic":  # a guard stands on topics only
                 self._hosted().ask("add", rid=kept.id, kind=kept.kind, source=kept.source, target=kept.target,
@@ -111,7 +112,7 @@ class KeptRelays:
             self._close_one(kept)
         return kept
 
-    def set_gate(self, topic: str, gate: Any) -> None:
+    def set_gate(self, topic: str, gate: Optional[Guarding]) -> None:
         """The guard on ``topic`` here changed: each relay onto it passes its check from now on (``gate``: the guard,
         :meth:`KeptGuard.check`; moved into the keeper, closed first: nothing passes unchecked meanwhile), or none
         (moved back to the relays' process)."""

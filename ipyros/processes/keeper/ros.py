@@ -8,8 +8,9 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Any, Callable, Protocol
+from typing import Any, Callable, Optional, Protocol
 
+from ...core.guard import Guarding
 from ...core.model import BaseModel
 from ..relayhost import Relaying
 
@@ -49,7 +50,7 @@ class KeeperRos(Protocol):
     def has_package(self, package: str) -> bool: ...
     def executables(self, package: str) -> list[str]: ...
     # a relay of a placed basenode's topic; ``gate``: the guard's on ``target`` it passes from its first message
-    def relay(self, source: str, target: str, type_name: str, gate: Any,
+    def relay(self, source: str, target: str, type_name: str, gate: Optional[Guarding],
               complain: Callable[[str], None]) -> Relaying: ...
     def relay_host_command(self, name: str) -> list[str]: ...  # a relay host whose ROS node is ``name``
 
