@@ -30,6 +30,10 @@ __all__ = ["LiveGuard", "limits_of"]
 SENTINEL_START = 30.0
 #: How long a guard waits for the graph to show an input of its rules, whose type it subscribes with (s).
 INPUT_TYPE_WAIT = 5.0
+#: How long a guard waits for the first message of each input its rules newly read, before they judge (s): a
+#: guard declared on a moving robot does not stop it for a sensor it has not heard yet only because it just
+#: subscribed (one not heard by then: the stop message, said, as an input never heard is).
+INPUT_FIRST_WAIT = 1.0
 #: How its verdicts go out: the last ten kept for a subscriber that comes later (latched, on ROS 1 the last).
 VERDICT_QOS = Qos(10, "reliable", "transient_local")
 
@@ -119,6 +123,12 @@ class LiveGuard:
             raise
         return added
 
+    def _hear_first(self, topics: list[str]) -> None:
+        """Wait a moment (:data:`INPUT_FIRST_WAIT`) for the first message of each of ``topics``, just subscribed."""
+        until = time.monotonic() + INPUT_FIRST_WAIT
+        while any(topic not in self.heard for topic in topics) and time.monotonic() < until:
+            time.sleep(0.01)
+
     def _input_type(self, topic: str) -> str:
         """The type the live graph shows for an input of its rules, waited for a few seconds; one line if none."""
         from ..core.errors import BaseNodeError
@@ -174,7 +184,7 @@ class LiveGuard:
         figures, commands = self.gate.figures, self.gate.commands
         stop = self._make_stop(model)
         rules = self._ruleset(model, stop)
-        self._listen(rules)
+        self._hear_first(self._listen(rules))  # the gate that judges them takes over once they are heard
         self._stop_message, self.rules = stop, rules
         self.gate = self._gate(model)
         self.gate.figures, self.gate.commands = figures, commands
@@ -212,7 +222,7 @@ class LiveGuard:
         package_root = str(Path(__file__).resolve().parents[2])  # ipyros importable as it is here
         env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
         log = log_dir() / f"{name}.log"
-        self._listen(self.rules)  # what its rules read, heard before anything passes
+        self._hear_first(self._listen(self.rules))  # what its rules read, heard before anything passes
         try:
             self._open_verdicts()
             self.sentinel = Sentinel(self._backend.sentinel_command(), settings, self.shared, log, env)

@@ -148,6 +148,10 @@ def _drawn(cell: Any, shot: Path) -> str:
     return unquote(source.split(",", 1)[1])
 
 
+#: How the guard of the kobuki's base begins each line it says (on stderr, below the cell that runs).
+GUARD_SAYS = "ipyros: guard /mobile_base/commands/velocity: "
+
+
 def test_the_wrapped_kobuki_is_drawn_in_the_browser(lab, browser, tmp_path):
     """The paper's second session run from the Run menu: its %graph draws move_base inside its wrapping node, the
     handler that replaced its cmd_vel, and the guard on the output to the base with what it did."""
@@ -155,9 +159,13 @@ def test_the_wrapped_kobuki_is_drawn_in_the_browser(lab, browser, tmp_path):
     notebook = NotebookPage(lab, browser, "kobuki.ipynb", tmp_path)
     try:
         notebook.run_all()
-        wait_for(lambda: notebook.ran() or notebook.errors(), timeout=TIMEOUT, interval=0.2,
-                 what="the notebook to run to its end")
-        assert notebook.errors() == [], "\n---\n".join(notebook.errors())
+
+        def errors() -> list[str]:  # what the guard says as its bumper rule acts is no error
+            return [text for text in notebook.errors()
+                    if not all(line.startswith(GUARD_SAYS) for line in text.strip().splitlines())]
+
+        wait_for(lambda: notebook.ran() or errors(), timeout=TIMEOUT, interval=0.2, what="the notebook to run to its end")
+        assert errors() == [], "\n---\n".join(errors())
         svg = _drawn(notebook.cell("%graph --node /experimental_move_base"), tmp_path / "kobuki-graph.png")
         assert "/experimental_move_base wraps ipyros_demo/move_base" in svg and "(basenode)" in svg, svg[:400]
         assert "/cmd_vel: replaced by controlVelocity" in svg and re.search(r"guard: passing, \d+ clamped", svg)

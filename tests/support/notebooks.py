@@ -106,6 +106,10 @@ def check_kobuki(nb: nbformat.NotebookNode, text: str) -> None:
     assert "e-stopped: the base is told 0.0 m/s while the planner still asks for 6.0" in text
     assert "released: the base is told 5.0 m/s again" in text
     assert re.search(r"mobile_base/commands/velocity.*passing", text), "%status shows no guard"
+    # a rule over what the robot senses: nothing but backing off while the bumper is pressed against the wall
+    assert "against the wall: the planner asks for 6.0 m/s, the base is told 0.0 m/s" in text
+    assert "when /mobile_base/events/bumper.data: only linear.x <= 0 (in force)" in text, "%status shows no rule"
+    assert "rule 1: only linear.x <= 0" in text, "the guard did not say that its rule acted"
     # the session drawn as the paper draws wrapping: the planner inside its wrapping node, the guard on its output
     svg = "\n".join(out.get("data", {}).get("image/svg+xml", "") for out in cell_with(nb, "%graph").outputs)
     said = re.findall(r">([^<>]+)</text>", svg)
