@@ -308,6 +308,6 @@ def test_no_hostile_command_breaks_four_rules_whose_inputs_change_underneath():
 
     from bench.guard import hostile_rules
 
-    tally = hostile_rules(20_000, Twist, Vector3, (Sample, "gains"), (Sample, "on"), (Gain, "gain"), Vector3)
+    tally = hostile_rules(10_000, Twist, Vector3, (Sample, "gains"), (Sample, "on"), (Gain, "gain"), Vector3)
     assert tally["outside"] == 0, tally
-    assert min(tally["stopped"], tally["changed"], tally["passed"]) > 1000, tally
+    assert min(tally["stopped"], tally["changed"], tally["passed"]) > 500, tally
