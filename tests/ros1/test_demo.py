@@ -238,9 +238,11 @@ def test_launch_files_read_as_roslaunch_reads_them():
     assert [(n.name, n.package, n.executable) for n in nodes] == [
         ("/mobile_base", "ipyros_demo", "turtle_sim"), ("/speed_monitor", "ipyros_demo", "speed_monitor"),
         ("/move_base", "ipyros_demo", "move_base")]
-    assert nodes[0].remaps == {"turtle1/cmd_vel": "mobile_base/commands/velocity"}
+    assert nodes[0].remaps == {"turtle1/cmd_vel": "mobile_base/commands/velocity",
+                               "turtle1/bumper": "mobile_base/events/bumper"}
     assert params["/mobile_base/max_speed"] == params["/speed_monitor/max_speed"] == 3.0
-    assert {a.name for a in launch_args(ROBOTS["kobuki"].path)} == {"max_speed", "noise", "speed", "planner", "relay"}
+    assert {a.name for a in launch_args(ROBOTS["kobuki"].path)} == {"max_speed", "wall", "noise", "speed", "planner",
+                                                                    "relay"}
     # roslaunch itself runs them too, with ipyros/ on ROS_PACKAGE_PATH (as the launch files say).
     env = {**os.environ, "ROS_PACKAGE_PATH": str(DEMO_DIR.parent)}
     listed = subprocess.run(["roslaunch", "--nodes", str(ROBOTS["kobuki"].path), "relay:=true"], env=env,
