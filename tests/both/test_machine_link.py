@@ -91,8 +91,9 @@ def test_a_lost_link_stops_the_robot_within_the_lease_and_commands_pass_once_it_
     assert any("no word from machine linkbot" in line for line in session.lines), session.lines[-10:]
 
 
-#: How long the lossy link is watched for a false stop (s).
-LOSSY_FOR = float(os.environ.get("IPYROS_LOSSY_SECONDS", "60"))
+#: How long the lossy link is watched for a false stop (s): 600 commands and 300 heartbeats across it. The bench watches
+#: it for 60 s (bench/machine_link.py); IPYROS_LOSSY_SECONDS=600 watches it longer here.
+LOSSY_FOR = float(os.environ.get("IPYROS_LOSSY_SECONDS", "30"))
 
 
 def test_a_lossy_link_makes_no_false_stop(robot):
