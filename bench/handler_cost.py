@@ -5,8 +5,8 @@
 The relay bench measures the whole paths: flat out, a DSL handler costs its node some 26 µs of CPU
 a message more than a ``reuse`` relay of the same topic (37.5 against 11.1 µs in the README's run),
 because the relay forwards the bytes it read and the handler path does more. This bench times, in
-this process and one at a time, each step of that more, as :class:`ipyros.ros1.runtime.Subscription`
-and :class:`~ipyros.ros1.runtime.Publication` take them, with the relay bench's message (a
+this process and one at a time, each step of that more, as :class:`ipyros.ros1.endpoints.Subscription`
+and :class:`~ipyros.ros1.endpoints.Publication` take them, with the relay bench's message (a
 ``TwistStamped``) and handler (one field changed, then written on):
 
 1. the message made from the bytes (genpy's deserialise);
@@ -50,7 +50,7 @@ def measure() -> list[tuple[str, float]]:
     from rospy.msg import serialize_message
 
     from ipyros.core.slots import Arrival, HandlerSlot, Pristine
-    from ipyros.ros1.runtime import _message
+    from ipyros.ros1.endpoints import _message
 
     msg = TwistStamped()
     msg.header.frame_id = "base_link"

@@ -3,7 +3,7 @@
 A ROS 1 action is five topics under its name: ``goal`` and ``cancel`` go to the server,
 ``status``, ``feedback`` and ``result`` come from it (``pkg/TypeActionGoal``,
 ``actionlib_msgs/GoalID``, ``actionlib_msgs/GoalStatusArray``, ``pkg/TypeActionFeedback``,
-``pkg/TypeActionResult``). A relay is five byte relays (:class:`~ipyros.ros1.runtime.Relay`),
+``pkg/TypeActionResult``). A relay is five byte relays (:class:`~ipyros.ros1.endpoints.Relay`),
 one unit; a basenode is remapped topic by topic (the backend's ``action_parts``), since ROS 1
 remaps names, not namespaces.
 """
@@ -23,7 +23,7 @@ from ..core import msgtypes
 from ..core.actions import ActionCall, GoalResult, serve_goal, to_message
 from ..core.errors import IpyrosError
 from ..core.slots import HandlerSlot
-from .runtime import Relay
+from .endpoints import Relay
 
 __all__ = ["ActionRelay", "ActionServer", "ActionWatch", "Goal", "Goals", "STATES"]
 

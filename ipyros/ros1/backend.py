@@ -16,7 +16,7 @@ from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
-from . import bagfile, introspect, master as master_mod, nodes, reconfigure, runtime
+from . import bagfile, endpoints, introspect, master as master_mod, nodes, params, reconfigure, runtime, services
 from .connection import MasterConnection
 from .discovery import wait_for_node
 from .export import RospyScript
@@ -131,16 +131,16 @@ class Ros1:
     # TCPROS is reliable and rospy queues are ipyros's own: of a QoS only durability
     # means something here (transient-local is latched); nothing can mismatch.
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
-                    follows: Optional[str] = None, gate: Optional[Guarding] = None) -> runtime.Publication:
-        return runtime.Publication(topic, cls, qos.latched, follows, gate)
+                    follows: Optional[str] = None, gate: Optional[Guarding] = None) -> endpoints.Publication:
+        return endpoints.Publication(topic, cls, qos.latched, follows, gate)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
-                     complain: Complain) -> runtime.Subscription:
-        return runtime.Subscription(topic, cls, slot, complain)
+                     complain: Complain) -> endpoints.Subscription:
+        return endpoints.Subscription(topic, cls, slot, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Optional[Guarding] = None) -> runtime.Relay:
-        return runtime.Relay(source, target, cls, on_wrong_type, complain, gate)
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Optional[Guarding] = None) -> endpoints.Relay:
+        return endpoints.Relay(source, target, cls, on_wrong_type, complain, gate)
 
     # -- guards: a message as bytes, the guard's own process -------------------------------------
     @staticmethod
@@ -158,19 +158,19 @@ class Ros1:
     launch_params_on_server = True  # a launch file's params go on the parameter server, as roslaunch puts them
 
     def raw_relay(self, host: str, source: str, target: str, type_name: str,
-                  on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> runtime.RawRelay:
-        return runtime.RawRelay(source, target, type_name, on_wrong_type, complain)
+                  on_wrong_type: Optional[Callable[[str], None]], complain: Complain) -> endpoints.RawRelay:
+        return endpoints.RawRelay(source, target, type_name, on_wrong_type, complain)
 
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
-              complain: Optional[Complain] = None) -> runtime.Timer:
-        return runtime.Timer(period, slot, oneshot)  # rospy gives each timer a thread of its own
+              complain: Optional[Complain] = None) -> endpoints.Timer:
+        return endpoints.Timer(period, slot, oneshot)  # rospy gives each timer a thread of its own
 
-    def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
-        return runtime.ServiceServer(name, cls, slot)
+    def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> services.ServiceServer:
+        return services.ServiceServer(name, cls, slot)
 
     def service_relay(self, host: str, source: str, target: str, cls: type,
-                      complain: Complain) -> runtime.ServiceRelay:
-        return runtime.ServiceRelay(source, target, cls)  # a basenode's failure reaches the caller as an error
+                      complain: Complain) -> services.ServiceRelay:
+        return services.ServiceRelay(source, target, cls)  # a basenode's failure reaches the caller as an error
 
     # -- actions (actionlib: imported when first used, so that a ROS 1 without python3-actionlib runs the rest)
     action_parts: tuple[str, ...] = tuple("/" + part for part in ROS1_ACTION_TOPICS)  # ROS 1 remaps names, one topic each
@@ -226,11 +226,11 @@ class Ros1:
         """Nothing to do: each subscription has its thread, which closing it ends."""
 
     # -- the parameter server, by global name --------------------------------------------------
-    check_param = staticmethod(runtime.check_param)
-    get_param = staticmethod(runtime.get_param)
-    set_param = staticmethod(runtime.set_param)
-    has_param = staticmethod(runtime.has_param)
-    delete_param = staticmethod(runtime.delete_param)
+    check_param = staticmethod(params.check_param)
+    get_param = staticmethod(params.get_param)
+    set_param = staticmethod(params.set_param)
+    has_param = staticmethod(params.has_param)
+    delete_param = staticmethod(params.delete_param)
 
     def build_messages(self, package_dir: Any, into: Any, progress: Progress = no_progress) -> list[str]:
         """genpy writes Python only: a moment, no progress to show."""
@@ -242,8 +242,8 @@ class Ros1:
         """Nothing to build: a ROS 1 relay forwards bytes of any type (a handler needs the package installed)."""
         return []
 
-    def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
-        return runtime.ParamWatch(name, tell)
+    def watch_param(self, name: str, tell: Callable[[Any], None]) -> params.ParamWatch:
+        return params.ParamWatch(name, tell)
 
     def forget_params(self, names: list[str]) -> None:
         """Delete what nodes that ended left on the parameter server (a demo robot's launch params)."""
@@ -312,7 +312,7 @@ class Ros1:
     # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----
     def service_type(self, name: str) -> str:
         uri = introspect.service_uri(self.connection.uri, name)
-        return runtime.served_here(name, uri) or introspect.probe_type(uri, name)
+        return services.served_here(name, uri) or introspect.probe_type(uri, name)
 
     def call(self, name: str, cls: type, request: Any, timeout: float) -> Any:
         return introspect.call(self.connection.uri, name, cls, request, timeout)
@@ -321,7 +321,7 @@ class Ros1:
         """Every parameter under ``namespace``, by global name."""
         return introspect.params_under(self.connection.uri, namespace)
 
-    read_param = staticmethod(runtime.get_param)
+    read_param = staticmethod(params.get_param)
 
     def describe_param(self, name: str) -> dict[str, Any]:
         """What ROS 1 knows of a parameter: the type of its value (the parameter server keeps no more), and a
@@ -363,7 +363,7 @@ class Ros1:
         kept = reconfigure.set_value(server, name.rsplit("/", 1)[1], value) if server else None
         if kept is not None:
             return kept
-        runtime.set_param(name, value)
+        params.set_param(name, value)
         return value
 
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]:

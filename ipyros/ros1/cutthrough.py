@@ -1,6 +1,6 @@
 """Reading a large message straight into one buffer, and relaying it while it still arrives (cut-through).
 
-rospy reads a message in ``buff_size`` pieces (127 KiB here, :mod:`.runtime`), each a new
+rospy reads a message in ``buff_size`` pieces (127 KiB here, :mod:`.endpoints`), each a new
 bytes object appended to a growing buffer, and copies the message out once it is whole:
 three copies of a 1 MiB image, each into fresh memory, before a handler parses it or a
 relay sends it on; and a relay's hop starts only once the first hop has ended.
@@ -18,7 +18,7 @@ Only a relay fed by one publisher connection (the wrapped basenode) sends pieces
 two incoming messages must never mix on an outgoing stream, so while one message goes out
 in pieces, a message from another connection waits for it and goes whole. If the incoming
 connection breaks in the middle, the subscribers' streams are cut: the relay closes their
-connections and has them connect again (:meth:`~.runtime.Relay.abort`).
+connections and has them connect again (:meth:`~.endpoints.Relay.abort`).
 """
 
 from __future__ import annotations

@@ -69,7 +69,7 @@ class RospyKeeper(Lookup):
 
     def relay(self, source: str, target: str, type_name: str, gate: Any, complain: Callable[[str], None]) -> Any:
         from ..core.errors import MessageTypeError
-        from . import runtime
+        from . import endpoints
 
         def wrong_type(got: str) -> None:
             complain(wrong_type_line(source, type_name, got))
@@ -79,13 +79,13 @@ class RospyKeeper(Lookup):
         except MessageTypeError:
             if gate is not None:  # a guard reads the values it checks: the guard's own refusal said so already
                 raise
-            return runtime.RawRelay(source, target, type_name, wrong_type, complain)  # TCPROS carries any type
-        return runtime.Relay(source, target, cls, wrong_type, complain, gate)
+            return endpoints.RawRelay(source, target, type_name, wrong_type, complain)  # TCPROS carries any type
+        return endpoints.Relay(source, target, cls, wrong_type, complain, gate)
 
     def service_relay(self, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
-        from . import runtime
+        from . import services
 
-        return runtime.ServiceRelay(source, target, msgtypes.resolve_service(type_name)[1])
+        return services.ServiceRelay(source, target, msgtypes.resolve_service(type_name)[1])
 
     def action_relay(self, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
         from .actions import ActionRelay

@@ -10,7 +10,7 @@ What is patched (on ipyros's own objects only: the session's subscriptions and t
 1. a subscription's ``remove_connection`` (:func:`on_connection_removed`): rospy ignores a
    publisher update while the old connection to that publisher is still listed, then drops the
    connection, and the publisher is lost for good; the session asks the master again after a
-   connection ends (``runtime._Reconnect``).
+   connection ends (``reconnect.Reconnect``).
 2. a subscription's ``add_connection`` and each connection protocol's ``read_messages``
    (:func:`on_connection_added`, :func:`take_over_reading`): a large message is read straight into
    one buffer and relayed while it arrives (:mod:`.cutthrough`).
@@ -20,13 +20,13 @@ What is patched (on ipyros's own objects only: the session's subscriptions and t
 What is read (private, not changed)
 
 4. the text of rospy's internal log (:func:`listen_to_internal_log`): rospy says that a peer's type
-   differs only there, and ipyros tells the user who and what (``runtime._OtherTypes``);
+   differs only there, and ipyros tells the user who and what (``endpoints._OtherTypes``);
 5. the stack frame of rospy's connecting thread (:func:`connecting_topic`): that log line does not
    name the topic, the thread that logged it holds it;
 6. rospy's registration state (:func:`topic_manager`, :func:`service_manager`,
    :func:`registration_manager`, :func:`node_uri`) and its logger services: what the process has
    registered, to register it again after a master restart or under a new name, and the type of a
-   service it serves itself (``runtime.served_here``: no probe through its own socket);
+   service it serves itself (``services.served_here``: no probe through its own socket);
 7. a publication's impl (``acquire``, ``publish``, ``release``, ``enable_latch``): bytes are written
    as they came, without rospy's type check (relays and exported relays);
 8. the parameter cache's notifier (:func:`notify_param_sets`, set, the one patch of a rospy-wide

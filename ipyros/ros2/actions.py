@@ -6,8 +6,8 @@ A ROS 2 action is three services and two topics under ``<name>/_action/``:
 handler that works for seconds would hold up every subscription of the session, so the
 callback here only awaits a future that the goal's own thread completes (an rclpy task
 yields while it waits). A relay relays the five parts as one unit: the services through
-:class:`~ipyros.ros2.runtime.ServiceRelay` (``get_result`` without a time limit: it is
-answered when the goal ends), the topics as bytes through :class:`~ipyros.ros2.runtime.Relay`.
+:class:`~ipyros.ros2.endpoints.ServiceRelay` (``get_result`` without a time limit: it is
+answered when the goal ends), the topics as bytes through :class:`~ipyros.ros2.endpoints.Relay`.
 """
 
 from __future__ import annotations
@@ -27,7 +27,9 @@ from rclpy.task import Future
 from ..core.actions import ActionCall, GoalResult, Waiter, serve_goal, to_message
 from ..core.errors import IpyrosError
 from ..core.slots import HandlerSlot
-from .runtime import RESULT_SETTLE, Complain, ProcessNode, Relay, ServiceRelay
+from .endpoints import RESULT_SETTLE, Relay, ServiceRelay
+from .qosmatch import Complain
+from .runtime import ProcessNode
 
 __all__ = ["ActionRelay", "ActionServer", "ActionWatch", "Goal", "Goals", "STATES"]
 

@@ -21,11 +21,10 @@ from ..core.qos import Qos
 from ..core.records import Interface
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
-from . import actions, bagfile, fastdds, introspect, launchfile, nodes, runtime
+from . import actions, bagfile, endpoints, fastdds, graph, introspect, launchfile, nodes, params, qosmatch, runtime
 from .export import RclpyScript
-from .graph import snapshot
 from .launch_rest import LaunchBase
-from .runtime import Complain
+from .qosmatch import Complain
 
 __all__ = ["Ros2"]
 
@@ -71,16 +70,16 @@ class Ros2:
         self.process.shutdown()
 
     def publication(self, host: str, topic: str, cls: type, qos: Qos, complain: Complain,
-                    follows: Optional[str] = None, gate: Optional[Guarding] = None) -> runtime.Publication:
-        return runtime.Publication(self.process.host(host), topic, cls, qos, complain, self.process, follows, gate)
+                    follows: Optional[str] = None, gate: Optional[Guarding] = None) -> endpoints.Publication:
+        return endpoints.Publication(self.process.host(host), topic, cls, qos, complain, self.process, follows, gate)
 
     def subscription(self, host: str, topic: str, cls: type, slot: HandlerSlot, qos: Qos,
-                     complain: Complain) -> runtime.Subscription:
-        return runtime.Subscription(self.process, self.process.host(host), topic, cls, slot, qos, complain)
+                     complain: Complain) -> endpoints.Subscription:
+        return endpoints.Subscription(self.process, self.process.host(host), topic, cls, slot, qos, complain)
 
     def relay(self, host: str, source: str, target: str, cls: type,
-              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Optional[Guarding] = None) -> runtime.Relay:
-        return runtime.Relay(self.process, self.process.host(host), source, target, cls, on_wrong_type, complain,
+              on_wrong_type: Optional[Callable[[str], None]], complain: Complain, gate: Optional[Guarding] = None) -> endpoints.Relay:
+        return endpoints.Relay(self.process, self.process.host(host), source, target, cls, on_wrong_type, complain,
                              gate=gate)
 
     # -- guards: a message as bytes, the guard's own process -------------------------------------
@@ -104,15 +103,15 @@ class Ros2:
                                f"({msgtypes.install_hint(type_name.split('/')[0])})")
 
     def timer(self, host: str, period: float, slot: HandlerSlot, oneshot: bool,
-              complain: Optional[Complain] = None) -> runtime.Timer:
-        return runtime.Timer(self.process.host(host), period, slot, oneshot, complain, self.process.spinner)
+              complain: Optional[Complain] = None) -> endpoints.Timer:
+        return endpoints.Timer(self.process.host(host), period, slot, oneshot, complain, self.process.spinner)
 
-    def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> runtime.ServiceServer:
-        return runtime.ServiceServer(self.process.host(host), name, cls, slot)
+    def service(self, host: str, name: str, cls: type, slot: HandlerSlot) -> endpoints.ServiceServer:
+        return endpoints.ServiceServer(self.process.host(host), name, cls, slot)
 
     def service_relay(self, host: str, source: str, target: str, cls: type,
-                      complain: Complain) -> runtime.ServiceRelay:
-        return runtime.ServiceRelay(self.process, self.process.host(host), source, target, cls, complain)
+                      complain: Complain) -> endpoints.ServiceRelay:
+        return endpoints.ServiceRelay(self.process, self.process.host(host), source, target, cls, complain)
 
     # -- actions: an action is remapped by its name, as a whole ------------------------------
     action_parts: tuple[str, ...] = ("",)
@@ -138,7 +137,7 @@ class Ros2:
     def wait_for_node(self, name: str, timeout: float = 10.0, alive: Optional[Callable[[], bool]] = None,
                       settle: float = 0.5) -> Interface:
         """The interface of the running node ``name`` once it has settled."""
-        return runtime.wait_for_node(self._graph(), name, timeout, settle=settle, alive=alive)
+        return graph.wait_for_node(self._graph(), name, timeout, settle=settle, alive=alive)
 
     # -- a bag's time ------------------------------------------------------------------------------
     def bag_time(self, on: bool) -> str:
@@ -176,7 +175,7 @@ class Ros2:
         self.process.detach(hosts)
 
     # -- parameters: each belongs to its node --------------------------------------------
-    check_param = staticmethod(runtime.check_param)
+    check_param = staticmethod(params.check_param)
 
     def _owner(self, name: str) -> tuple[Any, str]:
         """The ROS 2 node a parameter ``/ns/node/key`` belongs to, and its key there."""
@@ -194,7 +193,7 @@ class Ros2:
         from rcl_interfaces.msg import ParameterDescriptor
         from rclpy.parameter import Parameter
 
-        runtime.check_param(name, value)
+        params.check_param(name, value)
         node, key = self._owner(name)
         node.serve_parameters()  # reachable from outside (ros2 param, on_param) from its first parameter on
         if node.has_parameter(key):
@@ -228,9 +227,9 @@ class Ros2:
 
         return build_from_node(self.process, node, wanted, progress=progress)
 
-    def watch_param(self, name: str, tell: Callable[[Any], None]) -> runtime.ParamWatch:
+    def watch_param(self, name: str, tell: Callable[[Any], None]) -> params.ParamWatch:
         node, key = self._owner(name)
-        return runtime.ParamWatch(node, key, tell)
+        return params.ParamWatch(node, key, tell)
 
     def forget_params(self, names: list[str]) -> None:
         """Nothing to delete: a ROS 2 node's parameters end with it."""
@@ -251,9 +250,9 @@ class Ros2:
     def graph_snapshot(self, timeout: float = 1.0) -> GraphSnapshot:
         """What discovery has found so far (:func:`.graph.snapshot`): read locally, no round trip (but, just
         after rclpy started, once discovery has had its moment: :meth:`ProcessNode.discovered`)."""
-        graph = self._graph()
+        reader = self._graph()
         self.process.discovered(within=timeout)
-        return snapshot(graph)
+        return graph.snapshot(reader)
 
     def where(self) -> str:
         return f"ROS_DOMAIN_ID {runtime.domain_id()}"
@@ -301,14 +300,14 @@ class Ros2:
     def topic_endpoints(self, topic: str) -> list[tuple[str, str, str, str]]:
         """Who publishes and subscribes to ``topic``, each with its type and the QoS it offers or asks for:
         ``(node, "publisher" | "subscription", "std_msgs/String", "reliable transient-local depth 1")``."""
-        graph = self._graph()
+        reader = self._graph()
         found = []
-        for kind, infos in (("publisher", graph.get_publishers_info_by_topic(topic)),
-                            ("subscription", graph.get_subscriptions_info_by_topic(topic))):
+        for kind, infos in (("publisher", reader.get_publishers_info_by_topic(topic)),
+                            ("subscription", reader.get_subscriptions_info_by_topic(topic))):
             for info in infos:
                 if not info.node_name.startswith("_"):
                     found.append((f"{info.node_namespace.rstrip('/')}/{info.node_name}", kind,
-                                  msgtypes.short_name(info.topic_type), runtime.qos_text(info.qos_profile)))
+                                  msgtypes.short_name(info.topic_type), qosmatch.qos_text(info.qos_profile)))
         return sorted(found)
 
     # -- the graph's services, parameters and nodes, for %services, %call, %params, %nodes ----
@@ -365,7 +364,7 @@ class Ros2:
         current = introspect.node_params(self.process, node).get(key)
         if isinstance(current, float) and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
-        runtime.check_param(name, value)
+        params.check_param(name, value)
         if node in self.process.hosts():
             self.set_param(name, value)
         else:

@@ -17,7 +17,7 @@ from ..core import plan as planning
 from ..core.errors import IpyrosError
 from . import package as ament
 from .nodes import command
-from .runtime import RESULT_SETTLE
+from .endpoints import RESULT_SETTLE
 
 __all__ = ["RclpyScript"]
 

@@ -1,4 +1,5 @@
-"""The ROS 2 graph as a :class:`~ipyros.core.graph.GraphSnapshot`, for ``%topics`` and completion.
+"""The ROS 2 graph as a :class:`~ipyros.core.graph.GraphSnapshot`, for ``%topics`` and completion; a running
+node's interface, as a wrapping node reads it.
 
 ROS 2 has no master to ask: each process discovers its peers and keeps what it learnt
 (DDS discovery, here through the session's hidden graph node). Reading that is local and
@@ -9,14 +10,18 @@ shows up or goes away within a fraction of a second.
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import Any, Callable, Optional
 
-from rclpy.node import NodeNameNonExistentError
+from rclpy.node import Node, NodeNameNonExistentError
 
-from ..core.graph import GraphSnapshot, frozen
+from ..core import msgtypes
+from ..core.errors import BaseNodeError
+from ..core.graph import GraphSnapshot, frozen, settled
 from ..core.msgtypes import short_name
+from ..core.records import Interface
+from .runtime import domain_id
 
-__all__ = ["snapshot"]
+__all__ = ["node_interface", "snapshot", "wait_for_node"]
 
 
 def snapshot(graph: Any) -> GraphSnapshot:
@@ -63,3 +68,56 @@ def snapshot(graph: Any) -> GraphSnapshot:
         taken_at=time.time(),
         master_up=True,
     )
+
+
+# -- a node's interface, as discovery sees it --------------------------------------------------
+
+#: What every rclpy node has: not part of the interface a wrapper would reuse.
+_PLUMBING_TOPICS = {"/rosout", "/parameter_events"}
+_PLUMBING_SERVICES = ("/describe_parameters", "/get_parameter_types", "/get_parameters", "/list_parameters",
+                      "/set_parameters", "/set_parameters_atomically", "/get_type_description",
+                      "/get_logger_levels", "/set_logger_levels")
+
+
+def node_interface(graph: Node, fullname: str) -> Any:
+    """The publications, subscriptions and services of the running node ``fullname``, or None if unseen."""
+    namespace, name = fullname.rsplit("/", 1)
+    namespace = namespace or "/"
+    if (name, namespace) not in graph.get_node_names_and_namespaces():
+        return None
+    left_out: list[str] = []
+
+    def entries(found: list[tuple[str, list[str]]], plumbing: Callable[[str], bool], what: str) -> list:
+        kept = []
+        for topic, types in sorted(found):
+            if plumbing(topic):
+                left_out.append(f"{topic} ({what})")
+            else:
+                kept.append((topic, msgtypes.short_name(types[0]) if len(types) == 1 else ""))
+        return kept
+
+    return Interface(
+        node=fullname,
+        publications=entries(graph.get_publisher_names_and_types_by_node(name, namespace),
+                             lambda t: t in _PLUMBING_TOPICS, "publishes"),
+        subscriptions=entries(graph.get_subscriber_names_and_types_by_node(name, namespace),
+                              lambda t: t in _PLUMBING_TOPICS, "subscribes"),
+        services=entries(graph.get_service_names_and_types_by_node(name, namespace),
+                         lambda s: s.startswith(fullname + "/") and s.endswith(_PLUMBING_SERVICES), "serves"),
+        left_out=left_out,
+    )
+
+
+def wait_for_node(graph: Node, fullname: str, timeout: float = 10.0, settle: float = 0.5,
+                  alive: Optional[Callable[[], bool]] = None) -> Any:
+    """Wait until ``fullname`` is in the graph and its interface has been unchanged for ``settle`` s.
+
+    Raises :class:`BaseNodeError` if it never shows up, at once when ``alive()`` turns False.
+    """
+    current = settled(lambda: node_interface(graph, fullname), fullname, timeout, settle, alive)
+    if current is None:
+        names = ", ".join(sorted(ns.rstrip("/") + "/" + n for n, ns in graph.get_node_names_and_namespaces()
+                                 if not n.startswith("_"))) or "none"
+        raise BaseNodeError(f"node {fullname} did not appear in the ROS 2 graph (ROS_DOMAIN_ID {domain_id()}) after "
+                            f"{timeout:g}s: start it first (nodes seen: {names})")
+    return current

@@ -73,7 +73,7 @@ class RclpyKeeper(Lookup):
     def relay(self, source: str, target: str, type_name: str, gate: Any, complain: Callable[[str], None]) -> Any:
         """The runtime's relay (bytes on, QoS taken from the basenode's publishers), on a node of its own in an
         rclpy context of its own: a camera's traffic never shares a participant with the leases' heartbeats."""
-        from .runtime import Relay
+        from .endpoints import Relay
 
         cls = msgtypes.resolve_message(type_name)[1]  # rclpy needs the type's Python package, even for bytes
         process, node = self._relays_node()
@@ -86,7 +86,7 @@ class RclpyKeeper(Lookup):
         return self._relaying
 
     def service_relay(self, source: str, target: str, type_name: str, complain: Callable[[str], None]) -> Any:
-        from .runtime import ServiceRelay
+        from .endpoints import ServiceRelay
 
         process, node = self._relays_node()
         return ServiceRelay(process, node, source, target, msgtypes.resolve_service(type_name)[1], complain)
@@ -110,7 +110,7 @@ class RclpyKeeper(Lookup):
         return f"domain {os.environ.get('ROS_DOMAIN_ID') or 0}{found}"
 
     def publisher(self, topic: str, type_name: str, latch: bool) -> _Outlet:
-        from .runtime import profile_of
+        from .qosmatch import profile_of
 
         cls = msgtypes.resolve_message(type_name)[1]
         qos = profile_of(Qos(durability="transient_local") if latch else Qos(depth=10))  # latched: the last one
@@ -120,7 +120,7 @@ class RclpyKeeper(Lookup):
                   lossy: bool = False) -> _Subscription:
         from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 
-        from .runtime import profile_of
+        from .qosmatch import profile_of
 
         cls = msgtypes.resolve_message(type_name)[1]
         qos = profile_of(Qos(depth=10, reliability="best_effort" if lossy else "reliable"))

@@ -25,7 +25,7 @@ def start(settings: dict[str, Any], shared: Shared,
 
     from ..core import msgtypes
     from ..core.qos import from_model
-    from .runtime import profile_of
+    from .qosmatch import profile_of
 
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     namespace, _, name = ("/" + settings["node"]).rpartition("/")

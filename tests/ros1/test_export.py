@@ -28,7 +28,7 @@ from std_srvs.srv import Empty
 
 from ipyros.core.errors import IpyrosError
 from ipyros.core.remapping import basenode_remaps
-from ipyros.ros1 import runtime
+from ipyros.ros1 import params as param_server, services
 
 speed = 2.5  # read by on_pose when called: exported as a literal
 plain = wrapper = None  # the nodes the handlers write with: bound to the live node by the builders below
@@ -117,8 +117,8 @@ def check_plain(make_node, ns: str, output: Output, gain: float = 1.5) -> None:
     wait_for(printed(output, "pose x=2.0"), timeout=10, what="on_pose's print")
     wait_for(lambda: alive, timeout=10, what="the timer's message")
     assert alive[-1].data == "alive"
-    params = wait_for(lambda: runtime.has_param(f"{ns}/export_plain/label") and
-                      runtime.get_param(f"{ns}/export_plain"), timeout=10, what="the node's params")
+    params = wait_for(lambda: param_server.has_param(f"{ns}/export_plain/label") and
+                      param_server.get_param(f"{ns}/export_plain"), timeout=10, what="the node's params")
     assert params == {"gain": gain, "label": "plain", "limits": [1, 2]}
 
 
@@ -140,9 +140,9 @@ def check_wrapper(make_node, ns: str, output: Output) -> None:
     base = f"{ns}/echo_node"
     assert listed(base), "the basenode runs at its own name"
     assert base in master_state(os.environ["ROS_MASTER_URI"])["sub"][f"{ns}/export_wrapper/base{ns}/in"]
-    assert runtime.get_param(f"{ns}/export_wrapper") == {"volume": 11, "mode": "loud"}
-    assert runtime.get_param(f"{base}/exit_after") == 0
-    service = runtime.service_proxy(f"{base}/reset", Empty)
+    assert param_server.get_param(f"{ns}/export_wrapper") == {"volume": 11, "mode": "loud"}
+    assert param_server.get_param(f"{base}/exit_after") == 0
+    service = services.service_proxy(f"{base}/reset", Empty)
     service.wait_for_service(10)
     service()  # answered by echo_node, through the wrapping node's service relay
     wait_for(printed(output, "reset"), timeout=10, what="echo_node to print reset")

@@ -23,7 +23,7 @@ from test_export import export_env, running, world
 
 from ipyros.core.errors import IpyrosError
 from ipyros.core.plan import internal_name
-from ipyros.ros1 import runtime
+from ipyros.ros1 import params as param_server
 
 cpp = None  # the node the handler writes with
 
@@ -106,8 +106,8 @@ def test_catkin_make_builds_it_and_the_compiled_node_relays_and_guards(make_node
         wait_for(lambda: driver.write(f"{ns}/in", String("hi")) or out, timeout=60,
                  what=f"echo_node's answer through the compiled relays (output: {launch.lines[-8:]})")
         assert out[-1].data == "echo> hi"
-        wait_for(lambda: runtime.has_param(f"{ns}/cpp_wrap/volume"), timeout=10, what="the node's parameter")
-        assert runtime.get_param(f"{ns}/cpp_wrap/volume") == 11
+        wait_for(lambda: param_server.has_param(f"{ns}/cpp_wrap/volume"), timeout=10, what="the node's parameter")
+        assert param_server.get_param(f"{ns}/cpp_wrap/volume") == 11
         wait_for(lambda: driver.write(internal_cmd, Twist(linear=Vector3(x=3.0))) or
                  any(m.linear.x == 0.5 for m in cmd), timeout=20, interval=0.05, what="the clamped command")
         assert all(m.linear.x <= 0.5 for m in cmd), [m.linear.x for m in cmd]

@@ -26,7 +26,7 @@ from std_srvs.srv import Empty, EmptyResponse
 from ipyros import rosNode
 from ipyros.core.errors import IpyrosError
 from ipyros.files import export, modelfile as keep
-from ipyros.ros1 import runtime
+from ipyros.ros1 import params as param_server, services
 
 speed = 2.5  # read by showPose when called: exported as a literal
 
@@ -284,7 +284,7 @@ def test_exported_turtle_node_runs_without_ipyros(make_node, tmp_path, ros_maste
         assert alive[-1].data == "alive"
         state = master_state(ros_master)
         assert "/turtle_control_node" in state["srv"]["/turtle_control_node/reset"]
-        assert wait_for(lambda: runtime.get_param("/turtle_control_node/gain", None), what="~gain") == 1.5
+        assert wait_for(lambda: param_server.get_param("/turtle_control_node/gain", None), what="~gain") == 1.5
         assert stop(proc) == 0
 
 
@@ -305,14 +305,14 @@ def test_exported_wrapper_runs_and_stops_its_basenode(make_node, tmp_path, ros_m
         wait_for(lambda: driver.write("/keep_ns/in", String("hi")) or loud, timeout=30,
                  what=f"echo_node's answer through shout (output: {lines[-5:]})")
         assert loud[-1].data == "ECHO> HI" and out == []  # intercepted: echo_node's out goes to shout only
-        service = runtime.service_proxy("/keep_ns/echo_node/reset", Empty)
+        service = services.service_proxy("/keep_ns/echo_node/reset", Empty)
         service.wait_for_service(10)
         service()  # answered by echo_node, through the script's service relay
         wait_for(lambda: "reset" in lines, timeout=10, what="echo_node to print reset")
         assert stop(proc) == 0
         wait_for(lambda: not Path(f"/proc/{base_pid}").exists(), timeout=10, what="the basenode to be gone")
         assert "echo_node shut down" in lines  # stopped by Ctrl-C, so it unregistered
-    assert runtime.get_param("/keep_ns/keep_wrapper/volume") == 11
+    assert param_server.get_param("/keep_ns/keep_wrapper/volume") == 11
     assert "/keep_ns/echo_node" not in str(master_state(ros_master))
 
 

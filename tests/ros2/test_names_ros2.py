@@ -31,7 +31,7 @@ def test_a_topic_rclpy_refuses_is_one_line(make_node):
 def test_a_peer_whose_node_discovery_has_not_told_is_not_called_unknown():
     """rclpy names such a peer _NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_: the QoS notice waits a moment for
     discovery, then says the node is not known yet rather than print the placeholder."""
-    from ipyros.ros2.runtime import peer_name
+    from ipyros.ros2.qosmatch import peer_name
 
     assert peer_name("/robot1", "lidar") == "/robot1/lidar"
     assert peer_name("/", "lidar") == "/lidar"
