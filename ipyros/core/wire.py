@@ -8,8 +8,8 @@ when nothing is to be done, costs a few microseconds. Only a message the guard a
 Two encodings: ROS 1's (little-endian, packed: no padding) and ROS 2's CDR (a 4-byte encapsulation header, then
 each primitive aligned to its size, up to 8, counted from the end of that header; only little-endian plain CDR is
 read here). A string is a length then its bytes (CDR counts its closing NUL), a sequence a count then its
-elements, a fixed array its elements alone, a nested message its fields in order. A type with an array of messages
-(or of strings inside one) has no :class:`Layout`: its messages are read whole.
+elements, a fixed array its elements alone, a nested message its fields in order. A type with an array of messages,
+or a fixed-size array of strings or of times, has no :class:`Layout`: its messages are read whole.
 
     layout = wire.layout(TwistStamped, wire.CDR)
     layout.names           # ("header.stamp.sec", ..., "twist.linear.x", ...): each scalar number, in order

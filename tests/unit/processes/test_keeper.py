@@ -233,10 +233,9 @@ def test_a_placed_guards_limit_rule_sends_the_stop_through_its_gate_once_as_a_se
     guard.command(Twist(linear=Vector3(x=0.4)))
     hear(Sample(gains=[0.3]))
     assert [m.linear.x for m in sent] == [0.4, 0.0] and len(logged) == 1
-    time.sleep(0.02)  # two periods of its rate
-    for _ in range(3):
+    for later in (1.0, 2.0, 3.0):  # looks a second and more apart: each would send it, if the rules still held it
         hear(Sample(gains=[0.3]))
-        assert guard._judge(time.monotonic()) is None
+        assert guard._judge(time.monotonic() + later) is None
     assert [m.linear.x for m in sent] == [0.4, 0.0], "the stop message passed its gate: it is the last command now"
     hear(Sample(gains=[2.0]))
     assert len(logged) == 1 and guard.watch.ruling == ""
