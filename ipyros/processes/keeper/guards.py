@@ -21,6 +21,10 @@ __all__ = ["GUARD_START", "KeptGuard"]
 
 #: How long a placed guard's stop process may take to start on the robot (s).
 GUARD_START = 30.0
+#: How long a guard placed with rules waits for the first message of each of their inputs before it acts (s): placed
+#: again on a running robot, the robot is not stopped for a sensor the new guard has only just subscribed to (one not
+#: heard by then: the stop message, as for one never heard).
+INPUTS_FIRST_WAIT = 1.0
 
 
 class KeptGuard:
@@ -47,6 +51,7 @@ class KeptGuard:
             raise Refused(str(error)) from None
         #: Each input of its rules: its last message and when it came (monotonic), heard on this machine.
         self.heard: dict[str, tuple[Any, float]] = {}
+        self._arm_by = time.monotonic() + (INPUTS_FIRST_WAIT if self.rules is not None else 0.0)  # see armed
         self.repeat = float(spec.get("repeat", 10.0))
         self.watch = RuleWatch(self.repeat)  # what its rules do with no command coming (see _judge)
         self.lease = Lease(float(spec.get("lease", 0.5)), spec.get("grace_lease", 30.0), keeper.clock())
@@ -95,7 +100,7 @@ class KeptGuard:
     def _hearing(self, topic: str) -> Any:
         def hear(msg: Any) -> None:
             self.heard[topic] = (msg, time.monotonic())
-            said = self._judge(time.monotonic())  # an obstacle with no command coming: the stop message at once
+            said = self._judge(time.monotonic()) if self.armed else None  # an obstacle with no command coming: the stop message at once
             if said:
                 self._log(said)
 
@@ -137,8 +142,20 @@ class KeptGuard:
         except Exception:  # noqa: BLE001 - read whole, where a failure is the stop message
             return False
 
+    @property
+    def armed(self) -> bool:
+        """Whether it acts on the session's commands and judges its rules yet: once each input of its rules has been
+        heard, or :data:`INPUTS_FIRST_WAIT` s after it was placed. Until then it sends nothing (placed again on a
+        running robot, a gap of a sensor's period at most; placed first, the robot is at rest)."""
+        if self._arm_by and (time.monotonic() >= self._arm_by or self.rules is None
+                             or all(topic in self.heard for topic in self.rules.topics)):
+            self._arm_by = 0.0
+        return not self._arm_by
+
     def command(self, msg: Any) -> None:
-        """A message from the session: through the gate, onto the robot's topic."""
+        """A message from the session: through the gate, onto the robot's topic (nothing before :meth:`arm`)."""
+        if not self.armed:
+            return
         send = self.check(msg).send
         if send is not None:
             try:
@@ -182,7 +199,7 @@ class KeptGuard:
             self._out.write(self.stop_message())
             if self.lost is not None:  # a stop process counts its own
                 self.shared.stops_sent += 1
-        ruled = self._judge(time.monotonic())
+        ruled = self._judge(time.monotonic()) if self.armed else None
         return "; ".join(line for line in (said, ruled) if line) or None
 
     def _judge(self, now: float) -> Optional[str]:

@@ -158,7 +158,7 @@ def test_a_command_the_keepers_gate_cannot_check_goes_out_as_the_stop_message():
 
     sent: list = []
     guard = KeptGuard.__new__(KeptGuard)  # its gate and publisher only: no stop process, no ROS
-    guard.topic, guard._log, guard._stop = "/cmd_vel", lambda text: None, {"linear": 0.0}
+    guard.topic, guard._log, guard._stop, guard._arm_by = "/cmd_vel", lambda text: None, {"linear": 0.0}, 0.0
     guard.gate = SimpleNamespace(check=fails)
     guard._out = SimpleNamespace(write=sent.append)
     guard.command({"linear": 9.0})
@@ -188,7 +188,7 @@ def test_a_placed_guards_rules_are_judged_on_the_robot_as_a_sensor_comes_and_sai
     guard = KeptGuard.__new__(KeptGuard)  # its gate, rules and publisher only: no stop process, no ROS
     guard.topic, guard._log, guard._stop, guard.repeat = "/cmd_vel", logged.append, Twist(), 10.0
     guard.rules = KeptGuard._ruleset({**spec, "inputs": {"/scan": "unit_msgs/Sample"}}, Twist, "guard /cmd_vel")
-    guard.heard, guard.watch = {}, RuleWatch(guard.repeat)
+    guard.heard, guard.watch, guard._arm_by = {}, RuleWatch(guard.repeat), 0.0
     guard.gate = Gate("/cmd_vel", Twist, {}, {}, "clamp", guard.stop_message, lambda: False, lambda: None,
                       lambda text: None, rules=guard.rules, heard=lambda: guard.heard)
     guard._out = SimpleNamespace(write=sent.append)
@@ -224,7 +224,7 @@ def test_a_placed_guards_limit_rule_sends_the_stop_through_its_gate_once_as_a_se
     guard = KeptGuard.__new__(KeptGuard)  # its gate, rules and publisher only: no stop process, no ROS
     guard.topic, guard._log, guard._stop, guard.repeat = "/cmd_vel", logged.append, Twist(), 100.0
     guard.rules = KeptGuard._ruleset(spec, Twist, "guard /cmd_vel")
-    guard.heard, guard.watch = {}, RuleWatch(guard.repeat)
+    guard.heard, guard.watch, guard._arm_by = {}, RuleWatch(guard.repeat), 0.0
     guard.gate = Gate("/cmd_vel", Twist, {}, {}, "clamp", guard.stop_message, lambda: False, lambda: None,
                       lambda text: None, rules=guard.rules, heard=lambda: guard.heard)
     guard._out = SimpleNamespace(write=sent.append)
@@ -253,3 +253,43 @@ def test_a_discovery_server_asked_wrong_is_one_line(monkeypatch, capsys, ros, ar
     assert main(["--name", "robot1", *argv]) == 2
     err = capsys.readouterr().err
     assert why in err and err.count("\n") == 1, err
+
+
+def test_a_guard_placed_with_rules_acts_only_once_its_sensors_are_heard():
+    """Placed again on a running robot, a guard with rules sends nothing, not even "not heard yet"'s stop message,
+    until each input has been heard or INPUTS_FIRST_WAIT has passed; then it judges (one never heard: the stop)."""
+    import time
+    from types import SimpleNamespace
+
+    from unit_msgs.msg import Sample, Twist, Vector3
+
+    from ipyros.core.guard import Gate, RuleWatch
+    from ipyros.core.rules import rule
+    from ipyros.processes.keeper import KeptGuard
+
+    spec = {"topic": "/cmd_vel", "rules": [rule("min(/scan.gains) < 0.5", stop=True).as_data()],
+            "inputs": {"/scan": "unit_msgs/Sample", "/bump": "unit_msgs/Sample"}, "stale": {"/bump": 1.0}}
+
+    def placed() -> tuple[KeptGuard, list]:
+        sent: list = []
+        guard = KeptGuard.__new__(KeptGuard)  # its gate, rules and publisher only: no stop process, no ROS
+        guard.topic, guard._log, guard._stop, guard.repeat = "/cmd_vel", lambda text: None, Twist(), 10.0
+        guard.rules = KeptGuard._ruleset(spec, Twist, "guard /cmd_vel")
+        guard.heard, guard.watch, guard._arm_by = {}, RuleWatch(guard.repeat), time.monotonic() + 60.0
+        guard.gate = Gate("/cmd_vel", Twist, {}, {}, "clamp", guard.stop_message, lambda: False, lambda: None,
+                          lambda text: None, rules=guard.rules, heard=lambda: guard.heard)
+        guard._out = SimpleNamespace(write=sent.append)
+        return guard, sent
+
+    guard, sent = placed()
+    guard._hearing("/scan")(Sample(gains=[2.0]))  # one input heard, the other not yet: no stop message for it
+    guard.command(Twist(linear=Vector3(x=0.4)))
+    assert sent == [] and not guard.armed and guard.watch.ruling == "", "nothing judged, nothing said"
+    guard._hearing("/bump")(Sample(gains=[2.0]))
+    assert guard.armed, "armed as soon as both were heard"
+    guard.command(Twist(linear=Vector3(x=0.4)))
+    assert [m.linear.x for m in sent] == [0.4]
+    quiet, sent = placed()
+    quiet._arm_by = time.monotonic() - 0.01  # its wait is over, a sensor never heard: it acts, and stops the robot
+    quiet.command(Twist(linear=Vector3(x=0.4)))
+    assert quiet.armed and [m.linear.x for m in sent] == [0.0]
