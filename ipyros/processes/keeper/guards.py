@@ -126,7 +126,10 @@ class KeptGuard:
     def check(self, msg: Any) -> Verdict:
         """The gate's verdict on ``msg`` (a session's command, a relay's message); one the gate fails on is the
         stop message in its place: when in doubt, stop (neither dropped, leaving the last command in force, nor sent
-        unchecked). What a relay in the keeper passes its messages through (see ``Keeper.gate_relays``)."""
+        unchecked). What a relay in the keeper passes its messages through (see ``Keeper.gate_relays``). Before it is
+        :attr:`armed`, nothing (unless it holds the stop message: then that)."""
+        if not self.armed and not self.holding():
+            return Verdict(None)
         try:
             return self.gate.check(msg)
         except Exception as error:  # noqa: BLE001 - a bad message never ends the keeper
@@ -137,6 +140,8 @@ class KeptGuard:
     def passes_raw(self, raw: Any, encoding: str) -> bool:
         """Whether a relay in the keeper forwards ``raw`` as it came (see ``Gate.raw_checker``); when in doubt, no:
         :meth:`check` reads it whole."""
+        if not self.armed:
+            return False
         try:
             return self.gate.passes_raw(raw, encoding)
         except Exception:  # noqa: BLE001 - read whole, where a failure is the stop message
@@ -153,9 +158,8 @@ class KeptGuard:
         return not self._arm_by
 
     def command(self, msg: Any) -> None:
-        """A message from the session: through the gate, onto the robot's topic (nothing before :meth:`arm`)."""
-        if not self.armed:
-            return
+        """A message from the session: through the gate, onto the robot's topic (nothing before it is :attr:`armed`,
+        but the stop message while it holds it)."""
         send = self.check(msg).send
         if send is not None:
             try:

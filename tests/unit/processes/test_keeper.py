@@ -276,15 +276,21 @@ def test_a_guard_placed_with_rules_acts_only_once_its_sensors_are_heard():
         guard.topic, guard._log, guard._stop, guard.repeat = "/cmd_vel", lambda text: None, Twist(), 10.0
         guard.rules = KeptGuard._ruleset(spec, Twist, "guard /cmd_vel")
         guard.heard, guard.watch, guard._arm_by = {}, RuleWatch(guard.repeat), time.monotonic() + 60.0
-        guard.gate = Gate("/cmd_vel", Twist, {}, {}, "clamp", guard.stop_message, lambda: False, lambda: None,
+        guard.gate = Gate("/cmd_vel", Twist, {}, {}, "clamp", guard.stop_message, guard.holding, lambda: None,
                           lambda text: None, rules=guard.rules, heard=lambda: guard.heard)
         guard._out = SimpleNamespace(write=sent.append)
+        guard.shared, guard.lost, guard.lease = SimpleNamespace(estopped=False), None, SimpleNamespace(first=False)
         return guard, sent
 
     guard, sent = placed()
     guard._hearing("/scan")(Sample(gains=[2.0]))  # one input heard, the other not yet: no stop message for it
     guard.command(Twist(linear=Vector3(x=0.4)))
     assert sent == [] and not guard.armed and guard.watch.ruling == "", "nothing judged, nothing said"
+    assert guard.check(Twist(linear=Vector3(x=0.4))).send is None, "a relay in the keeper sends nothing either"
+    guard.shared.estopped = True
+    guard.command(Twist(linear=Vector3(x=0.4)))
+    assert [m.linear.x for m in sent] == [0.0], "e-stopped: the stop message, armed or not"
+    guard.shared.estopped, sent[:] = False, []
     guard._hearing("/bump")(Sample(gains=[2.0]))
     assert guard.armed, "armed as soon as both were heard"
     guard.command(Twist(linear=Vector3(x=0.4)))
