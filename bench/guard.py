@@ -207,6 +207,12 @@ def hostile_rules(count: int, twist: type, vector3: type, scan: tuple[type, str]
               "/bumper": lambda: message(bumper_cls, pressed, rng.random() < 0.3),
               "/battery": lambda: message(battery_cls, level, rng.choice(LEVELS))}
     tally = {"outside": 0, "stopped": 0, "changed": 0, "passed": 0}
+
+    def fresh(topic: str, cls: type, stale: Optional[float]) -> object:
+        """The input's last message, if it is of its type and fresh enough: what the rules may read."""
+        msg, at = heard.get(topic, (None, 0.0))
+        return msg if isinstance(msg, cls) and (stale is None or now[0] - at <= stale) else None
+
     for _ in range(count):
         now[0] += rng.random() * 0.05
         for topic, make in makers.items():
@@ -229,10 +235,6 @@ def hostile_rules(count: int, twist: type, vector3: type, scan: tuple[type, str]
         if not all(math.isfinite(v) for v in values) or abs(values[0]) > 1.0 or abs(values[5]) > 2.0:
             tally["outside"] += 1
             continue
-
-        def fresh(topic: str, cls: type, stale: Optional[float]) -> object:
-            msg, at = heard.get(topic, (None, 0.0))
-            return msg if isinstance(msg, cls) and (stale is None or now[0] - at <= stale) else None
 
         laser, bump, power = (fresh("/scan", scan_cls, 0.5), fresh("/bumper", bumper_cls, 0.5),
                               fresh("/battery", battery_cls, None))

@@ -22,8 +22,8 @@ __all__ = ["GUARD_START", "KeptGuard"]
 #: How long a placed guard's stop process may take to start on the robot (s).
 GUARD_START = 30.0
 #: How long a guard placed with rules waits for the first message of each of their inputs before it acts (s): placed
-#: again on a running robot, the robot is not stopped for a sensor the new guard has only just subscribed to (one not
-#: heard by then: the stop message, as for one never heard).
+#: again on a running robot, the guard it replaces keeps the robot meanwhile, and the robot is not stopped for a
+#: sensor the new guard has only just subscribed to (one not heard by then: the stop message, as for one never heard).
 INPUTS_FIRST_WAIT = 1.0
 
 
@@ -52,6 +52,7 @@ class KeptGuard:
         #: Each input of its rules: its last message and when it came (monotonic), heard on this machine.
         self.heard: dict[str, tuple[Any, float]] = {}
         self._arm_by = time.monotonic() + (INPUTS_FIRST_WAIT if self.rules is not None else 0.0)  # see armed
+        self._replacing: Optional[KeptGuard] = None  # the guard it replaces, keeping the robot until it is armed
         self.repeat = float(spec.get("repeat", 10.0))
         self.watch = RuleWatch(self.repeat)  # what its rules do with no command coming (see _judge)
         self.lease = Lease(float(spec.get("lease", 0.5)), spec.get("grace_lease", 30.0), keeper.clock())
@@ -150,8 +151,9 @@ class KeptGuard:
     @property
     def armed(self) -> bool:
         """Whether it acts on the session's commands and judges its rules yet: once each input of its rules has been
-        heard, or :data:`INPUTS_FIRST_WAIT` s after it was placed. Until then it sends nothing (placed again on a
-        running robot, a gap of a sensor's period at most; placed first, the robot is at rest)."""
+        heard, or :data:`INPUTS_FIRST_WAIT` s after it was placed. Until then it sends nothing: placed again, the
+        guard it replaces keeps the robot (see :meth:`replace`); placed first, nothing passes (its stop process stops
+        the robot on silence)."""
         if self._arm_by and (time.monotonic() >= self._arm_by or self.rules is None
                              or all(topic in self.heard for topic in self.rules.topics)):
             self._arm_by = 0.0
@@ -184,6 +186,14 @@ class KeptGuard:
             self.lost = None
         self._wake()
 
+    def replace(self, old: "KeptGuard") -> None:
+        """Take over from ``old``, placed before it on the same topic: at once if armed, else once armed (the keeper's
+        loop, :meth:`tend`): never a moment with no guard acting on the robot's topic."""
+        if self.armed:
+            old.close(hold=False)
+        else:
+            self._replacing = old
+
     def tend(self, now: float) -> Optional[str]:
         """While the stop message holds (the session not heard, e-stopped, its stop process lost), the keeper sends
         it too, at the guard's rate, on the publisher the robot already hears commands from (a stop process just
@@ -203,7 +213,11 @@ class KeptGuard:
             self._out.write(self.stop_message())
             if self.lost is not None:  # a stop process counts its own
                 self.shared.stops_sent += 1
-        ruled = self._judge(time.monotonic()) if self.armed else None
+        armed = self.armed
+        if armed and self._replacing is not None:  # its sensors heard: it keeps the robot from now on
+            old, self._replacing = self._replacing, None
+            old.close(hold=False)
+        ruled = self._judge(time.monotonic()) if armed else None
         return "; ".join(line for line in (said, ruled) if line) or None
 
     def _judge(self, now: float) -> Optional[str]:
@@ -240,6 +254,9 @@ class KeptGuard:
 
     def close(self, hold: bool) -> None:
         """End it: its stop process holds the stop message for its grace first (``hold``), or quits at once."""
+        old, self._replacing = self._replacing, None
+        if old is not None:
+            old.close(hold=False)
         for sub in self._subs:
             sub.close()
         if self.sentinel is not None:

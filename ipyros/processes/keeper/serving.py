@@ -122,7 +122,7 @@ class Keeper:
             self.guards[gid] = guard
         self.gate_relays(guard.topic)
         if old is not None:
-            old.close(hold=False)
+            guard.replace(old)
         self.log(f"placed guard {guard.topic} for {guard.owner} (lease {guard.lease.length:g} s, grace "
                  f"{guard.lease.grace} s)")
         self._publish_info()

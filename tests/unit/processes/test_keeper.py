@@ -280,10 +280,15 @@ def test_a_guard_placed_with_rules_acts_only_once_its_sensors_are_heard():
                           lambda text: None, rules=guard.rules, heard=lambda: guard.heard)
         guard._out = SimpleNamespace(write=sent.append)
         guard.shared, guard.lost, guard.lease = SimpleNamespace(estopped=False), None, SimpleNamespace(first=False)
+        guard._replacing, guard.sentinel, guard._stopped_at = None, None, -float("inf")
         return guard, sent
 
     guard, sent = placed()
+    closed: list[bool] = []
+    guard.replace(SimpleNamespace(close=lambda hold: closed.append(hold)))  # placed again: the old one keeps it
     guard._hearing("/scan")(Sample(gains=[2.0]))  # one input heard, the other not yet: no stop message for it
+    guard.tend(time.monotonic())
+    assert closed == [], "not armed yet: the guard it replaces keeps the robot"
     guard.command(Twist(linear=Vector3(x=0.4)))
     assert sent == [] and not guard.armed and guard.watch.ruling == "", "nothing judged, nothing said"
     assert guard.check(Twist(linear=Vector3(x=0.4))).send is None, "a relay in the keeper sends nothing either"
@@ -293,6 +298,8 @@ def test_a_guard_placed_with_rules_acts_only_once_its_sensors_are_heard():
     guard.shared.estopped, sent[:] = False, []
     guard._hearing("/bump")(Sample(gains=[2.0]))
     assert guard.armed, "armed as soon as both were heard"
+    guard.tend(time.monotonic())
+    assert closed == [False], "armed: it takes over, the old one quits"
     guard.command(Twist(linear=Vector3(x=0.4)))
     assert [m.linear.x for m in sent] == [0.4]
     quiet, sent = placed()
