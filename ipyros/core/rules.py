@@ -44,7 +44,8 @@ from . import msgpath
 from .errors import DeclarationError, cut
 from .msgbuild import copy_message, field_types, nested_class
 
-__all__ = ["CHANGED_LAST", "Condition", "Judgement", "Rule", "RuleSet", "as_rule", "compile_condition", "rule"]
+__all__ = ["CHANGED_LAST", "Condition", "Judgement", "Rule", "RuleSet", "as_rule", "compile_condition", "input_index",
+           "parse_condition", "rule"]
 
 
 # -- a rule, as declared --------------------------------------------------------------------------
@@ -205,6 +206,21 @@ class Condition:
 def compile_condition(text: str, where: str, inputs: bool = True, fields: bool = True) -> Condition:
     """``text`` compiled (see the module's docstring): a one-line :class:`DeclarationError` for a syntax error
     (with its column), anything a condition may not hold, or what is not a true/false at its top."""
+    top, paths = parse_condition(text, where, inputs)
+    read: list[str] = []
+    run = _Compiler(text, where, paths, read, fields).compile(top)
+    if not (isinstance(top, (ast.Compare, ast.BoolOp, ast.Name, ast.Attribute, ast.Subscript))
+            or isinstance(top, ast.UnaryOp) and isinstance(top.op, ast.Not)
+            or isinstance(top, ast.Constant) and isinstance(top.value, bool)):
+        raise DeclarationError(f"{where}: {text!r} is not a true/false condition; compare it, e.g. "
+                               f"{text.strip()} > 0")
+    return Condition(text, tuple(paths), tuple(dict.fromkeys(read)), run)
+
+
+def parse_condition(text: str, where: str, inputs: bool = True) -> tuple[ast.expr, list[msgpath.MessagePath]]:
+    """``text`` parsed, not yet checked (:func:`compile_condition` checks it): Python's tree of the expression, each
+    message path in it a name ``_p0``, ``_p1``... (padded with ``_`` to the path's length, so that a syntax error's
+    column is the user's) standing for the paths returned, in order. An exported node renders the same tree."""
     paths: list[msgpath.MessagePath] = []
     spelled = []
     last = 0
@@ -218,26 +234,22 @@ def compile_condition(text: str, where: str, inputs: bool = True, fields: bool =
             paths.append(msgpath.parse(found.group(0)))
         except msgpath.MessagePathError as error:
             raise DeclarationError(f"{where}: {error}") from None
-        name = f"_p{len(paths) - 1}"  # as long as the path, so that a syntax error's column is the user's
+        name = f"_p{len(paths) - 1}"
         spelled += [text[last:found.start()], name.ljust(len(found.group(0)), "_")]
         last = found.end()
     spelled.append(text[last:])
     source = re.sub(r"\btrue\b", "True", re.sub(r"\bfalse\b", "False", "".join(spelled)))
     try:
-        tree = ast.parse(source.strip(), mode="eval")
+        return ast.parse(source.strip(), mode="eval").body, paths
     except SyntaxError as error:
         at = "at its end" if not error.offset or error.offset > len(source.strip()) else \
             f"at column {error.offset + len(source) - len(source.lstrip())}"
         raise DeclarationError(f"{where}: {text!r} does not parse {at}: {error.msg}; {_WHAT}") from None
-    read: list[str] = []
-    run = _Compiler(text, where, paths, read, fields).compile(tree.body)
-    top = tree.body
-    if not (isinstance(top, (ast.Compare, ast.BoolOp, ast.Name, ast.Attribute, ast.Subscript))
-            or isinstance(top, ast.UnaryOp) and isinstance(top.op, ast.Not)
-            or isinstance(top, ast.Constant) and isinstance(top.value, bool)):
-        raise DeclarationError(f"{where}: {text!r} is not a true/false condition; compare it, e.g. "
-                               f"{text.strip()} > 0")
-    return Condition(text, tuple(paths), tuple(dict.fromkeys(read)), run)
+
+
+def input_index(name: str) -> Optional[int]:
+    """Which input path a name of :func:`parse_condition`'s tree stands for (``_p1__`` → 1); None: a field's name."""
+    return int(name.strip("_").removeprefix("p")) if re.fullmatch(r"_p\d+_*", name) else None
 
 
 class _Compiler:
@@ -257,8 +269,8 @@ class _Compiler:
             if isinstance(value, bool) or _finite(value):
                 return lambda env: value
             raise self.refuse(node, f"{value!r} is not a number or true/false")
-        if isinstance(node, ast.Name) and re.fullmatch(r"_p\d+_*", node.id):
-            index = int(node.id.strip("_").removeprefix("p"))
+        index = input_index(node.id) if isinstance(node, ast.Name) else None
+        if index is not None:
             return lambda env: env[0][index]
         if isinstance(node, (ast.Name, ast.Attribute, ast.Subscript)):
             return self.command_field(node)
@@ -304,7 +316,7 @@ class _Compiler:
                 at = at.value
             else:
                 raise self.refuse(at, f"{ast.unparse(at)!r} is not a field")
-        if at.id in _FUNCTIONS or at.id.startswith("_") or re.fullmatch(r"_p\d+_*", at.id):
+        if at.id in _FUNCTIONS or at.id.startswith("_"):
             raise self.refuse(at, f"{at.id!r} is not a field")
         if not self.fields:
             raise self.refuse(node, f"{ast.unparse(node)!r}: the command's fields are read by only= and the rule's "
@@ -446,7 +458,7 @@ class RuleSet:
                                        "the seconds after which its last message is too old, above 0")
         self.stale = {topic: float(seconds) for topic, seconds in stale.items()}
         self.topics = tuple(dict.fromkeys([p.topic for c in self.conditions for p in c.inputs] + list(self.stale)))
-        self._floats = _float_paths(cls) if cls is not None else None
+        self.floats = _float_paths(cls) if cls is not None else None
         self._held_until = [-math.inf] * len(self.rules)
         self.acting: tuple[int, ...] = ()  # the rules in force at the last judgement, by number
 
@@ -525,8 +537,8 @@ class RuleSet:
         """A copy of ``command`` scaled, then clamped to the limits in force (see :meth:`apply`)."""
         out = copy_message(command)
         changed = []
-        if judgement.scale != 1.0 and self._floats:
-            for path in self._floats:
+        if judgement.scale != 1.0 and self.floats:
+            for path in self.floats:
                 for owner, key, value in _places(out, path):
                     _set(owner, key, value * judgement.scale)
             changed.append(f"scaled {judgement.scale:g}")

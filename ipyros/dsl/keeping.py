@@ -151,8 +151,12 @@ def _declare(node: Any, model: NodeModel, functions: dict[str, Callable[..., Any
 
 def export(engine: NodeEngine, path: "str | os.PathLike[str]", namespace: Optional[dict] = None,
            language: str = "python") -> Path:
-    """Export a node to run without ipyros, for the session's ROS (see :func:`ipyros.files.export.export`)."""
-    return exporting.export(engine, path, engine.session.backend.export_flavour(), namespace, language)
+    """Export a node to run without ipyros, for the session's ROS (see :func:`ipyros.files.export.export`); a guard's
+    rules' inputs are subscribed there with the types the live graph shows now."""
+    backend = engine.session.backend
+    ruled = any(g.rules or g.stale for g in engine.model().guards)
+    types = backend.graph_snapshot(timeout=1.0).topics if ruled else {}
+    return exporting.export(engine, path, backend.export_flavour(), namespace, language, types)
 
 
 # -- running a saved file --------------------------------------------------------------------

@@ -26,12 +26,12 @@ import dataclasses
 import getpass
 import os
 import re
-import types
 import xml.etree.ElementTree as ET
 from functools import partial
 from pathlib import Path
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Mapping, Optional
 
+from ..core import msgtypes
 from ..core import plan as planning
 from ..core.code import WRITER, Bindings, handler_slots, handler_source, import_of
 from ..core.errors import IpyrosError, warn_user
@@ -39,6 +39,7 @@ from ..core.model import BaseModel, NodeModel
 from ..core.remapping import base_namespace, base_node_name, basenode_remaps
 from ..core.slots import call_arity
 from .atomic import write_atomic
+from .exportrules import RULES_FUNCTIONS, rules_source
 from .kept import KeptNode
 
 __all__ = ["ExportWarning", "Script", "check_package_name", "docstring", "export", "package_xml", "placed_on",
@@ -72,13 +73,21 @@ GUARD_FUNCTIONS = '''
 class Guard:
     """What every message of a guarded output passes before it is published: limits (clamped, or dropped), NaN and
     infinities replaced by the stop message, a rate limit per field; after timeout s with nothing passed, the stop
-    message at repeat Hz until a message passes (on the steady clock: never stopped by a stopped ROS clock)."""
+    message at repeat Hz until a message passes (on the steady clock: never stopped by a stopped ROS clock). With
+    rules (Rules: over what the robot senses, its inputs subscribed by listen), each command is judged by them
+    first, and with none coming they are judged at repeat Hz and as each input comes: while they hold the stop
+    message (an input stale, a stop rule, a last command they would now change), it goes out at repeat Hz."""
 
-    def __init__(self, publish, stop, limits=None, rate=None, on_limit="clamp", timeout=None, repeat=10.0):
+    def __init__(self, publish, stop, limits=None, rate=None, on_limit="clamp", timeout=None, repeat=10.0,
+                 rules=None, listen=None):
         self._out, self._stop, self.limits, self.rate = publish, stop, limits or {}, rate or {}
         self.on_limit, self.timeout, self.period = on_limit, timeout, 1.0 / repeat
         self._lock, self._last, self.passed_at = threading.Lock(), {}, time.monotonic()
-        if timeout is not None:
+        self.rules, self.heard, self.last, self._ruling, self._ruled_at = rules, {}, None, "", -math.inf
+        self._armed_at = time.monotonic() + 1.0  # its inputs' first messages awaited a second at most
+        for topic, cls in (rules.inputs.items() if rules is not None else ()):
+            listen(topic, cls, self._hearing(topic))
+        if timeout is not None or rules is not None:
             threading.Thread(target=self._watch, daemon=True).start()
 
     def publish(self, msg):
@@ -91,6 +100,13 @@ class Guard:
     def check(self, msg):
         if not _finite(msg):
             return copy.deepcopy(self._stop)
+        if self.rules is not None:
+            if not self._armed():
+                return None  # its inputs not heard yet, at start: nothing judged, nothing sent (a second at most)
+            why, judged = self.rules.judge(self.heard, time.monotonic(), msg)
+            msg, why = (None, why) if why else self.rules.apply(judged, msg)
+            if msg is None:
+                return copy.deepcopy(self._stop)
         msg = copy.deepcopy(msg)
         for path, (low, high) in self.limits.items():
             for owner, key, value in _values(msg, path):
@@ -107,18 +123,50 @@ class Guard:
                     value = type(value)(min(max(value, last[0] - step), last[0] + step))
                     _put(owner, key, value)
                 self._last[(path, place)] = (value, now)
+        if self.rules is not None:
+            self.last = copy.deepcopy(msg)
         return msg
+
+    def _armed(self):
+        return time.monotonic() >= self._armed_at or all(topic in self.heard for topic in self.rules.topics)
+
+    def _hearing(self, topic):
+        def heard(msg):
+            with self._lock:
+                self.heard[topic] = (msg, time.monotonic())
+            self._look()  # an obstacle, no command coming: the stop message now
+        return heard
+
+    def _look(self):
+        """Its rules judged with no new command: the stop message at repeat Hz while they hold it, said once."""
+        with self._lock:
+            now = time.monotonic()
+            if self.rules is None or not self._armed():
+                return
+            why = self.rules.idle(self.heard, now, self.last)
+            if why and now - self._ruled_at >= self.period:
+                self._ruled_at = now
+                self._out(copy.deepcopy(self._stop))
+                self._last.clear()  # a rate-limited field starts again from the stop message
+                self.last = copy.deepcopy(self._stop)  # the last command now: within the rules (checked at export)
+            if why and not self._ruling:
+                print(f"guard: {why}: the stop message goes out until its rules let a command pass", flush=True)
+            elif self._ruling and not why and not self._ruling.startswith("the last command"):
+                print("guard: its rules let commands pass again", flush=True)
+            self._ruling = why
 
     def _watch(self):
         while True:
-            wait = self.passed_at + self.timeout - time.monotonic()
-            if wait > 0:
-                time.sleep(wait)
-                continue
+            wait = self.period
             with self._lock:
-                self._out(copy.deepcopy(self._stop))
-                self._last.clear()  # a rate-limited field starts again from the stop message
-            time.sleep(self.period)
+                now = time.monotonic()
+                if self.timeout is not None and now - self.passed_at >= self.timeout:
+                    self._out(copy.deepcopy(self._stop))
+                    self._last.clear()  # a rate-limited field starts again from the stop message
+                elif self.timeout is not None and self.rules is None:
+                    wait = self.passed_at + self.timeout - now
+            self._look()
+            time.sleep(wait)
 
 
 def _fields(msg):
@@ -182,7 +230,7 @@ def _fill(msg, data):
 
 #: The modules GUARD_FUNCTIONS uses, imported by a script with a guard; with what it defines, the script's own names.
 GUARD_IMPORTS = ("copy", "math", "threading", "time")
-GUARD_NAMES = {*GUARD_IMPORTS, *re.findall(r"^(?:def|class) (\w+)", GUARD_FUNCTIONS, re.M)}
+GUARD_NAMES = {*GUARD_IMPORTS, *re.findall(r"^(?:def|class) (\w+)", GUARD_FUNCTIONS + RULES_FUNCTIONS, re.M)}
 
 
 class ExportWarning(UserWarning):
@@ -214,8 +262,9 @@ class Script:
     """
 
     def __init__(self, node: KeptNode, flavour: Any, path: "str | os.PathLike[str]", namespace: Optional[dict],
-                 package: Optional[str] = None) -> None:
+                 package: Optional[str] = None, topic_types: Optional[Mapping[str, str]] = None) -> None:
         self.flavour, self.node, self.path, self.package = flavour, node, path, package
+        self.topic_types = topic_types or {}  # topic → type, as the live graph showed them: the rules' inputs
         self.model: NodeModel = node.model()
         self.handlers: dict[str, Callable[..., Any]] = node.handlers()
         # The handlers' sources go in with their globals: a global named like a handler is that handler.
@@ -277,6 +326,9 @@ class Script:
                    "on_limit": guard.on_limit if guard.on_limit != "clamp" else None, "timeout": guard.timeout,
                    "repeat": guard.repeat}
         text = "".join(f", {key}={value!r}" for key, value in options.items() if value is not None)
+        if guard.rules or guard.stale:  # its inputs subscribed as the flavour subscribes (best effort)
+            ruled = rules_source(guard, msgtypes.resolve_message(guard.type)[1], self.cls, self.topic_types)
+            text += f", rules={ruled}, listen={self.flavour.LISTEN}"
         return f"Guard({publish}, {stop}{text})"
 
     # -- the script -----------------------------------------------------------------------------
@@ -301,6 +353,8 @@ class Script:
         parts += flavour.helpers(self)
         if self.model.guards:
             parts.append(GUARD_FUNCTIONS.strip("\n"))
+        if any(g.rules or g.stale for g in self.model.guards):
+            parts.append(RULES_FUNCTIONS.strip("\n"))
         parts += [src.rstrip("\n") for src in self.bindings.functions.values()]
         parts.append("def main():\n" + "".join(f"    {line}\n" for line in main).rstrip("\n"))
         parts.append('if __name__ == "__main__":\n    main()')
@@ -456,13 +510,14 @@ def xml_text(root: ET.Element) -> str:
 
 
 def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Optional[dict],
+                    topic_types: Mapping[str, str],
                     language: str = "python") -> Path:
     """Write the package ``directory`` (named after it): the flavour says which files, this writes them."""
     package = check_package_name(directory.name)
     model = node.model()
     script_name, script_mode = flavour.script_file(package, model.name)
     script_path = directory / script_name
-    script = Script(node, flavour, script_path, namespace, package=package)
+    script = Script(node, flavour, script_path, namespace, package=package, topic_types=topic_types)
     if language == "cpp":  # the handlers' sources, collected as for a script, go beside their C++ methods
         files, manifest = flavour.cpp_package(script, package)
     else:
@@ -495,7 +550,7 @@ def _export_package(node: KeptNode, flavour: Any, directory: Path, namespace: Op
 
 
 def export(node: KeptNode, path: "str | os.PathLike[str]", flavour: Any, namespace: Optional[dict] = None,
-           language: str = "python") -> Path:
+           language: str = "python", topic_types: Optional[Mapping[str, str]] = None) -> Path:
     """Export ``node`` to run without ipyros, written for ``flavour``'s ROS; return what was written.
 
     ``path`` ending in ``.py``: one standalone script of that ROS (rospy or rclpy)
@@ -530,13 +585,14 @@ def export(node: KeptNode, path: "str | os.PathLike[str]", flavour: Any, namespa
         raise IpyrosError(f"export({str(path)!r}, language='cpp'): C++ goes in a package: give a directory "
                           "named like my_node_pkg")
     ruled = [g.resolved for g in node.model().guards if g.rules or g.stale]
-    if ruled:  # never a guard that checks less than the session's does: refused, not weakened
-        raise IpyrosError(f"export({str(path)!r}): the guard of {', '.join(ruled)} has rules over what the robot "
-                          "senses, which an exported node does not enforce yet; export it without them "
-                          f"(nd.guard({ruled[0]!r}, ...) declared again without rules=), or keep it in the session")
+    if ruled and language == "cpp":  # never a guard that checks less than the session's does: refused, not weakened
+        raise IpyrosError(f"export({str(path)!r}, language='cpp'): the guard of {', '.join(ruled)} has rules over "
+                          "what the robot senses, which the C++ node does not enforce yet; export it in Python "
+                          "(language='python'), which does, or declare the guard again without rules=")
     if Path(path).suffix != ".py":
-        return _export_package(node, flavour, Path(os.path.abspath(Path(path).expanduser())), namespace, language)
-    script = Script(node, flavour, path, namespace)
+        return _export_package(node, flavour, Path(os.path.abspath(Path(path).expanduser())), namespace,
+                               topic_types or {}, language)
+    script = Script(node, flavour, path, namespace, topic_types=topic_types)
     text = script.render()
     compile(text, str(path), "exec")  # a generated script that does not compile is ipyros's bug: fail here
     written = write_atomic(path, text, mode=0o755)

@@ -175,6 +175,8 @@ class RospyScript:
     """The rospy flavour of an exported script (see :class:`ipyros.files.export.Script`, which asks it)."""
 
     LIBRARY = "rospy"
+    #: How a guard's rules subscribe their inputs: an expression taking (topic, class, callback).
+    LISTEN = "lambda topic, cls, hear: rospy.Subscriber(topic, cls, hear, queue_size=1)"
     #: Names the generated script defines itself; a handler global with one of them would clash.
     SCRIPT_NAMES = {"rospy", "os", "signal", "subprocess", "NodeHandle", "relay", "main", "BASENODE",
                     "BASENODE_ENV", "start_basenode", "stop_basenode", "threading", "actionlib", "GoalStatus",

@@ -185,6 +185,8 @@ class RclpyScript:
     """The rclpy flavour of an exported script (see :class:`ipyros.files.export.Script`, which asks it)."""
 
     LIBRARY = "rclpy"
+    #: How a guard's rules subscribe their inputs (best effort: it hears a sensor's publisher of either QoS).
+    LISTEN = "lambda topic, cls, hear: node.create_subscription(cls, topic, hear, qos(10, best_effort=True))"
     SCRIPT_NAMES = {"rclpy", "os", "signal", "subprocess", "sys", "threading", "NodeHandle", "relay", "qos",
                     "service_relay", "main", "BASENODE", "BASENODE_ENV", "start_basenode", "stop_basenode",
                     "QoSProfile", "ReliabilityPolicy", "DurabilityPolicy", "SingleThreadedExecutor",

@@ -8,14 +8,12 @@ rclpy.action), as another program would be, and the basenodes are real processes
 from __future__ import annotations
 
 import os
-import signal
-import subprocess
-import sys
 import threading
 import time
 
 import pytest
 from IPython.core.completer import provisionalcompleter
+from helpers import run_exported, stop_exported
 from shell import ctrl_c_after, error_of, ok
 from support import wait_for
 
@@ -238,27 +236,6 @@ def exported_clamp(goal, action):
     return action.forward(goal)
 
 
-def run_exported(script, tmp_path):
-    """Run an exported script as a process of its own, with an ipyros that fails to import; stopped by Ctrl-C."""
-    poisoned = tmp_path / "no_ipyros" / "ipyros"
-    poisoned.mkdir(parents=True, exist_ok=True)
-    (poisoned / "__init__.py").write_text('raise ImportError("an exported node runs without ipyros")\n')
-    env = {**os.environ, "PYTHONPATH": str(poisoned.parent), "PYTHONUNBUFFERED": "1"}
-    log = script.with_suffix(".log")
-    with log.open("w") as out:
-        return subprocess.Popen([sys.executable, str(script)], env=env, stdout=out, stderr=subprocess.STDOUT,
-                                start_new_session=True), log
-
-
-def stop(proc):
-    os.killpg(proc.pid, signal.SIGINT)
-    try:
-        proc.wait(20)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-
-
 def test_an_exported_node_serves_relays_and_intercepts_actions_without_ipyros(make_node, counting, tmp_path):
     nd = make_node("act_export")
     nd.baseNode(str(counting.server), namespace="act_exported")
@@ -282,6 +259,6 @@ def test_an_exported_node_serves_relays_and_intercepts_actions_without_ipyros(ma
             relayed = counting.plain_send("/act_exported_relay/count", 4)
         assert relayed == ("succeeded", 4, [1, 2, 3, 4])
     finally:
-        stop(proc)
-        stop(relay_proc)
+        stop_exported(proc)
+        stop_exported(relay_proc)
     assert "goal 3" in log.read_text()

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 from geometry_msgs.msg import Twist
-from helpers import descendants, pid_alive
+from helpers import descendants, pid_alive, run_exported, stop_exported
 from support import children, wait_for
 
 from ipyros.core import errors
@@ -406,10 +406,6 @@ def test_pub_at_the_prompt_passes_the_guard_and_estop_holds_the_session(ip, peer
              any(x == 0.2 and t > released for x, *_, t in twists(robot)), interval=0.2, what="commands again")
 
 
-WITHOUT_IPYROS = ("import runpy, sys; sys.modules['ipyros'] = None; sys.argv = sys.argv[1:]; "
-                  "runpy.run_path(sys.argv[0], run_name='__main__')")
-
-
 def forward_guarded9(msg):
     """The handler of the exported node: what comes in goes out, through the guard."""
     exported.write("/guarded9/cmd_vel", msg)
@@ -445,8 +441,7 @@ def test_a_guard_is_kept_by_save_by_a_model_file_without_trust_and_by_export(mak
     assert "class Guard:" in text and "import ipyros" not in text
     robot = peer("listen_twist.py", "/guarded9/cmd_vel", "--name=robot9")
     robot.wait_line("ready")
-    node = subprocess.Popen([sys.executable, "-c", WITHOUT_IPYROS, str(script)], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True, process_group=0)
+    node, _ = run_exported(script, tmp_path)
     try:
         driver = peer("talk.py", "/guarded9/in", "geometry_msgs/Twist", "20", "linear.x=4.0")
         wait_for(lambda: any(x == 0.5 for x, *_ in twists(robot)), timeout=60, what="the exported guard's clamping")
@@ -455,10 +450,4 @@ def test_a_guard_is_kept_by_save_by_a_model_file_without_trust_and_by_export(mak
         silent = time.monotonic()
         wait_for(lambda: len(stops(robot, silent)) >= 2, timeout=20, what="the exported node's stop on silence")
     finally:
-        os.killpg(node.pid, signal.SIGINT)
-        try:
-            node.wait(15)
-        except subprocess.TimeoutExpired:
-            os.killpg(node.pid, signal.SIGKILL)
-            node.wait()
-        node.stderr.close()
+        stop_exported(node)

@@ -9,7 +9,8 @@ import time
 
 import pytest
 from geometry_msgs.msg import Twist
-from sensing import Sensors, xs
+from helpers import run_exported, stop_exported
+from sensing import Sensors, approach, xs
 from sensing import drive as sensing_drive
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Bool, String
@@ -44,11 +45,7 @@ def test_rules_limit_near_an_obstacle_let_only_backing_off_past_the_bumper_and_s
         sensing_drive(nd, "/ruled/cmd_vel", motors, x, expect, what)
 
     try:
-        drive(0.4, 0.0, "the stop message while the laser was never heard")
-        sensors.start()
-        drive(0.4, 0.4, "a command passing as it came, nothing near")
-        sensors.ranges = [0.3, 3.0]
-        drive(0.4, 0.2, "the command limited near an obstacle")
+        approach(drive, sensors)
         assert "limit linear.x -0.2..0.2 (in force)" in engine_of(nd).status().guards[0].rules[0]
         sensors.ranges = [2.0, 3.0]
         drive(0.4, 0.4, "the command as it came once the obstacle is gone")
@@ -115,13 +112,75 @@ def test_a_rule_given_wrong_is_one_line_and_leaves_the_guard_as_it_was(make_node
     assert nd.model().guards == []
 
 
-def test_a_guard_with_rules_is_kept_by_save_and_refused_by_export(make_node, tmp_path):
+def test_a_guard_with_rules_is_kept_by_save_and_refused_by_an_export_that_cannot_enforce_them(make_node, tmp_path):
     nd = make_node("ruled3")
     nd.new.publish("/ruled3/cmd_vel", msgType=Twist)
-    nd.guard("/ruled3/cmd_vel", rules=[BUMPER], stale={"/ruled/scan": 0.3})
+    nd.guard("/ruled3/cmd_vel", rules=[rule("/ruled3/bumper.data", only="linear.x <= 0")], stale={"/ruled3/scan": 0.3})
     saved = nd.save(tmp_path / "ruled3.py").read_text()
-    assert "rules=[{'condition': '/ruled/bumper.data', 'only': 'linear.x <= 0'}]" in saved, saved
-    assert "stale={'/ruled/scan': 0.3}" in saved
-    with pytest.raises(errors.IpyrosError, match="has rules over what the robot senses, which an exported node"):
-        nd.export(tmp_path / "ruled3_export.py")
-    assert not (tmp_path / "ruled3_export.py").exists()
+    assert "rules=[{'condition': '/ruled3/bumper.data', 'only': 'linear.x <= 0'}]" in saved, saved
+    assert "stale={'/ruled3/scan': 0.3}" in saved
+    with pytest.raises(errors.IpyrosError, match="has rules over what the robot senses, which the C.. node does not"):
+        nd.export(tmp_path / "ruled3_pkg", language="cpp")
+    with pytest.raises(errors.IpyrosError, match="read /ruled3/bumper, and nothing publishes it now"):
+        nd.export(tmp_path / "ruled3_export.py")  # its input's type: the live graph's, and nothing shows it
+    assert not (tmp_path / "ruled3_pkg").exists() and not (tmp_path / "ruled3_export.py").exists()
+
+
+ruled_export = None
+
+
+def forward_ruled_export(msg):
+    """The handler of the exported node: what comes in goes out, through the guard and its rules."""
+    ruled_export.write("/ruled4/cmd_vel", msg)
+
+
+def test_an_exported_node_enforces_its_guards_rules_without_ipyros(make_node, peer, tmp_path):
+    """The script, run with no ipyros to import: the stop while the laser was never heard, the limit near an
+    obstacle, the stop when one appears with no new command, only backing off while the bumper is pressed, the stop
+    once the laser is stale; each said once on its output."""
+    global ruled_export
+    motors = peer("listen_twist.py", "/ruled4/cmd_vel", "--name=ruled4_motors")
+    motors.wait_line("ready")
+    sensing = make_node("ruled4_sensors")
+    sensing.new.publish("/ruled4/scan", msgType=LaserScan).publish("/ruled4/bumper", msgType=Bool)
+    sensing.new.publish("/ruled4/in", msgType=Twist)
+    sensing.create()
+    sensors = Sensors(sensing, "/ruled4/scan", "/ruled4/bumper")
+    nd = ruled_export = make_node("ruled4")  # declared, exported, never run in the session
+    nd.new.publish("/ruled4/cmd_vel", msgType=Twist).subscribe("/ruled4/in", handler=forward_ruled_export,
+                                                               msgType=Twist)
+    nd.guard("/ruled4/cmd_vel", limits={"linear.x": (-1.0, 1.0)}, stale={"/ruled4/scan": 0.5},
+             rules=[rule("min(/ruled4/scan.ranges) < 0.5", limit={"linear.x": (-0.2, 0.2)}),
+                    rule("/ruled4/bumper.data", only="linear.x <= 0")])
+    script = nd.export(tmp_path / "ruled_node.py")
+    assert "class Rules:" in script.read_text() and "import ipyros" not in script.read_text()
+    package = nd.export(tmp_path / "ruled4_pkg")  # the package's node: the same script, as a module or in scripts/
+    ruled = [f for f in package.rglob("ruled4*") if f.is_file() and "class Rules:" in f.read_text()]
+    assert len(ruled) == 1, sorted(map(str, package.rglob("*")))
+    compile(ruled[0].read_text(), str(ruled[0]), "exec")
+    node, said = run_exported(script, tmp_path)
+
+    def drive(x: float, expect: float, what: str) -> None:
+        sensing_drive(sensing, "/ruled4/in", motors, x, expect, what)
+
+    try:
+        try:
+            approach(drive, sensors)
+            sensors.ranges = [2.0, 3.0]
+            drive(0.4, 0.4, "the command as it came once the obstacle is gone")
+            appeared = time.monotonic()
+            sensors.ranges = [0.3, 3.0]  # and no new command: the last, 0.4, would now be limited
+            wait_for(lambda: 0.0 in xs(motors, appeared), timeout=10, what="the stop with no new command")
+            sensors.ranges, sensors.pressed = [2.0, 3.0], True
+            drive(0.3, 0.0, "the stop message for a forward command while the bumper is pressed")
+            drive(-0.2, -0.2, "backing off while the bumper is pressed")
+        finally:
+            sensors.stop()
+        gone = time.monotonic()
+        wait_for(lambda: 0.0 in xs(motors, gone + 0.5), timeout=10, what="the stop once the laser went stale")
+        wait_for(lambda: "/ruled4/scan stale" in said.read_text(), timeout=10, what="the stale laser said")
+        lines = said.read_text()
+        assert "guard: /ruled4/scan not heard yet: the stop message goes out until its rules let a command pass" \
+            in lines and "guard: its rules let commands pass again" in lines, lines
+    finally:
+        stop_exported(node)

@@ -1,9 +1,13 @@
-"""Helpers shared by tests: the test basenodes package, whether a process is still alive, a free port."""
+"""Helpers shared by tests: the test basenodes package, whether a process is still alive, a free port, an exported
+script run without ipyros."""
 
 from __future__ import annotations
 
 import os
+import signal
 import socket
+import subprocess
+import sys
 from pathlib import Path
 
 #: Put this on ROS_PACKAGE_PATH to find the package ``ipyros_test_nodes`` (echo_node, ...).
@@ -91,3 +95,26 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def run_exported(script: Path, tmp_path: Path) -> tuple[subprocess.Popen, Path]:
+    """Run an exported script as a process of its own (its own group), with an ipyros that fails to import; what it
+    prints goes to the log returned beside it. Stop it with :func:`stop_exported`."""
+    poisoned = tmp_path / "no_ipyros" / "ipyros"
+    poisoned.mkdir(parents=True, exist_ok=True)
+    (poisoned / "__init__.py").write_text('raise ImportError("an exported node runs without ipyros")\n')
+    env = {**os.environ, "PYTHONPATH": str(poisoned.parent), "PYTHONUNBUFFERED": "1"}
+    log = script.with_suffix(".log")
+    with log.open("w") as out:
+        return subprocess.Popen([sys.executable, str(script)], env=env, stdout=out, stderr=subprocess.STDOUT,
+                                start_new_session=True), log
+
+
+def stop_exported(proc: subprocess.Popen) -> None:
+    """Stop what :func:`run_exported` started as roslaunch would: Ctrl-C to its group, then SIGKILL after 20 s."""
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        proc.wait(20)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()

@@ -13,7 +13,7 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Bool
 from support import wait_for
 
-__all__ = ["Sensors", "drive", "xs"]
+__all__ = ["Sensors", "approach", "drive", "xs"]
 
 
 def xs(listener: Any, after: float = 0.0) -> list[float]:
@@ -58,3 +58,14 @@ def drive(node: Any, topic: str, motors: Any, x: float, expect: float, what: str
              timeout=30, interval=0.1, what=what)
     time.sleep(0.3)
     assert set(xs(motors, time.monotonic() - 0.2)) <= {expect}, f"{what}: {xs(motors, since)[-10:]}"
+
+
+def approach(drive: Any, sensors: Sensors) -> None:
+    """The first legs under a rule limiting linear.x to 0.2 near an obstacle (under 0.5 m) and a laser required:
+    the stop message while the laser was never heard, a command as it came with nothing near, then limited near an
+    obstacle. ``drive(x, expect, what)`` writes until the motors hear ``expect``."""
+    drive(0.4, 0.0, "the stop message while the laser was never heard")
+    sensors.start()
+    drive(0.4, 0.4, "a command passing as it came, nothing near")
+    sensors.ranges = [0.3, 3.0]
+    drive(0.4, 0.2, "the command limited near an obstacle")
