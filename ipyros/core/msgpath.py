@@ -98,6 +98,17 @@ class MessagePath:
             found = [out for value in found for out in _apply(step, value, self, variables or {})]
         return found
 
+    def plain_steps(self) -> tuple[tuple[Any, ...], ...]:
+        """The steps as plain data, for code that walks them elsewhere (an exported node's): ``("field", name)``,
+        ``("index", i)``, ``("slice", start, stop)``; a condition's path has no filter (one here: one line)."""
+        out: list[tuple[Any, ...]] = []
+        for step in self.steps:
+            if isinstance(step, Filter):
+                raise MessagePathError(f"{self.text}: a filter cannot be written as plain steps")
+            out.append(("field", step.name) if isinstance(step, Field) else ("index", step.index)
+                       if isinstance(step, Index) else ("slice", step.start, step.stop))
+        return tuple(out)
+
     def check(self, cls: Any) -> None:
         """Say at once, in one line, if the path cannot select anything in messages of ``cls``: a field its
         type lacks (and which fields there are), an index into what is no array, a field of an array not

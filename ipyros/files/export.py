@@ -584,11 +584,6 @@ def export(node: KeptNode, path: "str | os.PathLike[str]", flavour: Any, namespa
     if language == "cpp" and Path(path).suffix == ".py":
         raise IpyrosError(f"export({str(path)!r}, language='cpp'): C++ goes in a package: give a directory "
                           "named like my_node_pkg")
-    ruled = [g.resolved for g in node.model().guards if g.rules or g.stale]
-    if ruled and language == "cpp":  # never a guard that checks less than the session's does: refused, not weakened
-        raise IpyrosError(f"export({str(path)!r}, language='cpp'): the guard of {', '.join(ruled)} has rules over "
-                          "what the robot senses, which the C++ node does not enforce yet; export it in Python "
-                          "(language='python'), which does, or declare the guard again without rules=")
     if Path(path).suffix != ".py":
         return _export_package(node, flavour, Path(os.path.abspath(Path(path).expanduser())), namespace,
                                topic_types or {}, language)

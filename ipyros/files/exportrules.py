@@ -296,22 +296,6 @@ class _Render:
         return f"_field(c, {tuple(reversed(steps))!r}, {ast.unparse(node)!r})"
 
 
-def _steps(path: msgpath.MessagePath) -> tuple[tuple[Any, ...], ...]:
-    """A path's steps as data the exported node walks (``_input``): a condition's paths have fields, indexes and
-    slices (no filter: :func:`parse_condition` reads none)."""
-    out: list[tuple[Any, ...]] = []
-    for step in path.steps:
-        if isinstance(step, msgpath.Field):
-            out.append(("field", step.name))
-        elif isinstance(step, msgpath.Index):
-            out.append(("index", step.index))
-        elif isinstance(step, msgpath.Slice):
-            out.append(("slice", step.start, step.stop))
-        else:
-            raise IpyrosError(f"{path.text}: a filter in a rule cannot be exported")
-    return tuple(out)
-
-
 def input_topics(guard: GuardModel) -> list[str]:
     """The topics a guard's rules read and its ``stale`` names, in order (what an exported node subscribes)."""
     rules = [as_rule(given, f"guard {guard.resolved}") for given in guard.rules]
@@ -334,7 +318,7 @@ def rules_source(guard: GuardModel, cls: type, name_of: Callable[[str], str], ty
     parts = []
     for number, (given, condition) in enumerate(zip(rules, ruleset.conditions), 1):
         here = f"{where}: rule {number}"
-        paths = [(p.topic, _steps(p), any(isinstance(s, msgpath.Slice) for s in p.steps), p.text)
+        paths = [(p.topic, p.plain_steps(), any(isinstance(s, msgpath.Slice) for s in p.steps), p.text)
                  for p in condition.inputs]
         only = condition_source(given.only, f"{here} only=", inputs=False) if given.only is not None else "None"
         fields = {"text": repr(given.condition), "paths": repr(paths), "when": condition_source(given.condition, here),

@@ -10,7 +10,7 @@ plan the session runs (:func:`ipyros.core.plan.plan`):
 * the node's parameters set at start unless given (``_key:=value`` wins) and read into members;
 * each guard compiled in: limits by field path (clamped or dropped), NaN and infinities replaced by the
   stop message, rate limits, and the stop message after ``timeout`` s of silence on a steady timer
-  (never the ROS clock);
+  (never the ROS clock); its rules over what the robot senses too, their inputs subscribed (:mod:`.cpp_rules`);
 * each Python handler as a C++ method whose body is the handler's Python source, as a comment, to be
   ported by hand: ``PORTING.md`` lists them, with their topics and the globals they read.
 
@@ -20,13 +20,12 @@ The C++ types and the fields the guard checks are read from the message classes 
 
 from __future__ import annotations
 
-import json
-import re
 from typing import Any, Callable, Iterable, Optional
 
 from ..core import plan as planning
-from ..core.errors import IpyrosError
 from ..files.export import package_xml
+from .cpp_rules import RULES_HELPERS, CppRules
+from .cpp_text import cpp_type, ident, indent, message_class, string, visit
 
 __all__ = ["Manifest", "cpp_package", "ported_line"]
 
@@ -88,41 +87,6 @@ install(DIRECTORY launch DESTINATION ${{CATKIN_PACKAGE_SHARE_DESTINATION}})
 """
 
 
-def _cpp_type(type_name: str) -> str:
-    package, name = type_name.split("/")
-    return f"{package}::{name}"
-
-
-def _ident(text: str) -> str:
-    """A C++ identifier made from a ROS name (``/robot/cmd_vel`` → ``robot_cmd_vel``)."""
-    return re.sub(r"\W+", "_", text).strip("_") or "root"
-
-
-def _string(text: str) -> str:
-    """A C++ string literal (JSON's escapes are C++'s for these)."""
-    return json.dumps(text)
-
-
-def _message_class(type_name: str) -> Any:
-    import roslib.message
-
-    cls = roslib.message.get_message_class(type_name)
-    if cls is None:
-        raise IpyrosError(f"the C++ export needs the message {type_name}, which this Python cannot import: "
-                          "install its package")
-    return cls
-
-
-def _service_class(type_name: str) -> Any:
-    import roslib.message
-
-    cls = roslib.message.get_service_class(type_name)
-    if cls is None:
-        raise IpyrosError(f"the C++ export needs the service {type_name}, which this Python cannot import: "
-                          "install its package")
-    return cls
-
-
 class _Writer:
     """The C++ source of one node, written from its plan."""
 
@@ -139,6 +103,7 @@ class _Writer:
     # -- the source ---------------------------------------------------------------------------------
     def source(self) -> str:
         self.types = set()
+        self.ruled = False  # a guard has rules: their helpers go in once
         self.finite = _Finite()
         members: list[str] = []
         setup: list[str] = []
@@ -147,34 +112,34 @@ class _Writer:
         for spec in self.specs:
             if isinstance(spec, planning.PublishSpec):
                 self.types.add(spec.type)
-                pub = f"pub_{_ident(spec.topic)}_"
+                pub = f"pub_{ident(spec.topic)}_"
                 members.append(f"ros::Publisher {pub};")
-                setup.append(f"{pub} = nh_.advertise<{_cpp_type(spec.type)}>({_string(spec.topic)}, kQueue, "
+                setup.append(f"{pub} = nh_.advertise<{cpp_type(spec.type)}>({string(spec.topic)}, kQueue, "
                              f"{'true' if spec.latch else 'false'});")
                 guard = self.model.guard(spec.topic)
                 if guard is not None:
                     guards.append(self._guard(guard))
-                    name = f"guard_{_ident(spec.topic)}_"
+                    name = f"guard_{ident(spec.topic)}_"
                     members.append(f"std::unique_ptr<{self._guard_class(guard)}> {name};")
                     setup.append(f"{name}.reset(new {self._guard_class(guard)}(nh_, {pub}));")
             elif isinstance(spec, planning.RelaySpec) and self.model.guard(spec.target) is not None:
                 guard = self.model.guard(spec.target)
                 self.types.add(spec.type)
                 guards.append(self._guard(guard))
-                pub, name, sub = (f"{kind}_{_ident(spec.target)}_" for kind in ("pub", "guard", "relay"))
+                pub, name, sub = (f"{kind}_{ident(spec.target)}_" for kind in ("pub", "guard", "relay"))
                 members += [f"ros::Publisher {pub};", f"std::unique_ptr<{self._guard_class(guard)}> {name};",
                             f"ros::Subscriber {sub};"]
                 setup += [f"// {spec.source} -> {spec.target}: a guarded relay reads the values it checks",
-                          f"{pub} = nh_.advertise<{_cpp_type(spec.type)}>({_string(spec.target)}, kQueue);",
+                          f"{pub} = nh_.advertise<{cpp_type(spec.type)}>({string(spec.target)}, kQueue);",
                           f"{name}.reset(new {self._guard_class(guard)}(nh_, {pub}));",
-                          f"{sub} = nh_.subscribe<{_cpp_type(spec.type)}>({_string(spec.source)}, kQueue, "
-                          f"[this](const {_cpp_type(spec.type)}::ConstPtr& msg) {{ {name}->publish(*msg); }}, "
+                          f"{sub} = nh_.subscribe<{cpp_type(spec.type)}>({string(spec.source)}, kQueue, "
+                          f"[this](const {cpp_type(spec.type)}::ConstPtr& msg) {{ {name}->publish(*msg); }}, "
                           "ros::VoidConstPtr(), noDelay());"]
             elif isinstance(spec, planning.RelaySpec):
                 self.types.add(spec.type)
-                members.append(f"std::unique_ptr<ByteRelay> relay_{_ident(spec.target)}_;")
-                setup.append(f"relay_{_ident(spec.target)}_.reset(ByteRelay::make<{_cpp_type(spec.type)}>(nh_, "
-                             f"{_string(spec.source)}, {_string(spec.target)}));")
+                members.append(f"std::unique_ptr<ByteRelay> relay_{ident(spec.target)}_;")
+                setup.append(f"relay_{ident(spec.target)}_.reset(ByteRelay::make<{cpp_type(spec.type)}>(nh_, "
+                             f"{string(spec.source)}, {string(spec.target)}));")
             elif isinstance(spec, planning.ActionRelaySpec):
                 package, stem = spec.type.split("/")
                 parts = (("goal", f"{package}/{stem}ActionGoal", True), ("cancel", "actionlib_msgs/GoalID", True),
@@ -187,16 +152,16 @@ class _Writer:
                     source, target = f"{spec.source}/{part}", f"{spec.target}/{part}"
                     if inward:
                         source, target = target, source
-                    members.append(f"std::unique_ptr<ByteRelay> relay_{_ident(target)}_;")
-                    setup.append(f"relay_{_ident(target)}_.reset(ByteRelay::make<{_cpp_type(type_name)}>(nh_, "
-                                 f"{_string(source)}, {_string(target)}));")
+                    members.append(f"std::unique_ptr<ByteRelay> relay_{ident(target)}_;")
+                    setup.append(f"relay_{ident(target)}_.reset(ByteRelay::make<{cpp_type(type_name)}>(nh_, "
+                                 f"{string(source)}, {string(target)}));")
             elif isinstance(spec, planning.SubscribeSpec):
                 self.types.add(spec.type)
                 method = self.script.names[spec.slot]
                 members.append(f"ros::Subscriber sub_{method}_;")
-                setup.append(f"sub_{method}_ = nh_.subscribe({_string(spec.topic)}, kQueue, &{self._class()}::{method}, "
+                setup.append(f"sub_{method}_ = nh_.subscribe({string(spec.topic)}, kQueue, &{self._class()}::{method}, "
                              "this, noDelay());")
-                methods.append(self._method(spec.slot, f"void {method}(const {_cpp_type(spec.type)}::ConstPtr& msg)",
+                methods.append(self._method(spec.slot, f"void {method}(const {cpp_type(spec.type)}::ConstPtr& msg)",
                                             "(void)msg;", f"each message on {spec.topic}"))
             elif isinstance(spec, planning.TimerSpec):
                 method = self.script.names[spec.slot]
@@ -209,9 +174,9 @@ class _Writer:
             elif isinstance(spec, planning.ServiceSpec):
                 self.types.add(spec.type)
                 method = self.script.names[spec.slot]
-                srv = _cpp_type(spec.type)
+                srv = cpp_type(spec.type)
                 members.append(f"ros::ServiceServer srv_{method}_;")
-                setup.append(f"srv_{method}_ = nh_.advertiseService({_string(spec.name)}, &{self._class()}::{method}, "
+                setup.append(f"srv_{method}_ = nh_.advertiseService({string(spec.name)}, &{self._class()}::{method}, "
                              "this);")
                 methods.append(self._method(spec.slot, f"bool {method}({srv}::Request& request, {srv}::Response& "
                                                        "response)",
@@ -219,12 +184,13 @@ class _Writer:
                                             f"each call of {spec.name}"))
             elif isinstance(spec, planning.ServiceRelaySpec):
                 self.types.add(spec.type)
-                srv = _cpp_type(spec.type)
-                member = f"srv_{_ident(spec.target)}_"
+                srv = cpp_type(spec.type)
+                member = f"srv_{ident(spec.target)}_"
                 members.append(f"ros::ServiceServer {member};")
-                setup.append(f"{member} = nh_.advertiseService<{srv}::Request, {srv}::Response>({_string(spec.target)}, "
-                             f"[source = std::string({_string(spec.source)})]({srv}::Request& request, "
-                             f"{srv}::Response& response) {{ return ros::service::call(source, request, response); }});")
+                setup.append(f"{member} = nh_.advertiseService<{srv}::Request, {srv}::Response>({string(spec.target)}, "
+                             f"[source = std::string({string(spec.source)})]({srv}::Request& request, "
+                             f"{srv}::Response& response) {{ return ros::service::call(source, request, response); "
+                             "});")
             elif isinstance(spec, planning.ActionServerSpec):
                 setup.append(f"// the action server {spec.name} ({spec.type}, handler "
                              f"{self.script.names[spec.slot]}) is not generated: see PORTING.md")
@@ -233,13 +199,13 @@ class _Writer:
         includes = sorted({f"#include <{t.split('/')[0]}/{t.split('/')[1]}.h>" for t in self.types})
         return _SOURCE.format(
             doc=self._doc(), includes="\n".join(includes), guards="\n\n".join(dict.fromkeys(guards)),
-            finite=self.finite.text() if self.finite.done else "",
-            cls=self._class(), setup=_indent("\n".join(params[1] + setup), 4),
-            members=_indent("\n".join(params[0] + members), 2), methods=_indent("\n\n".join(methods), 2),
-            node=_string(self.model.name), byte_relay=_BYTE_RELAY.strip("\n"))
+            finite=(self.finite.text() if self.finite.done else "") + (RULES_HELPERS if self.ruled else ""),
+            cls=self._class(), setup=indent("\n".join(params[1] + setup), 4),
+            members=indent("\n".join(params[0] + members), 2), methods=indent("\n\n".join(methods), 2),
+            node=string(self.model.name), byte_relay=_BYTE_RELAY.strip("\n"))
 
     def _class(self) -> str:
-        return "".join(part.title() for part in _ident(self.model.name).split("_")) + "Node"
+        return "".join(part.title() for part in ident(self.model.name).split("_")) + "Node"
 
     def _doc(self) -> str:
         return (f"// {self.model.name}: a roscpp node exported by ipyros from the DSL node "
@@ -256,11 +222,11 @@ class _Writer:
                              f"pnh_.getParam(\"{name}\", value) into an XmlRpc::XmlRpcValue")
                 continue
             literal = ("true" if value else "false") if kind == "bool" else \
-                _string(value) if kind == "std::string" else repr(value)
-            member = f"param_{_ident(name)}_"
+                string(value) if kind == "std::string" else repr(value)
+            member = f"param_{ident(name)}_"
             members.append(f"{kind} {member};")
-            setup += [f"if (!pnh_.hasParam({_string(name)})) pnh_.setParam({_string(name)}, {kind}({literal}));",
-                      f"pnh_.getParam({_string(name)}, {member});"]
+            setup += [f"if (!pnh_.hasParam({string(name)})) pnh_.setParam({string(name)}, {kind}({literal}));",
+                      f"pnh_.getParam({string(name)}, {member});"]
         return members, setup
 
     def _method(self, slot: str, signature: str, body: str, when: str) -> str:
@@ -272,23 +238,23 @@ class _Writer:
 
     # -- guards -------------------------------------------------------------------------------------
     def _guard_class(self, guard: Any) -> str:
-        return "Guard_" + _ident(guard.resolved)
+        return "Guard_" + ident(guard.resolved)
 
     def _guard(self, guard: Any) -> str:
         """A class of its own for one guarded output: the checks written out for its message type."""
-        cls = _message_class(guard.type)
-        cpp = _cpp_type(guard.type)
+        cls = message_class(guard.type)
+        cpp = cpp_type(guard.type)
         self.types.add(guard.type)
         self.finite.of(guard.type)
         limits, rates = [], []
         for path, (low, high) in guard.limits.items():
-            limits.append(_visit(cls, path, "m", lambda place, v, low=low, high=high: (
+            limits.append(visit(cls, path, "m", lambda place, v, low=low, high=high: (
                 f"if ({v} < {low!r} || {v} > {high!r}) {{ "
                 + ("return false; }" if guard.on_limit == "drop" else
                    f"{v} = std::min(std::max({v}, _t<decltype({v})>({low!r})), _t<decltype({v})>({high!r})); }}"))))
         for path, most in guard.rate.items():
-            rates.append(_visit(cls, path, "m", lambda place, v, path=path, most=most: (
-                f"{{ auto key = std::string({_string(path)}) + \"#\" + std::to_string({place}); "
+            rates.append(visit(cls, path, "m", lambda place, v, path=path, most=most: (
+                f"{{ auto key = std::string({string(path)}) + \"#\" + std::to_string({place}); "
                 f"auto last = last_.find(key); "
                 f"if (last != last_.end()) {{ double step = {most!r} * (now - last->second.second).toSec(); "
                 f"{v} = std::min(std::max(double({v}), last->second.first - step), last->second.first + step); }} "
@@ -296,14 +262,22 @@ class _Writer:
         stop = "\n".join(f"    stop_.{field} = {value};" for field, value in _assignments(guard.stop or {}))
         if guard.estop_topic:  # std_msgs/Bool: true holds the stop message, whatever else arrives
             self.types.add("std_msgs/Bool")
-            stop += (f"\n    estop_ = nh.subscribe<std_msgs::Bool>({_string(guard.estop_topic)}, 10, "
+            stop += (f"\n    estop_ = nh.subscribe<std_msgs::Bool>({string(guard.estop_topic)}, 10, "
                      "[this](const std_msgs::Bool::ConstPtr& msg) { std::lock_guard<std::mutex> lock(mutex_); "
                      "held_ = msg->data; });")
         timeout = "-1.0" if guard.timeout is None else repr(float(guard.timeout))
+        ruled = CppRules(guard, self.script.topic_types) if guard.rules or guard.stale else None
+        if ruled is not None:
+            self.types |= ruled.types
+            self.ruled = True
+            stop += ("\n" if stop else "") + indent(ruled.setup(), 4)
         return _GUARD.format(cls=self._guard_class(guard), cpp=cpp, topic=guard.resolved,
-                             limits=_indent("\n".join(limits), 4) or "    // no limits", stop=stop,
-                             rates=_indent("\n".join(rates), 4) or "    // no rate limits", timeout=timeout,
-                             period=repr(1.0 / guard.repeat))
+                             limits=indent("\n".join(limits), 4) or "    // no limits", stop=stop,
+                             rates=indent("\n".join(rates), 4) or "    // no rate limits", timeout=timeout,
+                             period=repr(1.0 / guard.repeat), passes="check" if ruled is None else "pass",
+                             rules_look="" if ruled is None else "\n    look(now.toSec());",
+                             rules="" if ruled is None else "\n\n" + indent(ruled.methods(), 2) + "\n\n"
+                             + indent(ruled.members(), 2))
 
     # -- PORTING.md ---------------------------------------------------------------------------------
     def porting(self, package: str) -> str:
@@ -349,7 +323,7 @@ class _Finite:
             return
         self.done[type_name] = ""  # while it is written: a type may hold itself through an array
         self.types.add(type_name)
-        cls = _message_class(type_name)
+        cls = message_class(type_name)
         checks = []
         for field, slot_type in zip(cls.__slots__, cls._slot_types):
             base, array = slot_type.partition("[")[0], "[" in slot_type
@@ -361,46 +335,12 @@ class _Finite:
                 self.of(nested)
                 checks.append(f"  for (const auto& e : m.{field}) if (!finite(e)) return false;" if array else
                               f"  if (!finite(m.{field})) return false;")
-        self.done[type_name] = (f"inline bool finite(const {_cpp_type(type_name)}& m) {{\n"
+        self.done[type_name] = (f"inline bool finite(const {cpp_type(type_name)}& m) {{\n"
                                 + "".join(line + "\n" for line in checks) + "  (void)m;\n  return true;\n}")
 
     def text(self) -> str:
-        declared = "\n".join(f"inline bool finite(const {_cpp_type(t)}& m);" for t in self.done)
+        declared = "\n".join(f"inline bool finite(const {cpp_type(t)}& m);" for t in self.done)
         return declared + "\n" + "\n".join(self.done.values())
-
-
-def _visit(cls: Any, path: str, root: str, act: Any) -> str:
-    """C++ that does ``act(place, lvalue)`` on every value ``path`` names in the message ``root`` (a type ``cls``):
-    ``linear.x``, ``axes[2]`` (if the array has it), ``poses[*].position.x`` (each element)."""
-    steps = path.strip().split(".")
-    lines: list[str] = []
-    expr, depth, place = root, 0, "0"
-    for number, step in enumerate(steps):
-        name, _, index = step.partition("[")
-        index = index.rstrip("]")
-        slots = dict(zip(cls.__slots__, cls._slot_types))
-        if name not in slots:
-            raise IpyrosError(f"the guard's path {path!r}: {cls._type} has no field {name!r}")
-        slot_type = slots[name]
-        base = slot_type.partition("[")[0]
-        expr = f"{expr}.{name}"
-        if index:
-            if index in ("*", ":"):
-                lines.append(f"{'  ' * depth}for (size_t i{depth} = 0; i{depth} < {expr}.size(); ++i{depth}) {{")
-                place = f"i{depth}"
-                expr = f"{expr}[i{depth}]"
-            else:
-                lines.append(f"{'  ' * depth}if ({expr}.size() > {int(index)}) {{")
-                expr = f"{expr}[{int(index)}]"
-            depth += 1
-        if number < len(steps) - 1:
-            if "/" not in base and base != "Header":
-                raise IpyrosError(f"the guard's path {path!r}: {name!r} is a {slot_type}, not a message")
-            cls = _message_class("std_msgs/Header" if base == "Header" else base)
-    lines.append(f"{'  ' * depth}{act(place, expr)}")
-    for level in range(depth - 1, -1, -1):
-        lines.append(f"{'  ' * level}}}")
-    return "\n".join(lines)
 
 
 def _assignments(values: dict[str, Any], prefix: str = "") -> list[tuple[str, str]]:
@@ -414,15 +354,11 @@ def _assignments(values: dict[str, Any], prefix: str = "") -> list[tuple[str, st
         elif isinstance(value, (int, float)):
             out.append((prefix + key, repr(value)))
         elif isinstance(value, str):
-            out.append((prefix + key, _string(value)))
+            out.append((prefix + key, string(value)))
         elif isinstance(value, (list, tuple)):
-            out.append((prefix + key, "{" + ", ".join(_string(v) if isinstance(v, str) else repr(v)
+            out.append((prefix + key, "{" + ", ".join(string(v) if isinstance(v, str) else repr(v)
                                                        for v in value) + "}"))
     return out
-
-
-def _indent(text: str, spaces: int) -> str:
-    return "\n".join((" " * spaces + line) if line else line for line in text.splitlines())
 
 
 _BYTE_RELAY = r'''
@@ -492,8 +428,8 @@ class {cls} {{
     {cpp} m = in;
     if (held_ || !finite(m)) {{
       m = stop_;
-    }} else if (!check(m)) {{
-      return;  // dropped: a value outside its limits
+    }} else if (!{passes}(m)) {{
+      return;  // dropped: a value outside its limits (or, with rules, before their inputs are heard)
     }}
     passed_ = ros::SteadyTime::now();
     pub_.publish(m);
@@ -510,7 +446,7 @@ class {cls} {{
 
   void watch(const ros::SteadyTimerEvent&) {{
     std::lock_guard<std::mutex> lock(mutex_);
-    ros::SteadyTime now = ros::SteadyTime::now();
+    ros::SteadyTime now = ros::SteadyTime::now();{rules_look}
     bool silent = timeout_ > 0 && (now - passed_).toSec() >= timeout_;
     if (!(silent || held_) || (now - stopped_).toSec() < period_) return;
     pub_.publish(stop_);
@@ -527,7 +463,7 @@ class {cls} {{
   bool held_ = false;  // an e-stop holds the stop message
   std::map<std::string, std::pair<double, ros::SteadyTime>> last_;
   const double timeout_ = {timeout};
-  const double period_ = {period};
+  const double period_ = {period};{rules}
 }};"""
 
 _SOURCE = """\
@@ -538,12 +474,15 @@ _SOURCE = """\
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 {includes}
 

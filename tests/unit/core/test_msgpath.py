@@ -142,3 +142,11 @@ def test_numbers_to_plot_pass_and_unknown_types_are_left_to_the_messages():
     for text in ("/s.count", "/s.level", "/s.gains[1]", "/s.points[:].x", "/s.fixed[2]"):
         parse(text).check_number(Sample)
     parse("/s.anything.at_all").check_number(None)
+
+
+def test_a_paths_steps_as_plain_data_for_an_exported_node_to_walk():
+    assert parse("/scan.ranges[0:2]").plain_steps() == (("field", "ranges"), ("slice", 0, 2))
+    assert parse("/odom.poses[-1].position.x").plain_steps() == (("field", "poses"), ("index", -1),
+                                                                  ("field", "position"), ("field", "x"))
+    with pytest.raises(MessagePathError, match="a filter cannot be written as plain steps"):
+        parse("/tf.transforms[:]{child_frame_id==\"base\"}").plain_steps()
