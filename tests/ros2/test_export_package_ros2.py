@@ -15,11 +15,14 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 from geometry_msgs.msg import Twist
 from ros2_fixtures import wait_for
+from sensing import Sensors
+from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
@@ -28,8 +31,9 @@ ECHO_NODE = Path(__file__).resolve().parent / "peers" / "echo_node.py"
 BUILD = '''
 import sys
 import time
-from ipyros import rosNode
+from ipyros import rosNode, rule
 from geometry_msgs.msg import Twist, Vector3
+from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 def shout(msg):
@@ -42,7 +46,11 @@ nd.baseNode("echo_node", params={"prefix": "echo> "}).basePackage("echo_pkg")
 nd.reuse.subscribe("in", type=String).publish("out", type=String).service("check", type=SetBool)
 nd.new.subscribe("out", handler=shout, type=String).publish("loud", type=String).publish("beat", type=String)
 nd.new.publish("cmd", type=Twist)
-nd.guard("cmd", limits={"linear.x": (-0.5, 0.5)})
+laser = rosNode("kp_laser")  # what the guard's rule reads: its type, the live graph's at export
+laser.new.publish("/kp/scan", type=LaserScan)
+laser.create()
+nd.guard("cmd", limits={"linear.x": (-0.5, 0.5)}, rules=[rule("min(/kp/scan.ranges) < 0.5", stop=True)],
+         stale={"/kp/scan": 1.0})
 nd.timer(0.2, beat)
 def count(goal, action):
     for i in range(1, goal.order + 1):
@@ -113,6 +121,7 @@ def test_the_installed_node_started_from_its_launch_file_runs_as_the_session_did
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(poisoned.parent), str(site)]), "PYTHONUNBUFFERED": "1"}
     procs = []
     heard: dict[str, list] = {"loud": [], "beat": [], "cmd": []}
+    sensors = Sensors(None, "/kp/scan")
     try:
         for base in launched.nodes:
             log = (tmp_path / f"{base.executable}.log").open("w")
@@ -122,13 +131,25 @@ def test_the_installed_node_started_from_its_launch_file_runs_as_the_session_did
         probe.new.publish("/kp/in", msgType=String)
         for topic, cls in (("loud", String), ("beat", String), ("cmd", Twist)):
             probe.new.subscribe(f"/kp/{topic}", handler=heard[topic].append, msgType=cls)
+        probe.new.publish("/kp/scan", msgType=LaserScan)
         probe.create()
+        sensors.node = probe
+        sensors.start()
         wait_for(lambda: probe.write("/kp/in", String(data="hi")) or "v1 echo> hi" in [m.data for m in heard["loud"]],
                  timeout=30, interval=0.2, what="the installed node's handler on its basenode's output")
         wait_for(lambda: "beat 12" in [m.data for m in heard["beat"]], timeout=10,
                  what="the timer's beat with the parameter from the package's params file")
-        wait_for(lambda: heard["cmd"], timeout=10, what="the guarded cmd")
-        assert {m.linear.x for m in heard["cmd"]} == {0.5}, "the guard's limit held in the installed node"
+        wait_for(lambda: 0.5 in [m.linear.x for m in heard["cmd"]], timeout=10, what="the guarded cmd")
+        assert {m.linear.x for m in heard["cmd"]} <= {0.0, 0.5}, "the guard's limit held in the installed node"
+        sensors.ranges = [0.3]  # the guard's rule: an obstacle, the stop message, as in the session
+
+        def stopped() -> bool:  # half a second of the guarded cmd, nothing but the stop message in it
+            heard["cmd"].clear()
+            time.sleep(0.5)
+            return {m.linear.x for m in heard["cmd"]} == {0.0}
+
+        wait_for(stopped, timeout=10, what="the stop message near an obstacle, by the rule exported with the guard")
+        sensors.stop()
         answer = caller("/kp/check", SetBool, SetBool.Request(data=True))
         assert answer.success and answer.message == "echo>  checked"
         assert counting.plain_send("/kp/count", 3) == ("succeeded", 3, [1, 2, 3])  # the action it serves
@@ -138,6 +159,7 @@ def test_the_installed_node_started_from_its_launch_file_runs_as_the_session_did
             print(log.name, log.read_text()[-2000:])
         raise
     finally:
+        sensors.stop()
         for proc, _ in procs:
             os.killpg(proc.pid, signal.SIGINT)
         for proc, _ in procs:
