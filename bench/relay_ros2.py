@@ -252,9 +252,10 @@ def targets(results: dict[tuple[str, str], Run], loads: list[Load]) -> list[Figu
                     Figure(ROS, f"{load.label} lost at start, (h)", h.start_lost, "msgs", most=0)]
         g = results.get((load.key, "g"))
         if c is not None and g is not None and g.p50 is not None:  # issue 40: a guard's cost, beside (c)
-            out += [Figure(ROS, f"{load.label} p50, guarded relay (g)", g.p50, "ms", "reuse relay (c)", c.p50),
+            out += [Figure(ROS, f"{load.label} p50, guarded relay (g)", g.p50, "ms", "reuse relay (c)", c.p50,
+                           most=1.1),  # issue 49
                     Figure(ROS, f"{load.label} flat out, guarded relay (g)", g.flat_per_s, "msg/s", "reuse relay (c)",
-                           c.flat_per_s),
+                           c.flat_per_s, least=0.9),
                     Figure(ROS, f"{load.label} lost at start, (g)", g.start_lost, "msgs", most=0)]
         if load.reliability == "best_effort" and "e" in lost:
             out.append(Figure(ROS, f"{load.label} lost, wrapped camera (e), start included", lost["e"],

@@ -404,22 +404,23 @@ class Gate:
         if any(path.text not in place for path, _, _ in self._limits):
             return None
         limits = [(place[path.text], low, high) for path, low, high in self._limits]
-        read = found.read
+        read, lock, estopped, clock, passed, figures = (found.read, self._lock, self._estopped, self._clock,
+                                                        self._passed, self.figures)
 
-        def passes(raw: Any) -> bool:
+        def passes(raw: Any) -> bool:  # on every message of a guarded relay: what it reads is bound once, here
             numbers = read(raw)
             if numbers is None:
                 return False
             for i, low, high in limits:
                 if not low <= numbers[i] <= high:
                     return False
-            with self._lock:
-                if self._estopped():
+            with lock:
+                if estopped():
                     return False
                 self.commands += 1
-                self._passed_at = self._clock()
-                self.figures.passed += 1
-                self._passed()
+                self._passed_at = clock()
+                figures.passed += 1
+                passed()
             return True
 
         return passes

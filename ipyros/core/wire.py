@@ -19,9 +19,10 @@ or a fixed-size array of strings or of times, has no :class:`Layout`: its messag
 from __future__ import annotations
 
 import math
+import operator
 import re
 import struct
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Callable, Optional, Sequence, Union
 
 from .msgbuild import field_types, nested_class
 
@@ -130,11 +131,16 @@ class Layout:
         #: not named: a guard limiting one reads the message whole).
         self.names = tuple(names)
         self._steps, self._cdr = list(steps), cdr
+        #: ROS 1's bytes have no padding, so each run's struct is known before a message comes: the steps made
+        #: ready for :meth:`_read_packed` (a run's struct, its size, how its floats are summed; or the step).
+        self._packed = None if cdr else [_packed(step) for step in steps]
 
     def read(self, raw: Any) -> Optional[list[Any]]:
         """The scalar numbers of the serialized message ``raw``, in :attr:`names`' order; None when a float anywhere
         in it (an array's too) is not finite, or the bytes are not what its type lays out (too short, another
         encapsulation): the message is then read whole."""
+        if self._packed is not None:
+            return self._read_packed(raw)
         cdr = self._cdr
         if cdr and raw[:2] != _CDR_LE:
             return None
@@ -157,6 +163,45 @@ class Layout:
         except struct.error:
             return None
         return values if at <= len(raw) else None
+
+
+    def _read_packed(self, raw: Any) -> Optional[list[Any]]:
+        """:meth:`read` for ROS 1's packed bytes, where a guarded relay reads every message: each run unpacked by the
+        struct made for it, its floats checked finite by their sum (finite only if each is; finite floats whose sum
+        overflows are read whole, as a NaN is: slower, never wrong)."""
+        at, values = 0, list[Any]()
+        try:
+            for packed, size, floats, step in self._packed or ():
+                if packed is not None:
+                    found = packed.unpack_from(raw, at)
+                    at += size
+                    if floats is not None and not math.isfinite(sum(floats(found))):
+                        return None
+                    values += found
+                elif isinstance(step, _Numbers):
+                    finite, at = step.read(raw, at, 0)
+                    if not finite:
+                        return None
+                elif isinstance(step, _Skip):  # a string: its length, then its bytes; or a sequence of them
+                    at = step.read(raw, at, 0) if step.strings else at + 4 + _COUNT.unpack_from(raw, at)[0]
+        except struct.error:
+            return None
+        return values if at <= len(raw) else None
+
+
+def _packed(step: _Step) -> tuple[Optional[struct.Struct], int, Optional[Callable[[tuple], Sequence[float]]], _Step]:
+    """A step of ROS 1's layout made ready to read: a run's struct, its size and what picks its floats (None: it has
+    none); other steps as they are."""
+    if not isinstance(step, _Run):
+        return None, 0, None, step
+    packed, size = step._struct(0)
+    floats = step.floats
+    if not floats:
+        return packed, size, None, step
+    if len(floats) == len(step.codes):
+        return packed, size, lambda found: found, step
+    pick = operator.itemgetter(*floats)
+    return packed, size, (lambda found: (pick(found),)) if len(floats) == 1 else pick, step
 
 
 def layout(cls: type, encoding: str) -> Optional[Layout]:

@@ -92,7 +92,9 @@ class Shared:
 
     @property
     def estopped(self) -> bool:
-        return self.estop_session or self.estop_topic or self.held
+        """E-stopped by the session or its topic, or held by a keeper (words 1, 2, 8): read on every message."""
+        words = self._words
+        return bool(words[1] or words[2] or words[8])
 
     def close(self) -> None:
         self._words.release()
