@@ -386,7 +386,10 @@ class Gate:
         checker = self._raw_checkers.get(encoding, self)
         if checker is self:
             checker = self._raw_checkers[encoding] = self.raw_checker(encoding)
-        return checker is not None and checker(raw)
+        try:
+            return checker is not None and checker(raw)
+        except Exception:  # noqa: BLE001 - never a dropped command for a check of its bytes gone wrong: read it whole
+            return False
 
     def raw_checker(self, encoding: str) -> Optional[Callable[[Any], bool]]:
         """A check of one message's serialized bytes (in ``encoding``: :data:`~ipyros.core.wire.ROS1` or

@@ -94,3 +94,19 @@ def test_rates_rules_or_a_limit_on_a_sequences_elements_read_every_message_whole
     sample = guard.Gate("/s", Sample, {"gains[0]": (0.0, 1.0)}, {}, "clamp", Sample, lambda: False, lambda: None,
                         lambda text: None)
     assert sample.raw_checker(wire.CDR) is None
+
+
+def test_ros1_floats_checked_by_their_sum_are_read_whole_when_it_overflows_and_never_pass_a_nan():
+    layout = wire.layout(Twist, wire.ROS1)
+    assert layout.read(struct.pack("<6d", 1e308, 1e308, 0, 0, 0, 0)) is None, "finite, but summed to inf: read whole"
+    assert layout.read(struct.pack("<6d", math.inf, -math.inf, 0, 0, 0, 0)) is None
+    stamped = wire.layout(Stamped, wire.ROS1)  # a run with one float among other numbers: its sum is itself
+    raw = (struct.pack("<I", 0) + b"\x01" + struct.pack("<d", math.nan) + struct.pack("<I", 0)
+           + struct.pack("<2f", 3.0, 4.0) + struct.pack("<II", 0, 0))
+    assert stamped.read(raw) is None
+
+
+def test_a_byte_check_that_raises_reads_the_message_whole_instead_of_dropping_it():
+    gate, _ = make_gate({"linear.x": (-0.5, 0.5)})
+    gate._raw_checkers[wire.ROS1] = lambda raw: 1 / 0  # what the byte check may never do, if it ever did
+    assert gate.passes_raw(struct.pack("<6d", 0.1, 0, 0, 0, 0, 0), wire.ROS1) is False
