@@ -29,8 +29,9 @@ from ..core.graph import EMPTY, GraphSnapshot, actions_of
 from ..core.journal import Change, Journal
 from ..core.progress import Progress, no_progress
 from ..core.model import NodeModel
+from ..core.sessionlink import RunningBase
 from ..core.slots import HandlerFailure, OutputScope
-from ..processes.basenode import stop_together
+from ..processes.basenode import BaseHandle, stop_together
 from .backend import Backend, choose as choose_backend
 from .guards import Watch
 
@@ -49,6 +50,11 @@ class SessionNode(Protocol):
     def model(self) -> NodeModel: ...  # a copy
     def declared(self) -> NodeModel: ...  # as it stands, for reading alone
     def release_base(self) -> Any: ...  # its running basenode (stop()), handed over to be stopped elsewhere
+    @property
+    def base(self) -> Optional[BaseHandle]: ...  # its basenode, while it has one
+    @property
+    def basenode_name(self) -> Optional[str]: ...
+    def register_params(self) -> int: ...
     def quieten(self) -> None: ...
     def shutdown(self) -> None: ...
 
@@ -156,6 +162,19 @@ class Session:
             directory = self.config.history_dir
             self._journal = Journal(Path(directory).expanduser() if directory else None)
         return self._journal
+
+    def register_params_again(self) -> int:
+        """Every created node's parameters registered again (a ROS 1 master is back); how many there were."""
+        return sum(node.register_params() for node in list(self.nodes.values()) if node.created)
+
+    def running_basenodes(self) -> list[RunningBase]:
+        """The basenodes running now, as the backend may need them (see :mod:`ipyros.core.sessionlink`)."""
+        found = []
+        for node in list(self.nodes.values()):
+            base, name = node.base, node.basenode_name
+            if base is not None and base.running and name is not None:
+                found.append(RunningBase(name, node.name, node.called, base.restart))
+        return found
 
     def notify(self, text: str) -> None:
         """Tell the user something that happened on its own (a basenode died, ...); each line :func:`shorten`-ed.

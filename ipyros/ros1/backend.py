@@ -14,6 +14,7 @@ from ..core.model import BaseModel
 from ..core.progress import Progress, no_progress
 from ..core.qos import Qos
 from ..core.records import Interface
+from ..core.sessionlink import SessionLink
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
 from . import bagfile, endpoints, introspect, master as master_mod, nodes, params, reconfigure, runtime, services
@@ -65,7 +66,7 @@ class Ros1:
         return self.connection.master
 
     # -- the session's ROS ----------------------------------------------------------------
-    def start(self, name: str, session: Any) -> str:
+    def start(self, name: str, session: SessionLink) -> str:
         """Attach to (or start) the master, start the process node as ``name``, watch the master."""
         uri = self.connection.attach(session).uri
         started = self.process.start(session.config.process_node_name or name, uri)
@@ -74,7 +75,7 @@ class Ros1:
         self.connection.start_watch(session)
         return started
 
-    def connect(self, session: Any, wait: bool = True) -> str:
+    def connect(self, session: SessionLink, wait: bool = True) -> str:
         """The load line: the master in use; one that answers now is attached, else one is started when allowed
         (in the background unless ``wait``)."""
         connection = self.connection
@@ -113,7 +114,7 @@ class Ros1:
         """A master that just restarted: the session registers again before a magic reads the graph."""
         self.connection.check_now()
 
-    def check_config(self, session: Any, master_uri: Optional[str]) -> None:
+    def check_config(self, session: SessionLink, master_uri: Optional[str]) -> None:
         self.connection.check_config(session, master_uri)
 
     def closing(self) -> None:

@@ -19,23 +19,26 @@ when the session asks it to start, to check the graph, and to close.
 from __future__ import annotations
 
 import threading
-from typing import Any, Optional
+from typing import Optional
 
 from ..core.errors import MasterError
+from ..core.sessionlink import SessionLink, restart_unregistered
 from . import master as master_mod
 from .masterwatch import MasterWatch
+from .runtime import ProcessNode
 
 __all__ = ["MasterConnection"]
 
 
 class MasterConnection:
-    """A session's ROS master and its watch; ``session`` is read for its settings, nodes and notices."""
+    """A session's ROS master and its watch; the session is known by its link (:mod:`ipyros.core.sessionlink`): its
+    settings, its notices, and what its nodes do again when the master comes back."""
 
-    def __init__(self, process: Any) -> None:
+    def __init__(self, process: ProcessNode) -> None:
         self.process = process  # the process node, registered again after a restart
         self.master: Optional[master_mod.MasterHandle] = None
         self.watch: Optional[MasterWatch] = None
-        self._session: Any = None
+        self._session: Optional[SessionLink] = None
         self._lock = threading.RLock()
 
     @property
@@ -46,7 +49,7 @@ class MasterConnection:
         configured = self._session.config.master_uri if self._session is not None else None
         return _slashed(configured or master_mod.configured_uri())
 
-    def attach(self, session: Any) -> master_mod.MasterHandle:
+    def attach(self, session: SessionLink) -> master_mod.MasterHandle:
         """The master in use, found or started (if the session's settings allow) on first call."""
         with self._lock:
             self._session = session
@@ -59,14 +62,14 @@ class MasterConnection:
                     session.config.announce(advice)
             return self.master
 
-    def check_config(self, session: Any, master_uri: Optional[str]) -> None:
+    def check_config(self, session: SessionLink, master_uri: Optional[str]) -> None:
         """Refuse, in one line, another master than the one in use."""
         self._session = session
         if self.master is not None and master_uri not in (None, self.master.uri):
             raise MasterError(f"this session already uses the master at {self.master.uri}; "
                               "restart the interpreter to use another one")
 
-    def start_watch(self, session: Any) -> None:
+    def start_watch(self, session: SessionLink) -> None:
         if self.watch is None and self.master is not None:
             self.watch = MasterWatch(self.master.uri, self._down, self.back).start()
 
@@ -99,8 +102,9 @@ class MasterConnection:
 
     # -- the master going away and coming back ------------------------------------------
     def _down(self) -> None:
-        self._session.notify(f"ipyros: the ROS master at {self.uri} does not answer; your nodes keep the "
-                             "connections they have, new declarations fail until it is back")
+        if self._session is not None:
+            self._session.notify(f"ipyros: the ROS master at {self.uri} does not answer; your nodes keep the "
+                                 "connections they have, new declarations fail until it is back")
 
     def back(self, restarted: bool) -> None:
         """The master answers again: register every endpoint and parameter of the session with it again.
@@ -110,9 +114,10 @@ class MasterConnection:
         that restarts them.
         """
         session, uri = self._session, self.uri
+        assert session is not None  # watched only once attached
         try:
             publications, subscriptions, services = self.process.register_again()
-            params = sum(node.register_params() for node in list(session.nodes.values()) if node.created)
+            params = session.register_params_again()
         except Exception as error:  # noqa: BLE001 - told, not raised: this runs on the watch thread
             session.notify(f"ipyros: the ROS master at {uri} is back, but registering this session with it failed "
                            f"({error}); restart the interpreter if topics stay missing")
@@ -127,19 +132,12 @@ class MasterConnection:
     def _check_basenodes(self) -> None:
         """After a master restart: the basenodes that did not register again, restarted or reported."""
         session = self._session
-        if self.master is None or session.closed:
+        if self.master is None or session is None or session.closed:
             return
-        for node in list(session.nodes.values()):
-            base, name = node.base, node.basenode_name
-            if base is None or not base.running or name is None or master_mod.is_registered(self.master.uri, name):
-                continue
-            if session.config.restart_basenodes:
-                base.restart()
-                session.notify(f"ipyros: basenode {name} of {node.name} did not register with the restarted master; "
-                               "restarted it")
-            else:
-                session.notify(f"ipyros: basenode {name} of {node.name} did not register with the restarted master "
-                               f"(ROS 1 nodes do not); restart it: {node.called}.base.restart()")
+        uri = self.master.uri
+        for line in restart_unregistered(session.running_basenodes(), lambda name: master_mod.is_registered(uri, name),
+                                         session.config.restart_basenodes):
+            session.notify(line)
 
 
 def _slashed(uri: str) -> str:

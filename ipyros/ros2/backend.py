@@ -19,6 +19,7 @@ from ..core.model import BaseModel
 from ..core.progress import Progress, no_progress
 from ..core.qos import Qos
 from ..core.records import Interface
+from ..core.sessionlink import SessionLink
 from ..core.slots import HandlerSlot
 from ..processes.basenode import BaseProcess
 from . import actions, bagfile, endpoints, fastdds, graph, introspect, launchfile, nodes, params, qosmatch, runtime
@@ -45,10 +46,10 @@ class Ros2:
         self._goals: Optional[actions.Goals] = None  # the session's action clients, made with the first goal sent
 
     # -- the session's ROS: no master; peers find each other in the DDS domain -------------
-    def start(self, name: str, session: Any) -> str:
+    def start(self, name: str, session: SessionLink) -> str:
         return self.process.start(session.config.process_node_name or name)
 
-    def connect(self, session: Any, wait: bool = True) -> str:
+    def connect(self, session: SessionLink, wait: bool = True) -> str:
         return self.describe()
 
     def require_graph(self, doing: str) -> None:
@@ -57,7 +58,7 @@ class Ros2:
     def check_graph(self) -> None:
         """Nothing to check: discovery keeps itself up to date."""
 
-    def check_config(self, session: Any, master_uri: Optional[str]) -> None:
+    def check_config(self, session: SessionLink, master_uri: Optional[str]) -> None:
         """Nothing to check: a master URI means nothing on ROS 2."""
 
     def closing(self) -> None:
