@@ -77,7 +77,7 @@ class Publication:
         self.topic, self.cls = topic, cls
         self.count = 0
         self._pub = _publisher(topic, cls, latch)
-        self._impl = self._pub.impl
+        self._impl = rospy_inside.impl_of(self._pub)
         self._follows = follows  # a topic whose latching this one takes: latched once a message came latched on it
         #: A guard's gate every message passes first (``check(msg)``: what to send, or nothing), or None.
         self.gate = gate
@@ -184,7 +184,7 @@ def _subscribe_bytes(topic: str, cls: type, callback: Callable[[Any], None]) -> 
                                f"so it cannot be read as {cls._type} too: use {existing.data_class._type}")
     sub = rospy.Subscriber(topic, raw_class(cls), callback, queue_size=None, buff_size=_BUFF_SIZE,
                            tcp_nodelay=True)
-    cutthrough.reading(sub.impl)  # large messages read straight into one buffer
+    cutthrough.reading(rospy_inside.impl_of(sub))  # large messages read straight into one buffer
     Reconnect.guard(sub)
     _OtherTypes.install()
     return sub
@@ -303,7 +303,7 @@ class Subscription:
         headers of connections that are gone are dropped now and then, so they do not pile up."""
         sub = getattr(self, "_sub", None)  # None while rospy hands a latched message to the new callback
         if sub is not None and len(self._connections) >= 16:
-            self._connections = {id(c.header): c.header for c in sub.impl.connections if getattr(c, "header", None)}
+            self._connections = {id(c.header): c.header for c in rospy_inside.impl_of(sub).connections if getattr(c, "header", None)}
         self._connections[id(header)] = header
 
     def connections(self) -> int:
@@ -356,7 +356,7 @@ class Relay:
         self._on_wrong_type = on_wrong_type
         self._header_seen: Optional[dict] = None
         self._pub = _publisher(target, cls)
-        self._impl = self._pub.impl
+        self._impl = rospy_inside.impl_of(self._pub)
         try:
             self._read(source, cls)
         except DeclarationError:
@@ -369,7 +369,7 @@ class Relay:
         self._sending = threading.Lock()  # held while a message goes out in parts
         self._sent_in_parts: set[int] = set()  # ids of whole messages whose bytes already went out
         self._sub = _subscribe_bytes(source, cls, self._forward)
-        self._reading = cutthrough.reading(self._sub.impl)
+        self._reading = cutthrough.reading(rospy_inside.impl_of(self._sub))
         if self._reading.sink is None:
             self._reading.sink = self
 
@@ -445,7 +445,7 @@ class Relay:
         if impl is None or self.gate is not None or not self._sending.acquire(False):  # a guard reads it whole
             return None
         frame = None
-        if len(self._sub.impl.connections) == 1 and self._accepts(header):
+        if len(self._reading.sub_impl.connections) == 1 and self._accepts(header):
             impl.acquire()
             try:
                 frame = sending.Frame(impl.connections, self.target, size) if impl.connections else None
@@ -476,7 +476,7 @@ class Relay:
 
     def peers(self) -> tuple[int, int]:
         """How many publishers of the source it reads and subscribers of the target it writes to, now."""
-        return len(self._sub.impl.connections), len(self._impl.connections) if self._impl is not None else 0
+        return len(self._reading.sub_impl.connections), len(self._impl.connections) if self._impl is not None else 0
 
     def close(self) -> None:
         _OtherTypes.unwatch(self.source, self._complain)
@@ -522,7 +522,7 @@ class RawRelay(Relay):
                 "__slots__": (), "_type": header["type"], "_md5sum": header.get("md5sum", "*"),
                 "_full_text": header.get("message_definition", ""), "_has_header": False})
             self._pub = _publisher(self.target, described)
-            self._impl = self._pub.impl
+            self._impl = rospy_inside.impl_of(self._pub)
         super()._forward(raw)
 
     def figures(self) -> SendFigures:

@@ -45,7 +45,7 @@ class Reconnect:
 
     @classmethod
     def guard(cls, subscriber: Any) -> None:
-        impl = subscriber.impl
+        impl = rospy_inside.impl_of(subscriber)
         rospy_inside.on_connection_removed(impl, lambda: cls._soon(impl))
 
     @classmethod

@@ -27,8 +27,9 @@ What is read (private, not changed)
    :func:`registration_manager`, :func:`node_uri`) and its logger services: what the process has
    registered, to register it again after a master restart or under a new name, and the type of a
    service it serves itself (``services.served_here``: no probe through its own socket);
-7. a publication's impl (``acquire``, ``publish``, ``release``, ``enable_latch``): bytes are written
-   as they came, without rospy's type check (relays and exported relays);
+7. a publication's and a subscription's impl (:func:`impl_of`; a publication's ``acquire``, ``publish``,
+   ``release``, ``enable_latch``, both's ``connections``): bytes are written as they came, without rospy's type
+   check (relays and exported relays), and a relay counts its connections;
 8. the parameter cache's notifier (:func:`notify_param_sets`, set, the one patch of a rospy-wide
    object): the master pushes a parameter set from outside to the process that subscribed to it
    (``on_param``), and rospy tells only that notifier;
@@ -47,7 +48,7 @@ from typing import Any, Callable, Optional
 import rospy
 
 __all__ = ["RospyShapeError", "check", "connecting_topic", "listen_to_internal_log", "logger_services", "node_uri",
-           "initialised_or_ended", "notify_param_sets", "on_connection_added", "on_connection_removed", "registration_manager",
+           "impl_of", "initialised_or_ended", "notify_param_sets", "on_connection_added", "on_connection_removed", "registration_manager",
            "rename_caller", "response_of", "rospy_version", "service_manager", "subscriber_impl",
            "take_over_reading", "topic_manager"]
 
@@ -101,6 +102,13 @@ def take_over_reading(connection: Any, read_messages: Callable[..., None]) -> No
     protocol = connection.protocol
     if "read_messages" not in protocol.__dict__:
         protocol.read_messages = functools.partial(read_messages, connection, protocol.read_messages)
+
+
+def impl_of(endpoint: Any) -> Any:
+    """A rospy Publisher's or Subscriber's impl, shared by every endpoint of its topic in this process (7): its
+    ``connections``, a publication's lock (``acquire``, ``release``), latch (``is_latch``, ``enable_latch``,
+    ``latch``) and bytes written as they came (``publish``), a subscription's ``callbacks``."""
+    return endpoint.impl
 
 
 def subscriber_impl(topic: str) -> Any:

@@ -47,3 +47,19 @@ def test_nothing_else_in_ros1_reaches_into_rospys_private_parts():
             if not line.lstrip().startswith("#") and any(word in line for word in private):
                 found.append(f"{path.name}:{number}: {line.strip()}")
     assert not found, "\n".join(found)
+
+
+def test_a_rospy_endpoints_impl_is_reached_through_the_door_alone():
+    """rospy's per-topic impl (its connections, its lock, its latch) is read by attribute in rospy_inside.py alone,
+    through :func:`~ipyros.ros1.rospy_inside.impl_of`; the exported scripts' text is not ipyros's code, and may."""
+    import ast
+    from pathlib import Path
+
+    import ipyros.ros1
+
+    found = []
+    for path in Path(ipyros.ros1.__file__).parent.glob("*.py"):
+        if path.name != "rospy_inside.py":
+            found += [f"{path.name}:{node.lineno}" for node in ast.walk(ast.parse(path.read_text()))
+                      if isinstance(node, ast.Attribute) and node.attr == "impl"]
+    assert not found, found
