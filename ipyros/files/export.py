@@ -79,14 +79,15 @@ class Guard:
     message (an input stale, a stop rule, a last command they would now change), it goes out at repeat Hz."""
 
     def __init__(self, publish, stop, limits=None, rate=None, on_limit="clamp", timeout=None, repeat=10.0,
-                 rules=None, listen=None):
+                 rules=None, listen=None, topic=""):
         self._out, self._stop, self.limits, self.rate = publish, stop, limits or {}, rate or {}
         self.on_limit, self.timeout, self.period = on_limit, timeout, 1.0 / repeat
         self._lock, self._last, self.passed_at = threading.Lock(), {}, time.monotonic()
         self.rules, self.heard, self.last, self._ruling, self._ruled_at = rules, {}, None, "", -math.inf
+        self.said = f"guard {topic}:" if topic else "guard:"  # how its lines begin
         self._armed_at = time.monotonic() + 1.0  # its inputs' first messages awaited a second at most
-        for topic, cls in (rules.inputs.items() if rules is not None else ()):
-            listen(topic, cls, self._hearing(topic))
+        for name, cls in (rules.inputs.items() if rules is not None else ()):
+            listen(name, cls, self._hearing(name))
         if timeout is not None or rules is not None:
             threading.Thread(target=self._watch, daemon=True).start()
 
@@ -150,9 +151,9 @@ class Guard:
                 self._last.clear()  # a rate-limited field starts again from the stop message
                 self.last = copy.deepcopy(self._stop)  # the last command now: within the rules (checked at export)
             if why and not self._ruling:
-                print(f"guard: {why}: the stop message goes out until its rules let a command pass", flush=True)
+                print(f"{self.said} {why}: the stop message goes out until its rules let a command pass", flush=True)
             elif self._ruling and not why and not self._ruling.startswith("the last command"):
-                print("guard: its rules let commands pass again", flush=True)
+                print(f"{self.said} its rules let commands pass again", flush=True)
             self._ruling = why
 
     def _watch(self):
@@ -230,7 +231,8 @@ def _fill(msg, data):
 
 #: The modules GUARD_FUNCTIONS uses, imported by a script with a guard; with what it defines, the script's own names.
 GUARD_IMPORTS = ("copy", "math", "threading", "time")
-GUARD_NAMES = {*GUARD_IMPORTS, *re.findall(r"^(?:def|class) (\w+)", GUARD_FUNCTIONS + RULES_FUNCTIONS, re.M)}
+GUARD_NAMES = {*GUARD_IMPORTS, *re.findall(r"^(?:def |class )?(\w+)\b(?:\(| =|:)", GUARD_FUNCTIONS + RULES_FUNCTIONS,
+                                           re.M)}
 
 
 class ExportWarning(UserWarning):
@@ -328,7 +330,7 @@ class Script:
         text = "".join(f", {key}={value!r}" for key, value in options.items() if value is not None)
         if guard.rules or guard.stale:  # its inputs subscribed as the flavour subscribes (best effort)
             ruled = rules_source(guard, msgtypes.resolve_message(guard.type)[1], self.cls, self.topic_types)
-            text += f", rules={ruled}, listen={self.flavour.LISTEN}"
+            text += f", rules={ruled}, listen={self.flavour.LISTEN}, topic={guard.resolved!r}"
         return f"Guard({publish}, {stop}{text})"
 
     # -- the script -----------------------------------------------------------------------------

@@ -19,7 +19,7 @@ from ..core.errors import IpyrosError
 from ..core.model import GuardModel
 from ..core.rules import RuleSet, as_rule, input_index, parse_condition
 
-__all__ = ["RULES_FUNCTIONS", "condition_source", "input_topics", "rules_source"]
+__all__ = ["RULES_FUNCTIONS", "condition_source", "rules_source"]
 
 #: The judging of a guard's rules in an exported node: plain Python, the same for rospy and rclpy (it uses math).
 RULES_FUNCTIONS = '''
@@ -294,12 +294,6 @@ class _Render:
                 at = at.value
         steps.append(at.id)
         return f"_field(c, {tuple(reversed(steps))!r}, {ast.unparse(node)!r})"
-
-
-def input_topics(guard: GuardModel) -> list[str]:
-    """The topics a guard's rules read and its ``stale`` names, in order (what an exported node subscribes)."""
-    rules = [as_rule(given, f"guard {guard.resolved}") for given in guard.rules]
-    return list(RuleSet(rules, None, guard.resolved, guard.stale, f"guard {guard.resolved}").topics)
 
 
 def rules_source(guard: GuardModel, cls: type, name_of: Callable[[str], str], types: Mapping[str, str]) -> str:

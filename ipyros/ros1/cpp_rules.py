@@ -126,7 +126,7 @@ class CppRules:
             lines.append(f"{cpp_type(kind)}::ConstPtr in{number}_;  // {topic}")
             lines.append(f"double in{number}_at_ = 0;")
             lines.append(f"ros::Subscriber in{number}_sub_;")
-        lines += [f"double hold_until_[{len(self.rules)}];  // each rule in force until then (its hold)",
+        lines += [f"double hold_until_[{max(len(self.rules), 1)}];  // each rule in force until then (its hold)",
                   f"{self.cpp} last_cmd_;  // the last command that passed", "bool has_last_ = false;",
                   "double armed_at_ = 0;", "std::string ruling_;  // why its rules hold the stop message now"]
         return "\n".join(lines)

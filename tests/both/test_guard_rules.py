@@ -181,7 +181,7 @@ def test_an_exported_node_enforces_its_guards_rules_without_ipyros(make_node, pe
         wait_for(lambda: 0.0 in xs(motors, gone + 0.5), timeout=10, what="the stop once the laser went stale")
         wait_for(lambda: "/ruled4/scan stale" in said.read_text(), timeout=10, what="the stale laser said")
         lines = said.read_text()
-        assert "guard: /ruled4/scan not heard yet: the stop message goes out until its rules let a command pass" \
-            in lines and "guard: its rules let commands pass again" in lines, lines
+        assert "guard /ruled4/cmd_vel: /ruled4/scan not heard yet: the stop message goes out until its rules let a " \
+            "command pass" in lines and "guard /ruled4/cmd_vel: its rules let commands pass again" in lines, lines
     finally:
         stop_exported(node)
