@@ -29,7 +29,8 @@ from ..core.records import History, NodeStatus, Versions
 from ..node import declaring
 from ..node.engine import NodeEngine
 from ..node.session import Session, current
-from ..node.wrapping import discover, set_bag, set_base, set_launch_base, set_machine
+from ..node.baseinterface import discover
+from ..node.wrapping import set_bag, set_base, set_launch_base, set_machine
 from . import keeping
 from .declarations import UNSET, NodeParams, TopicHandler
 

@@ -3,7 +3,7 @@
 Whoever declares something on a node goes through here: the DSL (``nd.new.subscribe(...)``,
 ``nd.timer(...)``, ``nd.remove(...)``; :mod:`ipyros.dsl` only spells these calls: chains, the
 paper's attribute spelling, what a chain shows), ``%handler`` and reverts (the engine's
-``redeclare``), discovery and ``%wrap`` (:func:`ipyros.node.wrapping.declare_interface`). So
+``redeclare``), discovery and ``%wrap`` (:func:`ipyros.node.baseinterface.declare_interface`). So
 a declaration is checked the same whoever makes it, and the calls run down the layers only.
 
 Each function checks its input, hands the engine one edit of the model (all or nothing, live
@@ -32,7 +32,7 @@ from ..processes.keeper import MachineError, Token, check_machine_name, token_pa
 
 
 
-class NodeEngine(Protocol):
+class DeclaringNode(Protocol):
     """What declaring needs of a node (its :class:`~ipyros.node.engine.NodeEngine`, which declares through here:
     named as a protocol, so that this module does not import the engine back)."""
 
@@ -55,7 +55,7 @@ MIN_TIMER_PERIOD = 1e-4  # seconds; below it a timer would only spin a core (and
 
 # -- topics ---------------------------------------------------------------------------------------
 
-def subscribe(engine: NodeEngine, role: Role, topic: str, handler: Optional[Callable[..., Any]], msg_type: Any,
+def subscribe(engine: DeclaringNode, role: Role, topic: str, handler: Optional[Callable[..., Any]], msg_type: Any,
               qos: Any = None) -> str:
     """Subscribe ``handler(msg)`` to ``topic`` (``new``), or relay the basenode's input (``reuse``); declared again,
     the handler is swapped live."""
@@ -81,7 +81,7 @@ def subscribe(engine: NodeEngine, role: Role, topic: str, handler: Optional[Call
     return _done(engine, role, f"subscribe {resolved} [{type_name}]" + (f" -> {entry.handler}" if handler else ""))
 
 
-def publish(engine: NodeEngine, role: Role, topic: str, msg_type: Any, latch: bool = False, qos: Any = None) -> str:
+def publish(engine: DeclaringNode, role: Role, topic: str, msg_type: Any, latch: bool = False, qos: Any = None) -> str:
     """Publish ``topic`` (``new``: ``write`` sends on it), or relay the basenode's output (``reuse``)."""
     resolved = engine.resolve_as(role, topic, "topic")
     type_name = _type_name(engine, msg_type, relayed=role == "reuse")
@@ -97,7 +97,7 @@ def publish(engine: NodeEngine, role: Role, topic: str, msg_type: Any, latch: bo
     return _done(engine, role, f"publish {resolved} [{type_name}]")
 
 
-def drop(engine: NodeEngine, role: str, topic: str, direction: str) -> str:
+def drop(engine: DeclaringNode, role: str, topic: str, direction: str) -> str:
     """Drop this role's subscription (``direction="subscribe"``) or publication of ``topic``."""
     resolved = engine.resolve_as(role, topic, "topic")
     if engine.model().topic(resolved, direction, role) is None:  # type: ignore[arg-type]
@@ -131,10 +131,10 @@ def _replace_topic(entry: TopicModel) -> Callable[[NodeModel], None]:
     return edit
 
 
-def _type_name(engine: NodeEngine, msg_type: Any, relayed: bool) -> str:
+def _type_name(engine: DeclaringNode, msg_type: Any, relayed: bool) -> str:
     """The declared type's name; a type this Python cannot import is taken, as ``pkg/Type``, only for a relay: a
     handler or a publisher needs its class, a relay does not (ROS 1 relays bytes of any type) or gets it from
-    the basenode before it opens (ROS 2: :func:`~ipyros.node.wrapping.learn_relayed_types`)."""
+    the basenode before it opens (ROS 2: :func:`~ipyros.node.baseinterface.learn_relayed_types`)."""
     try:
         return msgtypes.resolve_message(msg_type)[0]
     except MessageTypeError:
@@ -161,7 +161,7 @@ _SERVED = {"service": ("called with each request, returns the response", "to ans
            "action": ("called with each goal, returns the result", "to serve or change its goals")}
 
 
-def serve(engine: NodeEngine, role: Role, kind: str, name: str, type_: Any,
+def serve(engine: DeclaringNode, role: Role, kind: str, name: str, type_: Any,
           handler: Optional[Callable[..., Any]]) -> str:
     """A service or an action (``kind``): served by ``handler`` (new) or relayed from the basenode (reuse).
 
@@ -198,7 +198,7 @@ def serve(engine: NodeEngine, role: Role, kind: str, name: str, type_: Any,
 
 # -- timers ---------------------------------------------------------------------------------------
 
-def timer(engine: NodeEngine, period: Any, handler: Callable[..., Any], name: Optional[str] = None,
+def timer(engine: DeclaringNode, period: Any, handler: Callable[..., Any], name: Optional[str] = None,
           oneshot: bool = False) -> str:
     """Call ``handler`` every ``period`` seconds (once if ``oneshot``); a timer of the same ``name`` (default: the
     handler's name) is replaced."""
@@ -223,7 +223,7 @@ def timer(engine: NodeEngine, period: Any, handler: Callable[..., Any], name: Op
 
 # -- guards ---------------------------------------------------------------------------------------
 
-def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, on_limit: str = "clamp",
+def guard(engine: DeclaringNode, topic: str, limits: Any = None, rate: Any = None, on_limit: str = "clamp",
           timeout: Any = None, stop: Any = None, repeat: Any = DEFAULT_REPEAT, grace: Any = DEFAULT_GRACE,
           estop_topic: Optional[str] = None, machine: Optional[str] = None, lease: Any = None,
           machine_grace: Any = DEFAULT_MACHINE_GRACE, rules: Any = None, stale: Any = None) -> str:
@@ -280,7 +280,7 @@ def guard(engine: NodeEngine, topic: str, limits: Any = None, rate: Any = None, 
     return text
 
 
-def _sensed_rules(engine: NodeEngine, where: str, cls: type, output: str, stop_message: Any, rules: Any, stale: Any,
+def _sensed_rules(engine: DeclaringNode, where: str, cls: type, output: str, stop_message: Any, rules: Any, stale: Any,
                   machine: Optional[str]) -> tuple[list[Rule], dict[str, float]]:
     """A guard's rules over what the robot senses (``rule(...)`` or their data), compiled against the guarded type
     and the inputs' types the graph knows, and the stop message checked against them; each refusal one line."""
@@ -299,7 +299,7 @@ def _sensed_rules(engine: NodeEngine, where: str, cls: type, output: str, stop_m
     return given, {t: float(s) for t, s in stale_.items()}
 
 
-def _known_types(engine: NodeEngine, rules: list[Rule], stale: dict[str, Any]) -> dict[str, Any]:
+def _known_types(engine: DeclaringNode, rules: list[Rule], stale: dict[str, Any]) -> dict[str, Any]:
     """The message classes of the inputs the live graph (or the node itself) knows and this Python has."""
     topics = {p.topic for r in rules for p in compile_condition(r.condition, "").inputs} | set(stale)
     try:
@@ -342,7 +342,7 @@ def _positive(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < float("inf")
 
 
-def _refuse_unguarding(engine: NodeEngine, resolved: str, what: str) -> None:
+def _refuse_unguarding(engine: DeclaringNode, resolved: str, what: str) -> None:
     """A guarded output is not removed by accident: its guard goes first, by its own call."""
     if engine.model().guard(resolved) is not None:
         raise DeclarationError(f"{what} would remove {resolved}, which is guarded; remove its guard first, by its "
@@ -357,7 +357,7 @@ _REMOVABLE = {"topic": ("topics", planning.topic_slot), "timer": ("timers", plan
               "guard": ("guards", None)}
 
 
-def remove(engine: NodeEngine, kind: str, name: str) -> str:
+def remove(engine: DeclaringNode, kind: str, name: str) -> str:
     """Remove every declaration of the topic ``name``, or the timer, service or action of that name."""
     field, slot = _REMOVABLE[kind]
     key = name if kind == "timer" else engine.resolve(name, "topic" if kind == "guard" else kind)
@@ -378,7 +378,7 @@ def remove(engine: NodeEngine, kind: str, name: str) -> str:
 
 # -- a handler swapped in (%handler, a revert) ----------------------------------------------------
 
-def redeclare(engine: NodeEngine, target: Any, handler: Callable[..., Any]) -> str:
+def redeclare(engine: DeclaringNode, target: Any, handler: Callable[..., Any]) -> str:
     """Declare ``target`` (a :class:`~ipyros.node.targets.HandlerTarget`) again exactly as it is, but served by
     ``handler``: a live swap, as the DSL does it."""
     model = engine.model()
@@ -406,7 +406,7 @@ def redeclare(engine: NodeEngine, target: Any, handler: Callable[..., Any]) -> s
     return serve(engine, "new", target.kind, found.name, found.type, handler)
 
 
-def _done(engine: NodeEngine, role: str, text: str) -> str:
+def _done(engine: DeclaringNode, role: str, text: str) -> str:
     """Record ``role.text`` in the history; ``text`` is what the declaration did."""
     engine.record(f"{role}.{text}")
     return text

@@ -41,7 +41,9 @@ from .session import Session
 from .targets import HandlerTarget, handler_slots
 from .versions import HandlerVersions
 from .writing import Writing
-from .wrapping import interrupted, learn_relayed_types, start_bag_clock, start_base, stop_bag_clock
+from .baseinterface import learn_relayed_types
+from .basestart import start_bag_clock, start_base, stop_bag_clock
+from .wrapping import interrupted
 
 #: A slot key's new handler and whether it takes the message (or timer event) as its argument.
 Handlers = dict[str, tuple[Callable[..., Any], bool]]

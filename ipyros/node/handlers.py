@@ -22,7 +22,7 @@ from .versions import HandlerVersions, parse_versions
 __all__ = ["HandlerEdits"]
 
 
-class EditedNode(declaring.NodeEngine, Protocol):
+class EditedNode(declaring.DeclaringNode, Protocol):
     """What editing its handlers needs of a node (its :class:`~ipyros.node.engine.NodeEngine`)."""
 
     @property

@@ -177,12 +177,12 @@ def test_a_basenode_slow_to_show_up_is_waited_for_and_said(make_node, notices, m
     the wait is said at the prompt with how to stop it; the wrapping node then runs."""
     from pathlib import Path
 
-    from ipyros.node import wrapping
+    from ipyros.node import basestart
 
     peers = Path(__file__).parent / "peers"
     script = tmp_path / "slow_talker.py"
     script.write_text(SLOW_START.format(peers=str(peers), talk=str(peers / "talk.py")))
-    monkeypatch.setattr(wrapping, "SLOW_START_NOTICE", 0.5)
+    monkeypatch.setattr(basestart, "SLOW_START_NOTICE", 0.5)
     w = make_node("slow_wrap")
     w.baseNode(str(script), name="talk_peer", namespace="slow_robot", args=["level", "std_msgs/UInt32", "10",
                                                                             "data=7"])
@@ -193,7 +193,7 @@ def test_a_basenode_slow_to_show_up_is_waited_for_and_said(make_node, notices, m
     w.create()
     said = [n for n in notices if "not in the graph yet" in n]
     assert said == [f"ipyros: basenode /slow_robot/talk_peer of slow_wrap runs but is not in the graph yet; waiting "
-                    f"up to {wrapping.REGISTRATION_TIMEOUT:g} s (Ctrl-C stops it and slow_wrap)"], notices
+                    f"up to {basestart.REGISTRATION_TIMEOUT:g} s (Ctrl-C stops it and slow_wrap)"], notices
     wait_for(lambda: 7 in heard, timeout=30, what="the slow basenode's messages through the relay")
     w.shutdown()
 
@@ -214,9 +214,9 @@ def test_a_basenode_that_runs_but_never_shows_up_fails_create_in_one_line_and_is
     create() says so in one line; nothing of the wrapping node is left running."""
     from support import children
 
-    from ipyros.node import wrapping
+    from ipyros.node import basestart
 
-    monkeypatch.setattr(wrapping, "REGISTRATION_TIMEOUT", 2.0)
+    monkeypatch.setattr(basestart, "REGISTRATION_TIMEOUT", 2.0)
     w = wrapping_no_node(make_node, tmp_path, "absent")
     before = children()
     with pytest.raises(errors.BaseNodeError) as caught:
@@ -225,7 +225,7 @@ def test_a_basenode_that_runs_but_never_shows_up_fails_create_in_one_line_and_is
     assert "\n" not in message and message.startswith(
         "basenode /absent_base of absent_wrap ran 2 s without showing up in the graph ("), message
     question = "so it was stopped; is it a ROS node that keeps the name it is given?"
-    hint = message.partition(question)[2]  # if the graph holds a node of a name like it (pure test: test_wrapping)
+    hint = message.partition(question)[2]  # if the graph holds a node of a name like it (pure test: test_basestart)
     assert question in message and (not hint or hint.startswith(" nodes of a name like it: ")), message
     assert not w.created and w.base is None
     assert children() <= before, "the basenode was stopped"
@@ -239,9 +239,9 @@ def test_ctrl_c_while_create_waits_for_a_basenode_ends_it_in_one_line_with_nothi
 
     from support import children
 
-    from ipyros.node import wrapping
+    from ipyros.node import basestart
 
-    monkeypatch.setattr(wrapping, "SLOW_START_NOTICE", 0.3)
+    monkeypatch.setattr(basestart, "SLOW_START_NOTICE", 0.3)
     w = wrapping_no_node(make_node, tmp_path, "interrupted")
     declared = w.model()
     before = children()
@@ -283,8 +283,8 @@ INTERRUPTED_SESSION = """
 import _thread, threading, time
 from std_msgs.msg import UInt32
 from ipyros import rosNode
-from ipyros.node import session, wrapping
-wrapping.SLOW_START_NOTICE = 0.2
+from ipyros.node import basestart, session
+basestart.SLOW_START_NOTICE = 0.2
 session.current().notify = lambda text: (print(text, flush=True),
                                          "not in the graph yet" in text and _thread.interrupt_main())
 w = rosNode("terminated_wrap")

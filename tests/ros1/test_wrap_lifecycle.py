@@ -15,7 +15,7 @@ from std_msgs.msg import Int32, String
 
 from ipyros.core.errors import BaseNodeError
 from ipyros.dsl import engine_of
-from ipyros.node import wrapping
+from ipyros.node import basestart
 
 
 def alive(pid: int) -> bool:
@@ -83,7 +83,7 @@ def test_a_basenode_that_ends_at_start_fails_create_at_once_in_one_notice(make_n
         broken.baseNode(str(script)).reuse.publish("map", type=String)
         # Were the registration wait not cut short by the basenode's end, create() would wait for it
         # until the test's own timeout failed it.
-        monkeypatch.setattr(wrapping, "REGISTRATION_TIMEOUT", 600.0)
+        monkeypatch.setattr(basestart, "REGISTRATION_TIMEOUT", 600.0)
         with pytest.raises(BaseNodeError) as caught:
             broken.create()
     finally:

@@ -1,5 +1,5 @@
-"""ipyros.node.wrapping's pure parts: the hint given when a basenode never shows up in the graph."""
-from ipyros.node.wrapping import names_like
+"""ipyros.node.basestart's pure parts: the hint given when a basenode never shows up in the graph."""
+from ipyros.node.basestart import names_like
 
 
 def test_names_like_a_missing_basenode_are_typos_namespaces_and_suffixes():
