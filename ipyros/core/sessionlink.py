@@ -81,7 +81,12 @@ def restart_unregistered(bases: list[RunningBase], registered: Callable[[str], b
         if registered(base.name):
             continue
         if restart:
-            base.restart()
+            try:
+                base.restart()
+            except Exception as error:  # noqa: BLE001 - said, and the others still looked at
+                said.append(f"ipyros: basenode {base.name} of {base.node} did not register with the restarted master "
+                            f"and could not be restarted ({error}); restart it: {base.called}.base.restart()")
+                continue
             said.append(f"ipyros: basenode {base.name} of {base.node} did not register with the restarted master; "
                         "restarted it")
         else:

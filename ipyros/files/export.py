@@ -104,8 +104,11 @@ class Guard:
         if self.rules is not None:
             if not self._armed():
                 return None  # its inputs not heard yet, at start: nothing judged, nothing sent (a second at most)
-            why, judged = self.rules.judge(self.heard, time.monotonic(), msg)
-            msg, why = (None, why) if why else self.rules.apply(judged, msg)
+            try:
+                why, judged = self.rules.judge(self.heard, time.monotonic(), msg)
+                msg, why = (None, why) if why else self.rules.apply(judged, msg)
+            except Exception:  # noqa: BLE001 - when in doubt, the stop message
+                msg = None
             if msg is None:
                 return copy.deepcopy(self._stop)
         msg = copy.deepcopy(msg)
@@ -144,7 +147,10 @@ class Guard:
             now = time.monotonic()
             if self.rules is None or not self._armed():
                 return
-            why = self.rules.idle(self.heard, now, self.last)
+            try:
+                why = self.rules.idle(self.heard, now, self.last)
+            except Exception as error:  # noqa: BLE001 - when in doubt, the stop message (and the watch goes on)
+                why = f"its rules could not be judged ({error!r})"
             if why and now - self._ruled_at >= self.period:
                 self._ruled_at = now
                 self._out(copy.deepcopy(self._stop))

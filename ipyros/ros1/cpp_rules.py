@@ -371,12 +371,21 @@ std::string judge({cpp}* c, double now, bool* changed) {{
 {judge}
 }}
 
+// judge(), and what it could not judge for another reason than a rule's (a RuleError): the stop message too.
+std::string judged({cpp}* c, double now, bool* changed) {{
+  try {{
+    return judge(c, now, changed);
+  }} catch (const std::exception& e) {{
+    return std::string("its rules could not be judged (") + e.what() + ")";
+  }}
+}}
+
 // A command through its rules (the stop message in its place when they say so), then its limits and rate limits.
 bool pass({cpp}& m) {{
   double now = ros::SteadyTime::now().toSec();
   if (!armed(now)) return false;  // its inputs not heard yet, at start: nothing judged, nothing sent
   bool changed = false;
-  if (!judge(&m, now, &changed).empty()) {{
+  if (!judged(&m, now, &changed).empty()) {{
     m = stop_;
     return true;
   }}
@@ -394,10 +403,10 @@ void look(double now) {{
   if (has_last_) {{
     {cpp} copy = last_cmd_;
     bool changed = false;
-    why = judge(&copy, now, &changed);
+    why = judged(&copy, now, &changed);
     if (why.empty() && changed) why = "the last command would now be changed";
   }} else {{
-    why = judge(nullptr, now, nullptr);
+    why = judged(nullptr, now, nullptr);
   }}
   ros::SteadyTime at = ros::SteadyTime::now();
   if (!why.empty() && (at - stopped_).toSec() >= period_) {{

@@ -213,12 +213,14 @@ class KeptGuard:
             self._out.write(self.stop_message())
             if self.lost is not None:  # a stop process counts its own
                 self.shared.stops_sent += 1
-        armed = self.armed
+        armed, kept = self.armed, None
         if armed and self._replacing is not None:  # its sensors heard: it keeps the robot from now on
             old, self._replacing = self._replacing, None
             old.close(hold=False)
+        elif self._replacing is not None:  # the guard it replaces keeps the robot: tended as before, its rules judged
+            kept = self._replacing.tend(now)
         ruled = self._judge(time.monotonic()) if armed else None
-        return "; ".join(line for line in (said, ruled) if line) or None
+        return "; ".join(line for line in (said, kept, ruled) if line) or None
 
     def _judge(self, now: float) -> Optional[str]:
         """Its rules judged with no new command, at each turn of the keeper's loop and as each input comes (an input

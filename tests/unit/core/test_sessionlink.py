@@ -24,3 +24,12 @@ def test_with_restart_basenodes_each_one_not_registered_is_restarted_and_said_so
     said = restart_unregistered(bases(restarted), lambda name: False, restart=True)
     assert restarted == ["/move_base", "/laser"]
     assert said[1] == "ipyros: basenode /laser of scan did not register with the restarted master; restarted it"
+
+
+def test_a_basenode_that_cannot_be_restarted_is_said_and_the_others_are_still_restarted():
+    restarted: list[str] = []
+    failing = RunningBase("/move_base", "nav", "nd", lambda: 1 / 0)
+    said = restart_unregistered([failing, *bases(restarted)[1:]], lambda name: False, restart=True)
+    assert said[0].startswith("ipyros: basenode /move_base of nav did not register with the restarted master and "
+                              "could not be restarted (division by zero); restart it: nd.base.restart()")
+    assert restarted == ["/laser"]

@@ -107,3 +107,18 @@ def test_an_exported_guard_sends_nothing_until_its_inputs_are_heard_then_the_sto
     assert [m.linear.x for m in sent] == [0.2]
     hearing["/scan"](Sample(gains=[0.1]))  # an obstacle, no new command: the stop message at once
     assert [m.linear.x for m in sent] == [0.2, 0.0]
+
+
+def test_an_exported_guard_whose_rules_fail_to_judge_sends_the_stop_message_and_its_watch_goes_on():
+    script: dict = {"Sample": Sample}
+    exec("import copy, math, threading, time\n" + GUARD_FUNCTIONS + RULES_FUNCTIONS, script)  # noqa: S102
+    sent, hearing = [], {}
+    rules = exported(RULES[:1], {})
+    guard = script["Guard"](sent.append, Twist(), rules=rules, listen=lambda topic, cls, hear: hearing.setdefault(
+        topic, hear))
+    hearing["/scan"](Sample(gains=[2.0]))
+    rules.judge = rules.idle = lambda *args: 1 / 0  # what its judging may never do, if it ever did
+    guard.publish(Twist(linear=Vector3(x=0.2)))
+    assert [m.linear.x for m in sent] == [0.0], "a command: the stop message in its place"
+    hearing["/scan"](Sample(gains=[2.0]))  # no command: the stop message, said, and nothing raised
+    assert [m.linear.x for m in sent] == [0.0, 0.0]

@@ -285,10 +285,13 @@ def test_a_guard_placed_with_rules_acts_only_once_its_sensors_are_heard():
 
     guard, sent = placed()
     closed: list[bool] = []
-    guard.replace(SimpleNamespace(close=lambda hold: closed.append(hold)))  # placed again: the old one keeps it
+    tended: list[float] = []
+    guard.replace(SimpleNamespace(close=lambda hold: closed.append(hold), tend=lambda now: tended.append(now) or
+                                  "guard /cmd_vel: the old one's word"))  # placed again: the old one keeps it
     guard._hearing("/scan")(Sample(gains=[2.0]))  # one input heard, the other not yet: no stop message for it
-    guard.tend(time.monotonic())
+    said = guard.tend(time.monotonic())
     assert closed == [], "not armed yet: the guard it replaces keeps the robot"
+    assert len(tended) == 1 and said == "guard /cmd_vel: the old one's word", "and it is tended as before, its rules"
     guard.command(Twist(linear=Vector3(x=0.4)))
     assert sent == [] and not guard.armed and guard.watch.ruling == "", "nothing judged, nothing said"
     assert guard.check(Twist(linear=Vector3(x=0.4))).send is None, "a relay in the keeper sends nothing either"
@@ -299,7 +302,7 @@ def test_a_guard_placed_with_rules_acts_only_once_its_sensors_are_heard():
     guard._hearing("/bump")(Sample(gains=[2.0]))
     assert guard.armed, "armed as soon as both were heard"
     guard.tend(time.monotonic())
-    assert closed == [False], "armed: it takes over, the old one quits"
+    assert closed == [False] and len(tended) == 1, "armed: it takes over, the old one quits"
     guard.command(Twist(linear=Vector3(x=0.4)))
     assert [m.linear.x for m in sent] == [0.4]
     quiet, sent = placed()
